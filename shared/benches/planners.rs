@@ -1,0 +1,2 @@
+//! Placeholder: the planner benchmark (issue 2) goes here.
+fn main() {}

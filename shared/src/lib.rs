@@ -1,0 +1,26 @@
+//! # twil-core
+//!
+//! Every algorithm of the Twil navigation stack, as plain data and pure step functions.
+//! `no_std`, no heap, no `unsafe`: the firmware, the host simulator and the tests all drive
+//! this same code.
+//!
+//! ## Layers
+//!
+//! - [`geom`]: points in world metres and grid cells (two types, so they cannot be mixed up).
+//! - [`grid`]: the bit-packed occupancy grid with a capacity fixed at compile time.
+//! - [`raster`]: Bresenham lines and obstacle expansion (marking with the robot's radius).
+//! - [`world`]: obstacle polygons and the seed's `.da` / `.par` text formats.
+//! - [`plan`]: BFS, A* and any-angle planners with static queues and 4-bit scratch cells, and the
+//!   pruning of a path to what the sonar has just seen.
+//!
+//! Every buffer has a named capacity; running out of it is an error value, never a panic.
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod geom;
+pub mod grid;
+pub mod math;
+pub mod plan;
+pub mod raster;
+pub mod world;
