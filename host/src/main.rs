@@ -1,4 +1,10 @@
 //! `twil`: plan, simulate and talk to the Twil robot.
+//!
+//! Each subcommand lives in its own module under `cmd/` with an `Args` struct (clap) and a
+//! `run` function; this file only dispatches. Errors reach the user as one line on stderr and
+//! exit code 1 (2 for usage errors, from clap).
+
+mod cmd;
 
 use clap::{Parser, Subcommand};
 
@@ -13,15 +19,25 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Plan a path on a known world (.da) for a mission (.par).
-    Plan,
+    Plan(cmd::plan::Args),
+    /// Simulate a whole mission: sonar sweeps, planning, the 50 ms controller, a robot model.
+    Simulate(cmd::simulate::Args),
+    /// Plan for the two-link manipulator of seed 000 in its configuration space.
+    Cspace(cmd::cspace::Args),
+    /// Check the link to the firmware (QEMU, TCP or a serial port).
+    Ping(cmd::ping::Args),
 }
 
 fn main() {
     let cli = Cli::parse();
-    match cli.command {
-        Command::Plan => {
-            eprintln!("twil plan: not implemented yet");
-            std::process::exit(2);
-        }
+    let result = match cli.command {
+        Command::Plan(args) => cmd::plan::run(args),
+        Command::Simulate(args) => cmd::simulate::run(args),
+        Command::Cspace(args) => cmd::cspace::run(args),
+        Command::Ping(args) => cmd::ping::run(args),
+    };
+    if let Err(error) = result {
+        eprintln!("twil: {error:#}");
+        std::process::exit(1);
     }
 }

@@ -12,15 +12,26 @@
 //! - [`world`]: obstacle polygons and the seed's `.da` / `.par` text formats.
 //! - [`plan`]: BFS, A* and any-angle planners with static queues and 4-bit scratch cells, and the
 //!   pruning of a path to what the sonar has just seen.
+//! - [`sonar`], [`plant`], [`control`], [`trajectory`], [`mission`]: the navigation loop and
+//!   the simulated robot it can drive.
+//! - [`link`]: the host <-> firmware protocol.
+//! - [`cspace`]: the two-link manipulator planner of seed 000.
 //!
 //! Every buffer has a named capacity; running out of it is an error value, never a panic.
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod control;
+pub mod cspace;
 pub mod geom;
 pub mod grid;
+pub mod link;
 pub mod math;
+pub mod mission;
 pub mod plan;
+pub mod plant;
 pub mod raster;
+pub mod sonar;
+pub mod trajectory;
 pub mod world;
