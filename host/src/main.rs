@@ -1,10 +1,10 @@
 //! `twil`: plan, simulate and talk to the Twil robot.
 //!
-//! Each subcommand lives in its own module under `cmd/` with an `Args` struct (clap) and a
+//! Each subcommand lives in its own module under `cmd/` of the `twil_host` library with an `Args` struct (clap) and a
 //! `run` function; this file only dispatches. Errors reach the user as one line on stderr and
 //! exit code 1 (2 for usage errors, from clap).
 
-mod cmd;
+use twil_host::cmd;
 
 use clap::{Parser, Subcommand};
 

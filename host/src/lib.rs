@@ -1,0 +1,4 @@
+//! The `twil` host tool as a library: each subcommand's logic, so that the binary, the tests and
+//! other tools share it.
+
+pub mod cmd;
