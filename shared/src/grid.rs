@@ -409,7 +409,7 @@ impl<const WORDS: usize> Grid<WORDS> {
             .iter()
             .map(|w| w.count_ones() as usize)
             .sum();
-        if n % 32 != 0 {
+        if !n.is_multiple_of(32) {
             count += (self.bits[full] & ((1u32 << (n % 32)) - 1)).count_ones() as usize;
         }
         count
@@ -424,7 +424,7 @@ impl<const WORDS: usize> Grid<WORDS> {
     /// the used cells are refused with `CapacityExceeded` and nothing is written.
     pub fn write_words(&mut self, offset: usize, words: &[u32]) -> Result<(), GridError> {
         let used = words_for_cells(self.geometry.cell_count());
-        let end = offset.checked_add(words.len()).unwrap_or(usize::MAX);
+        let end = offset.saturating_add(words.len());
         if end > used {
             return Err(GridError::CapacityExceeded {
                 cells: end.saturating_mul(32).min(u32::MAX as usize) as u32,
@@ -434,7 +434,7 @@ impl<const WORDS: usize> Grid<WORDS> {
         self.bits[offset..end].copy_from_slice(words);
         // Keep the bits past the last cell clear, whatever was sent.
         let n = self.geometry.cell_count();
-        if n % 32 != 0 && end == used {
+        if !n.is_multiple_of(32) && end == used {
             self.bits[used - 1] &= (1u32 << (n % 32)) - 1;
         }
         Ok(())
