@@ -70,3 +70,15 @@ pub fn wrap_angle_rad(angle_rad: f32) -> f32 {
     }
     a
 }
+
+/// `e` raised to `x` (micromath's approximation).
+#[inline]
+pub fn exp(x: f32) -> f32 {
+    F32Ext::exp(x)
+}
+
+/// Natural logarithm (micromath's approximation); `NaN` for negative `x`.
+#[inline]
+pub fn ln(x: f32) -> f32 {
+    F32Ext::ln(x)
+}
