@@ -38,7 +38,7 @@
 
 use crate::control::Pose;
 use crate::geom::PointM;
-use crate::math::{abs, cos, exp, floor, hypot_precise, sin, sqrt_precise, wrap_angle_rad};
+use crate::math::{abs, cos, exp, floor, hypot_precise, sin, wrap_angle_rad};
 use crate::robot::{RobotConfig, MAX_CONE_RAYS};
 use crate::world::PolygonSet;
 
@@ -625,7 +625,7 @@ mod tests {
                 .unwrap();
             sum2 += (v - truth) * (v - truth);
         }
-        let std = sqrt_precise(sum2 / 50.0);
+        let std = crate::math::sqrt_precise(sum2 / 50.0);
         assert!(std > 0.01 && std < 0.03, "{std}");
     }
 
