@@ -40,6 +40,7 @@ use crate::control::Pose;
 use crate::geom::PointM;
 use crate::math::{abs, cos, exp, floor, hypot_precise, sin, wrap_angle_rad};
 use crate::robot::{RobotConfig, MAX_CONE_RAYS};
+use crate::sonar::{Reading, SweepBuffer, SweepPlan};
 use crate::world::PolygonSet;
 
 /// Most substeps one [`Plant::step`] call integrates; a longer `dt_s` uses longer substeps.
@@ -308,6 +309,33 @@ impl Plant {
         } else {
             None
         }
+    }
+
+    /// A whole sweep standing still (the seed's stop-and-sweep): `out` is cleared and gets one
+    /// [`Reading`] per neck angle of `plan`, read with [`sonar_range_m`](Self::sonar_range_m)
+    /// up to [`RobotConfig::sonar_range_m`] from the current pose; then the plant idles (0 V)
+    /// for the sweep's duration ([`SweepPlan::timing`]). Returns that duration, seconds.
+    pub fn sweep_in_place<const V: usize, const P: usize>(
+        &mut self,
+        obstacles: &PolygonSet<V, P>,
+        plan: &SweepPlan,
+        out: &mut SweepBuffer,
+    ) -> f32 {
+        out.clear();
+        let range = self.config.sonar_range_m;
+        let pose = self.pose;
+        for angle in plan.angles_rad() {
+            let range_m = self.sonar_range_m(obstacles, angle, range);
+            // A plan never has more readings than a buffer holds.
+            let _ = out.push(Reading {
+                neck_angle_rad: angle,
+                range_m,
+                pose,
+            });
+        }
+        let duration_s = plan.timing(&self.config).total_s();
+        self.idle(duration_s);
+        duration_s
     }
 
     /// Distance from the centre to the nearest polygon edge (or lone vertex) minus the
@@ -651,6 +679,26 @@ mod tests {
         point.push(&[PointM::new(0.0, 1.0)]).unwrap();
         assert!((inside.clearance_m(&point) - 0.7).abs() < 1e-5);
         assert_eq!(inside.clearance_m(&Obstacles::new()), f32::INFINITY);
+    }
+
+    #[test]
+    fn sweep_in_place_reads_every_angle_and_takes_its_time() {
+        use crate::sonar::SweepKind;
+        let c = RobotConfig::default();
+        let walls = wall_at_x(2.2);
+        let mut plant = Plant::new(&c, Pose::new(1.0, 0.0, 0.0));
+        let plan = SweepPlan::new(&c, SweepKind::Normal);
+        let mut sweep = SweepBuffer::new();
+        let t = plant.sweep_in_place(&walls, &plan, &mut sweep);
+        assert_eq!(sweep.len(), 105);
+        assert!((t - plan.timing(&c).total_s()).abs() < 1e-6);
+        assert!((plant.time_s() - t).abs() < 1e-4);
+        let ahead = sweep.as_slice()[52];
+        assert_eq!(ahead.neck_angle_rad, 0.0);
+        assert!((ahead.range_m.unwrap() - 1.0).abs() < 1e-4);
+        // Readings beyond 1.5 m are no echo: the wall is at 1 m, so |angle| > 48° sees nothing.
+        assert!(sweep.as_slice()[0].range_m.is_none());
+        assert_eq!(plant.pose(), Pose::new(1.0, 0.0, 0.0));
     }
 
     #[test]
