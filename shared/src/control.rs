@@ -285,6 +285,10 @@ pub struct ControlOutput {
     pub left_speed_ref_rad_s: f32,
     /// Right wheel speed reference, rad/s.
     pub right_speed_ref_rad_s: f32,
+    /// Left wheel speed measured from the counts, rad/s.
+    pub left_speed_rad_s: f32,
+    /// Right wheel speed measured from the counts, rad/s.
+    pub right_speed_rad_s: f32,
     /// The step came late: more than period + [`OVERRUN_TOLERANCE_S`] since the previous one.
     pub overrun: bool,
     /// At least one voltage was clamped to the saturation.
@@ -410,27 +414,8 @@ impl Controller {
     /// One control period. Never panics: a non-finite reference acts as a hold for this step, a
     /// non-finite or absurd elapsed time uses the nominal period for the speeds.
     pub fn step(&mut self, input: ControlInput) -> ControlOutput {
+        let m = self.measure(&input);
         let c = &self.config;
-        let period = c.controller_period_s;
-        let elapsed = input.elapsed_since_last_step_s;
-        let overrun = elapsed.is_finite() && elapsed > period + OVERRUN_TOLERANCE_S;
-        // Counts accumulate over the real interval; trust it when it is plausible.
-        let dt = if elapsed.is_finite() && elapsed >= 0.5 * period && elapsed <= 20.0 * period {
-            elapsed
-        } else {
-            period
-        };
-
-        let rad_per_count = c.rad_per_count();
-        let left_speed = input.encoder_left_delta_counts as f32 * rad_per_count / dt;
-        let right_speed = input.encoder_right_delta_counts as f32 * rad_per_count / dt;
-        let pose = self.odometry.update(
-            input.encoder_left_delta_counts,
-            input.encoder_right_delta_counts,
-        );
-        let d = c.point_offset_m;
-        let point = pose.point_ahead(d);
-
         let target = match self.held {
             Some(h) => h,
             None if input.reference.is_finite() => input.reference,
@@ -440,12 +425,107 @@ impl Controller {
         let k = c.tracking_gain_1_s;
         let model_dx = (target.x_m - self.model.x_m) / tau;
         let model_dy = (target.y_m - self.model.y_m) / tau;
-        let vx = model_dx + k * (self.model.x_m - point.x_m);
-        let vy = model_dy + k * (self.model.y_m - point.y_m);
+        let vx = model_dx + k * (self.model.x_m - m.point.x_m);
+        let vy = model_dy + k * (self.model.y_m - m.point.y_m);
 
-        let (s, co) = (sin(pose.heading_rad), cos(pose.heading_rad));
+        let (s, co) = (sin(m.pose.heading_rad), cos(m.pose.heading_rad));
         let forward_m_s = co * vx + s * vy;
-        let turn_rad_s = (-s * vx + co * vy) / d;
+        let turn_rad_s = (-s * vx + co * vy) / c.point_offset_m;
+
+        let used_model = self.model;
+        let blend = 1.0 - exp(-m.dt_s / tau);
+        let next = PointM::new(
+            self.model.x_m + (target.x_m - self.model.x_m) * blend,
+            self.model.y_m + (target.y_m - self.model.y_m) * blend,
+        );
+        if next.is_finite() {
+            self.model = next;
+        }
+        self.drive(&m, forward_m_s, turn_rad_s, used_model)
+    }
+
+    /// One control period of the turn-in-place mode: the input's counts and elapsed time are
+    /// used, its reference is ignored, and the robot turns on the spot towards `heading_rad`
+    /// (turn rate = [`RobotConfig::turn_gain_1_s`] × heading error, at most
+    /// [`RobotConfig::max_turn_rate_rad_s`], forward speed 0). The reference model follows
+    /// the control point as it swings round, so [`step`](Self::step) can take over without a
+    /// jump (any hold is released). Use it to face a new path before following it, so the
+    /// sonar looks where the robot goes. A non-finite heading means "stop turning".
+    ///
+    /// ```
+    /// use twil_core::control::{ControlInput, Controller, Pose};
+    /// use twil_core::robot::RobotConfig;
+    /// let mut ctl = Controller::new(&RobotConfig::default(), Pose::new(0.0, 0.0, 0.0));
+    /// let out = ctl.step_turn(
+    ///     ControlInput { elapsed_since_last_step_s: 0.05, ..Default::default() },
+    ///     1.0,
+    /// );
+    /// assert!(out.right_voltage_v > 0.0 && out.left_voltage_v < 0.0); // counter-clockwise
+    /// ```
+    pub fn step_turn(&mut self, input: ControlInput, heading_rad: f32) -> ControlOutput {
+        let m = self.measure(&input);
+        let c = &self.config;
+        let error = if heading_rad.is_finite() {
+            wrap_angle_rad(heading_rad - m.pose.heading_rad)
+        } else {
+            0.0
+        };
+        let limit = c.max_turn_rate_rad_s;
+        let mut turn_rad_s = c.turn_gain_1_s * error;
+        if turn_rad_s > limit {
+            turn_rad_s = limit;
+        } else if turn_rad_s < -limit {
+            turn_rad_s = -limit;
+        }
+        self.held = None;
+        self.model = m.point;
+        self.drive(&m, 0.0, turn_rad_s, m.point)
+    }
+
+    /// Heading error to `heading_rad` from the current odometry pose, wrapped to `(-π, π]`.
+    pub fn heading_error_rad(&self, heading_rad: f32) -> f32 {
+        wrap_angle_rad(heading_rad - self.odometry.pose().heading_rad)
+    }
+
+    /// Odometry and measured wheel speeds for one step.
+    fn measure(&mut self, input: &ControlInput) -> Measured {
+        let c = &self.config;
+        let period = c.controller_period_s;
+        let elapsed = input.elapsed_since_last_step_s;
+        let overrun = elapsed.is_finite() && elapsed > period + OVERRUN_TOLERANCE_S;
+        // Counts accumulate over the real interval; trust it when it is plausible.
+        let dt_s = if elapsed.is_finite() && elapsed >= 0.5 * period && elapsed <= 20.0 * period {
+            elapsed
+        } else {
+            period
+        };
+        let rad_per_count = c.rad_per_count();
+        let left_speed_rad_s = input.encoder_left_delta_counts as f32 * rad_per_count / dt_s;
+        let right_speed_rad_s = input.encoder_right_delta_counts as f32 * rad_per_count / dt_s;
+        let pose = self.odometry.update(
+            input.encoder_left_delta_counts,
+            input.encoder_right_delta_counts,
+        );
+        Measured {
+            dt_s,
+            overrun,
+            left_speed_rad_s,
+            right_speed_rad_s,
+            pose,
+            point: pose.point_ahead(c.point_offset_m),
+        }
+    }
+
+    /// Wheel speed references from a body velocity, limited to what the motors can do, then
+    /// the wheel PIDs.
+    fn drive(
+        &mut self,
+        m: &Measured,
+        forward_m_s: f32,
+        turn_rad_s: f32,
+        reference_model: PointM,
+    ) -> ControlOutput {
+        let c = &self.config;
         let r = c.wheel_radius_m;
         let b = c.half_axle_m;
         let mut right_ref = (forward_m_s + b * turn_rad_s) / r;
@@ -465,33 +545,33 @@ impl Controller {
             right_ref = 0.0;
             left_ref = 0.0;
         }
-
-        let (right_v, right_sat) = self.right_pid.step(right_ref - right_speed, dt);
-        let (left_v, left_sat) = self.left_pid.step(left_ref - left_speed, dt);
-
-        let used_model = self.model;
-        let blend = 1.0 - exp(-dt / tau);
-        let next = PointM::new(
-            self.model.x_m + (target.x_m - self.model.x_m) * blend,
-            self.model.y_m + (target.y_m - self.model.y_m) * blend,
-        );
-        if next.is_finite() {
-            self.model = next;
-        }
-
+        let (right_v, right_sat) = self.right_pid.step(right_ref - m.right_speed_rad_s, m.dt_s);
+        let (left_v, left_sat) = self.left_pid.step(left_ref - m.left_speed_rad_s, m.dt_s);
         self.last = ControlOutput {
             left_voltage_v: left_v,
             right_voltage_v: right_v,
-            pose,
-            control_point: point,
-            reference_model: used_model,
+            pose: m.pose,
+            control_point: m.point,
+            reference_model,
             left_speed_ref_rad_s: left_ref,
             right_speed_ref_rad_s: right_ref,
-            overrun,
+            left_speed_rad_s: m.left_speed_rad_s,
+            right_speed_rad_s: m.right_speed_rad_s,
+            overrun: m.overrun,
             saturated: left_sat || right_sat,
         };
         self.last
     }
+}
+
+/// What [`Controller::measure`] found.
+struct Measured {
+    dt_s: f32,
+    overrun: bool,
+    left_speed_rad_s: f32,
+    right_speed_rad_s: f32,
+    pose: Pose,
+    point: PointM,
 }
 
 #[cfg(test)]
@@ -782,6 +862,64 @@ mod tests {
         assert!(plant.speed_m_s().abs() < 0.01);
         ctl.reset_reference(cp);
         assert!(!ctl.is_holding());
+    }
+
+    #[test]
+    fn turns_in_place_then_follows_without_a_jump() {
+        let c = RobotConfig::default();
+        let start = Pose::new(2.0, 2.0, 0.0);
+        let mut plant = Plant::new(&c, start);
+        let mut ctl = Controller::new(&c, start);
+        let mut counts = (0, 0);
+        let target = 3.0f32; // about 172° to the left
+        let mut steps_turning = 0;
+        let mut input_for = |plant: &Plant| {
+            let now = plant.encoder_counts();
+            let input = ControlInput {
+                reference: PointM::default(),
+                encoder_left_delta_counts: now.0.wrapping_sub(counts.0),
+                encoder_right_delta_counts: now.1.wrapping_sub(counts.1),
+                elapsed_since_last_step_s: 0.05,
+            };
+            counts = now;
+            input
+        };
+        while ctl.heading_error_rad(target).abs() > 0.01 || plant.speed_m_s().abs() > 0.005 {
+            let out = ctl.step_turn(input_for(&plant), target);
+            plant.step(0.05, out.left_voltage_v, out.right_voltage_v);
+            steps_turning += 1;
+            assert!(
+                steps_turning < 400,
+                "turn did not converge: {:?}",
+                plant.pose()
+            );
+        }
+        let p = plant.pose();
+        assert!(
+            (p.x_m - 2.0).abs() < 0.01 && (p.y_m - 2.0).abs() < 0.01,
+            "{p:?}"
+        );
+        assert!((p.heading_rad - target).abs() < 0.03, "{p:?}");
+        // Now follow a reference 1 m ahead along the new heading.
+        let cp = ctl.control_point();
+        let goal = PointM::new(
+            cp.x_m + crate::math::cos(target),
+            cp.y_m + crate::math::sin(target),
+        );
+        let mut first = None;
+        for _ in 0..200 {
+            let mut input = input_for(&plant);
+            input.reference = goal;
+            let out = ctl.step(input);
+            first.get_or_insert(out);
+            plant.step(0.05, out.left_voltage_v, out.right_voltage_v);
+        }
+        let first = first.unwrap();
+        // No jump: the model starts at the control point.
+        assert!(first.reference_model.distance_m(first.control_point) < 0.01);
+        let end = plant.pose().point_ahead(c.point_offset_m);
+        assert!(end.distance_m(goal) < 0.01, "{end:?}");
+        assert!((plant.pose().heading_rad - target).abs() < 0.05);
     }
 
     #[test]
