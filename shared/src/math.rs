@@ -7,9 +7,16 @@
 
 use micromath::F32Ext;
 
-/// Square root (micromath's fast approximation).
+/// Square root to full `f32` precision: see [`sqrt_precise`] (micromath's own square root is a
+/// fast estimate up to 6 % off, too coarse for path lengths and odometry).
 #[inline]
 pub fn sqrt(x: f32) -> f32 {
+    sqrt_precise(x)
+}
+
+/// micromath's fast square-root estimate: the starting point of [`sqrt_precise`].
+#[inline]
+fn sqrt_estimate(x: f32) -> f32 {
     F32Ext::sqrt(x)
 }
 
@@ -132,7 +139,7 @@ pub fn ln(x: f32) -> f32 {
     series + e as f32 * core::f32::consts::LN_2
 }
 
-/// Square root to full `f32` precision (within an ulp): micromath's [`sqrt`] is a fast estimate
+/// Square root to full `f32` precision (within an ulp): micromath's square root is a fast estimate
 /// that can be 6 % off (`sqrt(2.25)` gives 1.5625), refined here by three Newton steps, which
 /// are plain arithmetic and so identical on every target. `NaN` for negative or `NaN` input.
 pub fn sqrt_precise(x: f32) -> f32 {
@@ -148,7 +155,7 @@ pub fn sqrt_precise(x: f32) -> f32 {
     } else {
         (x, 1.0)
     };
-    let mut y = sqrt(v);
+    let mut y = sqrt_estimate(v);
     if !(y.is_finite() && y > 0.0) {
         y = v;
     }
