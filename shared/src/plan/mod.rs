@@ -292,15 +292,18 @@ const BUCKETS: usize = 33;
 /// below the last key popped, which A* with a consistent heuristic guarantees for `f`.
 ///
 /// Buckets are singly linked lists threaded through the pool, so a push is O(1) (link at the
-/// head of its bucket) and a pop is O(1) from bucket 0, or, when bucket 0 is empty, one pass over
-/// the lowest non-empty bucket to find its minimum (the new reference key) and to relink its
-/// entries into lower buckets. Each entry moves down at most 32 times; in practice once or twice,
-/// since `f` grows slowly. Within bucket 0 (equal `f`) the last pushed entry pops first: the
-/// children of the cell just expanded, i.e. the deeper entries (larger `g`), which on open floors
-/// keeps the search on one straight line instead of flooding every cell of equal `f`.
+/// head of its bucket, update the bucket's minimum) and a pop is O(1) from bucket 0, or, when
+/// bucket 0 is empty, one pass over the lowest non-empty bucket that relinks its entries into
+/// lower buckets relative to the bucket's minimum (the new reference key). Each entry moves down
+/// at most 32 times; in practice once or twice, since `f` grows slowly. Entries that went stale
+/// (their cell was closed meanwhile) are dropped during that pass instead of being moved.
+/// Within bucket 0 (equal `f`) the last pushed entry pops first: the children of the cell just
+/// expanded, i.e. the deeper entries (larger `g`), which on open floors keeps the search on one
+/// straight line instead of flooding every cell of equal `f`.
 struct RadixQueue<'a> {
     pool: &'a mut [OpenEntry],
     heads: [u32; BUCKETS],
+    mins: [u32; BUCKETS],
     nonempty: u64,
     last: u32,
     bump: u32,
@@ -312,6 +315,7 @@ impl<'a> RadixQueue<'a> {
         Self {
             pool,
             heads: [NIL; BUCKETS],
+            mins: [u32::MAX; BUCKETS],
             nonempty: 0,
             last: 0,
             bump: 0,
@@ -345,38 +349,41 @@ impl<'a> RadixQueue<'a> {
             next: self.heads[b],
         };
         self.heads[b] = slot;
+        self.mins[b] = self.mins[b].min(key);
         self.nonempty |= 1 << b;
         true
     }
 
-    /// Remove an entry of the smallest key: `(key, node)`.
+    /// Remove an entry of the smallest key: `(key, node)`. `stale(node)` tells which entries
+    /// may be dropped unseen when a bucket is redistributed.
     #[inline(always)]
-    fn pop(&mut self) -> Option<(u32, u32)> {
-        if self.heads[0] == NIL {
+    fn pop(&mut self, stale: impl Fn(u32) -> bool) -> Option<(u32, u32)> {
+        while self.heads[0] == NIL {
             let rest = self.nonempty & !1;
             if rest == 0 {
                 return None;
             }
             let b = rest.trailing_zeros() as usize;
-            let mut min = u32::MAX;
-            let mut slot = self.heads[b];
-            while slot != NIL {
-                let e = self.pool[slot as usize];
-                min = min.min(e.f);
-                slot = e.next;
-            }
+            let min = self.mins[b];
             self.last = min;
-            slot = self.heads[b];
+            let mut slot = self.heads[b];
             self.heads[b] = NIL;
+            self.mins[b] = u32::MAX;
             self.nonempty &= !(1 << b);
             while slot != NIL {
                 let e = &mut self.pool[slot as usize];
                 let next = e.next;
-                let diff = e.f ^ min;
-                let nb = (u32::BITS - diff.leading_zeros()) as usize;
-                e.next = self.heads[nb];
-                self.heads[nb] = slot;
-                self.nonempty |= 1 << nb;
+                if stale(e.node) {
+                    e.next = self.free;
+                    self.free = slot;
+                } else {
+                    let key = e.f;
+                    let nb = (u32::BITS - (key ^ min).leading_zeros()) as usize;
+                    e.next = self.heads[nb];
+                    self.heads[nb] = slot;
+                    self.mins[nb] = self.mins[nb].min(key);
+                    self.nonempty |= 1 << nb;
+                }
                 slot = next;
             }
         }
@@ -385,6 +392,7 @@ impl<'a> RadixQueue<'a> {
         self.heads[0] = e.next;
         if e.next == NIL {
             self.nonempty &= !1;
+            self.mins[0] = u32::MAX;
         }
         self.pool[slot as usize].next = self.free;
         self.free = slot;
@@ -737,7 +745,9 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             return Err(full);
         }
 
-        while let Some((f, node)) = open.pop() {
+        let unpack_index =
+            |node: u32| (node >> 16) as usize * width + ((node >> 4) & 0xFFF) as usize;
+        while let Some((f, node)) = open.pop(|node| nibble(scratch, unpack_index(node)) != 0) {
             let x = ((node >> 4) & 0xFFF) as usize;
             let y = (node >> 16) as usize;
             let index = y * width + x;
