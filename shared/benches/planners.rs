@@ -153,7 +153,7 @@ fn race<A, B, C>(
     mut c: impl FnMut() -> C,
 ) -> ([Duration; 3], A, B, C) {
     let mut best = [Duration::MAX; 3];
-    let mut once = |best: &mut Duration, f: &mut dyn FnMut()| {
+    let once = |best: &mut Duration, f: &mut dyn FnMut()| {
         let t0 = Instant::now();
         f();
         *best = (*best).min(t0.elapsed());
