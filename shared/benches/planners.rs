@@ -200,29 +200,42 @@ fn main() {
     );
     println!("pf = pathfinding 4 with allocation-free successors, pf-vec = with Vec successors");
     println!(
-        "{:<9} {:<9} {:>9} {:>9} {:>7} {:>9} {:>7} {:>10} {:>9}",
-        "case", "planner", "ours_us", "pf_us", "ratio", "pf-vec_us", "ratio", "cost", "expanded"
+        "{:<9} {:<9} {:>9} {:>9} {:>7} {:>9} {:>7} {:>10} {:>9} {:>6}",
+        "case",
+        "planner",
+        "ours_us",
+        "pf_us",
+        "ratio",
+        "pf-vec_us",
+        "ratio",
+        "cost",
+        "expanded",
+        "peak_q"
     );
     let mut ok = true;
-    let mut row =
-        |name: &str, algo: &str, t: [Duration; 3], ours: PlanReport, theirs: [Option<u32>; 2]| {
-            let same =
-                ours.status == PlanStatus::Found && theirs.iter().all(|c| *c == Some(ours.cost));
-            ok &= same;
-            println!(
-                "{:<9} {:<9} {:>9.0} {:>9.0} {:>6.1}x {:>9.0} {:>6.1}x {:>10} {:>9}{}",
-                name,
-                algo,
-                us(t[0]),
-                us(t[1]),
-                us(t[1]) / us(t[0]),
-                us(t[2]),
-                us(t[2]) / us(t[0]),
-                ours.cost,
-                ours.expanded,
-                if same { "" } else { "  COST MISMATCH" }
-            );
-        };
+    let mut row = |name: &str,
+                   algo: &str,
+                   t: [Duration; 3],
+                   ours: PlanReport,
+                   peak: u32,
+                   theirs: [Option<u32>; 2]| {
+        let same = ours.status == PlanStatus::Found && theirs.iter().all(|c| *c == Some(ours.cost));
+        ok &= same;
+        println!(
+            "{:<9} {:<9} {:>9.0} {:>9.0} {:>6.1}x {:>9.0} {:>6.1}x {:>10} {:>9} {:>6}{}",
+            name,
+            algo,
+            us(t[0]),
+            us(t[1]),
+            us(t[1]) / us(t[0]),
+            us(t[2]),
+            us(t[2]) / us(t[0]),
+            ours.cost,
+            ours.expanded,
+            peak,
+            if same { "" } else { "  COST MISMATCH" }
+        );
+    };
     let mut any_rows = Vec::new();
     for (name, (g, s, t)) in &cases {
         let (s, t) = (*s, *t);
@@ -241,7 +254,14 @@ fn main() {
             },
         );
         let steps = |p: Option<Vec<Node>>| p.map(|p| p.len() as u32 - 1);
-        row(name, "bfs", times, ours, [steps(theirs), steps(theirs_vec)]);
+        row(
+            name,
+            "bfs",
+            times,
+            ours,
+            planner.queue_peak(),
+            [steps(theirs), steps(theirs_vec)],
+        );
 
         let (times, ours, theirs, theirs_vec) = race(
             repeats,
@@ -264,7 +284,14 @@ fn main() {
             },
         );
         let cost = |p: Option<(Vec<Node>, u32)>| p.map(|(_, c)| c);
-        row(name, "astar", times, ours, [cost(theirs), cost(theirs_vec)]);
+        row(
+            name,
+            "astar",
+            times,
+            ours,
+            planner.queue_peak(),
+            [cost(theirs), cost(theirs_vec)],
+        );
 
         let mut best = Duration::MAX;
         let mut any = None;

@@ -26,32 +26,46 @@
 //! | 9         | the start cell (no parent)                                     |
 //! | 10 ..= 15 | unused                                                         |
 //!
-//! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`),
-//! plus the queue: 12 bytes per entry (`QUEUE = 4096` → 49 152 bytes), plus the vertex buffer
-//! of [`MAX_PATH_POINTS`] cells (4 096 bytes). Nothing else is allocated; the grid itself is
-//! only read.
+//! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
+//! [`SCRATCH_WORDS_300`]), plus the queue: 12 bytes per entry (`QUEUE = 4096` → 49 152 bytes),
+//! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (4 096 bytes). Nothing else is
+//! allocated; the grid itself is only read. [`Planner::queue_peak`] tells how much of the queue
+//! a search used (on the benchmark's 300 × 300 grids: BFS ≤ 600 entries, A* ≤ 3 800).
 //!
 //! ## Why A* needs no g-table
 //!
 //! A textbook A* keeps the best known cost `g` of every cell so that it can decrease a key in the
-//! open list. Here the open list is a binary min-heap of `(f, g, cell, step)` entries with *lazy
-//! deletion*: a cell may be pushed several times (once per improving neighbour), and only its
-//! first pop counts. Because the octile heuristic is consistent for these integer costs (it is
-//! the exact cost on an empty grid, a metric), the first time a cell leaves the heap its `g` is
-//! optimal, so the pop writes the parent step into the cell's nibble and later pops of the same
-//! cell are skipped. Cells already closed are never pushed again, which keeps duplicates rare.
-//! Ties on `f` pop the entry with the larger `g` first (deepest first), which on open floors
-//! walks straight to the goal instead of flooding the whole diamond of equal-`f` cells.
+//! open list. Here the open list holds `(f, cell, step)` entries with *lazy deletion*: a cell may
+//! be pushed several times (once per neighbour that reaches it), and only its first pop counts.
+//! Because the octile heuristic is consistent for these integer costs (it is the exact cost on an
+//! empty grid, a metric), the first time a cell leaves the open list at the minimum `f` its `g`
+//! is optimal, so the pop writes the parent step into the cell's nibble and later entries of the
+//! same cell are skipped. Cells already closed are never pushed again. `g` itself is not stored:
+//! it is `f - h(cell)`.
+//!
+//! The open list is a *radix heap* (a monotone priority queue: a consistent heuristic never
+//! pushes an `f` below the last one popped): 33 buckets by the highest bit in which a key differs
+//! from the last popped key, each a linked list threaded through the fixed pool of entries. A
+//! push is O(1); a pop takes the head of bucket 0 (keys equal to the last) or, when that is
+//! empty, relinks the lowest non-empty bucket around its minimum, dropping entries whose cell
+//! was closed meanwhile. On the benchmark this is 6–8× faster than the binary heap it replaced.
+//! Ties on `f` pop the last pushed entry first: the children of the cell just expanded, i.e. the
+//! deeper entries, which on open floors walks straight to the goal instead of flooding the whole
+//! diamond of equal-`f` cells (294 cells expanded corner to corner on an empty 300 × 300 grid).
 //!
 //! BFS marks a cell (with its parent step) when it is first *discovered*: in a FIFO queue the
 //! first discovery is by a fewest-steps parent, so every cell enters the ring buffer at most once.
 //!
+//! Search loops carry cell coordinates in their queue entries (no division per cell) and test
+//! the 8 neighbours with index arithmetic on the row-major bit and nibble arrays.
+//!
 //! ## Complexity
 //!
-//! BFS: `O(n)` time for `n` free cells. A*: `O(n log q)` with `q` the open-list size (each cell
-//! is pushed at most 8 times). Clearing the scratch costs `n / 8` word writes. Rebuilding the
-//! path walks the parent steps from the goal back to the start: `O(path cells)`, plus, for the
-//! any-angle planner, one line-of-sight test per path cell (`O(path cells × segment length)`).
+//! BFS: `O(n)` time for `n` free cells. A*: `O(n · 8)` pushes, each O(1), and pops amortized
+//! O(log C) for the cost range `C` (32-bit keys: at most 32 moves per entry). Clearing the
+//! scratch costs `n / 8` word writes. Rebuilding the path walks the parent steps from the goal
+//! back to the start: `O(path cells)`, plus, for the any-angle planner, one line-of-sight test
+//! per path cell (`O(path cells × segment length)`).
 //!
 //! ## Any-angle
 //!
@@ -444,6 +458,7 @@ pub struct Planner<const SCRATCH_WORDS: usize, const QUEUE: usize> {
     queue: [OpenEntry; QUEUE],
     cells: PathCells,
     last: Option<PlanReport>,
+    queue_peak: u32,
 }
 
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEUE> {
@@ -457,6 +472,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             queue: [OpenEntry::ZERO; QUEUE],
             cells: Vec::new(),
             last: None,
+            queue_peak: 0,
         }
     }
 
@@ -516,6 +532,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     ) -> Result<PlanReport, PlanError> {
         self.cells.clear();
         self.last = None;
+        self.queue_peak = 0;
         let geometry = *grid.geometry();
         self.check_scratch(&geometry)?;
         let inside = |c: Cell| geometry.contains_xy(c.x as i32, c.y as i32);
@@ -600,6 +617,12 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         self.last
     }
 
+    /// Most queue entries in use at once during the last search (BFS: ring-buffer entries;
+    /// A*: open-list entries, stale ones included). Size `QUEUE` from this on your maps.
+    pub fn queue_peak(&self) -> u32 {
+        self.queue_peak
+    }
+
     fn check_scratch(&self, geometry: &GridGeometry) -> Result<(), PlanError> {
         if geometry.cell_count() > Self::CAPACITY_CELLS {
             return Err(PlanError::ScratchTooSmall {
@@ -627,6 +650,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             capacity: capacity as u32,
         };
         let (mut head, mut tail, mut count) = (0usize, 0usize, 0usize);
+        let mut peak = 1usize;
         let mut expanded = 0u32;
 
         set_nibble(scratch, start, CODE_START);
@@ -666,6 +690,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     if nibble(scratch, n) == 0 {
                         set_nibble(scratch, n, $code);
                         if n == goal {
+                            self.queue_peak = peak as u32;
                             return Ok(Search {
                                 found: true,
                                 expanded,
@@ -673,6 +698,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                             });
                         }
                         if count == capacity {
+                            self.queue_peak = peak as u32;
                             return Err(full);
                         }
                         if let Some(slot) = queue.get_mut(tail) {
@@ -681,6 +707,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                         }
                         tail = if tail + 1 == capacity { 0 } else { tail + 1 };
                         count += 1;
+                        peak = peak.max(count);
                     }
                 }};
             }
@@ -710,6 +737,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 visit!(index - width + 1, x + 1, y - 1, SE);
             }
         }
+        self.queue_peak = peak as u32;
         Ok(Search {
             found: false,
             expanded,
@@ -760,6 +788,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             // grids that fit a planner's scratch).
             let g = f.wrapping_sub(h(x, y));
             if index == goal {
+                self.queue_peak = open.bump;
                 return Ok(Search {
                     found: true,
                     expanded,
@@ -778,6 +807,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     if nibble(scratch, n) == 0 {
                         let f = g.saturating_add($cost).saturating_add(h($nx, $ny));
                         if !open.push(f, pack($nx, $ny, $code)) {
+                            self.queue_peak = open.bump;
                             return Err(full);
                         }
                     }
@@ -809,6 +839,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 visit!(index - width + 1, x + 1, y - 1, DIAGONAL_COST, SE);
             }
         }
+        self.queue_peak = open.bump;
         Ok(Search {
             found: false,
             expanded,
