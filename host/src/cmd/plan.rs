@@ -252,7 +252,7 @@ pub fn plan(world: &World, kind: PlannerKind) -> anyhow::Result<Outcome> {
     let result = std::thread::scope(|scope| {
         std::thread::Builder::new()
             .name("planner".into())
-            .stack_size(256 * 1024 * 1024)
+            .stack_size(64 * 1024 * 1024)
             .spawn_scoped(scope, move || {
                 let mut planner = HostPlanner::new();
                 let mut path = PathM::new();
@@ -351,7 +351,7 @@ pub fn summary(world: &World, outcome: &Outcome) -> String {
 }
 
 /// Draw `world` and `outcome` to a PNG: faint metre lines, grown obstacles (light orange),
-/// saved-map cells (grey), the obstacle polygons (dark, filled faintly, outlined), the path
+/// saved-map cells (grey), the obstacle polygons (grey, filled, outlined dark), the path
 /// (blue, with its vertices), the robot's size at the start (a disc with its heading), start
 /// (green disc) and goal (red diamond), and a two-line caption (legend, result).
 pub fn render_png(
@@ -369,9 +369,7 @@ pub fn render_png(
         c.draw_grid(saved, palette::OBSTACLE);
     }
     c.draw_grid(&world.raw, palette::OBSTACLE);
-    c.set_opacity(0.45);
     c.fill_polygons(&world.obstacles, palette::OBSTACLE);
-    c.set_opacity(1.0);
     c.draw_polygons(&world.obstacles, palette::POLYGON, 1.0);
     let p = &world.params;
     c.draw_robot(
@@ -381,11 +379,11 @@ pub fn render_png(
         palette::ROBOT,
     );
     c.draw_polyline(&outcome.path, palette::PATH, 3.0);
-    if outcome.path.len() <= 64 {
+    if outcome.path.len() <= 16 {
         c.draw_points(&outcome.path, 3.0, palette::PATH);
     }
-    c.draw_marker(p.start, Marker::Disc, 12, palette::START);
-    c.draw_marker(p.goal, Marker::Diamond, 14, palette::GOAL);
+    c.draw_marker(p.start, Marker::Disc, 14, palette::START);
+    c.draw_marker(p.goal, Marker::Diamond, 18, palette::GOAL);
     let mut legend = vec![
         ("obstacle", palette::OBSTACLE),
         ("grown by radius", palette::EXPANSION),
