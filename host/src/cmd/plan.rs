@@ -285,10 +285,11 @@ pub struct PlanJson {
     pub status: &'static str,
     /// `bfs`, `astar` or `anyangle`.
     pub planner: &'static str,
-    /// The path, `[x, y]` in world metres, start to goal (empty unless found).
-    pub path: Vec<[f32; 2]>,
-    /// Euclidean length of the path, metres.
-    pub length_m: f32,
+    /// The path, `[x, y]` in world metres, start to goal (empty unless found), rounded to
+    /// 0.1 mm so that `f32` noise (`7.5750003`) does not show.
+    pub path: Vec<[f64; 2]>,
+    /// Euclidean length of the path, metres, rounded to 0.1 mm.
+    pub length_m: f64,
     /// Cells expanded by the planner.
     pub expanded: u32,
     /// Planner wall-clock time, microseconds.
@@ -298,13 +299,22 @@ pub struct PlanJson {
     pub extra: serde_json::Map<String, serde_json::Value>,
 }
 
+/// Metres rounded to 0.1 mm, as `f64` so that the JSON shows the short decimal.
+pub fn round_m(value_m: f32) -> f64 {
+    (value_m as f64 * 1e4).round() / 1e4
+}
+
 /// The JSON object for a planning outcome (add fields to `extra` before printing).
 pub fn plan_json(outcome: &Outcome) -> PlanJson {
     PlanJson {
         status: status_name(outcome.report.status),
         planner: planner_name(outcome.kind),
-        path: outcome.path.iter().map(|p| [p.x_m, p.y_m]).collect(),
-        length_m: outcome.report.length_m,
+        path: outcome
+            .path
+            .iter()
+            .map(|p| [round_m(p.x_m), round_m(p.y_m)])
+            .collect(),
+        length_m: round_m(outcome.report.length_m),
         expanded: outcome.report.expanded,
         elapsed_us: outcome.elapsed_us,
         extra: serde_json::Map::new(),
@@ -353,7 +363,8 @@ pub fn summary(world: &World, outcome: &Outcome) -> String {
 /// Draw `world` and `outcome` to a PNG: faint metre lines, grown obstacles (light orange),
 /// saved-map cells (grey), the obstacle polygons (grey, filled, outlined dark), the path
 /// (blue, with its vertices), the robot's size at the start (a disc with its heading), start
-/// (green disc) and goal (red diamond), and a two-line caption (legend, result).
+/// (green disc) and goal (red diamond), and a two-line caption (legend, result). Missing
+/// parent folders of `out` are created.
 pub fn render_png(
     world: &World,
     outcome: &Outcome,
@@ -411,6 +422,10 @@ pub fn render_png(
         g.resolution_m()
     ));
     c.caption_text(1, &result, palette::TEXT);
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("{}: cannot create the folder", parent.display()))?;
+    }
     c.save_png(out)?;
     Ok(())
 }
@@ -473,13 +488,13 @@ mod tests {
                 cost: 0,
                 length_m: 1.5,
             },
-            path: vec![PointM::new(0.25, 0.5), PointM::new(1.75, 0.5)],
+            path: vec![PointM::new(0.25, 0.5), PointM::new(7.575_000_3, 0.5)],
             elapsed_us: 3,
         };
         let mut json = plan_json(&outcome);
         assert_eq!(
             serde_json::to_string(&json).unwrap(),
-            r#"{"status":"found","planner":"anyangle","path":[[0.25,0.5],[1.75,0.5]],"length_m":1.5,"expanded":7,"elapsed_us":3}"#
+            r#"{"status":"found","planner":"anyangle","path":[[0.25,0.5],[7.575,0.5]],"length_m":1.5,"expanded":7,"elapsed_us":3}"#
         );
         json.extra.insert("static_ram_bytes".into(), 42.into());
         assert!(serde_json::to_string(&json)
