@@ -115,12 +115,12 @@ pub enum RenderError {
         px_per_cell: u32,
     },
     /// Writing the file failed.
-    #[error("{path}: cannot write the picture: {source}")]
+    #[error("{path}: cannot write the picture: {error}")]
     Save {
         /// The file.
         path: String,
-        /// Why.
-        source: image::ImageError,
+        /// Why (part of the message, so not also a `source`).
+        error: image::ImageError,
     },
 }
 
@@ -255,9 +255,9 @@ impl Canvas {
     pub fn save_png(&self, path: &Path) -> Result<(), RenderError> {
         self.image
             .save_with_format(path, image::ImageFormat::Png)
-            .map_err(|source| RenderError::Save {
+            .map_err(|error| RenderError::Save {
                 path: path.display().to_string(),
-                source,
+                error,
             })
     }
 

@@ -166,24 +166,32 @@ pub struct World {
 /// The geometry for a size and resolution, refused with a clear message when it does not fit
 /// a [`Grid400`].
 pub fn geometry_for(size: SizeM, resolution_m: f32) -> anyhow::Result<GridGeometry> {
-    let g = GridGeometry::from_size_m(size.width_m, size.height_m, resolution_m).map_err(|e| {
+    let what = format!(
+        "--size {}x{} m at --resolution {resolution_m} m",
+        size.width_m, size.height_m
+    );
+    if !(resolution_m.is_finite() && resolution_m > 0.0) {
+        bail!("{what}: the resolution must be a positive number of metres");
+    }
+    if resolution_m > size.width_m.min(size.height_m) {
+        bail!("{what}: a cell is larger than the map");
+    }
+    // Cells per side, computed in f64 so that absurd values give a readable count.
+    let cells = |side_m: f32| (side_m as f64 / resolution_m as f64).ceil();
+    let (w, h) = (cells(size.width_m), cells(size.height_m));
+    let too_big = || {
         anyhow::anyhow!(
-            "--size {}x{} at --resolution {resolution_m}: {e}",
-            size.width_m,
-            size.height_m
+            "{what} needs about {w:.0}x{h:.0} cells, more than the {HOST_CELLS} cells (400x400) \
+             of the host grid; use a coarser --resolution or a smaller --size"
         )
-    })?;
+    };
+    if w * h > HOST_CELLS as f64 * 1.01 {
+        return Err(too_big());
+    }
+    let g = GridGeometry::from_size_m(size.width_m, size.height_m, resolution_m)
+        .map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
     if g.cell_count() > HOST_CELLS || Grid400::new(g).is_err() {
-        bail!(
-            "--size {}x{} m at --resolution {} m needs {}x{} cells, more than the {} cells \
-             (400x400) of the host grid; use a coarser --resolution or a smaller --size",
-            size.width_m,
-            size.height_m,
-            resolution_m,
-            g.width(),
-            g.height(),
-            HOST_CELLS
-        );
+        return Err(too_big());
     }
     Ok(g)
 }
@@ -435,8 +443,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let world = load(&args)?;
     let outcome = plan(&world, args.planner.into())?;
     if let Some(out) = &args.png {
-        render_png(&world, &outcome, out, args.scale)
-            .with_context(|| format!("drawing {}", out.display()))?;
+        render_png(&world, &outcome, out, args.scale)?;
     }
     if args.json {
         println!("{}", serde_json::to_string(&plan_json(&outcome))?);
@@ -475,7 +482,15 @@ mod tests {
         let e = geometry_for(parse_size("30x15").unwrap(), 0.05).unwrap_err();
         assert!(e.to_string().contains("600x300 cells"), "{e}");
         assert!(geometry_for(parse_size("15").unwrap(), 0.0).is_err());
-        assert!(geometry_for(parse_size("1e9").unwrap(), 0.05).is_err());
+        let e = geometry_for(parse_size("1e9").unwrap(), 0.05).unwrap_err();
+        assert!(
+            e.to_string().contains("20000000000x20000000000 cells"),
+            "{e}"
+        );
+        let e = geometry_for(parse_size("15").unwrap(), 1.0e-30).unwrap_err();
+        assert!(e.to_string().contains("400x400"), "{e}");
+        let e = geometry_for(parse_size("15").unwrap(), 1.0e30).unwrap_err();
+        assert!(e.to_string().contains("larger than the map"), "{e}");
     }
 
     #[test]
