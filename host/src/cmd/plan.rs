@@ -483,10 +483,7 @@ mod tests {
         assert!(e.to_string().contains("600x300 cells"), "{e}");
         assert!(geometry_for(parse_size("15").unwrap(), 0.0).is_err());
         let e = geometry_for(parse_size("1e9").unwrap(), 0.05).unwrap_err();
-        assert!(
-            e.to_string().contains("20000000000x20000000000 cells"),
-            "{e}"
-        );
+        assert!(e.to_string().contains("cells, more than the 160000"), "{e}");
         let e = geometry_for(parse_size("15").unwrap(), 1.0e-30).unwrap_err();
         assert!(e.to_string().contains("400x400"), "{e}");
         let e = geometry_for(parse_size("15").unwrap(), 1.0e30).unwrap_err();
