@@ -2,3 +2,5 @@
 //! other tools share it.
 
 pub mod cmd;
+pub mod render;
+pub mod world_io;
