@@ -186,3 +186,28 @@ fn malformed_input_names_file_line_and_value() {
     assert_eq!(json["status"], "goal_blocked");
     assert_eq!(json["path"], serde_json::json!([]));
 }
+
+#[test]
+fn manipulator_case_with_the_reconstructed_second_arm() {
+    // Section 4.1 / appendix A: obstacles and arm 1 from A.1, arm 2's polygon reconstructed
+    // (A.1's transcription stops before it). The thesis' path (A.3) read 1-based goes from
+    // (0°, -75°) to (184°, 36°).
+    let rob = std::fs::read_to_string(common::world("seed000-arm.ROB")).unwrap();
+    let tra = std::fs::read_to_string(common::world("seed000-arm.TRA")).unwrap();
+    let robot = parse_rob(&rob).unwrap();
+    let thesis = Trajectory::parse(&tra).unwrap();
+    assert_eq!(thesis.value(0), Some([0.0, -75.0]));
+    assert_eq!(thesis.value(thesis.points.len() - 1), Some([184.0, 36.0]));
+    let map = ConfigMap::build(&robot, thesis.increments).unwrap();
+    // -30..210 by 2 → 121 values; -120..120 by 3 → 81 values.
+    assert_eq!(map.size(), (121, 81));
+    let mut search = Box::new(Search::new());
+    let report = search
+        .run(&map, [0.0, -75.0], [184.0, 36.0], NodeSet::Corners)
+        .unwrap();
+    assert_eq!(report.status, SearchStatus::Found);
+    assert!(path_is_free(&map, &report.path));
+    let theirs = thesis_length(&thesis);
+    assert!(path_is_free(&map, &thesis.to_map_indices()));
+    assert!(report.length <= theirs, "{} > {theirs}", report.length);
+}

@@ -43,10 +43,12 @@ pub enum Ink {
     Ghost,
     /// Light grid / frame lines.
     Light,
+    /// Outline of earlier arm positions.
+    GhostEdge,
 }
 
 /// RGB of each [`Ink`], in order.
-pub const PALETTE: [[u8; 3]; 13] = [
+pub const PALETTE: [[u8; 3]; 14] = [
     [255, 255, 255],
     [20, 20, 20],
     [150, 170, 205],
@@ -60,6 +62,7 @@ pub const PALETTE: [[u8; 3]; 13] = [
     [30, 160, 150],
     [200, 200, 210],
     [225, 225, 225],
+    [150, 150, 165],
 ];
 
 /// An indexed image.
@@ -499,7 +502,7 @@ impl WorkPanel {
                 (false, 0) => Ink::Arm1,
                 (false, _) => Ink::Arm2,
             };
-            let outline = if ghost { Ink::Ghost } else { Ink::Black };
+            let outline = if ghost { Ink::GhostEdge } else { Ink::Black };
             for poly in &scene.robot.joints[k].polygons {
                 self.polygon(c, poly, f, ink, outline);
             }
@@ -584,7 +587,7 @@ pub fn picture(scene: &Scene<'_>) -> Canvas {
     let map = map_panel(scene);
     let work = WorkPanel::new(scene, PANEL_H.max(map.canvas.height));
     let mut right = work.background(scene);
-    let samples = resample(scene.path, 9);
+    let samples = resample(scene.path, 7);
     for q in samples.iter().skip(1).take(samples.len().saturating_sub(2)) {
         work.arm(&mut right, scene, *q, true);
     }

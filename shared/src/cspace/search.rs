@@ -557,6 +557,29 @@ mod tests {
     }
 
     #[test]
+    fn wrap_around_goes_the_long_way_when_the_short_one_is_blocked() {
+        // Arm 1 (a 10-unit segment) turns fully; a post at (0, 10) blocks it near 90°. From 45°
+        // to 135° the direct way crosses 90°, so the path goes round through ±180°: 270°.
+        let robot =
+            parse_rob("1 4 -1 9 1 9 1 11 -1 11\n2\nR 10 -180 180 1 2 0 0 -10 0\nR 5 -10 10 0\n")
+                .unwrap();
+        let map = ConfigMap::build(&robot, [5.0, 5.0]).unwrap();
+        assert!(map.axes()[0].wraps);
+        let mut s = Box::new(Search::new());
+        let r = s
+            .run(&map, [45.0, 0.0], [135.0, 0.0], NodeSet::Corners)
+            .unwrap();
+        assert_eq!(r.status, SearchStatus::Found);
+        assert!((r.length - 270.0).abs() < 1e-3, "{}", r.length);
+        assert!(path_is_free(&map, &r.path));
+        // Unwrapped: the path leaves the first turn (index < 0) instead of jumping across.
+        assert!(r.path.iter().any(|p| p[0] < 0), "{:?}", r.path);
+        for w in r.path.windows(2) {
+            assert!((w[1][0] - w[0][0]).abs() <= 72 / 2 + 18);
+        }
+    }
+
+    #[test]
     fn the_all_node_set_is_never_longer_than_corners() {
         let wall: StdVec<(i32, i32)> = (2..=9)
             .map(|y| (4, y))
