@@ -9,6 +9,7 @@
 //! The exit code is 0 whenever the search ran, whatever its status (`found`, `unreachable`,
 //! `start_blocked`, ...); it is 1 for unreadable or malformed files and impossible increments.
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
@@ -240,28 +241,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         line_tests: report.line_tests,
         compare: compare.map(|c| c.1),
     };
+    let mut text = String::new();
     if args.json {
-        println!("{}", serde_json::to_string(&summary)?);
+        text = serde_json::to_string(&summary)?;
+        text.push('\n');
     } else {
-        println!(
+        use std::fmt::Write as _;
+        writeln!(
+            text,
             "map {nc} x {nl} (joint 1 x joint 2), {} free of {}",
             summary.free_cells,
             nc as usize * nl as usize
-        );
-        println!(
-            "status {}: {} corners, length {:.3} (joint units); {} nodes, {} expanded, {} line tests",
+        )?;
+        writeln!(
+            text,
+            "status {}: {} points, length {:.3} (joint units); {} nodes, {} expanded, {} line tests",
             summary.status,
             summary.path.len(),
             summary.length,
             summary.nodes,
             summary.expanded,
             summary.line_tests
-        );
+        )?;
         for q in &summary.path {
-            println!("  {:>9.3} {:>9.3}", q[0], q[1]);
+            writeln!(text, "  {:>9.3} {:>9.3}", q[0], q[1])?;
         }
         if let Some(c) = &summary.compare {
-            println!(
+            writeln!(
+                text,
                 "reference path: length {:.3}, {} on this map",
                 c.length,
                 if c.free {
@@ -269,8 +276,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 } else {
                     "NOT collision-free"
                 }
-            );
+            )?;
         }
     }
-    Ok(())
+    // A closed pipe (`| head`) is not an error worth a panic.
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(anyhow::Error::new(e).context("writing to stdout"))
+        }
+        _ => Ok(()),
+    }
 }

@@ -44,8 +44,8 @@ use crate::grid::{words_for_cells, Grid, GridGeometry};
 use crate::math;
 use crate::world::ParseErrorKind;
 
-/// Most cells in one configuration map (8 KiB of bits).
-pub const MAX_MAP_CELLS: usize = 65_536;
+/// Most cells in one configuration map (16 KiB of bits).
+pub const MAX_MAP_CELLS: usize = 131_072;
 /// Most values of one joint.
 pub const MAX_AXIS_CELLS: usize = 4096;
 /// Characters kept of the input file name written in `.MAP` and `.TRA` headers.
