@@ -339,3 +339,26 @@ mod tests {
         assert!(matches!(e.kind, ParseErrorKind::OutOfRange { .. }));
     }
 }
+
+#[cfg(test)]
+mod fuzz {
+    use crate::cspace::{map::ConfigMap, rob::parse_rob, tra::Trajectory};
+    use proptest::prelude::*;
+
+    proptest! {
+        /// No text makes a reader panic; it returns a value or an error.
+        #[test]
+        fn readers_never_panic(text in "[0-9 PRrpx%.\\n\\t-]{0,200}") {
+            let _ = parse_rob(&text);
+            let _ = Trajectory::parse(&text);
+            let _ = ConfigMap::parse_map(&text, [false, true]);
+        }
+
+        #[test]
+        fn readers_never_panic_on_any_unicode(text in "\\PC{0,120}") {
+            let _ = parse_rob(&text);
+            let _ = Trajectory::parse(&text);
+            let _ = ConfigMap::parse_map(&text, [true, false]);
+        }
+    }
+}
