@@ -19,7 +19,7 @@
 //! consecutive points are always joined by the straight motion that was checked.
 //!
 //! **Memory.** Nodes live in fixed arrays of [`MAX_NODES`] entries inside [`Search`] (about
-//! 80 KiB; keep it in a `static` or on the heap of a host); the open list is a flag per node and
+//! 60 KiB; keep it in a `static` or on the heap of a host); the open list is a flag per node and
 //! the best open node is found by a scan, so nothing can overflow during the search itself.
 //!
 //! ```
