@@ -211,3 +211,73 @@ fn manipulator_case_with_the_reconstructed_second_arm() {
     assert!(path_is_free(&map, &thesis.to_map_indices()));
     assert!(report.length <= theirs, "{} > {theirs}", report.length);
 }
+
+/// A full-turn shoulder with a post straight above it: to swing from 60° to 120° the arm must
+/// go round the back, through the seam of the map at ±180°.
+const WRAP_ROB: &str = "% full-turn shoulder, post above
+1
+4  -5 40  5 40  5 50  -5 50
+2
+R 40 -180 180
+1
+4  0 -3  -40 -3  -40 3  0 3
+R 25 -150 150
+1
+4  0 -2  -25 -2  -25 2  0 2
+";
+
+#[test]
+fn a_full_turn_joint_wraps_through_the_seam() {
+    let dir = tempfile::tempdir().unwrap();
+    let rob = dir.path().join("wrap.ROB");
+    std::fs::write(&rob, WRAP_ROB).unwrap();
+    let result = common::twil()
+        .args(["cspace", "--rob"])
+        .arg(&rob)
+        .args([
+            "--increments",
+            "5,5",
+            "--start",
+            "60,30",
+            "--goal",
+            "120,-30",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
+    assert_eq!(json["status"], "found");
+    // 360/5 = 72 values of joint 1 (wrapping), 300/5 + 1 = 61 of joint 2.
+    assert_eq!(json["cells"], serde_json::json!([72, 61]));
+    // The direct way (Δq1 = +60°) is blocked; round the back it is Δq1 = -300°, Δq2 = -60°.
+    let length = json["length"].as_f64().unwrap();
+    assert!(
+        (length - (300f64.powi(2) + 60f64.powi(2)).sqrt()).abs() < 1e-2,
+        "{length}"
+    );
+    let path = json["path"].as_array().unwrap();
+    assert_eq!(path.last().unwrap(), &serde_json::json!([-240.0, -30.0]));
+    // The path is collision-free in the workspace (joint values taken modulo 360°).
+    let robot = parse_rob(WRAP_ROB).unwrap();
+    let q: Vec<[f32; 2]> = path
+        .iter()
+        .map(|p| [p[0].as_f64().unwrap() as f32, p[1].as_f64().unwrap() as f32])
+        .collect();
+    for w in q.windows(2) {
+        for k in 0..=200 {
+            let t = k as f32 / 200.0;
+            let c = [
+                w[0][0] + (w[1][0] - w[0][0]) * t,
+                w[0][1] + (w[1][1] - w[0][1]) * t,
+            ];
+            assert_eq!(occupancy_at(&robot, c), Occupancy::Free, "at {c:?}");
+        }
+    }
+    // And the arm does hit the post half way along the direct way.
+    assert_ne!(occupancy_at(&robot, [90.0, 0.0]), Occupancy::Free);
+}

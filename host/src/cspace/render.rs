@@ -74,6 +74,8 @@ pub struct Canvas {
     pub height: u32,
     /// Palette index per pixel, row-major.
     pub pixels: Vec<u8>,
+    /// Drawing is limited to `[x0, x1) × [y0, y1)` when set.
+    pub clip: Option<(i64, i64, i64, i64)>,
 }
 
 impl Canvas {
@@ -83,11 +85,17 @@ impl Canvas {
             width,
             height,
             pixels: vec![Ink::White as u8; width as usize * height as usize],
+            clip: None,
         }
     }
 
     /// Set one pixel (ignored outside).
     pub fn put(&mut self, x: i64, y: i64, ink: Ink) {
+        if let Some((x0, y0, x1, y1)) = self.clip {
+            if x < x0 || x >= x1 || y < y0 || y >= y1 {
+                return;
+            }
+        }
         if x >= 0 && y >= 0 && (x as u32) < self.width && (y as u32) < self.height {
             self.pixels[y as usize * self.width as usize + x as usize] = ink as u8;
         }
@@ -302,6 +310,10 @@ struct MapPanel {
     min: [f32; 2],
     inc: [f32; 2],
     rows: f32,
+    /// Joint range of a full turn for wrapping joints.
+    period: [Option<f32>; 2],
+    /// The plot area, pixels.
+    area: (i64, i64, i64, i64),
 }
 
 impl MapPanel {
@@ -334,6 +346,12 @@ impl MapPanel {
             min: [axes[0].min, axes[1].min],
             inc: [axes[0].increment, axes[1].increment],
             rows: nl as f32,
+            period: [0, 1].map(|k| {
+                axes[k]
+                    .wraps
+                    .then(|| axes[k].cells as f32 * axes[k].increment)
+            }),
+            area: (MARGIN, MARGIN, w - MARGIN, h - MARGIN),
         };
         // Axis labels: joint ranges.
         let j1 = &scene.robot.joints[0];
@@ -386,15 +404,56 @@ impl MapPanel {
         )
     }
 
+    /// Copies of `q` shifted by whole turns of the wrapping joints that may show on the map.
+    fn images(&self, q: [f32; 2]) -> Vec<[f32; 2]> {
+        let shifts = |k: usize| -> Vec<f32> {
+            match self.period[k] {
+                Some(p) => {
+                    // Bring q into the first turn, then also one turn either side.
+                    let turns = ((q[k] - self.min[k]) / p).floor();
+                    let base = -turns * p;
+                    vec![base - p, base, base + p]
+                }
+                None => vec![0.0],
+            }
+        };
+        let mut out = Vec::new();
+        for dx in shifts(0) {
+            for dy in shifts(1) {
+                out.push([dx, dy]);
+            }
+        }
+        out
+    }
+
+    /// Draw a joint-space polyline, clipped to the map; across the seam of a wrapping joint it
+    /// continues on the other side.
     fn polyline(&mut self, path: &[[f32; 2]], width: i64, ink: Ink) {
+        let saved = self.canvas.clip;
+        self.canvas.clip = Some(self.area);
         for w in path.windows(2) {
-            let (a, b) = (self.px(w[0]), self.px(w[1]));
-            self.canvas.line(a.0, a.1, b.0, b.1, width, ink);
+            for d in self.images(w[0]) {
+                let a = self.px([w[0][0] + d[0], w[0][1] + d[1]]);
+                let b = self.px([w[1][0] + d[0], w[1][1] + d[1]]);
+                self.canvas.line(a.0, a.1, b.0, b.1, width, ink);
+            }
         }
         for q in path {
-            let p = self.px(*q);
+            let p = self.px(self.wrapped(*q));
             self.canvas.disc(p.0, p.1, width as f32 * 0.9, ink);
         }
+        self.canvas.clip = saved;
+    }
+
+    /// `q` brought into the first turn of each wrapping joint.
+    fn wrapped(&self, q: [f32; 2]) -> [f32; 2] {
+        let mut q = q;
+        for k in 0..2 {
+            if let Some(p) = self.period[k] {
+                q[k] = self.min[k] + (q[k] - self.min[k]).rem_euclid(p);
+            }
+        }
+        q
     }
 }
 
@@ -421,7 +480,7 @@ impl WorkPanel {
         let mut pts: Vec<WorkPoint> = scene.robot.obstacles.iter().flatten().copied().collect();
         let axes = scene.map.axes();
         let (nc, nl) = scene.map.size();
-        let mut configs: Vec<[f32; 2]> = scene.path.to_vec();
+        let mut configs: Vec<[f32; 2]> = resample(scene.path, 120);
         for i in [0, nc as i32 / 2, nc as i32 - 1] {
             for j in [0, nl as i32 / 2, nl as i32 - 1] {
                 configs.push([axes[0].value(i), axes[1].value(j)]);
@@ -575,9 +634,9 @@ fn map_panel(scene: &Scene<'_>) -> MapPanel {
         panel.canvas.text(x, 8, FONT, text, *ink);
         x -= 4 * FONT * 2;
     }
-    let s = panel.px(scene.start);
+    let s = panel.px(panel.wrapped(scene.start));
     panel.canvas.disc(s.0, s.1, 5.0, Ink::Start);
-    let g = panel.px(scene.goal);
+    let g = panel.px(panel.wrapped(scene.goal));
     panel.canvas.disc(g.0, g.1, 5.0, Ink::Goal);
     panel
 }
@@ -652,7 +711,7 @@ pub fn write_gif(scene: &Scene<'_>, frames: usize, path: &std::path::Path) -> an
         enc.set_repeat(gif::Repeat::Infinite)?;
         for (k, q) in configs.iter().enumerate() {
             let mut left = map.canvas.clone();
-            let p = map.px(*q);
+            let p = map.px(map.wrapped(*q));
             left.disc(p.0, p.1, 4.0, Ink::Black);
             let mut right = background.clone();
             work.trail(&mut right, scene, &configs[..=k]);
