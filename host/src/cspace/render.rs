@@ -448,9 +448,9 @@ impl MapPanel {
     /// `q` brought into the first turn of each wrapping joint.
     fn wrapped(&self, q: [f32; 2]) -> [f32; 2] {
         let mut q = q;
-        for k in 0..2 {
-            if let Some(p) = self.period[k] {
-                q[k] = self.min[k] + (q[k] - self.min[k]).rem_euclid(p);
+        for ((v, min), period) in q.iter_mut().zip(self.min).zip(self.period) {
+            if let Some(p) = period {
+                *v = min + (*v - min).rem_euclid(p);
             }
         }
         q
