@@ -513,7 +513,6 @@ impl ConfigMap {
             let Some((row, line)) = l.raw_line() else {
                 return Err(l.error("map row", place, ParseErrorKind::Missing));
             };
-            let mut count = 0usize;
             for (i, c) in row.chars().enumerate() {
                 if i >= nc {
                     if row.chars().skip(nc).all(|c| c == ' ') {
@@ -529,7 +528,6 @@ impl ConfigMap {
                         },
                     });
                 }
-                count = i + 1;
                 if c != ' ' {
                     map.bits.set_xy(i as i32, j as i32, true);
                     if c == 'A' {
@@ -539,7 +537,6 @@ impl ConfigMap {
                     }
                 }
             }
-            let _ = count;
         }
         for (i, seen) in arm1_seen.iter().enumerate().take(nc) {
             if *seen {

@@ -302,6 +302,12 @@ impl Search {
         if map.blocked(gi, gj) {
             return Ok(SearchReport::status(SearchStatus::GoalBlocked));
         }
+        if (si, sj) == (gi, gj) {
+            let mut report = SearchReport::status(SearchStatus::Found);
+            let _ = report.path.push([si, sj]);
+            report.nodes = 1;
+            return Ok(report);
+        }
         self.count = 0;
         self.push(si, sj)?;
         self.push(gi, gj)?;
@@ -526,6 +532,12 @@ mod tests {
         assert_eq!(r.status, SearchStatus::Found);
         assert_eq!(r.path.as_slice(), &[[0, 0], [4, 8], [6, 8], [9, 0]]);
         assert!(path_is_free(&map, &r.path));
+        // Start = goal: one point, length 0.
+        let r = s.run_cells(&map, [2, 2], [2, 2], NodeSet::Corners).unwrap();
+        assert_eq!(
+            (r.status, r.path.as_slice(), r.length),
+            (SearchStatus::Found, &[[2, 2]][..], 0.0)
+        );
         // Blocked and outside ends.
         let r = s.run_cells(&map, [5, 3], [9, 0], NodeSet::Corners).unwrap();
         assert_eq!(r.status, SearchStatus::StartBlocked);
