@@ -281,3 +281,59 @@ fn a_full_turn_joint_wraps_through_the_seam() {
     // And the arm does hit the post half way along the direct way.
     assert_ne!(occupancy_at(&robot, [90.0, 0.0]), Occupancy::Free);
 }
+
+#[test]
+fn a_hand_edited_map_is_planned_on_and_a_broken_one_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let map_path = dir.path().join("nav.MAP");
+    let plan = |extra: &[&str]| {
+        common::twil()
+            .args(["cspace", "--rob"])
+            .arg(common::world("seed000-nav.ROB"))
+            .args(["--start", "-60,-35", "--goal", "140,-5", "--json"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let map_arg = map_path.to_str().unwrap();
+    let built = plan(&["--increments", "2,2", "--map", map_arg]);
+    assert!(built.status.success());
+    let built: serde_json::Value = serde_json::from_slice(&built.stdout).unwrap();
+
+    // Unchanged, the file gives the same plan.
+    let same = plan(&["--from-map", map_arg]);
+    let same: serde_json::Value = serde_json::from_slice(&same.stdout).unwrap();
+    assert_eq!(same["path"], built["path"]);
+
+    // Wall off columns 100..=102 (q1 = 20..24) from top to bottom: no way across any more.
+    let text = std::fs::read_to_string(&map_path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    for line in lines.iter_mut().skip(4).take(111) {
+        let mut chars: Vec<char> = format!("{line:173}").chars().collect();
+        for c in &mut chars[100..=102] {
+            *c = 'x';
+        }
+        *line = chars.into_iter().collect();
+    }
+    std::fs::write(&map_path, lines.join("\n") + "\n").unwrap();
+    let edited = plan(&["--from-map", map_arg]);
+    assert!(
+        edited.status.success(),
+        "{}",
+        String::from_utf8_lossy(&edited.stderr)
+    );
+    let edited: serde_json::Value = serde_json::from_slice(&edited.stdout).unwrap();
+    assert_eq!(edited["status"], "unreachable");
+
+    // Disagreeing increments and a broken row are errors naming the file.
+    let wrong = plan(&["--from-map", map_arg, "--increments", "1,1"]);
+    assert_eq!(wrong.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&wrong.stderr).contains("disagree"));
+    lines[10] = "y".repeat(200);
+    std::fs::write(&map_path, lines.join("\n") + "\n").unwrap();
+    let broken = plan(&["--from-map", map_arg]);
+    assert_eq!(broken.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&broken.stderr);
+    assert!(err.contains("nav.MAP: line 11"), "{err}");
+    assert!(err.contains("map row 7"), "{err}");
+}

@@ -12,7 +12,7 @@
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
+use anyhow::{bail, Context};
 use serde::Serialize;
 use twil_core::cspace::{
     map::ConfigMap,
@@ -52,8 +52,18 @@ pub struct Args {
     #[arg(long, value_name = "F.ROB")]
     pub rob: PathBuf,
     /// Increments of joint 1 and joint 2 (degrees for rotational joints, units for prismatic).
-    #[arg(long, value_name = "D1,D2", value_parser = parse_pair, allow_hyphen_values = true)]
-    pub increments: [f32; 2],
+    #[arg(
+        long,
+        value_name = "D1,D2",
+        value_parser = parse_pair,
+        allow_hyphen_values = true,
+        required_unless_present = "from_map"
+    )]
+    pub increments: Option<[f32; 2]>,
+    /// Plan on this configuration map (`.MAP`, e.g. one edited by hand) instead of building it;
+    /// the `.ROB` still gives the arm for the pictures and which joints wrap.
+    #[arg(long, value_name = "F.MAP")]
+    pub from_map: Option<PathBuf>,
     /// Start configuration, joint units (snapped to the nearest map values).
     #[arg(long, value_name = "A,B", value_parser = parse_pair, allow_hyphen_values = true)]
     pub start: [f32; 2],
@@ -141,6 +151,15 @@ pub fn load_robot(path: &Path) -> anyhow::Result<Robot> {
     parse_rob(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
+/// Read a `.MAP` file; which joints wrap comes from the robot.
+pub fn load_map(path: &Path, robot: &Robot) -> anyhow::Result<ConfigMap> {
+    let text = read(path)?;
+    let wraps = [robot.joints[0].wraps(), robot.joints[1].wraps()];
+    let (_, map) = ConfigMap::parse_map(&text, wraps)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(map)
+}
+
 /// Read a `.TRA` file.
 pub fn load_tra(path: &Path) -> anyhow::Result<Trajectory> {
     let text = read(path)?;
@@ -149,9 +168,31 @@ pub fn load_tra(path: &Path) -> anyhow::Result<Trajectory> {
 
 /// Run `twil cspace`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (increments, start, goal) = (args.increments, args.start, args.goal);
+    let (start, goal) = (args.start, args.goal);
     let robot = load_robot(&args.rob)?;
-    let map = ConfigMap::build(&robot, increments).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let map = match (&args.from_map, args.increments) {
+        (Some(path), increments) => {
+            let map = load_map(path, &robot)?;
+            let axes = map.axes();
+            let own = [axes[0].increment, axes[1].increment];
+            if let Some(inc) = increments.filter(|inc| *inc != own) {
+                bail!(
+                    "--increments {},{} disagree with {} ({},{})",
+                    inc[0],
+                    inc[1],
+                    path.display(),
+                    own[0],
+                    own[1]
+                );
+            }
+            map
+        }
+        (None, Some(increments)) => {
+            ConfigMap::build(&robot, increments).map_err(|e| anyhow::anyhow!("{e}"))?
+        }
+        (None, None) => bail!("--increments is needed unless --from-map is given"),
+    };
+    let increments = [map.axes()[0].increment, map.axes()[1].increment];
     let mut search = Box::new(Search::new());
     let report: SearchReport = search
         .run(&map, start, goal, args.nodes.into())
