@@ -2,5 +2,6 @@
 //! other tools share it.
 
 pub mod cmd;
+pub mod cspace;
 pub mod render;
 pub mod world_io;
