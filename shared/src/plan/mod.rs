@@ -79,16 +79,17 @@
 //! mostly spent on the duplicate entries that a g-table would have avoided. Copying the map into
 //! the scratch costs `n / 8` word writes. Rebuilding the path walks the parent steps from the
 //! goal back to the start: `O(path cells)`, plus, for the any-angle planner, one line-of-sight
-//! test per path cell (`O(path cells × segment length)`).
+//! test per straight run and a bisection in the runs where a shortcut ends
+//! (`O(runs × log(run) × segment length)`).
 //!
 //! ## Any-angle
 //!
-//! [`PlannerKind::AnyAngle`] runs A*, then pulls the string on the A* cell path: walking from the
-//! goal towards the start, it keeps an anchor vertex and advances along the cell path while the
-//! next cell is visible from the anchor by [`line_of_sight`]; at the first cell that is not, the
-//! last visible cell becomes a vertex and the new anchor. Every segment therefore passes the same
-//! no-corner-cutting line-of-sight test, and by the triangle inequality the polyline is never
-//! longer than the A* path it shortcuts.
+//! [`PlannerKind::AnyAngle`] runs A*, then pulls the string on the A* cell path, run by run
+//! (maximal straight pieces), from the goal towards the start: if the far end of the next run
+//! is visible from the anchor by [`line_of_sight`], the whole run is skipped; otherwise the last
+//! visible cell of the run is found by bisection and becomes a vertex and the new anchor. Every
+//! segment therefore passes the same no-corner-cutting line-of-sight test, and by the triangle
+//! inequality the polyline is never longer than the A* path it shortcuts.
 //!
 //! ```
 //! use twil_core::geom::PointM;
@@ -1023,6 +1024,11 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
 
     /// Rebuild the A* path and pull the string with line-of-sight shortcuts. Returns the length
     /// in cells, the number of A* steps and whether every vertex fitted.
+    ///
+    /// Works run by run (maximal straight pieces of the A* path), from the goal back: if the far
+    /// end of the next run is visible from the anchor, the whole run is skipped; otherwise the
+    /// last visible cell of the run is found by bisection and becomes a vertex and the new
+    /// anchor. Every emitted segment has been tested with [`line_of_sight`].
     fn rebuild_any_angle<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
@@ -1032,23 +1038,59 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let mut fits = self.cells.push(goal).is_ok();
         let mut length = 0.0f32;
         let mut anchor = goal;
-        let mut cell = goal;
+        let mut cur = goal;
         let mut steps = 0u32;
-        for _ in 0..geometry.cell_count() {
-            let Some((parent, _)) = self.parent(&geometry, cell) else {
+        // Each pass either moves `cur` towards the start or moves the anchor forward; the
+        // bound only guards against a corrupt parent chain.
+        for _ in 0..2 * geometry.cell_count() {
+            // The run that ends at `cur`: `run` steps of `code`, back to `end`.
+            let Some((mut end, code)) = self.parent(&geometry, cur) else {
                 break;
             };
-            if !line_of_sight(grid, anchor, parent) {
-                fits &= self.cells.push(cell).is_ok();
-                length += cells_distance(anchor, cell);
-                anchor = cell;
+            let mut run = 1u32;
+            while let Some((p, c)) = self.parent(&geometry, end) {
+                if c != code {
+                    break;
+                }
+                end = p;
+                run += 1;
             }
-            steps += 1;
-            cell = parent;
+            if line_of_sight(grid, anchor, end) {
+                cur = end;
+                steps += run;
+                continue;
+            }
+            // `cur` is visible, `end` is not: bisect for the last visible cell of the run.
+            let Some(&(dx, dy)) = STEPS.get(code as usize - 1) else {
+                break;
+            };
+            let at = |i: u32| {
+                Cell::new(
+                    (cur.x as i32 - dx * i as i32) as u16,
+                    (cur.y as i32 - dy * i as i32) as u16,
+                )
+            };
+            let (mut lo, mut hi) = (0u32, run);
+            while hi - lo > 1 {
+                let mid = lo + (hi - lo) / 2;
+                if line_of_sight(grid, anchor, at(mid)) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            // The step after the anchor is an A* move, always visible; never stall.
+            let cut = if lo == 0 && cur == anchor { 1 } else { lo };
+            let vertex = at(cut);
+            fits &= self.cells.push(vertex).is_ok();
+            length += cells_distance(anchor, vertex);
+            anchor = vertex;
+            cur = vertex;
+            steps += cut;
         }
-        if cell != anchor {
-            fits &= self.cells.push(cell).is_ok();
-            length += cells_distance(anchor, cell);
+        if cur != anchor {
+            fits &= self.cells.push(cur).is_ok();
+            length += cells_distance(anchor, cur);
         }
         self.cells.reverse();
         (length, steps, fits)
