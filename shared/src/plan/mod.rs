@@ -762,6 +762,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         count += 1;
 
         while count > 0 {
+            peak = peak.max(count);
             let (index, x, y) = match queue.get(head) {
                 Some(e) => (
                     e.node as usize,
@@ -804,7 +805,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     let n = $n;
                     set_nibble(scratch, n, $code);
                     if n == goal {
-                        self.queue_peak = peak as u32;
+                        self.queue_peak = peak.max(count) as u32;
                         return Ok(Search {
                             found: true,
                             expanded,
@@ -812,7 +813,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                         });
                     }
                     if count == capacity {
-                        self.queue_peak = peak as u32;
+                        self.queue_peak = peak.max(count) as u32;
                         return Err(full);
                     }
                     if let Some(slot) = queue.get_mut(tail) {
@@ -821,7 +822,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     }
                     tail = if tail + 1 == capacity { 0 } else { tail + 1 };
                     count += 1;
-                    peak = peak.max(count);
                 }};
             }
 
@@ -850,7 +850,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 visit!(index - width + 1, x + 1, y - 1, SE);
             }
         }
-        self.queue_peak = peak as u32;
+        self.queue_peak = peak.max(count) as u32;
         Ok(Search {
             found: false,
             expanded,
