@@ -703,3 +703,13 @@ fn reclaiming_stale_entries_lets_a_small_open_list_finish() {
     assert_eq!((r.status, r.cost), (expected.status, expected.cost));
     assert!(small.queue_peak() <= 2048);
 }
+
+#[test]
+fn names_and_sizes() {
+    assert_eq!(PlannerKind::AnyAngle.as_str(), "anyangle");
+    assert_eq!(PlanStatus::StartBlocked.as_str(), "start_blocked");
+    assert_eq!(PlanStatus::OutOfBounds.as_str(), "out_of_bounds");
+    // 4 bits per cell for 300 x 300 cells, 12 bytes per queue entry, 4 bytes per vertex.
+    assert_eq!(SCRATCH_WORDS_300 * 4, 45_000);
+    assert!(core::mem::size_of::<Planner300>() <= 45_000 + 2048 * 12 + 1024 * 4 + 64);
+}
