@@ -237,7 +237,7 @@ impl TrajectorySupplier {
             config: SupplierConfig {
                 speed_m_s: 0.2,
                 turn_rate_rad_s: 0.8,
-                turn_in_place_above_rad: 0.5235988,
+                turn_in_place_above_rad: core::f32::consts::FRAC_PI_6,
                 settle_time_s: 4.0,
             },
             phase: Phase::Idle,
