@@ -71,6 +71,16 @@ pub fn wrap_angle_rad(angle_rad: f32) -> f32 {
     a
 }
 
+/// `e` raised to `x` (micromath's approximation).
+#[inline]
+pub fn exp(x: f32) -> f32 {
+    F32Ext::exp(x)
+}
+
+/// Natural logarithm (micromath's approximation); `NaN` for negative `x`.
+#[inline]
+pub fn ln(x: f32) -> f32 {
+    F32Ext::ln(x)
 /// Square root to nearly full `f32` precision: micromath's [`sqrt`] (a bit-level estimate,
 /// off by up to ~6 %) refined by two Newton steps. Plain `+ - * /`, so the host and the MCU
 /// still compute bit-identical results. Negative or NaN input gives NaN; `+inf` gives `+inf`.
