@@ -81,6 +81,8 @@ pub fn exp(x: f32) -> f32 {
 #[inline]
 pub fn ln(x: f32) -> f32 {
     F32Ext::ln(x)
+}
+
 /// Square root to nearly full `f32` precision: micromath's [`sqrt`] (a bit-level estimate,
 /// off by up to ~6 %) refined by two Newton steps. Plain `+ - * /`, so the host and the MCU
 /// still compute bit-identical results. Negative or NaN input gives NaN; `+inf` gives `+inf`.
