@@ -38,8 +38,9 @@
 
 use crate::control::Pose;
 use crate::geom::PointM;
-use crate::math::{abs, cos, exp, floor, hypot, sin, wrap_angle_rad};
+use crate::math::{abs, cos, exp, floor, hypot_precise, sin, wrap_angle_rad};
 use crate::robot::{RobotConfig, MAX_CONE_RAYS};
+use crate::sonar::{Reading, SweepBuffer, SweepPlan};
 use crate::world::PolygonSet;
 
 /// Most substeps one [`Plant::step`] call integrates; a longer `dt_s` uses longer substeps.
@@ -155,8 +156,8 @@ impl Plant {
         self.step(dt_s, 0.0, 0.0);
     }
 
-    /// Apply the two voltages for `dt_s` seconds. Voltages are clamped to ±max; a non-finite
-    /// voltage counts as 0 V; a non-finite or non-positive `dt_s` does nothing.
+    /// Apply the two voltages for `dt_s` seconds. Voltages are clamped to ±max (infinities
+    /// included); `NaN` counts as 0 V; a non-finite or non-positive `dt_s` does nothing.
     pub fn step(&mut self, dt_s: f32, left_voltage_v: f32, right_voltage_v: f32) {
         if !(dt_s.is_finite() && dt_s > 0.0) {
             return;
@@ -164,7 +165,7 @@ impl Plant {
         let c = self.config;
         let limit = c.max_voltage_v;
         let clamp = |v: f32| {
-            if !v.is_finite() {
+            if v.is_nan() {
                 0.0
             } else if v > limit {
                 limit
@@ -310,6 +311,33 @@ impl Plant {
         }
     }
 
+    /// A whole sweep standing still (the seed's stop-and-sweep): `out` is cleared and gets one
+    /// [`Reading`] per neck angle of `plan`, read with [`sonar_range_m`](Self::sonar_range_m)
+    /// up to [`RobotConfig::sonar_range_m`] from the current pose; then the plant idles (0 V)
+    /// for the sweep's duration ([`SweepPlan::timing`]). Returns that duration, seconds.
+    pub fn sweep_in_place<const V: usize, const P: usize>(
+        &mut self,
+        obstacles: &PolygonSet<V, P>,
+        plan: &SweepPlan,
+        out: &mut SweepBuffer,
+    ) -> f32 {
+        out.clear();
+        let range = self.config.sonar_range_m;
+        let pose = self.pose;
+        for angle in plan.angles_rad() {
+            let range_m = self.sonar_range_m(obstacles, angle, range);
+            // A plan never has more readings than a buffer holds.
+            let _ = out.push(Reading {
+                neck_angle_rad: angle,
+                range_m,
+                pose,
+            });
+        }
+        let duration_s = plan.timing(&self.config).total_s();
+        self.idle(duration_s);
+        duration_s
+    }
+
     /// Distance from the centre to the nearest polygon edge (or lone vertex) minus the
     /// physical radius, metres: negative means the body overlaps an obstacle. With no
     /// obstacle, `f32::INFINITY`. A centre inside a closed polygon also means collision: see
@@ -402,13 +430,15 @@ fn segment_distance_m(a: PointM, b: PointM, p: PointM) -> f32 {
     } else {
         0.0
     };
-    hypot(a.x_m + t * ex - p.x_m, a.y_m + t * ey - p.y_m)
+    hypot_precise(a.x_m + t * ex - p.x_m, a.y_m + t * ey - p.y_m)
 }
 
 /// Distance from `p` to the outline of a polygon (a lone vertex counts as a point).
 fn polygon_distance_m(poly: &[PointM], p: PointM) -> f32 {
     if poly.len() == 1 {
-        return poly.first().map_or(f32::INFINITY, |v| v.distance_m(p));
+        return poly.first().map_or(f32::INFINITY, |v| {
+            hypot_precise(v.x_m - p.x_m, v.y_m - p.y_m)
+        });
     }
     let mut nearest = f32::INFINITY;
     for (a, b) in edges(poly) {
@@ -432,4 +462,279 @@ fn point_in_polygon(poly: &[PointM], p: PointM) -> bool {
         }
     }
     inside
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::Obstacles;
+
+    fn wall_at_x(x: f32) -> Obstacles {
+        let mut o = Obstacles::new();
+        o.push(&[PointM::new(x, -10.0), PointM::new(x, 10.0)])
+            .unwrap();
+        o
+    }
+
+    fn square(cx: f32, cy: f32, half: f32) -> Obstacles {
+        let mut o = Obstacles::new();
+        o.push(&[
+            PointM::new(cx - half, cy - half),
+            PointM::new(cx + half, cy - half),
+            PointM::new(cx + half, cy + half),
+            PointM::new(cx - half, cy + half),
+        ])
+        .unwrap();
+        o
+    }
+
+    #[test]
+    fn constant_voltage_reaches_the_motor_speed() {
+        let c = RobotConfig::default();
+        let mut plant = Plant::new(&c, Pose::new(0.0, 0.0, 0.0));
+        for _ in 0..40 {
+            plant.step(0.05, 5.0, 5.0);
+        }
+        let (l, r) = plant.wheel_speeds_rad_s();
+        // 2 s = 20 time constants: at steady state K·V.
+        assert!((l - 4.0).abs() < 1e-3 && (r - 4.0).abs() < 1e-3, "{l} {r}");
+        let p = plant.pose();
+        // Distance = K V r (t − T(1 − e^{−t/T})).
+        let expected = 4.0 * c.wheel_radius_m * (2.0 - 0.1);
+        assert!((p.x_m - expected).abs() < 1e-3, "{p:?} vs {expected}");
+        assert!(p.y_m.abs() < 1e-5 && p.heading_rad.abs() < 1e-6);
+        let (cl, cr) = plant.encoder_counts();
+        let expected_counts = expected / c.wheel_radius_m / c.rad_per_count();
+        assert!(
+            (cl as f32 - expected_counts).abs() <= 1.5,
+            "{cl} vs {expected_counts}"
+        );
+        assert_eq!(cl, cr);
+        assert!((plant.time_s() - 2.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn opposite_voltages_turn_in_place() {
+        let c = RobotConfig::default();
+        let mut plant = Plant::new(&c, Pose::new(1.0, 1.0, 0.0));
+        for _ in 0..20 {
+            plant.step(0.05, -3.0, 3.0);
+        }
+        let p = plant.pose();
+        assert!(
+            (p.x_m - 1.0).abs() < 1e-4 && (p.y_m - 1.0).abs() < 1e-4,
+            "{p:?}"
+        );
+        assert!(p.heading_rad > 0.5, "{p:?}");
+        let (l, r) = plant.encoder_counts();
+        assert!(l < 0 && r > 0 && (l + r).abs() <= 1);
+    }
+
+    #[test]
+    fn voltages_are_clamped_and_nan_ignored() {
+        let c = RobotConfig::default();
+        let mut a = Plant::new(&c, Pose::default());
+        let mut b = Plant::new(&c, Pose::default());
+        a.step(1.0, 1000.0, f32::INFINITY);
+        b.step(1.0, 11.7, 11.7);
+        assert_eq!(a.pose(), b.pose());
+        let before = a.clone();
+        a.step(f32::NAN, 1.0, 1.0);
+        a.step(-1.0, 1.0, 1.0);
+        a.step(0.0, 1.0, 1.0);
+        assert_eq!(a, before);
+        a.step(0.05, f32::NAN, f32::NAN);
+        assert!(a.pose().is_finite());
+        // An absurd dt is integrated in at most MAX_SUBSTEPS_PER_STEP substeps.
+        a.step(1.0e30, 1.0, 1.0);
+        assert!(a.pose().is_finite());
+    }
+
+    #[test]
+    fn sonar_sees_a_wall_at_its_distance() {
+        let c = RobotConfig::default();
+        let walls = wall_at_x(2.5);
+        let mut plant = Plant::new(&c, Pose::new(1.0, 0.0, 0.0));
+        // Sonar at x = 1.2: wall 1.3 m ahead.
+        let d = plant.sonar_range_m(&walls, 0.0, c.sonar_range_m).unwrap();
+        assert!((d - 1.3).abs() < 0.01, "{d}");
+        // At 60° off axis the slant range is 1.3 / cos 60° = 2.6 m: beyond 1.5 m, no echo.
+        assert_eq!(
+            plant.sonar_range_m(&walls, 60f32.to_radians(), c.sonar_range_m),
+            None
+        );
+        let d = plant
+            .sonar_range_m(&walls, 60f32.to_radians(), 6.0)
+            .unwrap();
+        assert!((d - 2.6).abs() < 0.01, "{d}");
+        // Looking away: nothing.
+        assert_eq!(
+            plant.sonar_range_m(&walls, core::f32::consts::PI, 6.0),
+            None
+        );
+        // Turned towards +y, a neck angle of −90° looks at the wall.
+        plant.set_pose(Pose::new(1.0, 0.0, core::f32::consts::FRAC_PI_2));
+        let d = plant
+            .sonar_range_m(&walls, -core::f32::consts::FRAC_PI_2, 6.0)
+            .unwrap();
+        assert!((d - 1.5).abs() < 0.01, "{d}");
+    }
+
+    #[test]
+    fn no_echo_below_the_minimum_range() {
+        let c = RobotConfig::default();
+        let walls = wall_at_x(1.4);
+        let mut plant = Plant::new(&c, Pose::new(1.0, 0.0, 0.0));
+        // Wall 0.2 m from the sonar: blanked.
+        assert_eq!(plant.sonar_range_m(&walls, 0.0, 1.5), None);
+        // The exact ray still sees it.
+        let d = plant.ray_cast_m(&walls, 0.0, 1.5).unwrap();
+        assert!((d - 0.2).abs() < 1e-4);
+    }
+
+    #[test]
+    fn closed_polygons_are_hit_on_their_near_side() {
+        let c = RobotConfig::default();
+        let obstacles = square(3.0, 0.0, 0.5);
+        let mut plant = Plant::new(&c, Pose::new(1.0, 0.0, 0.0));
+        let d = plant.sonar_range_m(&obstacles, 0.0, 6.0).unwrap();
+        assert!((d - 1.3).abs() < 1e-4, "{d}");
+        // Just past the corner: miss.
+        assert_eq!(plant.ray_cast_m(&obstacles, 0.45, 6.0), None);
+    }
+
+    #[test]
+    fn cone_sees_off_axis_obstacles() {
+        let c = RobotConfig {
+            sonar_cone_deg: 20.0,
+            sonar_cone_rays: 9,
+            ..RobotConfig::default()
+        };
+        // A post 1 m ahead of the sonar, 0.12 m to the side: about 6.8° off axis.
+        let mut post = Obstacles::new();
+        post.push(&[PointM::new(2.2, 0.10), PointM::new(2.2, 0.14)])
+            .unwrap();
+        let mut plant = Plant::new(&c, Pose::new(1.0, 0.0, 0.0));
+        let d = plant.sonar_range_m(&post, 0.0, 6.0).unwrap();
+        assert!((d - 1.005).abs() < 0.01, "{d}");
+        let narrow = RobotConfig::default();
+        let mut plant = Plant::new(&narrow, Pose::new(1.0, 0.0, 0.0));
+        assert_eq!(plant.sonar_range_m(&post, 0.0, 6.0), None);
+    }
+
+    #[test]
+    fn noise_is_deterministic_per_seed() {
+        let c = RobotConfig {
+            sonar_noise_std_m: 0.02,
+            noise_seed: 7,
+            ..RobotConfig::default()
+        };
+        let walls = wall_at_x(2.2);
+        let read = |config: &RobotConfig| {
+            let mut plant = Plant::new(config, Pose::new(1.0, 0.0, 0.0));
+            let mut out = [0.0f32; 50];
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = plant
+                    .sonar_range_m(&walls, (i as f32 - 25.0) * 0.01, 1.5)
+                    .unwrap_or(-1.0);
+            }
+            out
+        };
+        let a = read(&c);
+        assert_eq!(a, read(&c));
+        let other = read(&RobotConfig { noise_seed: 8, ..c });
+        assert_ne!(a, other);
+        // Noise has about the asked spread around the true ranges.
+        let plant = Plant::new(&c, Pose::new(1.0, 0.0, 0.0));
+        let mut sum2 = 0.0;
+        for (i, v) in a.iter().enumerate() {
+            let truth = plant
+                .ray_cast_m(&walls, (i as f32 - 25.0) * 0.01, 6.0)
+                .unwrap();
+            sum2 += (v - truth) * (v - truth);
+        }
+        let std = crate::math::sqrt_precise(sum2 / 50.0);
+        assert!(std > 0.01 && std < 0.03, "{std}");
+    }
+
+    #[test]
+    fn clearance_and_inside() {
+        let c = RobotConfig::default();
+        let obstacles = square(3.0, 0.0, 0.5);
+        let plant = Plant::new(&c, Pose::new(1.0, 0.0, 0.0));
+        assert!((plant.clearance_m(&obstacles) - (1.5 - 0.3)).abs() < 1e-5);
+        assert!(!plant.centre_inside(&obstacles));
+        assert!(!plant.collides(&obstacles));
+        let touching = Plant::new(&c, Pose::new(2.3, 0.0, 0.0));
+        assert!(touching.clearance_m(&obstacles) < 0.0);
+        assert!(touching.collides(&obstacles));
+        // Deep inside: the outline is 0.5 m away (clearance positive!) but the centre is inside.
+        let big = square(0.0, 0.0, 2.0);
+        let inside = Plant::new(&c, Pose::new(0.0, 0.0, 0.0));
+        assert!(inside.clearance_m(&big) > 0.0);
+        assert!(inside.centre_inside(&big));
+        assert!(inside.collides(&big));
+        // Lone vertices are points for clearance.
+        let mut point = Obstacles::new();
+        point.push(&[PointM::new(0.0, 1.0)]).unwrap();
+        assert!((inside.clearance_m(&point) - 0.7).abs() < 1e-5);
+        assert_eq!(inside.clearance_m(&Obstacles::new()), f32::INFINITY);
+    }
+
+    #[test]
+    fn sweep_in_place_reads_every_angle_and_takes_its_time() {
+        use crate::sonar::SweepKind;
+        let c = RobotConfig::default();
+        let walls = wall_at_x(2.2);
+        let mut plant = Plant::new(&c, Pose::new(1.0, 0.0, 0.0));
+        let plan = SweepPlan::new(&c, SweepKind::Normal);
+        let mut sweep = SweepBuffer::new();
+        let t = plant.sweep_in_place(&walls, &plan, &mut sweep);
+        assert_eq!(sweep.len(), 105);
+        assert!((t - plan.timing(&c).total_s()).abs() < 1e-6);
+        assert!((plant.time_s() - t).abs() < 1e-4);
+        let ahead = sweep.as_slice()[52];
+        assert_eq!(ahead.neck_angle_rad, 0.0);
+        assert!((ahead.range_m.unwrap() - 1.0).abs() < 1e-4);
+        // Readings beyond 1.5 m are no echo: the wall is at 1 m, so |angle| > 48° sees nothing.
+        assert!(sweep.as_slice()[0].range_m.is_none());
+        assert_eq!(plant.pose(), Pose::new(1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn encoder_counts_do_not_drift() {
+        // Many tiny steps: the fractions carry over, so the count matches the wheel angle.
+        let c = RobotConfig::default();
+        let mut plant = Plant::new(&c, Pose::default());
+        let mut angle = 0.0f64;
+        for _ in 0..4000 {
+            plant.step(0.005, 1.0, 1.0);
+            angle += plant.wheel_speeds_rad_s().0 as f64 * 0.005;
+        }
+        let counts = plant.encoder_counts().0 as f64;
+        let expected = angle / c.rad_per_count() as f64;
+        assert!((counts - expected).abs() < 3.0, "{counts} vs {expected}");
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn sonar_and_clearance_never_panic(
+            x in proptest::num::f32::ANY,
+            y in proptest::num::f32::ANY,
+            heading in proptest::num::f32::ANY,
+            neck in proptest::num::f32::ANY,
+            range in proptest::num::f32::ANY,
+        ) {
+            let c = RobotConfig { sonar_noise_std_m: 0.01, sonar_cone_deg: 10.0, sonar_cone_rays: 3, ..RobotConfig::default() };
+            let obstacles = square(3.0, 0.0, 0.5);
+            let mut plant = Plant::new(&c, Pose::new(x, y, heading));
+            if let Some(d) = plant.sonar_range_m(&obstacles, neck, range) {
+                proptest::prop_assert!(d.is_finite() && d >= c.sonar_min_range_m && d <= range);
+            }
+            let _ = plant.clearance_m(&obstacles);
+            let _ = plant.centre_inside(&obstacles);
+            plant.step(0.05, x, y);
+            proptest::prop_assert!(plant.pose().is_finite());
+        }
+    }
 }

@@ -467,3 +467,257 @@ pub fn mark_hits<const W: usize>(
     }
     marked
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{Grid300, GridGeometry};
+    use crate::plant::Plant;
+    use crate::world::Obstacles;
+
+    fn sweep_of(ranges: &[Option<f32>]) -> SweepBuffer {
+        let mut s = SweepBuffer::new();
+        let n = ranges.len() as f32;
+        for (i, r) in ranges.iter().enumerate() {
+            s.push(Reading {
+                neck_angle_rad: (i as f32 - n / 2.0) * 1.8 * DEG,
+                range_m: *r,
+                pose: Pose::default(),
+            })
+            .unwrap();
+        }
+        s
+    }
+
+    fn filter(ranges: &[Option<f32>]) -> (usize, HitBuffer) {
+        let mut hits = HitBuffer::new();
+        let n = filter_constant_depth(
+            &sweep_of(ranges),
+            &RcdParams::from_config(&RobotConfig::default()),
+            &mut hits,
+        );
+        (n, hits)
+    }
+
+    #[test]
+    fn plans_are_symmetric_and_fit() {
+        let c = RobotConfig::default();
+        let normal = SweepPlan::new(&c, SweepKind::Normal);
+        assert_eq!(normal.steps_each_side, 52);
+        assert_eq!(normal.readings(), 105);
+        let first = normal.neck_angle_rad(0).unwrap();
+        let last = normal.neck_angle_rad(104).unwrap();
+        assert!((first + 93.6 * DEG).abs() < 1e-5 && (last - 93.6 * DEG).abs() < 1e-5);
+        assert_eq!(normal.neck_angle_rad(52), Some(0.0));
+        assert_eq!(normal.neck_angle_rad(105), None);
+        assert_eq!(normal.angles_rad().count(), 105);
+        let full = SweepPlan::new(&c, SweepKind::Full);
+        assert_eq!(full.readings(), SWEEP_CAPACITY);
+        assert!((full.covered_half_angle_rad() - core::f32::consts::PI).abs() < 1e-5);
+        // A finer neck would not fit: capped, never past the capacity.
+        let fine = RobotConfig {
+            neck_step_deg: 0.9,
+            ..c
+        };
+        assert!(fine.validate().is_err());
+        assert_eq!(
+            SweepPlan::new(&fine, SweepKind::Full).readings(),
+            SWEEP_CAPACITY
+        );
+        let broken = RobotConfig {
+            neck_step_deg: f32::NAN,
+            ..c
+        };
+        assert_eq!(SweepPlan::new(&broken, SweepKind::Full).readings(), 1);
+    }
+
+    #[test]
+    fn sweep_timing() {
+        let c = RobotConfig::default();
+        let full = SweepPlan::new(&c, SweepKind::Full).timing(&c);
+        assert_eq!((full.readings, full.neck_steps), (201, 400));
+        assert!((full.total_s() - (201.0 * 0.035 + 0.4)).abs() < 1e-4);
+        assert!((full.per_reading_s() - 0.036).abs() < 1e-6);
+        assert!((full.lead_in_s() - 0.1).abs() < 1e-6);
+    }
+
+    #[test]
+    fn time_of_flight_and_window() {
+        assert!((range_to_time_of_flight_s(3.432) - 0.02).abs() < 1e-7);
+        assert!((time_of_flight_to_range_m(0.02) - 3.432).abs() < 1e-5);
+        let c = RobotConfig::default();
+        let tof = |r: f32| range_to_time_of_flight_s(r);
+        assert_eq!(reading_from_time_of_flight(&c, tof(0.25)), None);
+        assert!(reading_from_time_of_flight(&c, tof(0.27)).is_some());
+        assert!(reading_from_time_of_flight(&c, tof(1.49)).is_some());
+        assert_eq!(reading_from_time_of_flight(&c, tof(1.51)), None);
+        assert_eq!(reading_from_time_of_flight(&c, f32::NAN), None);
+        assert_eq!(reading_from_time_of_flight(&c, -1.0), None);
+        let far = RobotConfig {
+            sonar_range_m: 6.0,
+            ..c
+        };
+        assert!(reading_from_time_of_flight(&far, tof(5.9)).is_some());
+    }
+
+    #[test]
+    fn flat_run_gives_hits_at_its_mean() {
+        let (regions, hits) = filter(&[Some(1.0), Some(1.005), Some(1.0), Some(0.995), Some(1.0)]);
+        assert_eq!(regions, 1);
+        assert_eq!(hits.len(), 5);
+        assert!(hits.iter().all(|h| (h.range_m - 1.0).abs() < 1e-6));
+    }
+
+    #[test]
+    fn isolated_spike_is_rejected() {
+        let mut ranges = [Some(1.2f32); 15];
+        ranges[7] = Some(0.6);
+        let (regions, hits) = filter(&ranges);
+        assert_eq!(regions, 2);
+        assert_eq!(hits.len(), 14);
+        assert!(hits.iter().all(|h| (h.range_m - 1.2).abs() < 1e-6));
+        // Ragged readings: no region.
+        let ragged = [
+            Some(1.0),
+            Some(1.1),
+            Some(0.9),
+            Some(1.3),
+            Some(0.7),
+            Some(1.05),
+        ];
+        assert_eq!(filter(&ragged).0, 0);
+    }
+
+    #[test]
+    fn short_regions_need_arc_length() {
+        // 3 pairs: at 1.5 m the arc is 3 × 1.5 × π/100 = 0.141 m ≥ 0.126 m: trusted.
+        let far = [None, Some(1.5), Some(1.5), Some(1.5), Some(1.5), None];
+        assert_eq!(filter(&far).0, 1);
+        // At 0.5 m the same 4 readings span 0.047 m: rejected.
+        let near = [None, Some(0.5), Some(0.5), Some(0.5), Some(0.5), None];
+        assert_eq!(filter(&near).0, 0);
+        // 4 pairs are enough at any depth.
+        let near5 = [Some(0.5); 5];
+        assert_eq!(filter(&near5).0, 1);
+    }
+
+    #[test]
+    fn no_echo_splits_regions() {
+        let mut ranges = [Some(1.0f32); 12];
+        ranges[6] = None;
+        let (regions, hits) = filter(&ranges);
+        // 0..=5 (5 pairs) and 7..=11 (4 pairs).
+        assert_eq!((regions, hits.len()), (2, 11));
+        assert!(hits.iter().all(|h| h.range_m == 1.0));
+        let (regions, hits) = filter(&[None; 20]);
+        assert_eq!((regions, hits.len()), (0, 0));
+    }
+
+    #[test]
+    fn filter_off_passes_every_echo() {
+        let sweep = sweep_of(&[Some(1.0), None, Some(0.4), Some(f32::NAN)]);
+        let params = RcdParams {
+            min_pairs: 0,
+            ..RcdParams::from_config(&RobotConfig::default())
+        };
+        let mut hits = HitBuffer::new();
+        assert_eq!(filter_constant_depth(&sweep, &params, &mut hits), 2);
+        assert_eq!(hits[1].range_m, 0.4);
+    }
+
+    #[test]
+    fn simulated_wall_is_seen_around_its_perpendicular() {
+        let c = RobotConfig::default();
+        let mut walls = Obstacles::new();
+        walls
+            .push(&[PointM::new(3.2, -5.0), PointM::new(3.2, 5.0)])
+            .unwrap();
+        // Sonar at x = 2.2: the wall is 1 m ahead.
+        let mut plant = Plant::new(&c, Pose::new(2.0, 0.0, 0.0));
+        let plan = SweepPlan::new(&c, SweepKind::Normal);
+        let mut sweep = SweepBuffer::new();
+        for a in plan.angles_rad() {
+            let range_m = plant.sonar_range_m(&walls, a, c.sonar_range_m);
+            sweep
+                .push(Reading {
+                    neck_angle_rad: a,
+                    range_m,
+                    pose: plant.pose(),
+                })
+                .unwrap();
+        }
+        let mut hits = HitBuffer::new();
+        let regions = filter_constant_depth(&sweep, &RcdParams::from_config(&c), &mut hits);
+        assert_eq!(regions, 1);
+        // Depth within 1 cm per step near the perpendicular: ±10 steps at 1 m.
+        assert!(hits.len() >= 15 && hits.len() <= 25, "{}", hits.len());
+        for h in &hits {
+            assert!(h.neck_angle_rad.abs() < 20.0 * DEG);
+            let p = h.world_point(c.sonar_offset_m);
+            assert!((p.x_m - 3.2).abs() < 0.07, "{p:?}");
+        }
+        // Into the grid with the robot's expansion.
+        let geometry = GridGeometry::new(100, 100, 0.05).unwrap();
+        let mut grid = Grid300::new(geometry).unwrap();
+        let cells = geometry.expansion_cells(c.planning_radius_m);
+        assert_eq!(
+            mark_hits(&mut grid, &hits, c.sonar_offset_m, cells),
+            hits.len()
+        );
+        let wall_cell = geometry.cell_of(PointM::new(3.2, 0.0)).unwrap();
+        assert!(grid.is_occupied(wall_cell));
+        // Grown by 0.40 m towards the robot, not much further.
+        assert!(grid.is_occupied(geometry.cell_of(PointM::new(2.85, 0.0)).unwrap()));
+        assert!(!grid.is_occupied(geometry.cell_of(PointM::new(2.6, 0.0)).unwrap()));
+    }
+
+    #[test]
+    fn hit_to_world_uses_the_sonar_offset_and_heading() {
+        let pose = Pose::new(1.0, 1.0, core::f32::consts::FRAC_PI_2);
+        let p = hit_to_world(pose, 0.2, 0.0, 1.0);
+        assert!(
+            (p.x_m - 1.0).abs() < 2e-3 && (p.y_m - 2.2).abs() < 2e-3,
+            "{p:?}"
+        );
+        let p = hit_to_world(pose, 0.2, -core::f32::consts::FRAC_PI_2, 0.5);
+        assert!(
+            (p.x_m - 1.5).abs() < 2e-3 && (p.y_m - 1.2).abs() < 2e-3,
+            "{p:?}"
+        );
+    }
+
+    #[test]
+    fn full_buffer_refuses_and_keeps_its_readings() {
+        let mut s = SweepBuffer::new();
+        for _ in 0..SWEEP_CAPACITY {
+            s.push(Reading::default()).unwrap();
+        }
+        let before = s.clone();
+        assert_eq!(s.push(Reading::default()), Err(SweepFull));
+        assert_eq!(s, before);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn filter_never_panics_and_reports_only_echoes(
+            ranges in proptest::collection::vec(
+                proptest::option::of(proptest::num::f32::ANY), 0..SWEEP_CAPACITY),
+            angles in proptest::collection::vec(proptest::num::f32::ANY, SWEEP_CAPACITY),
+        ) {
+            let mut sweep = SweepBuffer::new();
+            for (r, a) in ranges.iter().zip(angles.iter()) {
+                sweep.push(Reading { neck_angle_rad: *a, range_m: *r, pose: Pose::default() }).unwrap();
+            }
+            let mut hits = HitBuffer::new();
+            let regions = filter_constant_depth(&sweep, &RcdParams::from_config(&RobotConfig::default()), &mut hits);
+            proptest::prop_assert!(hits.len() <= sweep.len());
+            proptest::prop_assert!(regions <= hits.len());
+            for h in &hits {
+                proptest::prop_assert!(h.range_m.is_finite() && h.range_m >= 0.0);
+            }
+            let geometry = GridGeometry::new(50, 50, 0.1).unwrap();
+            let mut grid = Grid300::new(geometry).unwrap();
+            mark_hits(&mut grid, &hits, 0.2, 3);
+        }
+    }
+}
