@@ -206,31 +206,3 @@ mod tests {
         assert_eq!(super::hypot_precise(3.0, 4.0), 5.0);
     }
 }
-
-/// Square root to nearly full `f32` precision: micromath's [`sqrt`] (a bit-level estimate,
-/// off by up to ~6 %) refined by two Newton steps. Plain `+ - * /`, so the host and the MCU
-/// still compute bit-identical results. Negative or NaN input gives NaN; `+inf` gives `+inf`.
-///
-/// ```
-/// let r = twil_core::math::sqrt_precise(0.01);
-/// assert!((r - 0.1).abs() < 1e-6);
-/// ```
-#[inline]
-pub fn sqrt_precise(x: f32) -> f32 {
-    if x.is_nan() || x < 0.0 {
-        return f32::NAN;
-    }
-    if x == 0.0 || x == f32::INFINITY {
-        return x;
-    }
-    let mut y = sqrt(x);
-    y = 0.5 * (y + x / y);
-    y = 0.5 * (y + x / y);
-    y
-}
-
-/// Hypotenuse with [`sqrt_precise`].
-#[inline]
-pub fn hypot_precise(x: f32, y: f32) -> f32 {
-    sqrt_precise(x * x + y * y)
-}

@@ -1,3 +1,1118 @@
-//! The mission state machine: sweep, mark, plan, prune, follow, settle (issue 3).
+//! The mission state machine: sweep → mark → plan → prune → (full sweep) → follow → settle → …
+//! → reached | unreachable | timeout | aborted (seed 003 §IV.5: the obstacle detector,
+//! trajectory generator, trajectory supplier, sonar reader and controller threads, as one
+//! sans-IO state machine).
 //!
-//! Status: not written yet.
+//! ## Shape
+//!
+//! A [`Mission`] owns everything the navigation needs: the occupancy grid, the planner and its
+//! scratch memory, the full path and the kept prefix, the [`TrajectorySupplier`], the
+//! [`Controller`] and the buffer of the sweep in progress. It does no I/O: the shell (the
+//! firmware, `twil simulate`, a test) calls [`Mission::step`] with
+//!
+//! - [`MissionInput::Tick`] once per controller period (50 ms) with the encoder count deltas;
+//!   the output carries the wheel voltages to apply and, when the sonar is sweeping and the
+//!   sweep's time budget allows, a [`SonarRequest`] (a neck angle to measure at);
+//! - [`MissionInput::SonarReading`] with the answer to each request; the output may carry the
+//!   next request (several readings fit in one period when the echo wait is short);
+//! - [`MissionInput::Abort`] when the shell must stop (e.g. a collision).
+//!
+//! Simulated and real time are the same thing here: the mission's clock advances by one
+//! controller period per tick, and a sonar reading costs `echo_wait_s + neck_step_time_s` of
+//! that budget, so a ±95° sweep of 105 readings takes ≈ 3.8 s of mission time with the default
+//! 35 ms echo wait.
+//!
+//! ## State machine
+//!
+//! ```text
+//!            ┌──────────────────────────────────────────────────────────────┐
+//!            v                                                              │
+//!  start ─> Sweep (robot held; ±95°, or ±180° when asked)                   │
+//!            │ last reading                                                 │
+//!            v                                                              │
+//!           Mark (filter the sweep, hits -> grid with expansion)            │
+//!            v                                                              │
+//!           Plan (planner on the map from the current pose) ── no path ──> Unreachable
+//!            v                                                              │
+//!           Prune (prefix within sonar range and visible)                   │
+//!            │ a kept point outside the ±95° band and last sweep not full   │
+//!            ├──────────────> Sweep (full) ───────────────────────────────> Mark …
+//!            v                                                              │
+//!           Follow (supplier -> controller, 50 ms)                          │
+//!            │ end of trajectory                                            │
+//!            v                                                              │
+//!           Settle (reference model within 2 %) ── at the goal ──> Reached  │
+//!            └──────────────────────────────────────────────────────────────┘
+//!  any state: time limit -> Timeout; Abort input -> Aborted;
+//!             N plans in a row without moving -> Unreachable (no progress)
+//! ```
+//!
+//! **Stop mode** is exactly the loop above (the seed's stop-and-sweep).
+//!
+//! **Continuous mode** keeps the sonar sweeping (±95°, alternating direction) while the robot
+//! follows the prefix. Each reading is placed in the world with the odometry pose *at that
+//! reading*. At the end of every pass the hits are marked and the mission replans from the
+//! point the supplier is handing out (so the motion does not restart from rest), prunes, and
+//! hands the new prefix to the supplier without stopping. A pass whose new obstacles block the
+//! remaining path counts as a *blocked* replan. The robot only stops to sweep at the start,
+//! when the band check asks for a full sweep, or when it ran to the end of a prefix that is not
+//! the goal (then it settles, sweeps standing and continues).
+//!
+//! ## It always ends
+//!
+//! - The map only ever gains obstacles, so when the planner says the goal is unreachable (or the
+//!   goal cell is occupied) on the current map, it stays so: [`MissionStatus::Unreachable`].
+//! - [`MissionConfig::max_stalled_plans`] plans in a row from (almost) the same place also end
+//!   in [`MissionStatus::Unreachable`] ([`UnreachableReason::NoProgress`]).
+//! - [`MissionConfig::time_limit_s`] of mission time: [`MissionStatus::Timeout`].
+//!
+//! ## Memory
+//!
+//! No heap. The size is dominated by the grid (1 bit per cell), the planner scratch (4 bits per
+//! cell plus its queue) and two paths of [`MAX_PATH_POINTS`](crate::plan::MAX_PATH_POINTS) points (8 KiB each) plus the
+//! supplier's copy. [`Mission::SIZE_BYTES`] gives the exact figure for an instantiation; see
+//! `docs/simulate.md` for the numbers of [`Mission300`] and [`Mission400`].
+
+use heapless::Vec;
+
+use crate::control::{ControlInput, Controller, Pose};
+use crate::geom::{Cell, PointM};
+use crate::grid::{words_for_cells, Grid, GridError, GridGeometry};
+use crate::math::{cos, hypot_precise, sin};
+use crate::plan::{
+    needs_full_sweep, prune_visible_prefix, PathM, PlanError, PlanStatus, Planner, PlannerKind,
+};
+use crate::raster::{mark_point_m, mark_polygon, BresenhamLine};
+use crate::robot::RobotConfig;
+use crate::sonar::{
+    filter_constant_depth, HitBuffer, RcdParams, Reading, SweepBuffer, SweepKind, SweepPlan,
+    SWEEP_CAPACITY,
+};
+use crate::trajectory::{FrameTransform, SupplierConfig, SupplyEvent, TrajectorySupplier};
+use crate::world::Params;
+
+/// Most readings one sweep can hold: a full ±180° sweep at 1.8° per step (200 steps + 1).
+pub const MAX_SWEEP_READINGS: usize = SWEEP_CAPACITY;
+
+/// Most events one [`Mission::step`] can report.
+pub const MAX_EVENTS_PER_STEP: usize = 8;
+
+/// Open-list capacity of the planner inside the mission (entries).
+pub const MISSION_QUEUE: usize = 8192;
+
+/// Planner scratch words for `cells` cells (4 bits per cell, 8 cells per word).
+pub const fn scratch_words_for_cells(cells: usize) -> usize {
+    cells.div_ceil(8)
+}
+
+/// A mission on a grid of at most 300 × 300 cells (15 m × 15 m at 0.05 m): the MCU size.
+pub type Mission300 =
+    Mission<{ words_for_cells(300 * 300) }, { scratch_words_for_cells(300 * 300) }, MISSION_QUEUE>;
+
+/// A mission on a grid of at most 400 × 400 cells (20 m × 20 m at 0.05 m): the host size.
+pub type Mission400 =
+    Mission<{ words_for_cells(400 * 400) }, { scratch_words_for_cells(400 * 400) }, MISSION_QUEUE>;
+
+/// How the robot uses its sonar.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionMode {
+    /// Stop, sweep, plan, follow the prefix, settle, repeat (the seed).
+    #[default]
+    Stop,
+    /// Sweep while moving and replan on the fly.
+    Continuous,
+}
+
+/// Everything a mission needs to know before it starts.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MissionConfig {
+    /// Stop-and-sweep or continuous.
+    pub mode: MissionMode,
+    /// Which planner to run.
+    pub planner: PlannerKind,
+    /// Robot constants (its `planning_radius_m` grows obstacles, its `sonar_range_m` prunes).
+    pub robot: RobotConfig,
+    /// Start position, world metres.
+    pub start: PointM,
+    /// Initial heading, world radians, counter-clockwise from +x.
+    pub initial_heading_rad: f32,
+    /// Goal position, world metres.
+    pub goal: PointM,
+    /// Cruise speed along the path, metres per second.
+    pub speed_m_s: f32,
+    /// Turn rate when turning in place, radians per second.
+    pub turn_rate_rad_s: f32,
+    /// Direction changes larger than this are done as turns in place, radians.
+    pub turn_in_place_above_rad: f32,
+    /// Mission time after which it ends in [`MissionStatus::Timeout`], seconds.
+    pub time_limit_s: f32,
+    /// Reached when the odometry position is this close to the goal after a prefix that ends
+    /// at the goal, metres.
+    pub goal_tolerance_m: f32,
+    /// Plans in a row that start within [`Self::stall_distance_m`] of the previous plan's start
+    /// before the mission gives up as unreachable.
+    pub max_stalled_plans: u16,
+    /// A plan that starts closer than this to the previous one counts as stalled, metres.
+    pub stall_distance_m: f32,
+    /// Filter each sweep with the regions-of-constant-depth filter of [`crate::sonar`] (the
+    /// seed's); `false` marks every valid reading.
+    pub constant_depth_filter: bool,
+}
+
+impl MissionConfig {
+    /// A configuration from a `.par` file's parameters and a robot config (whose planning
+    /// radius is replaced by the `.par` radius), stop mode, A*, a 600 s time limit.
+    pub fn from_params(params: &Params, robot: RobotConfig) -> Self {
+        let robot = robot.with_planning_radius_m(params.robot_radius_m);
+        Self {
+            mode: MissionMode::Stop,
+            planner: PlannerKind::AStar,
+            robot,
+            start: params.start,
+            initial_heading_rad: params.initial_heading_deg * (core::f32::consts::PI / 180.0),
+            goal: params.goal,
+            speed_m_s: params.speed_m_s,
+            turn_rate_rad_s: 0.8,
+            turn_in_place_above_rad: core::f32::consts::FRAC_PI_6,
+            time_limit_s: 600.0,
+            goal_tolerance_m: 0.10,
+            max_stalled_plans: 6,
+            stall_distance_m: 0.10,
+            constant_depth_filter: true,
+        }
+    }
+
+    /// Check every value the mission relies on; the error names the field and its value.
+    pub fn validate(&self) -> Result<(), MissionError> {
+        if let Err(e) = self.robot.validate() {
+            return Err(MissionError::Robot(e));
+        }
+        let positive = [
+            ("speed_m_s", self.speed_m_s),
+            ("turn_rate_rad_s", self.turn_rate_rad_s),
+            ("time_limit_s", self.time_limit_s),
+            ("goal_tolerance_m", self.goal_tolerance_m),
+        ];
+        for (field, value) in positive {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(MissionError::BadValue { field, value });
+            }
+        }
+        let finite = [
+            ("start x", self.start.x_m),
+            ("start y", self.start.y_m),
+            ("goal x", self.goal.x_m),
+            ("goal y", self.goal.y_m),
+            ("initial_heading_rad", self.initial_heading_rad),
+            ("turn_in_place_above_rad", self.turn_in_place_above_rad),
+            ("stall_distance_m", self.stall_distance_m),
+        ];
+        for (field, value) in finite {
+            if !value.is_finite() {
+                return Err(MissionError::BadValue { field, value });
+            }
+        }
+        Ok(())
+    }
+
+    fn supplier_config(&self) -> SupplierConfig {
+        SupplierConfig {
+            speed_m_s: self.speed_m_s,
+            turn_rate_rad_s: self.turn_rate_rad_s,
+            turn_in_place_above_rad: self.turn_in_place_above_rad,
+            settle_time_s: crate::control::settle_time_s(&self.robot)
+                + 2.0 * self.robot.controller_period_s,
+        }
+    }
+}
+
+/// Why a mission could not be set up.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionError {
+    /// The robot config is invalid.
+    Robot(crate::robot::ConfigError),
+    /// A mission value is out of range.
+    BadValue {
+        /// Field name.
+        field: &'static str,
+        /// Its value.
+        value: f32,
+    },
+    /// The grid geometry does not fit the mission's grid capacity.
+    Grid(GridError),
+    /// The grid has more cells than the planner's scratch covers.
+    PlannerTooSmall {
+        /// Cells in the grid.
+        cells: u32,
+        /// Cells the planner covers.
+        capacity: u32,
+    },
+    /// The start or the goal lies off the map.
+    OffMap {
+        /// `"start"` or `"goal"`.
+        which: &'static str,
+    },
+}
+
+impl core::fmt::Display for MissionError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            MissionError::Robot(e) => write!(f, "robot config: {e}"),
+            MissionError::BadValue { field, value } => write!(f, "{field}: bad value {value}"),
+            MissionError::Grid(e) => write!(f, "grid: {e}"),
+            MissionError::PlannerTooSmall { cells, capacity } => write!(
+                f,
+                "grid of {cells} cells is larger than the planner's {capacity}"
+            ),
+            MissionError::OffMap { which } => write!(f, "the {which} lies off the map"),
+        }
+    }
+}
+
+/// How the mission stands.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionStatus {
+    /// Still going.
+    #[default]
+    Running,
+    /// The robot is at the goal.
+    Reached,
+    /// The map proves the goal cannot be reached, or the robot cannot make progress.
+    Unreachable,
+    /// The time limit ran out.
+    Timeout,
+    /// Stopped from outside ([`MissionInput::Abort`]) or by an internal capacity limit.
+    Aborted,
+}
+
+/// Why the mission ended unreachable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum UnreachableReason {
+    /// Start and goal are not connected on the map.
+    NoPath,
+    /// The goal cell is occupied on the map.
+    GoalBlocked,
+    /// Too many plans in a row without moving.
+    NoProgress,
+}
+
+/// The phase the state machine is in (for displays and logs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionPhase {
+    /// Standing, sweeping the sonar.
+    Sweep {
+        /// `true` for a ±180° sweep.
+        full: bool,
+    },
+    /// Following a prefix (in continuous mode the sonar sweeps meanwhile).
+    Follow,
+    /// Holding the last point for the settle time.
+    Settle,
+    /// Ended; see [`Mission::status`].
+    Done,
+}
+
+/// One input of [`Mission::step`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionInput {
+    /// A controller period went by.
+    Tick {
+        /// Left encoder counts since the previous tick.
+        left_delta_counts: i32,
+        /// Right encoder counts since the previous tick.
+        right_delta_counts: i32,
+        /// Real time since the previous tick, seconds (for the overrun flag).
+        elapsed_s: f32,
+    },
+    /// The answer to the last [`SonarRequest`].
+    SonarReading {
+        /// Neck angle the reading was taken at, robot frame, radians.
+        neck_angle_rad: f32,
+        /// Measured range from the sonar, metres, or `None` for no echo.
+        range_m: Option<f32>,
+    },
+    /// Stop the mission now ([`MissionStatus::Aborted`]).
+    Abort,
+}
+
+/// Take one sonar reading at this neck angle and answer with [`MissionInput::SonarReading`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SonarRequest {
+    /// Neck angle, robot frame (0 = straight ahead, counter-clockwise positive), radians.
+    pub neck_angle_rad: f32,
+}
+
+/// Something that happened during a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionEvent {
+    /// A sweep started.
+    SweepStarted {
+        /// ±180° sweep.
+        full: bool,
+        /// Taken while moving (continuous mode).
+        moving: bool,
+    },
+    /// A sweep ended and its hits were marked.
+    SweepDone {
+        /// Hits marked.
+        hits: u16,
+    },
+    /// The planner ran.
+    Planned {
+        /// Its verdict.
+        status: PlanStatus,
+        /// Continuous mode: the new obstacles blocked the remaining path.
+        blocked: bool,
+        /// Points in the kept prefix.
+        prefix_points: u16,
+    },
+    /// The kept prefix leaves the ±95° band: a full sweep comes first.
+    FullSweepRequested,
+    /// The end of the prefix was handed to the controller.
+    EndOfTrajectory,
+    /// The settle time after the end went by.
+    Settled,
+    /// The mission ended.
+    Finished(MissionStatus),
+}
+
+/// What one [`Mission::step`] asks of the shell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MissionOutput {
+    /// Left motor voltage to apply until the next tick, volts.
+    pub left_voltage_v: f32,
+    /// Right motor voltage, volts.
+    pub right_voltage_v: f32,
+    /// Take this sonar reading now (before the next tick).
+    pub sonar_request: Option<SonarRequest>,
+    /// What happened.
+    pub events: Vec<MissionEvent, MAX_EVENTS_PER_STEP>,
+    /// Status after the step.
+    pub status: MissionStatus,
+}
+
+/// Counters of a mission.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MissionStats {
+    /// Sweeps taken while standing (the seed's stops).
+    pub stops: u32,
+    /// Sweeps taken while moving (continuous mode).
+    pub moving_sweeps: u32,
+    /// Full ±180° sweeps (all standing).
+    pub full_sweeps: u32,
+    /// Planner runs.
+    pub plans: u32,
+    /// Planner runs after the first one.
+    pub replans: u32,
+    /// Continuous mode: replans whose new obstacles blocked the remaining path.
+    pub blocked_replans: u32,
+    /// Sonar readings taken.
+    pub readings: u32,
+    /// Hits marked in the grid.
+    pub hits: u32,
+    /// Distance travelled by the odometry, metres.
+    pub odometry_distance_m: f32,
+    /// Mission time, seconds.
+    pub time_s: f32,
+    /// Controller periods that overran.
+    pub controller_overruns: u32,
+    /// Controller periods with a saturated voltage.
+    pub saturated_periods: u32,
+    /// Set when the status is [`MissionStatus::Unreachable`].
+    pub unreachable_reason: Option<UnreachableReason>,
+    /// Planner scratch/queue/path errors met (the mission aborts on them).
+    pub plan_errors: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SweepState {
+    full: bool,
+    moving: bool,
+    /// Index of the next reading to request, 0 ..= count.
+    next: u16,
+    /// Readings in this sweep.
+    count: u16,
+    /// Sweep from +half to −half instead.
+    reversed: bool,
+    /// A request is out and not answered yet.
+    waiting: bool,
+}
+
+/// The mission: see the module documentation.
+pub struct Mission<const W: usize, const S: usize, const Q: usize> {
+    config: MissionConfig,
+    supplier_config: SupplierConfig,
+    grid: Grid<W>,
+    planner: Planner<S, Q>,
+    path: PathM,
+    prefix: PathM,
+    supplier: TrajectorySupplier,
+    controller: Controller,
+    frame: FrameTransform,
+    expansion_cells: u16,
+    readings: SweepBuffer,
+    filtered: HitBuffer,
+    hits: Vec<PointM, MAX_SWEEP_READINGS>,
+    sweep: Option<SweepState>,
+    next_sweep_reversed: bool,
+    last_sweep_full: bool,
+    sonar_budget_s: f32,
+    phase: MissionPhase,
+    status: MissionStatus,
+    stats: MissionStats,
+    /// Controller reference (control point), odometry frame.
+    reference: PointM,
+    pose_odom: Pose,
+    voltages_v: (f32, f32),
+    last_plan_origin: Option<PointM>,
+    stalled_plans: u16,
+    prefix_ends_at_goal: bool,
+}
+
+impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
+    /// Size of this mission type in bytes (it is meant to live in a `static` on the MCU).
+    pub const SIZE_BYTES: usize = core::mem::size_of::<Self>();
+
+    /// A mission on an empty map of `geometry`. Validates the config and checks that the grid
+    /// fits both the grid and the planner capacity and that start and goal are on the map.
+    pub fn new(config: MissionConfig, geometry: GridGeometry) -> Result<Self, MissionError> {
+        config.validate()?;
+        let grid = Grid::<W>::new(geometry).map_err(MissionError::Grid)?;
+        let cells = geometry.cell_count();
+        if cells > Planner::<S, Q>::CAPACITY_CELLS {
+            return Err(MissionError::PlannerTooSmall {
+                cells: cells as u32,
+                capacity: Planner::<S, Q>::CAPACITY_CELLS as u32,
+            });
+        }
+        if geometry.cell_xy_of(config.start).is_none() {
+            return Err(MissionError::OffMap { which: "start" });
+        }
+        if geometry.cell_xy_of(config.goal).is_none() {
+            return Err(MissionError::OffMap { which: "goal" });
+        }
+        let frame = FrameTransform::new(config.start, config.initial_heading_rad);
+        let controller = Controller::new(&config.robot, Pose::default());
+        let reference = PointM::new(config.robot.point_offset_m, 0.0);
+        Ok(Self {
+            supplier_config: config.supplier_config(),
+            expansion_cells: geometry.expansion_cells(config.robot.planning_radius_m),
+            config,
+            grid,
+            planner: Planner::new(),
+            path: Vec::new(),
+            prefix: Vec::new(),
+            supplier: TrajectorySupplier::new(),
+            controller,
+            frame,
+            readings: SweepBuffer::new(),
+            filtered: HitBuffer::new(),
+            hits: Vec::new(),
+            sweep: None,
+            next_sweep_reversed: false,
+            last_sweep_full: false,
+            sonar_budget_s: 0.0,
+            phase: MissionPhase::Sweep { full: false },
+            status: MissionStatus::Running,
+            stats: MissionStats::default(),
+            reference,
+            pose_odom: Pose::default(),
+            voltages_v: (0.0, 0.0),
+            last_plan_origin: None,
+            stalled_plans: 0,
+            prefix_ends_at_goal: false,
+        })
+    }
+
+    /// Rasterize an obstacle known a priori (a closed outline, world metres), grown by the
+    /// planning radius. Call before the first step; later calls are allowed (the map only
+    /// gains obstacles).
+    pub fn add_known_polygon(&mut self, vertices: &[PointM]) {
+        mark_polygon(&mut self.grid, vertices, self.expansion_cells);
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &MissionConfig {
+        &self.config
+    }
+
+    /// The map as the robot knows it (obstacles grown by the planning radius).
+    pub fn grid(&self) -> &Grid<W> {
+        &self.grid
+    }
+
+    /// The latest full plan, world metres (empty before the first plan).
+    pub fn path(&self) -> &[PointM] {
+        &self.path
+    }
+
+    /// The kept prefix being followed, world metres.
+    pub fn prefix(&self) -> &[PointM] {
+        &self.prefix
+    }
+
+    /// Hits of the latest completed sweep, world metres.
+    pub fn last_hits(&self) -> &[PointM] {
+        &self.hits
+    }
+
+    /// Current status.
+    pub fn status(&self) -> MissionStatus {
+        self.status
+    }
+
+    /// Current phase.
+    pub fn phase(&self) -> MissionPhase {
+        self.phase
+    }
+
+    /// Counters.
+    pub fn stats(&self) -> MissionStats {
+        self.stats
+    }
+
+    /// The robot's pose in the world frame, as the odometry believes it.
+    pub fn pose_world(&self) -> Pose {
+        self.to_world(self.pose_odom)
+    }
+
+    /// Advance the mission by one input; see the module documentation.
+    pub fn step(&mut self, input: MissionInput) -> MissionOutput {
+        let mut out = MissionOutput {
+            left_voltage_v: self.voltages_v.0,
+            right_voltage_v: self.voltages_v.1,
+            sonar_request: None,
+            events: Vec::new(),
+            status: self.status,
+        };
+        if self.status != MissionStatus::Running {
+            out.left_voltage_v = 0.0;
+            out.right_voltage_v = 0.0;
+            return out;
+        }
+        match input {
+            MissionInput::Tick {
+                left_delta_counts,
+                right_delta_counts,
+                elapsed_s,
+            } => self.on_tick(left_delta_counts, right_delta_counts, elapsed_s, &mut out),
+            MissionInput::SonarReading {
+                neck_angle_rad,
+                range_m,
+            } => self.on_reading(neck_angle_rad, range_m, &mut out),
+            MissionInput::Abort => self.finish(MissionStatus::Aborted, &mut out),
+        }
+        if self.status != MissionStatus::Running {
+            self.voltages_v = (0.0, 0.0);
+            out.sonar_request = None;
+        }
+        out.left_voltage_v = self.voltages_v.0;
+        out.right_voltage_v = self.voltages_v.1;
+        out.status = self.status;
+        out
+    }
+
+    fn period_s(&self) -> f32 {
+        self.config.robot.controller_period_s
+    }
+
+    fn reading_time_s(&self) -> f32 {
+        self.config.robot.echo_wait_s + self.config.robot.neck_step_time_s
+    }
+
+    fn to_world(&self, pose_odom: Pose) -> Pose {
+        let p = self
+            .frame
+            .odom_to_world(PointM::new(pose_odom.x_m, pose_odom.y_m));
+        Pose {
+            x_m: p.x_m,
+            y_m: p.y_m,
+            heading_rad: self.frame.heading_odom_to_world(pose_odom.heading_rad),
+        }
+    }
+
+    fn position_world(&self) -> PointM {
+        let p = self.pose_world();
+        PointM::new(p.x_m, p.y_m)
+    }
+
+    fn finish(&mut self, status: MissionStatus, out: &mut MissionOutput) {
+        self.status = status;
+        self.phase = MissionPhase::Done;
+        self.sweep = None;
+        self.supplier.stop();
+        push(out, MissionEvent::Finished(status));
+    }
+
+    fn on_tick(&mut self, left: i32, right: i32, elapsed_s: f32, out: &mut MissionOutput) {
+        let period = self.period_s();
+        self.stats.time_s += period;
+
+        // Trajectory supplier -> reference of the control point.
+        if matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle) {
+            let supply = self.supplier.tick(period);
+            let d = self.config.robot.point_offset_m;
+            self.reference = PointM::new(
+                supply.point.x_m + d * cos(supply.heading_rad),
+                supply.point.y_m + d * sin(supply.heading_rad),
+            );
+            match supply.event {
+                Some(SupplyEvent::EndOfTrajectory) => {
+                    push(out, MissionEvent::EndOfTrajectory);
+                    self.phase = MissionPhase::Settle;
+                }
+                Some(SupplyEvent::Settled) => {
+                    push(out, MissionEvent::Settled);
+                    self.on_settled(out);
+                }
+                None => {}
+            }
+        }
+
+        // Controller.
+        let before = self.pose_odom;
+        let control = self.controller.step(ControlInput {
+            reference: self.reference,
+            encoder_left_delta_counts: left,
+            encoder_right_delta_counts: right,
+            elapsed_since_last_step_s: elapsed_s,
+        });
+        self.pose_odom = control.pose;
+        self.voltages_v = (control.left_voltage_v, control.right_voltage_v);
+        if control.overrun {
+            self.stats.controller_overruns += 1;
+        }
+        if control.saturated {
+            self.stats.saturated_periods += 1;
+        }
+        let moved = hypot_precise(
+            self.pose_odom.x_m - before.x_m,
+            self.pose_odom.y_m - before.y_m,
+        );
+        if moved.is_finite() {
+            self.stats.odometry_distance_m += moved;
+        }
+
+        if self.status != MissionStatus::Running {
+            return;
+        }
+        // Continuous mode: reached as soon as the robot is at the goal at the end of a prefix
+        // that ends there.
+        if self.config.mode == MissionMode::Continuous
+            && self.phase == MissionPhase::Settle
+            && self.at_goal()
+        {
+            self.finish(MissionStatus::Reached, out);
+            return;
+        }
+        if self.stats.time_s >= self.config.time_limit_s {
+            self.finish(MissionStatus::Timeout, out);
+            return;
+        }
+
+        // Start a sweep when none runs: standing in the Sweep phase, or moving in continuous
+        // mode.
+        if self.sweep.is_none() {
+            match self.phase {
+                MissionPhase::Sweep { full } => self.start_sweep(full, false, out),
+                MissionPhase::Follow | MissionPhase::Settle
+                    if self.config.mode == MissionMode::Continuous =>
+                {
+                    self.start_sweep(false, true, out)
+                }
+                _ => {}
+            }
+        }
+        if self.sweep.is_some() {
+            self.sonar_budget_s += period;
+            self.request_next(out);
+        } else {
+            self.sonar_budget_s = 0.0;
+        }
+    }
+
+    fn at_goal(&self) -> bool {
+        self.prefix_ends_at_goal
+            && hypot_precise(
+                self.position_world().x_m - self.config.goal.x_m,
+                self.position_world().y_m - self.config.goal.y_m,
+            ) <= self.config.goal_tolerance_m
+    }
+
+    fn on_settled(&mut self, out: &mut MissionOutput) {
+        if self.at_goal() {
+            self.finish(MissionStatus::Reached, out);
+            return;
+        }
+        // Stand and sweep again. In continuous mode a moving pass may be under way: it is
+        // dropped and a standing sweep starts.
+        self.supplier.stop();
+        self.sweep = None;
+        self.phase = MissionPhase::Sweep { full: false };
+    }
+
+    fn start_sweep(&mut self, full: bool, moving: bool, out: &mut MissionOutput) {
+        let plan = SweepPlan::new(
+            &self.config.robot,
+            if full {
+                SweepKind::Full
+            } else {
+                SweepKind::Normal
+            },
+        );
+        let count = plan.readings().min(MAX_SWEEP_READINGS) as u16;
+        self.readings.clear();
+        let reversed = self.next_sweep_reversed;
+        self.next_sweep_reversed = !reversed;
+        self.sweep = Some(SweepState {
+            full,
+            moving,
+            next: 0,
+            count,
+            reversed,
+            waiting: false,
+        });
+        if moving {
+            self.stats.moving_sweeps += 1;
+        } else {
+            self.stats.stops += 1;
+            if full {
+                self.stats.full_sweeps += 1;
+            }
+        }
+        push(out, MissionEvent::SweepStarted { full, moving });
+    }
+
+    fn sweep_angle_rad(&self, sweep: &SweepState, index: u16) -> f32 {
+        let plan = SweepPlan::new(
+            &self.config.robot,
+            if sweep.full {
+                SweepKind::Full
+            } else {
+                SweepKind::Normal
+            },
+        );
+        let last = sweep.count.saturating_sub(1);
+        let i = if sweep.reversed {
+            last.saturating_sub(index)
+        } else {
+            index
+        };
+        plan.neck_angle_rad(i as usize).unwrap_or(0.0)
+    }
+
+    /// Hand out the next reading of the sweep if its time budget allows.
+    fn request_next(&mut self, out: &mut MissionOutput) {
+        let reading_time = self.reading_time_s();
+        let Some(mut sweep) = self.sweep else {
+            return;
+        };
+        if sweep.waiting || sweep.next >= sweep.count || self.sonar_budget_s < reading_time {
+            return;
+        }
+        self.sonar_budget_s -= reading_time;
+        let angle = self.sweep_angle_rad(&sweep, sweep.next);
+        sweep.waiting = true;
+        self.sweep = Some(sweep);
+        out.sonar_request = Some(SonarRequest {
+            neck_angle_rad: angle,
+        });
+    }
+
+    fn on_reading(&mut self, neck_angle_rad: f32, range_m: Option<f32>, out: &mut MissionOutput) {
+        let Some(mut sweep) = self.sweep else {
+            return; // Nobody asked: ignored.
+        };
+        if !sweep.waiting {
+            return;
+        }
+        sweep.waiting = false;
+        sweep.next += 1;
+        self.stats.readings += 1;
+        let robot = &self.config.robot;
+        let range_m = range_m.filter(|r| {
+            r.is_finite() && *r >= robot.sonar_min_range_m && *r <= robot.sonar_range_m
+        });
+        let neck_angle_rad = if neck_angle_rad.is_finite() {
+            neck_angle_rad
+        } else {
+            self.sweep_angle_rad(&sweep, sweep.next - 1)
+        };
+        let pose = self.pose_world();
+        // Capacity is the largest sweep: cannot fail.
+        let _ = self.readings.push(Reading {
+            neck_angle_rad,
+            range_m,
+            pose,
+        });
+        self.sweep = Some(sweep);
+        if sweep.next >= sweep.count {
+            self.sweep = None;
+            self.end_of_sweep(sweep, out);
+        } else {
+            self.request_next(out);
+        }
+    }
+
+    fn end_of_sweep(&mut self, sweep: SweepState, out: &mut MissionOutput) {
+        // Mark.
+        let hits = self.mark_readings();
+        push(out, MissionEvent::SweepDone { hits });
+        self.last_sweep_full = sweep.full;
+        if sweep.moving {
+            // Continuous: only replan if still following (a settle may have ended the pass).
+            if matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle) {
+                let blocked = self.remaining_path_blocked();
+                if blocked {
+                    self.stats.blocked_replans += 1;
+                }
+                self.plan_and_go(blocked, out);
+            }
+        } else {
+            self.plan_and_go(false, out);
+        }
+    }
+
+    /// Filter the sweep (regions of constant depth, unless turned off), turn the kept readings
+    /// into world points with the pose of each reading, mark them. Returns the hits marked.
+    fn mark_readings(&mut self) -> u16 {
+        self.hits.clear();
+        let mut params = RcdParams::from_config(&self.config.robot);
+        if !self.config.constant_depth_filter {
+            params.min_pairs = 0;
+        }
+        filter_constant_depth(&self.readings, &params, &mut self.filtered);
+        let offset_m = self.config.robot.sonar_offset_m;
+        for hit in self.filtered.iter() {
+            let p = hit.world_point(offset_m);
+            if !p.is_finite() {
+                continue;
+            }
+            mark_point_m(&mut self.grid, p, self.expansion_cells);
+            let _ = self.hits.push(p);
+        }
+        self.stats.hits += self.hits.len() as u32;
+        self.hits.len() as u16
+    }
+
+    /// Continuous mode: does an occupied cell lie on what remains of the path?
+    fn remaining_path_blocked(&self) -> bool {
+        let from = self.supplier.segment().min(self.path.len());
+        let g = *self.grid.geometry();
+        let Some(rest) = self.path.get(from..) else {
+            return false;
+        };
+        for w in rest.windows(2) {
+            let (Some(a), Some(b)) = (g.cell_xy_of(w[0]), g.cell_xy_of(w[1])) else {
+                continue;
+            };
+            if BresenhamLine::new(a, b).any(|(x, y)| self.grid.is_occupied_xy(x, y)) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Plan from where the robot is (or, moving, from where it is told to be), prune, and
+    /// either follow, ask for a full sweep, or end.
+    fn plan_and_go(&mut self, blocked: bool, out: &mut MissionOutput) {
+        let moving = matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle)
+            && self.config.mode == MissionMode::Continuous;
+        // Where the new trajectory starts: the robot, or while moving the point the supplier
+        // hands out now (the reference model is a little behind it), so motion is continuous.
+        let origin = if moving && self.phase == MissionPhase::Follow {
+            let s = self.supplier.current_point_odom();
+            self.frame.odom_to_world(s)
+        } else {
+            self.position_world()
+        };
+
+        // Stall detection.
+        match self.last_plan_origin {
+            Some(prev)
+                if hypot_precise(origin.x_m - prev.x_m, origin.y_m - prev.y_m)
+                    < self.config.stall_distance_m =>
+            {
+                self.stalled_plans = self.stalled_plans.saturating_add(1)
+            }
+            _ => self.stalled_plans = 0,
+        }
+        self.last_plan_origin = Some(origin);
+        if self.stalled_plans >= self.config.max_stalled_plans {
+            self.stats.unreachable_reason = Some(UnreachableReason::NoProgress);
+            self.finish(MissionStatus::Unreachable, out);
+            return;
+        }
+
+        // The planner starts from the nearest free cell (the robot may stand in the expansion
+        // of an obstacle it has just seen: the body is smaller than the planning radius).
+        let g = *self.grid.geometry();
+        let start_point = match g.cell_xy_of(origin) {
+            Some((x, y)) => match nearest_free(&self.grid, x, y, self.expansion_cells as i32) {
+                Some(c) => g.center_of(c),
+                None => origin,
+            },
+            None => origin,
+        };
+        self.stats.plans += 1;
+        if self.stats.plans > 1 {
+            self.stats.replans += 1;
+        }
+        let result = self.planner.plan(
+            self.config.planner,
+            &self.grid,
+            start_point,
+            self.config.goal,
+            &mut self.path,
+        );
+        let report = match result {
+            Ok(r) => r,
+            Err(e) => {
+                let _: PlanError = e;
+                self.stats.plan_errors += 1;
+                self.finish(MissionStatus::Aborted, out);
+                return;
+            }
+        };
+        match report.status {
+            PlanStatus::Found => {}
+            PlanStatus::Unreachable => {
+                push_planned(out, report.status, blocked, 0);
+                self.stats.unreachable_reason = Some(UnreachableReason::NoPath);
+                self.finish(MissionStatus::Unreachable, out);
+                return;
+            }
+            PlanStatus::GoalBlocked => {
+                push_planned(out, report.status, blocked, 0);
+                self.stats.unreachable_reason = Some(UnreachableReason::GoalBlocked);
+                self.finish(MissionStatus::Unreachable, out);
+                return;
+            }
+            PlanStatus::StartBlocked => {
+                // No free cell near the robot: stand, sweep all round and try again (the stall
+                // counter ends this if it never frees up).
+                push_planned(out, report.status, blocked, 0);
+                self.path.clear();
+                self.begin_standing_sweep(true);
+                return;
+            }
+            PlanStatus::OutOfBounds => {
+                push_planned(out, report.status, blocked, 0);
+                self.finish(MissionStatus::Aborted, out);
+                return;
+            }
+        }
+
+        // Prune: keep what the sonar has just seen.
+        let mut kept = PathM::new();
+        prune_visible_prefix(
+            &self.grid,
+            &self.path,
+            self.config.robot.sonar_range_m,
+            &mut kept,
+        );
+        self.prefix_ends_at_goal =
+            kept.len() == self.path.len() && kept.last() == self.path.last() && !kept.is_empty();
+        // The trajectory starts where the robot is (or where it is told to be).
+        self.prefix.clear();
+        let _ = self.prefix.push(origin);
+        for p in kept.iter() {
+            if self.prefix.push(*p).is_err() {
+                break;
+            }
+        }
+        push_planned(out, report.status, blocked, self.prefix.len() as u16);
+
+        // Band check (seed traj_fora_faixa_leit): a kept point more than the normal half sweep
+        // off the heading needs a full sweep first, unless the last sweep was one.
+        let pose = self.pose_world();
+        let band_rad = self.config.robot.normal_half_sweep_deg * (core::f32::consts::PI / 180.0);
+        if !self.last_sweep_full
+            && needs_full_sweep(
+                &self.prefix,
+                PointM::new(pose.x_m, pose.y_m),
+                pose.heading_rad,
+                band_rad,
+            )
+        {
+            push(out, MissionEvent::FullSweepRequested);
+            self.begin_standing_sweep(true);
+            return;
+        }
+
+        // Follow.
+        let heading_odom = self.pose_odom.heading_rad;
+        match self.supplier.start(
+            &self.prefix,
+            &self.frame,
+            heading_odom,
+            &self.supplier_config,
+        ) {
+            Ok(()) => self.phase = MissionPhase::Follow,
+            Err(_) => self.finish(MissionStatus::Aborted, out),
+        }
+    }
+
+    /// Hold the robot and sweep standing.
+    fn begin_standing_sweep(&mut self, full: bool) {
+        self.supplier.stop();
+        self.sweep = None;
+        // Hold where the controller is heading now.
+        self.phase = MissionPhase::Sweep { full };
+    }
+}
+
+fn push(out: &mut MissionOutput, event: MissionEvent) {
+    // Full: the oldest events are kept; the status field still tells the outcome.
+    let _ = out.events.push(event);
+}
+
+fn push_planned(out: &mut MissionOutput, status: PlanStatus, blocked: bool, prefix_points: u16) {
+    push(
+        out,
+        MissionEvent::Planned {
+            status,
+            blocked,
+            prefix_points,
+        },
+    );
+}
+
+/// The free cell nearest to (`x`, `y`) in growing square rings up to `max_ring`, or `None`.
+fn nearest_free<const W: usize>(grid: &Grid<W>, x: i32, y: i32, max_ring: i32) -> Option<Cell> {
+    let g = grid.geometry();
+    if !grid.is_occupied_xy(x, y) {
+        return g.cell_xy(x, y);
+    }
+    for r in 1..=max_ring.max(1) {
+        let mut best: Option<(i32, Cell)> = None;
+        for dy in -r..=r {
+            for dx in -r..=r {
+                if dx.abs() != r && dy.abs() != r {
+                    continue;
+                }
+                let (cx, cy) = (x + dx, y + dy);
+                if let Some(c) = g.cell_xy(cx, cy) {
+                    if !grid.is_occupied(c) {
+                        let d2 = dx * dx + dy * dy;
+                        if best.is_none_or(|(b, _)| d2 < b) {
+                            best = Some((d2, c));
+                        }
+                    }
+                }
+            }
+        }
+        if let Some((_, c)) = best {
+            return Some(c);
+        }
+    }
+    None
+}

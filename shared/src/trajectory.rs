@@ -335,6 +335,11 @@ impl TrajectorySupplier {
         self.elapsed_s
     }
 
+    /// The point being supplied now, odometry frame (the origin when idle and empty).
+    pub fn current_point_odom(&self) -> PointM {
+        self.current_point_opt().unwrap_or_default()
+    }
+
     /// The trajectory being supplied, odometry frame.
     pub fn points(&self) -> &[PointM] {
         &self.points
