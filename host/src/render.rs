@@ -976,11 +976,7 @@ mod tests {
         let mut c = Canvas::with_caption(geometry(), 2, 1).unwrap();
         let far = PointM::new(1.0e30, -1.0e30);
         let nan = PointM::new(f32::NAN, 1.0);
-        c.draw_polyline(
-            &[far, nan, PointM::new(1.0e30, 1.0e30)],
-            palette::PATH,
-            5.0,
-        );
+        c.draw_polyline(&[far, nan, PointM::new(1.0e30, 1.0e30)], palette::PATH, 5.0);
         c.draw_polyline(&[far, PointM::new(1.0e30, 1.0e30)], palette::PATH, 1.0);
         c.draw_disc(far, 1.0e30, palette::PATH);
         c.draw_circle(nan, 3.0, palette::PATH, 2.0);

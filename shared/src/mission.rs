@@ -179,7 +179,7 @@ impl MissionConfig {
             goal_tolerance_m: 0.10,
             max_stalled_plans: 6,
             stall_distance_m: 0.10,
-            constant_depth_filter: true,
+            constant_depth_filter: false,
         }
     }
 
@@ -659,10 +659,19 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         // Trajectory supplier -> reference of the control point.
         if matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle) {
             let supply = self.supplier.tick(period);
+            // Where the control point (offset ahead of the axle) should be, and how fast it
+            // moves: along the heading when moving, on a circle of radius `d` when turning.
             let d = self.config.robot.point_offset_m;
+            let (c, s) = (cos(supply.heading_rad), sin(supply.heading_rad));
+            let vx = supply.speed_m_s * c - d * supply.turn_rate_rad_s * s;
+            let vy = supply.speed_m_s * s + d * supply.turn_rate_rad_s * c;
+            // Feed-forward through the first-order reference model: with p = y + τ·ẏ the
+            // model output follows y without the lag τ·v (0.2 m at 0.2 m/s), so the centre
+            // stays on the path and turns in place stay in place.
+            let tau = self.config.robot.reference_time_constant_s;
             self.reference = PointM::new(
-                supply.point.x_m + d * cos(supply.heading_rad),
-                supply.point.y_m + d * sin(supply.heading_rad),
+                supply.point.x_m + d * c + tau * vx,
+                supply.point.y_m + d * s + tau * vy,
             );
             match supply.event {
                 Some(SupplyEvent::EndOfTrajectory) => {
@@ -1012,10 +1021,22 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         }
 
         // Prune: keep what the sonar has just seen.
+        // Prune from the last path vertex within 1.5 cells of the start: the first step of a
+        // path often goes to a neighbouring cell, and seen from the start cell the next
+        // segment may graze an obstacle corner (the no-corner-cutting rule) although it is
+        // clear from its own first cell.
+        let near_start_m = 1.5 * g.resolution_m();
+        let first = self.path.first().copied().unwrap_or(start_point);
+        let skip = self
+            .path
+            .iter()
+            .take_while(|p| hypot_precise(p.x_m - first.x_m, p.y_m - first.y_m) <= near_start_m)
+            .count()
+            .saturating_sub(1);
         let mut kept = PathM::new();
         prune_visible_prefix(
             &self.grid,
-            &self.path,
+            self.path.get(skip..).unwrap_or(&[]),
             self.config.robot.sonar_range_m,
             &mut kept,
         );
@@ -1024,7 +1045,15 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         // The trajectory starts where the robot is (or where it is told to be).
         self.prefix.clear();
         let _ = self.prefix.push(origin);
+        // Path points within a cell of the origin are dropped: a cell centre a few centimetres
+        // behind the robot would otherwise make it turn round for nothing.
+        let near_m = g.resolution_m();
+        let mut leaving = true;
         for p in kept.iter() {
+            if leaving && hypot_precise(p.x_m - origin.x_m, p.y_m - origin.y_m) < near_m {
+                continue;
+            }
+            leaving = false;
             if self.prefix.push(*p).is_err() {
                 break;
             }

@@ -59,8 +59,8 @@ use crate::plan::MAX_PATH_POINTS;
 /// Largest number of points a supplied trajectory can hold (the planner's path capacity).
 pub const MAX_TRAJECTORY_POINTS: usize = MAX_PATH_POINTS;
 
-/// Segments shorter than this are skipped, metres.
-const MIN_SEGMENT_M: f32 = 1.0e-5;
+/// Segments shorter than this are skipped (they have no reliable direction), metres.
+pub const MIN_SEGMENT_M: f32 = 1.0e-3;
 
 /// The rigid transform between the world frame and the odometry frame: the odometry frame's
 /// origin and heading, expressed in the world frame.
@@ -190,6 +190,10 @@ pub struct Supply {
     pub heading_rad: f32,
     /// `true` while turning in place (the point does not move).
     pub turning: bool,
+    /// Speed of the point along `heading_rad` this period, m/s (0 unless moving).
+    pub speed_m_s: f32,
+    /// Signed turn rate of `heading_rad` this period, rad/s (0 unless turning in place).
+    pub turn_rate_rad_s: f32,
     /// An event that happened during this period.
     pub event: Option<SupplyEvent>,
 }
@@ -365,6 +369,8 @@ impl TrajectorySupplier {
         };
         self.elapsed_s += dt;
         let mut event = None;
+        let mut speed_m_s = 0.0;
+        let mut turn_rate_rad_s = 0.0;
         match self.phase {
             Phase::Idle | Phase::Done => {}
             Phase::Turning => {
@@ -376,11 +382,14 @@ impl TrajectorySupplier {
                     self.phase = Phase::Moving;
                 } else if diff > 0.0 {
                     self.heading_rad = wrap_angle_rad(self.heading_rad + step);
+                    turn_rate_rad_s = self.config.turn_rate_rad_s;
                 } else {
                     self.heading_rad = wrap_angle_rad(self.heading_rad - step);
+                    turn_rate_rad_s = -self.config.turn_rate_rad_s;
                 }
             }
             Phase::Moving => {
+                speed_m_s = self.config.speed_m_s;
                 self.along_m += self.config.speed_m_s * dt;
                 loop {
                     if self.segment + 1 >= self.points.len() {
@@ -407,6 +416,7 @@ impl TrajectorySupplier {
                     self.segment = self.points.len().saturating_sub(1);
                     self.along_m = 0.0;
                     event = Some(SupplyEvent::EndOfTrajectory);
+                    speed_m_s = 0.0;
                     self.phase = Phase::Settling {
                         left_s: self.config.settle_time_s,
                     };
@@ -426,6 +436,12 @@ impl TrajectorySupplier {
             point: self.current_point_opt().unwrap_or_default(),
             heading_rad: self.heading_rad,
             turning: self.phase == Phase::Turning,
+            speed_m_s: if self.phase == Phase::Turning {
+                0.0
+            } else {
+                speed_m_s
+            },
+            turn_rate_rad_s,
             event,
         }
     }

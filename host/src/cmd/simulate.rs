@@ -84,6 +84,10 @@ pub struct Args {
     /// Mission time limit, seconds of simulated time.
     #[arg(long, default_value_t = 900.0)]
     pub time_limit: f32,
+    /// Filter each sweep with the seed's regions-of-constant-depth filter before marking (made
+    /// for a wide-beam sonar: with the ideal ray-cast sonar it drops oblique walls).
+    #[arg(long)]
+    pub rcd: bool,
     /// GIF scale, pixels per cell.
     #[arg(long, default_value_t = 2)]
     pub gif_scale: u32,
@@ -196,6 +200,7 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         robot,
         time_limit_s: args.time_limit,
         snapshot_period_s: if args.out.is_some() { 0.5 } else { 0.0 },
+        constant_depth_filter: args.rcd,
     })
 }
 

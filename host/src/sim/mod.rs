@@ -45,6 +45,8 @@ pub struct SimSetup {
     pub robot: RobotConfig,
     /// Mission time limit, seconds.
     pub time_limit_s: f32,
+    /// Filter sweeps with the regions-of-constant-depth filter.
+    pub constant_depth_filter: bool,
     /// Take a picture snapshot every this many seconds of simulated time (0: none).
     pub snapshot_period_s: f32,
 }
@@ -169,6 +171,7 @@ pub fn mission_config(setup: &SimSetup) -> MissionConfig {
     config.mode = setup.mode;
     config.planner = setup.planner;
     config.time_limit_s = setup.time_limit_s;
+    config.constant_depth_filter = setup.constant_depth_filter;
     config
 }
 
@@ -225,6 +228,10 @@ pub fn run(setup: &SimSetup, progress: &mut dyn Progress) -> Result<SimResult> {
             right_delta_counts: deltas.1,
             elapsed_s: period_s,
         });
+        let debug = std::env::var_os("TWIL_SIM_DEBUG").is_some();
+        if debug && !out.events.is_empty() {
+            eprintln!("{t_s:8.2} {:?} pose {:?}", out.events, mission.pose_world());
+        }
         let mut planned = has_plan(&out.events);
         while let Some(request) = out.sonar_request {
             let range_m =
@@ -234,6 +241,18 @@ pub fn run(setup: &SimSetup, progress: &mut dyn Progress) -> Result<SimResult> {
                 range_m,
             });
             planned |= has_plan(&out.events);
+            if debug && !out.events.is_empty() {
+                eprintln!("{t_s:8.2} {:?} prefix {:?}", out.events, mission.prefix());
+                if mission.prefix().len() < 2 {
+                    let p = mission.path();
+                    eprintln!("   path {:?}", &p[..p.len().min(4)]);
+                    let g = *mission.grid().geometry();
+                    for q in &p[..p.len().min(2)] {
+                        let c = g.cell_of(*q).unwrap();
+                        eprintln!("   cell {:?} occ {}", c, mission.grid().is_occupied(c));
+                    }
+                }
+            }
         }
         if planned {
             plans.push(snapshot(
