@@ -81,6 +81,7 @@ use crate::grid::{words_for_cells, Grid, GridError, GridGeometry};
 use crate::math::{cos, hypot_precise, sin};
 use crate::plan::{
     needs_full_sweep, prune_visible_prefix, PathM, PlanError, PlanStatus, Planner, PlannerKind,
+    SCRATCH_WORDS_300, SCRATCH_WORDS_400,
 };
 use crate::raster::{mark_point_m, mark_polygon, BresenhamLine};
 use crate::robot::RobotConfig;
@@ -97,21 +98,18 @@ pub const MAX_SWEEP_READINGS: usize = SWEEP_CAPACITY;
 /// Most events one [`Mission::step`] can report.
 pub const MAX_EVENTS_PER_STEP: usize = 8;
 
-/// Open-list capacity of the planner inside the mission (entries).
+/// Open-list capacity of the planner inside [`Mission300`] (entries, 12 bytes each).
 pub const MISSION_QUEUE: usize = 8192;
 
-/// Planner scratch words for `cells` cells (4 bits per cell, 8 cells per word).
-pub const fn scratch_words_for_cells(cells: usize) -> usize {
-    cells.div_ceil(8)
-}
+/// Open-list capacity of the planner inside [`Mission400`], the host's (entries).
+pub const HOST_MISSION_QUEUE: usize = 65536;
 
 /// A mission on a grid of at most 300 × 300 cells (15 m × 15 m at 0.05 m): the MCU size.
-pub type Mission300 =
-    Mission<{ words_for_cells(300 * 300) }, { scratch_words_for_cells(300 * 300) }, MISSION_QUEUE>;
+pub type Mission300 = Mission<{ words_for_cells(300 * 300) }, SCRATCH_WORDS_300, MISSION_QUEUE>;
 
 /// A mission on a grid of at most 400 × 400 cells (20 m × 20 m at 0.05 m): the host size.
 pub type Mission400 =
-    Mission<{ words_for_cells(400 * 400) }, { scratch_words_for_cells(400 * 400) }, MISSION_QUEUE>;
+    Mission<{ words_for_cells(400 * 400) }, SCRATCH_WORDS_400, HOST_MISSION_QUEUE>;
 
 /// How the robot uses its sonar.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -430,6 +428,9 @@ pub struct MissionStats {
     pub unreachable_reason: Option<UnreachableReason>,
     /// Planner scratch/queue/path errors met (the mission aborts on them).
     pub plan_errors: u32,
+    /// The last planner error, if any.
+    #[serde(skip)]
+    pub last_plan_error: Option<PlanError>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -985,8 +986,8 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         let report = match result {
             Ok(r) => r,
             Err(e) => {
-                let _: PlanError = e;
                 self.stats.plan_errors += 1;
+                self.stats.last_plan_error = Some(e);
                 self.finish(MissionStatus::Aborted, out);
                 return;
             }

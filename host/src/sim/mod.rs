@@ -302,8 +302,8 @@ pub fn run(setup: &SimSetup, progress: &mut dyn Progress) -> Result<SimResult> {
             MissionStatus::Timeout => SimStatus::Timeout,
             MissionStatus::Aborted => {
                 bail!(
-                    "the mission aborted: {} planner capacity error(s)",
-                    mission.stats().plan_errors
+                    "the mission aborted: planner error {:?}",
+                    mission.stats().last_plan_error
                 )
             }
             MissionStatus::Running => bail!("the mission stopped while running (internal error)"),
@@ -338,8 +338,9 @@ pub fn known_map_plan_length_m(setup: &SimSetup) -> Option<f32> {
     for polygon in setup.real.iter() {
         twil_core::raster::mark_polygon(&mut grid, polygon, half);
     }
-    let mut planner: Box<Planner<{ 400 * 400 / 8 }, { twil_core::mission::MISSION_QUEUE }>> =
-        Box::new(Planner::new());
+    let mut planner: Box<
+        Planner<{ twil_core::plan::SCRATCH_WORDS_400 }, { twil_core::mission::HOST_MISSION_QUEUE }>,
+    > = Box::new(Planner::new());
     let mut path = Box::new(PathM::new());
     let report = planner
         .plan(
