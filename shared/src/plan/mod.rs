@@ -220,24 +220,18 @@ impl PlanReport {
 struct OpenEntry {
     /// `g + h` (A*), unused by BFS.
     f: u32,
-    /// Cost from the start (A*), unused by BFS.
-    g: u32,
-    /// `cell_index << 4 | step code`.
+    /// `cell_index << 4 | step code` (A*), `cell_index` (BFS).
     node: u32,
+    /// Next entry of the same radix bucket (A*), unused by BFS.
+    next: u32,
 }
 
 impl OpenEntry {
     const ZERO: Self = Self {
         f: 0,
-        g: 0,
         node: 0,
+        next: NIL,
     };
-
-    /// Heap key: smaller `f` first, then larger `g`.
-    #[inline(always)]
-    fn key(&self) -> u64 {
-        ((self.f as u64) << 32) | (!self.g) as u64
-    }
 }
 
 /// Nibble code of the start cell.
@@ -288,63 +282,122 @@ fn octile(dx: u32, dy: u32) -> u32 {
         .saturating_add(STRAIGHT_COST.saturating_mul(hi - lo))
 }
 
-/// Push onto the min-heap `heap[..*len]`. `false` when full.
-#[inline(always)]
-fn heap_push(heap: &mut [OpenEntry], len: &mut usize, entry: OpenEntry) -> bool {
-    let mut i = *len;
-    if i >= heap.len() {
-        return false;
-    }
-    *len += 1;
-    let key = entry.key();
-    while i > 0 {
-        let parent = (i - 1) / 2;
-        let p = heap[parent];
-        if p.key() <= key {
-            break;
-        }
-        heap[i] = p;
-        i = parent;
-    }
-    heap[i] = entry;
-    true
+/// End of a bucket list.
+const NIL: u32 = u32::MAX;
+/// Radix buckets: 0 holds keys equal to the last popped key, `b` keys whose highest bit that
+/// differs from it is bit `b - 1`.
+const BUCKETS: usize = 33;
+
+/// A monotone priority queue (radix heap) over a fixed pool of entries: keys pushed are never
+/// below the last key popped, which A* with a consistent heuristic guarantees for `f`.
+///
+/// Buckets are singly linked lists threaded through the pool, so a push is O(1) (link at the
+/// head of its bucket, update the bucket's minimum) and a pop is O(1) from bucket 0, or, when
+/// bucket 0 is empty, one pass over the lowest non-empty bucket that relinks its entries into
+/// lower buckets relative to the bucket's minimum (the new reference key). Each entry moves down
+/// at most 32 times; in practice once or twice, since `f` grows slowly. Entries that went stale
+/// (their cell was closed meanwhile) are dropped during that pass instead of being moved.
+/// Within bucket 0 (equal `f`) the last pushed entry pops first: the children of the cell just
+/// expanded, i.e. the deeper entries (larger `g`), which on open floors keeps the search on one
+/// straight line instead of flooding every cell of equal `f`.
+struct RadixQueue<'a> {
+    pool: &'a mut [OpenEntry],
+    heads: [u32; BUCKETS],
+    mins: [u32; BUCKETS],
+    nonempty: u64,
+    last: u32,
+    bump: u32,
+    free: u32,
 }
 
-/// Pop the smallest entry of the min-heap `heap[..*len]`.
-#[inline(always)]
-fn heap_pop(heap: &mut [OpenEntry], len: &mut usize) -> Option<OpenEntry> {
-    if *len == 0 || *len > heap.len() {
-        return None;
-    }
-    let top = heap[0];
-    *len -= 1;
-    let n = *len;
-    let last = heap[n];
-    let key = last.key();
-    let mut i = 0;
-    loop {
-        let left = 2 * i + 1;
-        if left >= n {
-            break;
+impl<'a> RadixQueue<'a> {
+    fn new(pool: &'a mut [OpenEntry]) -> Self {
+        Self {
+            pool,
+            heads: [NIL; BUCKETS],
+            mins: [u32::MAX; BUCKETS],
+            nonempty: 0,
+            last: 0,
+            bump: 0,
+            free: NIL,
         }
-        let right = left + 1;
-        let mut child = left;
-        let mut child_key = heap[left].key();
-        if right < n {
-            let rk = heap[right].key();
-            if rk < child_key {
-                child = right;
-                child_key = rk;
+    }
+
+    #[inline(always)]
+    fn bucket(&self, key: u32) -> usize {
+        let diff = key ^ self.last;
+        (u32::BITS - diff.leading_zeros()) as usize
+    }
+
+    /// Insert; `false` when the pool is full.
+    #[inline(always)]
+    fn push(&mut self, key: u32, node: u32) -> bool {
+        let slot = if self.free != NIL {
+            let slot = self.free;
+            self.free = self.pool[slot as usize].next;
+            slot
+        } else if (self.bump as usize) < self.pool.len() {
+            self.bump += 1;
+            self.bump - 1
+        } else {
+            return false;
+        };
+        let b = self.bucket(key);
+        self.pool[slot as usize] = OpenEntry {
+            f: key,
+            node,
+            next: self.heads[b],
+        };
+        self.heads[b] = slot;
+        self.mins[b] = self.mins[b].min(key);
+        self.nonempty |= 1 << b;
+        true
+    }
+
+    /// Remove an entry of the smallest key: `(key, node)`. `stale(node)` tells which entries
+    /// may be dropped unseen when a bucket is redistributed.
+    #[inline(always)]
+    fn pop(&mut self, stale: impl Fn(u32) -> bool) -> Option<(u32, u32)> {
+        while self.heads[0] == NIL {
+            let rest = self.nonempty & !1;
+            if rest == 0 {
+                return None;
+            }
+            let b = rest.trailing_zeros() as usize;
+            let min = self.mins[b];
+            self.last = min;
+            let mut slot = self.heads[b];
+            self.heads[b] = NIL;
+            self.mins[b] = u32::MAX;
+            self.nonempty &= !(1 << b);
+            while slot != NIL {
+                let e = &mut self.pool[slot as usize];
+                let next = e.next;
+                if stale(e.node) {
+                    e.next = self.free;
+                    self.free = slot;
+                } else {
+                    let key = e.f;
+                    let nb = (u32::BITS - (key ^ min).leading_zeros()) as usize;
+                    e.next = self.heads[nb];
+                    self.heads[nb] = slot;
+                    self.mins[nb] = self.mins[nb].min(key);
+                    self.nonempty |= 1 << nb;
+                }
+                slot = next;
             }
         }
-        if child_key >= key {
-            break;
+        let slot = self.heads[0];
+        let e = self.pool[slot as usize];
+        self.heads[0] = e.next;
+        if e.next == NIL {
+            self.nonempty &= !1;
+            self.mins[0] = u32::MAX;
         }
-        heap[i] = heap[child];
-        i = child;
+        self.pool[slot as usize].next = self.free;
+        self.free = slot;
+        Some((e.f, e.node))
     }
-    heap[i] = last;
-    Some(top)
 }
 
 /// Precise square root for lengths: micromath's estimate (±5 %) refined by three Newton steps.
@@ -577,23 +630,30 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let mut expanded = 0u32;
 
         set_nibble(scratch, start, CODE_START);
+        // Entries carry the index (`node`) and the packed coordinates (`f` = y << 16 | x) so
+        // the loop never divides.
         match queue.get_mut(tail) {
-            Some(slot) => slot.node = start as u32,
+            Some(slot) => {
+                slot.node = start as u32;
+                slot.f = (((start / width) as u32) << 16) | (start % width) as u32;
+            }
             None => return Err(full),
         }
         tail = if tail + 1 == capacity { 0 } else { tail + 1 };
         count += 1;
 
         while count > 0 {
-            let index = match queue.get(head) {
-                Some(e) => e.node as usize,
+            let (index, x, y) = match queue.get(head) {
+                Some(e) => (
+                    e.node as usize,
+                    (e.f & 0xFFFF) as usize,
+                    (e.f >> 16) as usize,
+                ),
                 None => break,
             };
             head = if head + 1 == capacity { 0 } else { head + 1 };
             count -= 1;
             expanded += 1;
-            let x = index % width;
-            let y = index / width;
 
             let free_e = x + 1 < width && !grid.bit(index + 1);
             let free_w = x > 0 && !grid.bit(index - 1);
@@ -601,7 +661,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             let free_s = y > 0 && !grid.bit(index - width);
 
             macro_rules! visit {
-                ($n:expr, $code:expr) => {{
+                ($n:expr, $nx:expr, $ny:expr, $code:expr) => {{
                     let n = $n;
                     if nibble(scratch, n) == 0 {
                         set_nibble(scratch, n, $code);
@@ -617,6 +677,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                         }
                         if let Some(slot) = queue.get_mut(tail) {
                             slot.node = n as u32;
+                            slot.f = (($ny as u32) << 16) | $nx as u32;
                         }
                         tail = if tail + 1 == capacity { 0 } else { tail + 1 };
                         count += 1;
@@ -625,28 +686,28 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             }
 
             if free_e {
-                visit!(index + 1, E);
+                visit!(index + 1, x + 1, y, E);
             }
             if free_n {
-                visit!(index + width, N);
+                visit!(index + width, x, y + 1, N);
             }
             if free_w {
-                visit!(index - 1, W);
+                visit!(index - 1, x - 1, y, W);
             }
             if free_s {
-                visit!(index - width, S);
+                visit!(index - width, x, y - 1, S);
             }
             if free_n && free_e && !grid.bit(index + width + 1) {
-                visit!(index + width + 1, NE);
+                visit!(index + width + 1, x + 1, y + 1, NE);
             }
             if free_n && free_w && !grid.bit(index + width - 1) {
-                visit!(index + width - 1, NW);
+                visit!(index + width - 1, x - 1, y + 1, NW);
             }
             if free_s && free_w && !grid.bit(index - width - 1) {
-                visit!(index - width - 1, SW);
+                visit!(index - width - 1, x - 1, y - 1, SW);
             }
             if free_s && free_e && !grid.bit(index - width + 1) {
-                visit!(index - width + 1, SE);
+                visit!(index - width + 1, x + 1, y - 1, SE);
             }
         }
         Ok(Search {
@@ -669,32 +730,35 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let height = geometry.height() as usize;
         let (gx, gy) = (goal_cell.x as usize, goal_cell.y as usize);
         let scratch = &mut self.scratch[..];
-        let heap = &mut self.queue[..];
+        let mut open = RadixQueue::new(&mut self.queue[..]);
         let full = PlanError::QueueFull {
-            capacity: heap.len() as u32,
+            capacity: open.pool.len() as u32,
         };
-        let mut len = 0usize;
         let mut expanded = 0u32;
 
         let h = |x: usize, y: usize| octile(x.abs_diff(gx) as u32, y.abs_diff(gy) as u32);
         let (sx, sy) = (start % width, start / width);
-        let first = OpenEntry {
-            f: h(sx, sy),
-            g: 0,
-            node: ((start as u32) << 4) | CODE_START,
-        };
-        if !heap_push(heap, &mut len, first) {
+        // Entries carry `y << 16 | x << 4 | step code` (sides are at most 4096 cells), so the
+        // loop never divides.
+        let pack = |x: usize, y: usize, code: u32| ((y as u32) << 16) | ((x as u32) << 4) | code;
+        if !open.push(h(sx, sy), pack(sx, sy, CODE_START)) {
             return Err(full);
         }
 
-        while let Some(entry) = heap_pop(heap, &mut len) {
-            let index = (entry.node >> 4) as usize;
+        let unpack_index =
+            |node: u32| (node >> 16) as usize * width + ((node >> 4) & 0xFFF) as usize;
+        while let Some((f, node)) = open.pop(|node| nibble(scratch, unpack_index(node)) != 0) {
+            let x = ((node >> 4) & 0xFFF) as usize;
+            let y = (node >> 16) as usize;
+            let index = y * width + x;
             if nibble(scratch, index) != 0 {
                 continue; // already closed by a cheaper entry
             }
-            set_nibble(scratch, index, entry.node & 0xF);
+            set_nibble(scratch, index, node & 0xF);
             expanded += 1;
-            let g = entry.g;
+            // The entry does not store g: f = g + h exactly (costs stay far below u32::MAX on
+            // grids that fit a planner's scratch).
+            let g = f.wrapping_sub(h(x, y));
             if index == goal {
                 return Ok(Search {
                     found: true,
@@ -702,8 +766,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     cost: g,
                 });
             }
-            let x = index % width;
-            let y = index / width;
 
             let free_e = x + 1 < width && !grid.bit(index + 1);
             let free_w = x > 0 && !grid.bit(index - 1);
@@ -714,13 +776,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 ($n:expr, $nx:expr, $ny:expr, $cost:expr, $code:expr) => {{
                     let n = $n;
                     if nibble(scratch, n) == 0 {
-                        let ng = g.saturating_add($cost);
-                        let e = OpenEntry {
-                            f: ng.saturating_add(h($nx, $ny)),
-                            g: ng,
-                            node: ((n as u32) << 4) | $code,
-                        };
-                        if !heap_push(heap, &mut len, e) {
+                        let f = g.saturating_add($cost).saturating_add(h($nx, $ny));
+                        if !open.push(f, pack($nx, $ny, $code)) {
                             return Err(full);
                         }
                     }
