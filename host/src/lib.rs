@@ -4,3 +4,4 @@
 pub mod cmd;
 pub mod render;
 pub mod sim;
+pub mod world_io;
