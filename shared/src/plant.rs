@@ -718,6 +718,51 @@ mod tests {
 
     proptest::proptest! {
         #[test]
+        fn nonsense_configs_never_panic(
+            a in proptest::num::f32::ANY,
+            b in proptest::num::f32::ANY,
+            d in proptest::num::f32::ANY,
+            rays in proptest::num::u8::ANY,
+            pulses in proptest::num::u32::ANY,
+        ) {
+            use crate::control::{ControlInput, Controller};
+            let c = RobotConfig {
+                wheel_radius_m: a,
+                half_axle_m: b,
+                point_offset_m: d,
+                motor_time_constant_s: a,
+                reference_time_constant_s: b,
+                plant_substep_s: d,
+                sonar_cone_deg: a,
+                sonar_cone_rays: rays,
+                sonar_noise_std_m: b,
+                encoder_pulses_per_rev: pulses,
+                max_voltage_v: d,
+                ..RobotConfig::default()
+            };
+            let mut plant = Plant::new(&c, Pose::new(1.0, 0.0, 0.0));
+            let mut ctl = Controller::new(&c, Pose::new(1.0, 0.0, 0.0));
+            let obstacles = square(3.0, 0.0, 0.5);
+            let mut last = plant.encoder_counts();
+            for _ in 0..3 {
+                let now = plant.encoder_counts();
+                let out = ctl.step(ControlInput {
+                    reference: PointM::new(2.0, 1.0),
+                    encoder_left_delta_counts: now.0.wrapping_sub(last.0),
+                    encoder_right_delta_counts: now.1.wrapping_sub(last.1),
+                    elapsed_since_last_step_s: 0.05,
+                });
+                last = now;
+                plant.step(0.05, out.left_voltage_v, out.right_voltage_v);
+                let _ = ctl.step_turn(ControlInput::default(), a);
+                let _ = plant.sonar_range_m(&obstacles, 0.1, 1.5);
+                let _ = plant.clearance_m(&obstacles);
+            }
+            proptest::prop_assert!(plant.pose().is_finite());
+            proptest::prop_assert!(ctl.pose().is_finite());
+        }
+
+        #[test]
         fn sonar_and_clearance_never_panic(
             x in proptest::num::f32::ANY,
             y in proptest::num::f32::ANY,

@@ -76,6 +76,10 @@ pub struct RobotConfig {
     pub reference_time_constant_s: f32,
     /// Gain of the linearizing feedback on the control point error, 1/s (seed `ALPHA0 = 1`).
     pub tracking_gain_1_s: f32,
+    /// Gain of the turn-in-place mode on the heading error, 1/s.
+    pub turn_gain_1_s: f32,
+    /// Largest turn rate of the turn-in-place mode, rad/s.
+    pub max_turn_rate_rad_s: f32,
     /// Relative error at which the reference model counts as settled (seed: 2 %).
     pub settle_tolerance: f32,
     /// Distance of the sonar ahead of the centre, along the heading, metres (seed 0.20).
@@ -133,6 +137,8 @@ impl Default for RobotConfig {
             pid_kd_v_s2_per_rad: 0.05,
             reference_time_constant_s: 1.0,
             tracking_gain_1_s: 1.0,
+            turn_gain_1_s: 2.0,
+            max_turn_rate_rad_s: 0.8,
             settle_tolerance: 0.02,
             sonar_offset_m: 0.20,
             sonar_min_range_m: 0.26,
@@ -303,6 +309,18 @@ impl RobotConfig {
             c.tracking_gain_1_s,
             c.tracking_gain_1_s > 0.0 && c.tracking_gain_1_s <= 100.0,
             "above 0 and at most 100 1/s",
+        )?;
+        check(
+            "turn_gain_1_s",
+            c.turn_gain_1_s,
+            c.turn_gain_1_s > 0.0 && c.turn_gain_1_s <= 100.0,
+            "above 0 and at most 100 1/s",
+        )?;
+        check(
+            "max_turn_rate_rad_s",
+            c.max_turn_rate_rad_s,
+            c.max_turn_rate_rad_s > 0.0 && c.max_turn_rate_rad_s <= 100.0,
+            "above 0 and at most 100 rad/s",
         )?;
         check(
             "settle_tolerance",
