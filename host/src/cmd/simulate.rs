@@ -18,7 +18,9 @@ use twil_core::grid::GridGeometry;
 use twil_core::mission::{MissionMode, MissionStats};
 use twil_core::plan::PlannerKind;
 use twil_core::robot::RobotConfig;
-use twil_core::world::{parse_da, parse_par, Obstacles, Params};
+use twil_core::world::{Obstacles, Params};
+
+use crate::world_io;
 
 use crate::sim::{self, output, SimResult, SimSetup};
 
@@ -93,29 +95,14 @@ pub struct Args {
     pub gif_scale: u32,
 }
 
-fn read_text(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    String::from_utf8(bytes).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: not UTF-8 text (invalid byte at offset {})",
-            path.display(),
-            e.utf8_error().valid_up_to()
-        )
-    })
-}
-
-/// Read a `.da` file; errors name the file and the line.
+/// Read a `.da` file; errors name the file and the line (see [`crate::world_io`]).
 pub fn read_da(path: &Path) -> Result<Obstacles> {
-    let text = read_text(path)?;
-    let mut obstacles = Obstacles::new();
-    parse_da(&text, &mut obstacles).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    Ok(obstacles)
+    Ok(world_io::read_da(path)?)
 }
 
 /// Read a `.par` file; errors name the file and the line.
 pub fn read_par(path: &Path) -> Result<Params> {
-    let text = read_text(path)?;
-    parse_par(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    Ok(world_io::read_par(path)?)
 }
 
 /// Parse `WxH` in metres.
