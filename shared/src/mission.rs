@@ -494,10 +494,10 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
                 capacity: Planner::<S, Q>::CAPACITY_CELLS as u32,
             });
         }
-        if geometry.cell_xy_of(config.start).is_none() {
+        if geometry.cell_of(config.start).is_err() {
             return Err(MissionError::OffMap { which: "start" });
         }
-        if geometry.cell_xy_of(config.goal).is_none() {
+        if geometry.cell_of(config.goal).is_err() {
             return Err(MissionError::OffMap { which: "goal" });
         }
         let frame = FrameTransform::new(config.start, config.initial_heading_rad);
@@ -1145,4 +1145,277 @@ fn nearest_free<const W: usize>(grid: &Grid<W>, x: i32, y: i32, max_ring: i32) -
         }
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use std::boxed::Box;
+
+    use super::*;
+    use crate::plant::Plant;
+    use crate::world::Obstacles;
+
+    fn square(x0: f32, y0: f32, x1: f32, y1: f32) -> [PointM; 4] {
+        [
+            PointM::new(x0, y0),
+            PointM::new(x1, y0),
+            PointM::new(x1, y1),
+            PointM::new(x0, y1),
+        ]
+    }
+
+    fn config(start: PointM, goal: PointM, mode: MissionMode) -> MissionConfig {
+        let params = Params {
+            robot_radius_m: 0.4,
+            speed_m_s: 0.2,
+            initial_heading_deg: 0.0,
+            start,
+            goal,
+        };
+        let mut c = MissionConfig::from_params(&params, RobotConfig::default());
+        c.mode = mode;
+        c
+    }
+
+    /// Drive a mission against the plant until it ends; returns the status, the plant and
+    /// the smallest clearance.
+    fn run(mission: &mut Mission300, real: &Obstacles, plant: &mut Plant) -> (MissionStatus, f32) {
+        let period = mission.config().robot.controller_period_s;
+        let range = mission.config().robot.sonar_range_m;
+        let mut previous = plant.encoder_counts();
+        let mut min_clearance = f32::INFINITY;
+        for _ in 0..200_000 {
+            let counts = plant.encoder_counts();
+            let mut out = mission.step(MissionInput::Tick {
+                left_delta_counts: counts.0 - previous.0,
+                right_delta_counts: counts.1 - previous.1,
+                elapsed_s: period,
+            });
+            previous = counts;
+            while let Some(request) = out.sonar_request {
+                let range_m = plant.sonar_range_m(real, request.neck_angle_rad, range);
+                out = mission.step(MissionInput::SonarReading {
+                    neck_angle_rad: request.neck_angle_rad,
+                    range_m,
+                });
+            }
+            if out.status != MissionStatus::Running {
+                return (out.status, min_clearance);
+            }
+            plant.step(period, out.left_voltage_v, out.right_voltage_v);
+            min_clearance = min_clearance.min(plant.clearance_m(real));
+        }
+        (mission.status(), min_clearance)
+    }
+
+    fn geometry() -> GridGeometry {
+        GridGeometry::from_size_m(8.0, 8.0, 0.05).unwrap()
+    }
+
+    fn room_with_block() -> Obstacles {
+        let mut o = Obstacles::new();
+        o.push(&square(0.0, 0.0, 8.0, 0.1)).unwrap();
+        o.push(&square(0.0, 7.9, 8.0, 8.0)).unwrap();
+        o.push(&square(0.0, 0.0, 0.1, 8.0)).unwrap();
+        o.push(&square(7.9, 0.0, 8.0, 8.0)).unwrap();
+        o.push(&square(3.5, 1.5, 4.0, 6.5)).unwrap();
+        o
+    }
+
+    #[test]
+    fn reaches_the_goal_around_an_unknown_block_in_both_modes() {
+        let real = room_with_block();
+        for mode in [MissionMode::Stop, MissionMode::Continuous] {
+            let start = PointM::new(1.5, 4.0);
+            let goal = PointM::new(6.5, 4.0);
+            let c = config(start, goal, mode);
+            let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+            let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
+            let (status, clearance) = run(&mut mission, &real, &mut plant);
+            assert_eq!(status, MissionStatus::Reached, "{mode:?}");
+            assert!(clearance > 0.0, "{mode:?}: clearance {clearance}");
+            let p = plant.pose();
+            assert!(
+                hypot_precise(p.x_m - goal.x_m, p.y_m - goal.y_m) < 0.25,
+                "{mode:?}: ended at {p:?}"
+            );
+            let s = mission.stats();
+            assert!(s.stops >= 1 && s.plans >= 2 && s.hits > 0, "{s:?}");
+        }
+    }
+
+    #[test]
+    fn a_goal_inside_a_known_box_is_unreachable_after_the_first_sweep() {
+        let real = room_with_block();
+        let start = PointM::new(1.5, 4.0);
+        let goal = PointM::new(6.0, 4.0);
+        let c = config(start, goal, MissionMode::Stop);
+        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+        for wall in [
+            square(5.0, 3.0, 7.0, 3.1),
+            square(5.0, 4.9, 7.0, 5.0),
+            square(5.0, 3.0, 5.1, 5.0),
+            square(6.9, 3.0, 7.0, 5.0),
+        ] {
+            mission.add_known_polygon(&wall);
+        }
+        let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
+        let (status, _) = run(&mut mission, &real, &mut plant);
+        assert_eq!(status, MissionStatus::Unreachable);
+        let s = mission.stats();
+        assert_eq!(s.stops, 1);
+        assert!(matches!(
+            s.unreachable_reason,
+            Some(UnreachableReason::NoPath | UnreachableReason::GoalBlocked)
+        ));
+    }
+
+    #[test]
+    fn the_time_limit_ends_the_mission() {
+        let real = room_with_block();
+        let start = PointM::new(1.5, 4.0);
+        let mut c = config(start, PointM::new(6.5, 4.0), MissionMode::Stop);
+        c.time_limit_s = 2.0;
+        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+        let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
+        let (status, _) = run(&mut mission, &real, &mut plant);
+        assert_eq!(status, MissionStatus::Timeout);
+        assert!(mission.stats().time_s >= 2.0 && mission.stats().time_s < 2.2);
+    }
+
+    #[test]
+    fn abort_stops_the_motors_and_ignores_later_inputs() {
+        let c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(6.5, 4.0),
+            MissionMode::Stop,
+        );
+        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+        let out = mission.step(MissionInput::Abort);
+        assert_eq!(out.status, MissionStatus::Aborted);
+        assert!(out
+            .events
+            .contains(&MissionEvent::Finished(MissionStatus::Aborted)));
+        let out = mission.step(MissionInput::Tick {
+            left_delta_counts: 1000,
+            right_delta_counts: -1000,
+            elapsed_s: 0.05,
+        });
+        assert_eq!((out.left_voltage_v, out.right_voltage_v), (0.0, 0.0));
+        assert_eq!(out.sonar_request, None);
+        assert_eq!(mission.phase(), MissionPhase::Done);
+    }
+
+    #[test]
+    fn readings_nobody_asked_for_and_nonsense_values_change_nothing() {
+        let c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(6.5, 4.0),
+            MissionMode::Stop,
+        );
+        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+        let before = mission.grid().count_occupied();
+        let out = mission.step(MissionInput::SonarReading {
+            neck_angle_rad: 0.0,
+            range_m: Some(1.0),
+        });
+        assert!(out.events.is_empty());
+        assert_eq!(mission.grid().count_occupied(), before);
+        assert_eq!(mission.stats().readings, 0);
+        // A requested reading with NaN/inf values: counted, nothing marked, no panic.
+        let out = mission.step(MissionInput::Tick {
+            left_delta_counts: 0,
+            right_delta_counts: 0,
+            elapsed_s: f32::NAN,
+        });
+        assert!(out.sonar_request.is_some());
+        mission.step(MissionInput::SonarReading {
+            neck_angle_rad: f32::NAN,
+            range_m: Some(f32::INFINITY),
+        });
+        assert_eq!(mission.stats().readings, 1);
+        assert_eq!(mission.grid().count_occupied(), before);
+    }
+
+    #[test]
+    fn bad_configs_are_errors_naming_the_field() {
+        let mut c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(6.5, 4.0),
+            MissionMode::Stop,
+        );
+        c.speed_m_s = f32::NAN;
+        assert!(matches!(
+            Mission300::new(c, geometry()),
+            Err(MissionError::BadValue {
+                field: "speed_m_s",
+                ..
+            })
+        ));
+        let c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(9.5, 4.0),
+            MissionMode::Stop,
+        );
+        assert!(matches!(
+            Mission300::new(c, geometry()),
+            Err(MissionError::OffMap { which: "goal" })
+        ));
+        let big = GridGeometry::new(400, 400, 0.05).unwrap();
+        let c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(6.5, 4.0),
+            MissionMode::Stop,
+        );
+        assert!(matches!(
+            Mission300::new(c, big),
+            Err(MissionError::Grid(_))
+        ));
+    }
+
+    #[test]
+    fn a_sweep_asks_for_the_seed_angles_at_the_echo_rate() {
+        let c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(6.5, 4.0),
+            MissionMode::Stop,
+        );
+        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+        let mut angles = std::vec::Vec::new();
+        let mut ticks = 0;
+        while mission.stats().plans == 0 && ticks < 1000 {
+            ticks += 1;
+            let mut out = mission.step(MissionInput::Tick {
+                left_delta_counts: 0,
+                right_delta_counts: 0,
+                elapsed_s: 0.05,
+            });
+            while let Some(r) = out.sonar_request {
+                angles.push(r.neck_angle_rad);
+                out = mission.step(MissionInput::SonarReading {
+                    neck_angle_rad: r.neck_angle_rad,
+                    range_m: None,
+                });
+            }
+        }
+        // ±95° at 1.8°: 52 steps each side, 105 readings from -93.6° to +93.6°.
+        assert_eq!(angles.len(), 105);
+        assert!((angles[0].to_degrees() + 93.6).abs() < 1e-3);
+        assert!((angles[104].to_degrees() - 93.6).abs() < 1e-3);
+        // 36 ms per reading: 105 readings take 3.78 s = 76 periods of 50 ms.
+        assert!((75..=77).contains(&ticks), "{ticks}");
+    }
+
+    #[test]
+    fn mission_sizes_fit_their_targets() {
+        // Documented in docs/simulate.md.
+        std::println!(
+            "Mission300 {} B, Mission400 {} B",
+            Mission300::SIZE_BYTES,
+            Mission400::SIZE_BYTES
+        );
+        assert!(Mission300::SIZE_BYTES < 260_000);
+        assert!(Mission300::SIZE_BYTES < Mission400::SIZE_BYTES);
+    }
 }

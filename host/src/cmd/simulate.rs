@@ -160,7 +160,7 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         );
     }
     for (which, p) in [("start", params.start), ("goal", params.goal)] {
-        if geometry.cell_xy_of(p).is_none() {
+        if geometry.cell_of(p).is_err() {
             bail!(
                 "{}: the {which} ({}, {}) lies off the {} m map",
                 args.params.display(),
