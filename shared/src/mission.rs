@@ -1415,7 +1415,7 @@ mod tests {
             Mission300::SIZE_BYTES,
             Mission400::SIZE_BYTES
         );
-        assert!(Mission300::SIZE_BYTES < 260_000);
-        assert!(Mission300::SIZE_BYTES < Mission400::SIZE_BYTES);
+        const { assert!(Mission300::SIZE_BYTES < 260_000) };
+        const { assert!(Mission300::SIZE_BYTES < Mission400::SIZE_BYTES) };
     }
 }
