@@ -153,7 +153,7 @@ fn snapshot(
 }
 
 /// Progress reports during a run: simulated time and status text.
-pub trait Progress {
+pub trait Progress: Send {
     /// Called about once per simulated second.
     fn update(&mut self, sim_time_s: f32, time_limit_s: f32, stats: &MissionStats);
 }
@@ -175,9 +175,25 @@ pub fn mission_config(setup: &SimSetup) -> MissionConfig {
     config
 }
 
+/// Stack for the simulation thread: the mission and the planner are large values (about 1 MB
+/// each for the 400 × 400 host size) and are built before they are boxed.
+const SIM_STACK_BYTES: usize = 64 << 20;
+
 /// Run a whole mission. Errors are setup errors (bad config, start off the map…); every
-/// mission outcome is a [`SimResult`].
+/// mission outcome is a [`SimResult`]. Runs on its own thread with a large stack.
 pub fn run(setup: &SimSetup, progress: &mut dyn Progress) -> Result<SimResult> {
+    std::thread::scope(|scope| {
+        std::thread::Builder::new()
+            .name("twil-sim".into())
+            .stack_size(SIM_STACK_BYTES)
+            .spawn_scoped(scope, || run_on_this_thread(setup, progress))
+            .map_err(|e| anyhow::anyhow!("cannot start the simulation thread: {e}"))?
+            .join()
+            .map_err(|_| anyhow::anyhow!("the simulation thread panicked"))?
+    })
+}
+
+fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<SimResult> {
     let config = mission_config(setup);
     let robot = config.robot;
     let mut mission = Box::new(
