@@ -156,6 +156,12 @@ pub struct MissionConfig {
     /// Filter each sweep with the regions-of-constant-depth filter of [`crate::sonar`] (the
     /// seed's); `false` marks every valid reading.
     pub constant_depth_filter: bool,
+    /// Also trust the path through space seen free by *earlier* sweeps (see
+    /// [`Mission::seen`]); `false` keeps the seed's rule only (within range of the robot and
+    /// visible from it).
+    pub trust_seen_space: bool,
+    /// Longest prefix kept through seen space, measured along the path, metres.
+    pub max_trusted_path_m: f32,
 }
 
 impl MissionConfig {
@@ -178,6 +184,8 @@ impl MissionConfig {
             max_stalled_plans: 6,
             stall_distance_m: 0.10,
             constant_depth_filter: false,
+            trust_seen_space: true,
+            max_trusted_path_m: 30.0,
         }
     }
 
@@ -452,6 +460,7 @@ pub struct Mission<const W: usize, const S: usize, const Q: usize> {
     config: MissionConfig,
     supplier_config: SupplierConfig,
     grid: Grid<W>,
+    seen: Grid<W>,
     planner: Planner<S, Q>,
     path: PathM,
     prefix: PathM,
@@ -487,6 +496,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
     pub fn new(config: MissionConfig, geometry: GridGeometry) -> Result<Self, MissionError> {
         config.validate()?;
         let grid = Grid::<W>::new(geometry).map_err(MissionError::Grid)?;
+        let seen = grid.clone();
         let cells = geometry.cell_count();
         if cells > Planner::<S, Q>::CAPACITY_CELLS {
             return Err(MissionError::PlannerTooSmall {
@@ -508,6 +518,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
             expansion_cells: geometry.expansion_cells(config.robot.planning_radius_m),
             config,
             grid,
+            seen,
             planner: Planner::new(),
             path: Vec::new(),
             prefix: Vec::new(),
@@ -548,6 +559,17 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
     /// The map as the robot knows it (obstacles grown by the planning radius).
     pub fn grid(&self) -> &Grid<W> {
         &self.grid
+    }
+
+    /// Cells some sonar reading has seen free (set bit = seen): every cell a ray crossed
+    /// before its echo (or up to the range without one).
+    ///
+    /// With [`MissionConfig::trust_seen_space`] the kept prefix may go on beyond the seed's
+    /// limit (sonar range, visible from the robot) while the path crosses cells seen free
+    /// whose whole neighbourhood within the planning radius has been seen or is occupied, so
+    /// no unseen obstacle can lie within reach of the path.
+    pub fn seen(&self) -> &Grid<W> {
+        &self.seen
     }
 
     /// The latest full plan, world metres (empty before the first plan).
@@ -857,6 +879,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
             self.sweep_angle_rad(&sweep, sweep.next - 1)
         };
         let pose = self.pose_world();
+        self.mark_seen(pose, neck_angle_rad, range_m);
         // Capacity is the largest sweep: cannot fail.
         let _ = self.readings.push(Reading {
             neck_angle_rad,
@@ -870,6 +893,114 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         } else {
             self.request_next(out);
         }
+    }
+
+    /// Mark the cells the ray of one reading crossed as seen, stopping a cell short of the
+    /// echo.
+    fn mark_seen(&mut self, pose: Pose, neck_angle_rad: f32, range_m: Option<f32>) {
+        let robot = &self.config.robot;
+        let g = *self.grid.geometry();
+        let length_m = match range_m {
+            Some(r) => r - g.resolution_m(),
+            None => robot.sonar_range_m,
+        };
+        let sonar = pose.point_ahead(robot.sonar_offset_m);
+        let angle = pose.heading_rad + neck_angle_rad;
+        let end = PointM::new(
+            sonar.x_m + length_m * cos(angle),
+            sonar.y_m + length_m * sin(angle),
+        );
+        if let Some(centre) = g.cell_xy_of(pose.position()) {
+            self.seen.set_xy(centre.0, centre.1, true);
+        }
+        if length_m.is_nan() || length_m <= 0.0 {
+            return;
+        }
+        if let (Some(a), Some(b)) = (g.cell_xy_of(sonar), g.cell_xy_of(end)) {
+            for (x, y) in BresenhamLine::new(a, b) {
+                self.seen.set_xy(x, y, true);
+            }
+        }
+    }
+
+    /// `true` when the cell of `p` is free, seen, and every cell within the planning radius
+    /// around it is seen or occupied.
+    fn trusted(&self, p: PointM) -> bool {
+        let g = self.grid.geometry();
+        let Some((x, y)) = g.cell_xy_of(p) else {
+            return false;
+        };
+        if !g.contains_xy(x, y) || self.grid.is_occupied_xy(x, y) || !self.seen.is_occupied_xy(x, y)
+        {
+            return false;
+        }
+        let h = self.expansion_cells as i32;
+        for cy in y - h..=y + h {
+            for cx in x - h..=x + h {
+                if g.contains_xy(cx, cy)
+                    && !self.seen.is_occupied_xy(cx, cy)
+                    && !self.grid.is_occupied_xy(cx, cy)
+                {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// The prefix of `path` through trusted cells (see [`Self::seen`]), at most
+    /// `max_trusted_path_m` along the path, written to `out`; returns its length.
+    fn prune_through_seen(&self, path: &[PointM], out: &mut PathM) -> f32 {
+        self.prune_through_seen_capped(path, self.config.max_trusted_path_m, out)
+    }
+
+    /// [`Self::prune_through_seen`] with a length cap of `cap_m`.
+    fn prune_through_seen_capped(&self, path: &[PointM], cap_m: f32, out: &mut PathM) -> f32 {
+        out.clear();
+        let Some(&first) = path.first() else {
+            return 0.0;
+        };
+        let _ = out.push(first);
+        let step_m = 0.5 * self.grid.geometry().resolution_m();
+        let mut length_m = 0.0f32;
+        for pair in path.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
+            let segment_m = hypot_precise(dx, dy);
+            if segment_m.is_nan() || segment_m <= 0.0 {
+                continue;
+            }
+            let allowed_m = segment_m.min(cap_m - length_m);
+            let samples = ((allowed_m / step_m) as u32)
+                .saturating_add(1)
+                .min(1_000_000);
+            let at = |t_m: f32| {
+                PointM::new(
+                    a.x_m + dx * (t_m / segment_m),
+                    a.y_m + dy * (t_m / segment_m),
+                )
+            };
+            let mut last_ok_m = 0.0f32;
+            for k in 1..=samples {
+                let t_m = allowed_m * (k as f32 / samples as f32);
+                if !self.trusted(at(t_m)) {
+                    if last_ok_m > 0.0 {
+                        let _ = out.push(at(last_ok_m));
+                    }
+                    return length_m + last_ok_m;
+                }
+                last_ok_m = t_m;
+            }
+            if allowed_m < segment_m {
+                let _ = out.push(at(allowed_m));
+                return length_m + allowed_m;
+            }
+            if out.push(b).is_err() {
+                return length_m;
+            }
+            length_m += segment_m;
+        }
+        length_m
     }
 
     fn end_of_sweep(&mut self, sweep: SweepState, out: &mut MissionOutput) {
@@ -1035,12 +1166,16 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
             .count()
             .saturating_sub(1);
         let mut kept = PathM::new();
-        prune_visible_prefix(
-            &self.grid,
-            self.path.get(skip..).unwrap_or(&[]),
-            self.config.robot.sonar_range_m,
-            &mut kept,
-        );
+        let rest = self.path.get(skip..).unwrap_or(&[]);
+        let pruned =
+            prune_visible_prefix(&self.grid, rest, self.config.robot.sonar_range_m, &mut kept);
+        if self.config.trust_seen_space {
+            let mut through_seen = PathM::new();
+            let length_m = self.prune_through_seen(rest, &mut through_seen);
+            if length_m > pruned.length_m + 1.0e-3 {
+                kept = through_seen;
+            }
+        }
         self.prefix_ends_at_goal =
             kept.len() == self.path.len() && kept.last() == self.path.last() && !kept.is_empty();
         // The trajectory starts where the robot is (or where it is told to be).
@@ -1065,9 +1200,18 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         // off the heading needs a full sweep first, unless the last sweep was one.
         let pose = self.pose_world();
         let band_rad = self.config.robot.normal_half_sweep_deg * (core::f32::consts::PI / 180.0);
+        // Only the part within sonar range is the last sweep's business: farther points were
+        // trusted through space seen earlier.
+        let range_m = self.config.robot.sonar_range_m;
+        let near = self
+            .prefix
+            .iter()
+            .take_while(|p| hypot_precise(p.x_m - pose.x_m, p.y_m - pose.y_m) <= range_m)
+            .count()
+            .max(1);
         if !self.last_sweep_full
             && needs_full_sweep(
-                &self.prefix,
+                self.prefix.get(..near).unwrap_or(&[]),
                 PointM::new(pose.x_m, pose.y_m),
                 pose.heading_rad,
                 band_rad,

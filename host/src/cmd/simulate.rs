@@ -90,6 +90,10 @@ pub struct Args {
     /// for a wide-beam sonar: with the ideal ray-cast sonar it drops oblique walls).
     #[arg(long)]
     pub rcd: bool,
+    /// Keep only the seed's prefix (within sonar range, visible from the robot); by default
+    /// the prefix may go on through space seen free by earlier sweeps.
+    #[arg(long)]
+    pub seed_prune: bool,
     /// GIF scale, pixels per cell.
     #[arg(long, default_value_t = 2)]
     pub gif_scale: u32,
@@ -188,6 +192,7 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         time_limit_s: args.time_limit,
         snapshot_period_s: if args.out.is_some() { 0.5 } else { 0.0 },
         constant_depth_filter: args.rcd,
+        trust_seen_space: !args.seed_prune,
     })
 }
 

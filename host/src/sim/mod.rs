@@ -47,6 +47,8 @@ pub struct SimSetup {
     pub time_limit_s: f32,
     /// Filter sweeps with the regions-of-constant-depth filter.
     pub constant_depth_filter: bool,
+    /// Let the prefix go on through space seen free by earlier sweeps.
+    pub trust_seen_space: bool,
     /// Take a picture snapshot every this many seconds of simulated time (0: none).
     pub snapshot_period_s: f32,
 }
@@ -172,6 +174,7 @@ pub fn mission_config(setup: &SimSetup) -> MissionConfig {
     config.planner = setup.planner;
     config.time_limit_s = setup.time_limit_s;
     config.constant_depth_filter = setup.constant_depth_filter;
+    config.trust_seen_space = setup.trust_seen_space;
     config
 }
 
