@@ -477,3 +477,229 @@ proptest! {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Pruning and the band check.
+
+fn along_path_length(path: &[PointM]) -> f64 {
+    path.windows(2)
+        .map(|p| ((p[1].x_m - p[0].x_m) as f64).hypot((p[1].y_m - p[0].y_m) as f64))
+        .sum()
+}
+
+#[test]
+fn prune_cuts_at_range_mid_segment() {
+    let g = SmallGrid::new(GridGeometry::new(40, 40, 0.1).unwrap()).unwrap();
+    let path = [
+        PointM::new(0.55, 0.55),
+        PointM::new(2.55, 0.55),
+        PointM::new(2.55, 3.55),
+    ];
+    let mut out = PathM::new();
+    let pruned = prune_visible_prefix(&g, &path, 3.0, &mut out);
+    assert_eq!(pruned.end, PruneEnd::Range);
+    assert_eq!(out.len(), 3);
+    assert_eq!(&out[..2], &path[..2]);
+    assert!((out[2].x_m - 2.55).abs() < 1e-5);
+    assert!((out[2].y_m - 1.55).abs() < 1e-4, "{:?}", out[2]);
+    assert!((pruned.length_m - 3.0).abs() < 1e-5);
+
+    let pruned = prune_visible_prefix(&g, &path, 100.0, &mut out);
+    assert_eq!(pruned.end, PruneEnd::PathEnd);
+    assert_eq!(out.as_slice(), &path);
+    assert!((pruned.length_m - 5.0).abs() < 1e-4);
+}
+
+#[test]
+fn prune_stops_where_a_wall_hides_the_path() {
+    // A wall along x = 2.0 m from y = 1.5 m upwards; the path runs south, east below the wall's
+    // end, then north behind it. The part behind the wall is hidden from the start.
+    let mut g = SmallGrid::new(GridGeometry::new(40, 40, 0.1).unwrap()).unwrap();
+    for y in 15..40 {
+        g.set_xy(20, y, true);
+    }
+    let path = [
+        PointM::new(0.55, 2.55),
+        PointM::new(0.55, 0.55),
+        PointM::new(2.55, 0.55),
+        PointM::new(2.55, 3.55),
+    ];
+    let mut out = PathM::new();
+    let pruned = prune_visible_prefix(&g, &path, 100.0, &mut out);
+    assert_eq!(pruned.end, PruneEnd::Hidden);
+    assert_eq!(&out[..3], &path[..3]);
+    assert_eq!(out.len(), 4);
+    let cut = out[3];
+    assert!((cut.x_m - 2.55).abs() < 1e-5);
+    assert!(cut.y_m > 0.55 && cut.y_m < 3.55, "{cut:?}");
+    for p in out.iter() {
+        assert!(line_of_sight_m(&g, out[0], *p), "{p:?} not visible");
+    }
+    // A little further along the last segment is no longer visible.
+    let beyond = PointM::new(2.55, cut.y_m + 0.1);
+    assert!(!line_of_sight_m(&g, out[0], beyond));
+    assert!((pruned.length_m as f64 - along_path_length(&out)).abs() < 1e-4);
+}
+
+#[test]
+fn prune_degenerate_inputs() {
+    let mut g = SmallGrid::new(GridGeometry::new(10, 10, 0.1).unwrap()).unwrap();
+    let mut out = PathM::new();
+    let p = prune_visible_prefix(&g, &[], 3.0, &mut out);
+    assert_eq!((p.end, out.len()), (PruneEnd::PathEnd, 0));
+    let path = [PointM::new(0.15, 0.15), PointM::new(0.85, 0.15)];
+    for range in [0.0, -1.0, f32::NAN, f32::NEG_INFINITY] {
+        let p = prune_visible_prefix(&g, &path, range, &mut out);
+        assert_eq!((p.end, out.as_slice()), (PruneEnd::Range, &path[..1]));
+    }
+    let p = prune_visible_prefix(&g, &[PointM::new(-1.0, 0.0), path[1]], 3.0, &mut out);
+    assert_eq!((p.end, out.len()), (PruneEnd::Hidden, 1));
+    let p = prune_visible_prefix(&g, &[path[0], PointM::new(f32::NAN, 0.1)], 3.0, &mut out);
+    assert_eq!((p.end, out.len()), (PruneEnd::Hidden, 1));
+    // Repeated points are skipped, not emitted twice.
+    let p = prune_visible_prefix(&g, &[path[0], path[0], path[1]], 3.0, &mut out);
+    assert_eq!((p.end, out.as_slice()), (PruneEnd::PathEnd, &path[..]));
+    g.set_xy(1, 1, true);
+    let p = prune_visible_prefix(&g, &path, 3.0, &mut out);
+    assert_eq!((p.end, out.len()), (PruneEnd::Hidden, 1));
+    // An absurd range on a long path cannot hang: samples are capped.
+    let far = [PointM::new(0.15, 0.15), PointM::new(0.15, 1.0e30)];
+    let p = prune_visible_prefix(&g, &far, f32::MAX, &mut out);
+    assert_eq!(p.end, PruneEnd::Hidden);
+}
+
+#[test]
+fn band_check_matches_the_seed_rule() {
+    let pose = PointM::new(5.0, 5.0);
+    let at = |deg: f32| {
+        let r = deg.to_radians();
+        PointM::new(5.0 + r.cos(), 5.0 + r.sin())
+    };
+    let band = NORMAL_HALF_BAND_RAD;
+    assert!(!needs_full_sweep(
+        &[pose, at(0.0), at(90.0), at(-94.0)],
+        pose,
+        0.0,
+        band
+    ));
+    assert!(needs_full_sweep(
+        &[pose, at(0.0), at(96.0)],
+        pose,
+        0.0,
+        band
+    ));
+    assert!(needs_full_sweep(&[at(-170.0)], pose, 0.0, band));
+    // Heading 180°: behind is now ahead; wrap-around at ±π.
+    assert!(!needs_full_sweep(
+        &[at(170.0), at(-170.0)],
+        pose,
+        core::f32::consts::PI,
+        band
+    ));
+    assert!(needs_full_sweep(
+        &[at(0.0)],
+        pose,
+        core::f32::consts::PI,
+        band
+    ));
+    // The robot's own position has no direction.
+    assert!(!needs_full_sweep(&[pose], pose, 0.0, band));
+    assert!(!needs_full_sweep(&[], pose, 0.0, band));
+    assert!(needs_full_sweep(&[at(0.0)], pose, f32::NAN, band));
+    assert!(needs_full_sweep(
+        &[PointM::new(f32::NAN, 0.0)],
+        pose,
+        0.0,
+        band
+    ));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    #[test]
+    fn pruned_prefix_is_visible_and_in_range((g, s, t) in arb_grid(), range_m in 0.05f32..3.0) {
+        let mut p = Box::new(SmallPlanner::new());
+        let mut path = PathM::new();
+        let geometry = *g.geometry();
+        let r = p.plan(PlannerKind::AnyAngle, &g, geometry.center_of(s), geometry.center_of(t), &mut path).unwrap();
+        prop_assume!(r.status == PlanStatus::Found);
+        let mut out = PathM::new();
+        let pruned = prune_visible_prefix(&g, &path, range_m, &mut out);
+        prop_assert!(!out.is_empty());
+        prop_assert_eq!(out[0], path[0]);
+        // A prefix: all but the last kept point are path vertices, in order.
+        let n = out.len();
+        prop_assert_eq!(&out[..n - 1], &path[..n - 1]);
+        for q in out.iter() {
+            prop_assert!(line_of_sight_m(&g, out[0], *q), "{:?} hidden", q);
+        }
+        let along = along_path_length(&out);
+        prop_assert!(along <= range_m as f64 + 1e-4, "{} > {}", along, range_m);
+        prop_assert!((pruned.length_m as f64 - along).abs() < 1e-3);
+        if pruned.end == PruneEnd::PathEnd {
+            prop_assert_eq!(out.as_slice(), path.as_slice());
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// A small open list reclaims stale entries when it fills: it either finds exactly what a
+    /// large one finds, or reports QueueFull; never a different cost.
+    #[test]
+    fn small_open_list_is_exact_or_full((g, s, t) in arb_grid()) {
+        let mut big = Box::new(SmallPlanner::new());
+        let mut small = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 48>::new());
+        let expected = big.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+        match small.plan_cells(PlannerKind::AStar, &g, s, t) {
+            Ok(r) => {
+                // Equal-cost paths may differ: reclaiming reorders entries of equal f.
+                prop_assert_eq!((r.status, r.cost), (expected.status, expected.cost));
+                if r.status == PlanStatus::Found {
+                    prop_assert_eq!(steps_and_cost(small.path_cells()).1, r.cost);
+                    assert_collision_free(&g, small.path_cells());
+                }
+                prop_assert!(small.queue_peak() <= 48);
+            }
+            Err(e) => prop_assert_eq!(e, PlanError::QueueFull { capacity: 48 }),
+        }
+    }
+}
+
+/// The bundled office world (`worlds/office`), obstacles grown by the robot radius.
+fn office() -> (crate::grid::Grid300, crate::world::Params) {
+    use crate::world::{parse_da, parse_par, Obstacles};
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../worlds/");
+    let read = |ext: &str| std::fs::read_to_string(std::format!("{dir}office.{ext}")).unwrap();
+    let params = parse_par(&read("par")).unwrap();
+    let mut obstacles = Obstacles::new();
+    parse_da(&read("da"), &mut obstacles).unwrap();
+    let mut g = crate::grid::Grid300::new(GridGeometry::seed_default()).unwrap();
+    let half_side = g.geometry().expansion_cells(params.robot_radius_m);
+    for polygon in obstacles.iter() {
+        crate::raster::mark_polygon(&mut g, polygon, half_side);
+    }
+    (g, params)
+}
+
+#[test]
+fn reclaiming_stale_entries_lets_a_small_open_list_finish() {
+    // On the office world the open list peaks above 8 000 entries, mostly stale (cells closed
+    // since); reclaiming them lets 2 048 entries finish with the same cost.
+    let (g, params) = office();
+    let mut path = PathM::new();
+    let mut big = Box::new(Planner::<SCRATCH_WORDS_300, 16384>::new());
+    let expected = big
+        .plan(PlannerKind::AStar, &g, params.start, params.goal, &mut path)
+        .unwrap();
+    assert_eq!(expected.status, PlanStatus::Found);
+    assert!(big.queue_peak() > 8000, "peak {}", big.queue_peak());
+    let mut small = Box::new(Planner::<SCRATCH_WORDS_300, 2048>::new());
+    let r = small
+        .plan(PlannerKind::AStar, &g, params.start, params.goal, &mut path)
+        .unwrap();
+    assert_eq!((r.status, r.cost), (expected.status, expected.cost));
+    assert!(small.queue_peak() <= 2048);
+}
