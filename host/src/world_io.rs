@@ -64,7 +64,13 @@ impl FileError {
         }
     }
 
-    fn parse(path: &Path, error: &ParseError) -> Self {
+    /// A parse error of `text`. The core's tokenizer counts the newline that ends the last
+    /// line, so "the file ends before this value" would name a line after the last one; such
+    /// errors are reported on the file's last line.
+    fn parse(path: &Path, text: &str, error: &ParseError) -> Self {
+        let mut error = error.clone();
+        let lines = text.lines().count().max(1) as u32;
+        error.line = error.line.min(lines);
         Self::new(path, Some(error.line), error.to_string())
     }
 }
@@ -128,14 +134,14 @@ pub fn read_text(path: &Path) -> Result<String, FileError> {
 pub fn read_da(path: &Path) -> Result<Obstacles, FileError> {
     let text = read_text(path)?;
     let mut obstacles = Obstacles::new();
-    parse_da(&text, &mut obstacles).map_err(|e| FileError::parse(path, &e))?;
+    parse_da(&text, &mut obstacles).map_err(|e| FileError::parse(path, &text, &e))?;
     Ok(obstacles)
 }
 
 /// Read a `.par` parameter file.
 pub fn read_par(path: &Path) -> Result<Params, FileError> {
     let text = read_text(path)?;
-    parse_par(&text).map_err(|e| FileError::parse(path, &e))
+    parse_par(&text).map_err(|e| FileError::parse(path, &text, &e))
 }
 
 /// Mark in `grid` every cell that a saved map (see the module doc) marks occupied, for the
@@ -271,5 +277,48 @@ mod tests {
             );
         }
         assert_eq!(grid.count_occupied(), 0);
+    }
+
+    #[test]
+    fn endless_files_are_cut_off() {
+        let zero = Path::new("/dev/zero");
+        if zero.exists() {
+            let e = read_da(zero).unwrap_err();
+            assert!(e.to_string().contains("larger than"), "{e}");
+        }
+    }
+
+    #[test]
+    fn missing_value_is_reported_on_the_last_line() {
+        let (_d, p) = temp("m.par", b"0.4\n0.2\n90\n1 1\n2\n");
+        let e = read_par(&p).unwrap_err();
+        assert_eq!(e.line, Some(5), "{e}");
+        assert!(e.to_string().contains("line 5: field `goal y`"), "{e}");
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+        #[test]
+        fn any_bytes_give_a_result_or_one_line_error_naming_the_file(
+            bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..200),
+            numeric in proptest::collection::vec(0u8..16, 0..200),
+        ) {
+            // Raw bytes, and bytes drawn from digits/space/newline/sign/dot that parse further.
+            let alphabet = b"0123456789 \n-.9";
+            let text: Vec<u8> = numeric.iter().map(|i| alphabet[*i as usize % alphabet.len()]).collect();
+            for content in [&bytes, &text] {
+                let (_d, p) = temp("p.da", content);
+                if let Err(e) = read_da(&p) {
+                    let msg = e.to_string();
+                    proptest::prop_assert!(msg.starts_with(&p.display().to_string()));
+                    proptest::prop_assert!(!msg.chars().any(char::is_control), "{}", msg);
+                    if let Some(line) = e.line {
+                        let lines = content.iter().filter(|b| **b == b'\n').count() as u32 + 1;
+                        proptest::prop_assert!(line >= 1 && line <= lines);
+                    }
+                }
+                let _ = read_par(&p);
+            }
+        }
     }
 }
