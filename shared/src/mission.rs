@@ -145,8 +145,8 @@ pub struct MissionConfig {
     pub turn_in_place_above_rad: f32,
     /// Mission time after which it ends in [`MissionStatus::Timeout`], seconds.
     pub time_limit_s: f32,
-    /// Reached when the odometry position is this close to the goal after a prefix that ends
-    /// at the goal, metres.
+    /// Reached when the odometry position is this close to the goal (stop mode: checked after
+    /// the settle time; continuous mode: every period), metres.
     pub goal_tolerance_m: f32,
     /// Plans in a row that start within [`Self::stall_distance_m`] of the previous plan's start
     /// before the mission gives up as unreachable.
@@ -420,6 +420,8 @@ pub struct MissionStats {
     pub replans: u32,
     /// Continuous mode: replans whose new obstacles blocked the remaining path.
     pub blocked_replans: u32,
+    /// Continuous mode: prefixes cut to the swept band instead of stopping for a full sweep.
+    pub band_cuts: u32,
     /// Sonar readings taken.
     pub readings: u32,
     /// Hits marked in the grid.
@@ -484,7 +486,6 @@ pub struct Mission<const W: usize, const S: usize, const Q: usize> {
     voltages_v: (f32, f32),
     last_plan_origin: Option<PointM>,
     stalled_plans: u16,
-    prefix_ends_at_goal: bool,
 }
 
 impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
@@ -540,7 +541,6 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
             voltages_v: (0.0, 0.0),
             last_plan_origin: None,
             stalled_plans: 0,
-            prefix_ends_at_goal: false,
         })
     }
 
@@ -736,10 +736,9 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         if self.status != MissionStatus::Running {
             return;
         }
-        // Continuous mode: reached as soon as the robot is at the goal at the end of a prefix
-        // that ends there.
+        // Continuous mode: reached as soon as the robot is within the tolerance of the goal.
         if self.config.mode == MissionMode::Continuous
-            && self.phase == MissionPhase::Settle
+            && matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle)
             && self.at_goal()
         {
             self.finish(MissionStatus::Reached, out);
@@ -772,11 +771,10 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
     }
 
     fn at_goal(&self) -> bool {
-        self.prefix_ends_at_goal
-            && hypot_precise(
-                self.position_world().x_m - self.config.goal.x_m,
-                self.position_world().y_m - self.config.goal.y_m,
-            ) <= self.config.goal_tolerance_m
+        hypot_precise(
+            self.position_world().x_m - self.config.goal.x_m,
+            self.position_world().y_m - self.config.goal.y_m,
+        ) <= self.config.goal_tolerance_m
     }
 
     fn on_settled(&mut self, out: &mut MissionOutput) {
@@ -1176,8 +1174,6 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
                 kept = through_seen;
             }
         }
-        self.prefix_ends_at_goal =
-            kept.len() == self.path.len() && kept.last() == self.path.last() && !kept.is_empty();
         // The trajectory starts where the robot is (or where it is told to be).
         self.prefix.clear();
         let _ = self.prefix.push(origin);
@@ -1217,9 +1213,22 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
                 band_rad,
             )
         {
-            push(out, MissionEvent::FullSweepRequested);
-            self.begin_standing_sweep(true);
-            return;
+            if self.config.mode == MissionMode::Continuous {
+                // Sweeping while moving: instead of stopping for a full sweep, follow only the
+                // part inside the band (at least one cell towards the path, which makes the
+                // supplier turn in place first); the sonar keeps sweeping around the new
+                // heading and the next pass replans.
+                self.cut_prefix_to_band(
+                    PointM::new(pose.x_m, pose.y_m),
+                    pose.heading_rad,
+                    band_rad,
+                );
+                self.stats.band_cuts += 1;
+            } else {
+                push(out, MissionEvent::FullSweepRequested);
+                self.begin_standing_sweep(true);
+                return;
+            }
         }
 
         // Follow.
@@ -1232,6 +1241,38 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         ) {
             Ok(()) => self.phase = MissionPhase::Follow,
             Err(_) => self.finish(MissionStatus::Aborted, out),
+        }
+    }
+
+    /// Keep the prefix up to its last vertex inside the ±`band_rad` band around `heading_rad`
+    /// seen from `position`; when the first vertex after the origin is already outside, keep
+    /// one cell of the first segment.
+    fn cut_prefix_to_band(&mut self, position: PointM, heading_rad: f32, band_rad: f32) {
+        let Some(&origin) = self.prefix.first() else {
+            return;
+        };
+        let mut keep = 1;
+        for p in self.prefix.iter().skip(1) {
+            if needs_full_sweep(&[*p], position, heading_rad, band_rad) {
+                break;
+            }
+            keep += 1;
+        }
+        if keep >= 2 {
+            self.prefix.truncate(keep);
+            return;
+        }
+        let Some(&next) = self.prefix.get(1) else {
+            return;
+        };
+        let d = hypot_precise(next.x_m - origin.x_m, next.y_m - origin.y_m);
+        let step_m = self.grid.geometry().resolution_m().min(d);
+        self.prefix.truncate(1);
+        if d > 0.0 {
+            let _ = self.prefix.push(PointM::new(
+                origin.x_m + (next.x_m - origin.x_m) * (step_m / d),
+                origin.y_m + (next.y_m - origin.y_m) * (step_m / d),
+            ));
         }
     }
 
