@@ -57,7 +57,7 @@ pub fn render_snapshot(
     px_per_cell: u32,
 ) -> Result<RgbImage> {
     let geometry: GridGeometry = setup.geometry;
-    let mut canvas = Canvas::with_caption(geometry, px_per_cell, 1)
+    let mut canvas = Canvas::with_caption(geometry, px_per_cell, 2)
         .map_err(|e| anyhow::anyhow!("picture: {e}"))?;
     canvas.set_opacity(0.35);
     canvas.fill_polygons(&setup.real, REAL);
@@ -92,6 +92,18 @@ pub fn render_snapshot(
         format!("t = {:.1} s", snap.t_s)
     };
     canvas.caption_text(0, &caption, palette::TEXT);
+    canvas.caption_legend(
+        1,
+        &[
+            ("map", OCCUPIED),
+            ("real", REAL_OUTLINE),
+            ("path", PATH),
+            ("prefix", PREFIX),
+            ("trail", TRAIL),
+            ("hits", HITS),
+            ("robot", ROBOT),
+        ],
+    );
     Ok(canvas.into_image())
 }
 
