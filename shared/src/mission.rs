@@ -1622,4 +1622,61 @@ mod tests {
         const { assert!(Mission300::SIZE_BYTES < 140_000) };
         const { assert!(Mission300::SIZE_BYTES < Mission400::SIZE_BYTES) };
     }
+
+    mod props {
+        use super::*;
+        use proptest::prelude::*;
+
+        fn any_f32() -> impl Strategy<Value = f32> {
+            prop_oneof![
+                -10.0f32..10.0,
+                Just(f32::NAN),
+                Just(f32::INFINITY),
+                Just(f32::NEG_INFINITY),
+                Just(0.0f32),
+            ]
+        }
+
+        fn any_input() -> impl Strategy<Value = MissionInput> {
+            prop_oneof![
+                8 => (-5000i32..5000, -5000i32..5000, any_f32()).prop_map(|(l, r, e)| {
+                    MissionInput::Tick {
+                        left_delta_counts: l,
+                        right_delta_counts: r,
+                        elapsed_s: e,
+                    }
+                }),
+                8 => (any_f32(), prop::option::of(any_f32())).prop_map(|(a, r)| {
+                    MissionInput::SonarReading {
+                        neck_angle_rad: a,
+                        range_m: r,
+                    }
+                }),
+                1 => Just(MissionInput::Abort),
+            ]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(32))]
+            /// Any sequence of inputs, however absurd: no panic, voltages within the
+            /// saturation, and once ended the mission stays ended with the motors off.
+            #[test]
+            fn nonsense_inputs_never_panic(inputs in prop::collection::vec(any_input(), 1..400)) {
+                let c = config(PointM::new(1.5, 4.0), PointM::new(6.5, 4.0), MissionMode::Continuous);
+                let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+                let max_v = c.robot.max_voltage_v;
+                let mut ended = false;
+                for input in inputs {
+                    let out = mission.step(input);
+                    prop_assert!(out.left_voltage_v.abs() <= max_v + 1e-4);
+                    prop_assert!(out.right_voltage_v.abs() <= max_v + 1e-4);
+                    if ended {
+                        prop_assert!(out.status != MissionStatus::Running);
+                        prop_assert_eq!((out.left_voltage_v, out.right_voltage_v), (0.0, 0.0));
+                    }
+                    ended |= out.status != MissionStatus::Running;
+                }
+            }
+        }
+    }
 }

@@ -682,4 +682,62 @@ mod tests {
         assert!(close(out.point, PointM::new(1.0, 0.0), 1e-3), "{out:?}");
         assert!(abs(out.heading_rad) < 1e-3);
     }
+
+    mod props {
+        extern crate std;
+        use super::*;
+        use proptest::prelude::*;
+
+        fn seg_dist(p: PointM, a: PointM, b: PointM) -> f32 {
+            let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
+            let l2 = dx * dx + dy * dy;
+            let t = if l2 > 0.0 {
+                (((p.x_m - a.x_m) * dx + (p.y_m - a.y_m) * dy) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            hypot_precise(p.x_m - a.x_m - t * dx, p.y_m - a.y_m - t * dy)
+        }
+
+        proptest! {
+            /// Every supplied point lies on the polyline, the end comes exactly once and no
+            /// later than the cruise time plus the turns, and the last point is the end.
+            #[test]
+            fn supplied_points_stay_on_the_path(
+                raw in prop::collection::vec((-5.0f32..5.0, -5.0f32..5.0), 1..12),
+                heading in -3.2f32..3.2,
+                speed in 0.05f32..1.0,
+            ) {
+                let path: std::vec::Vec<PointM> =
+                    raw.iter().map(|&(x, y)| PointM::new(x, y)).collect();
+                let config = SupplierConfig { speed_m_s: speed, settle_time_s: 0.5, ..SupplierConfig::default() };
+                let mut s = TrajectorySupplier::new();
+                s.start(&path, &FrameTransform::identity(), heading, &config).unwrap();
+                let length: f32 = path.windows(2).map(|w| distance_m(w[0], w[1])).sum();
+                let turns = path.len() as f32 * core::f32::consts::PI / config.turn_rate_rad_s;
+                let max_ticks = ((length / speed + turns) / 0.05) as usize + path.len() * 2 + 20;
+                let mut ends = 0;
+                let mut settled = 0;
+                for _ in 0..max_ticks + 20 {
+                    let out = s.tick(0.05);
+                    let on_path = if path.len() == 1 {
+                        out.point.distance_m(path[0])
+                    } else {
+                        path.windows(2).map(|w| seg_dist(out.point, w[0], w[1])).fold(f32::INFINITY, f32::min)
+                    };
+                    prop_assert!(on_path < 1e-3, "{:?} off the path by {}", out.point, on_path);
+                    match out.event {
+                        Some(SupplyEvent::EndOfTrajectory) => {
+                            ends += 1;
+                            prop_assert!(distance_m(out.point, *path.last().unwrap()) < 1e-3);
+                        }
+                        Some(SupplyEvent::Settled) => settled += 1,
+                        None => {}
+                    }
+                }
+                prop_assert_eq!(ends, 1);
+                prop_assert_eq!(settled, 1);
+            }
+        }
+    }
 }
