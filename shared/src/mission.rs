@@ -929,22 +929,35 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         let Some((x, y)) = g.cell_xy_of(p) else {
             return false;
         };
-        if !g.contains_xy(x, y) || self.grid.is_occupied_xy(x, y) || !self.seen.is_occupied_xy(x, y)
-        {
+        if !g.contains_xy(x, y) || self.grid.is_occupied_xy(x, y) || !self.seen_near(x, y) {
             return false;
         }
         let h = self.expansion_cells as i32;
         for cy in y - h..=y + h {
             for cx in x - h..=x + h {
                 if g.contains_xy(cx, cy)
-                    && !self.seen.is_occupied_xy(cx, cy)
                     && !self.grid.is_occupied_xy(cx, cy)
+                    && !self.seen_near(cx, cy)
                 {
                     return false;
                 }
             }
         }
         true
+    }
+
+    /// A ray crossed a cell within [`SEEN_NEAR_CELLS`] of (`x`, `y`).
+    fn seen_near(&self, x: i32, y: i32) -> bool {
+        let g = self.grid.geometry();
+        let h = SEEN_NEAR_CELLS;
+        for cy in y - h..=y + h {
+            for cx in x - h..=x + h {
+                if g.contains_xy(cx, cy) && self.seen.is_occupied_xy(cx, cy) {
+                    return true;
+                }
+            }
+        }
+        false
     }
 
     /// The prefix of `path` through trusted cells (see [`Self::seen`]), at most
@@ -1151,28 +1164,43 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
             }
         }
 
-        // Prune: keep what the sonar has just seen.
-        // Prune from the last path vertex within 1.5 cells of the start: the first step of a
-        // path often goes to a neighbouring cell, and seen from the start cell the next
-        // segment may graze an obstacle corner (the no-corner-cutting rule) although it is
-        // clear from its own first cell.
-        let near_start_m = 1.5 * g.resolution_m();
+        // Prune: keep what the sonar has just seen. The seed's rule looks from the first path
+        // vertex; the first steps of a path often go to a neighbouring cell, and seen from the
+        // start cell the next segment may graze an obstacle corner (the no-corner-cutting
+        // rule) although it is clear from its own first cell. So the prune starts from the
+        // last vertex within 1.5 cells of the start, and if that keeps nothing beyond a cell,
+        // from each later vertex within 3 cells in turn.
+        let res_m = g.resolution_m();
         let first = self.path.first().copied().unwrap_or(start_point);
+        let from_first = |p: &PointM| hypot_precise(p.x_m - first.x_m, p.y_m - first.y_m);
         let skip = self
             .path
             .iter()
-            .take_while(|p| hypot_precise(p.x_m - first.x_m, p.y_m - first.y_m) <= near_start_m)
+            .take_while(|p| from_first(p) <= 1.5 * res_m)
             .count()
             .saturating_sub(1);
+        let last_try = self
+            .path
+            .iter()
+            .take_while(|p| from_first(p) <= 3.0 * res_m)
+            .count()
+            .saturating_sub(1)
+            .max(skip);
         let mut kept = PathM::new();
-        let rest = self.path.get(skip..).unwrap_or(&[]);
-        let pruned =
-            prune_visible_prefix(&self.grid, rest, self.config.robot.sonar_range_m, &mut kept);
-        if self.config.trust_seen_space {
-            let mut through_seen = PathM::new();
-            let length_m = self.prune_through_seen(rest, &mut through_seen);
-            if length_m > pruned.length_m + 1.0e-3 {
-                kept = through_seen;
+        for k in skip..=last_try {
+            let rest = self.path.get(k..).unwrap_or(&[]);
+            let mut pruned_m =
+                prune_visible_prefix(&self.grid, rest, self.prune_range_m(), &mut kept).length_m;
+            if self.config.trust_seen_space {
+                let mut through_seen = PathM::new();
+                let length_m = self.prune_through_seen(rest, &mut through_seen);
+                if length_m > pruned_m + 1.0e-3 {
+                    kept = through_seen;
+                    pruned_m = length_m;
+                }
+            }
+            if pruned_m > res_m {
+                break;
             }
         }
         // The trajectory starts where the robot is (or where it is told to be).
@@ -1277,6 +1305,17 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         }
     }
 
+    /// How far along the path the seed's rule may keep: the sonar range, plus the sonar's
+    /// offset ahead of the centre, minus the planning radius. An obstacle just beyond the range
+    /// is not seen, and the robot's disc must stay a planning radius clear of it: with the full
+    /// range (the seed's rule) the robot could end a prefix with its body against an unseen
+    /// wall 1.55 m ahead. At least one cell.
+    fn prune_range_m(&self) -> f32 {
+        let r = &self.config.robot;
+        (r.sonar_range_m + r.sonar_offset_m - r.planning_radius_m)
+            .max(self.grid.geometry().resolution_m())
+    }
+
     /// Hold the robot and sweep standing.
     fn begin_standing_sweep(&mut self, full: bool) {
         self.supplier.stop();
@@ -1285,6 +1324,10 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         self.phase = MissionPhase::Sweep { full };
     }
 }
+
+/// A path cell counts as seen when a ray crossed a cell within this many cells of it (rays
+/// 1.8° apart are one cell apart at 1.6 m, two at 3.2 m).
+const SEEN_NEAR_CELLS: i32 = 1;
 
 fn push(out: &mut MissionOutput, event: MissionEvent) {
     // Full: the oldest events are kept; the status field still tells the outcome.

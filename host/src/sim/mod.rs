@@ -264,7 +264,7 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
                 eprintln!("{t_s:8.2} {:?} prefix {:?}", out.events, mission.prefix());
                 if mission.prefix().len() < 2 {
                     let p = mission.path();
-                    eprintln!("   path {:?}", &p[..p.len().min(4)]);
+                    eprintln!("   path {:?}", &p[..p.len().min(5)]);
                     let g = *mission.grid().geometry();
                     for q in &p[..p.len().min(2)] {
                         let c = g.cell_of(*q).unwrap();
