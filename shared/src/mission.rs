@@ -1305,15 +1305,15 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         }
     }
 
-    /// How far along the path the seed's rule may keep: the sonar range, plus the sonar's
-    /// offset ahead of the centre, minus the planning radius. An obstacle just beyond the range
-    /// is not seen, and the robot's disc must stay a planning radius clear of it: with the full
-    /// range (the seed's rule) the robot could end a prefix with its body against an unseen
-    /// wall 1.55 m ahead. At least one cell.
+    /// How far along the path the seed's rule may keep: the sonar range minus the planning
+    /// radius. An obstacle just beyond the range is not seen, and the robot's disc must stay
+    /// clear of it wherever the path goes, also sideways where the sonar's 0.20 m offset ahead
+    /// of the centre does not help: with the full range (the seed's rule; the seed's cell
+    /// count came to 1.06 m) the robot drove its body into a wall 3.0 m to its side with a
+    /// 3 m sonar. At least one cell.
     fn prune_range_m(&self) -> f32 {
         let r = &self.config.robot;
-        (r.sonar_range_m + r.sonar_offset_m - r.planning_radius_m)
-            .max(self.grid.geometry().resolution_m())
+        (r.sonar_range_m - r.planning_radius_m).max(self.grid.geometry().resolution_m())
     }
 
     /// Hold the robot and sweep standing.
