@@ -54,9 +54,20 @@
 //! reading*. At the end of every pass the hits are marked and the mission replans from the
 //! point the supplier is handing out (so the motion does not restart from rest), prunes, and
 //! hands the new prefix to the supplier without stopping. A pass whose new obstacles block the
-//! remaining path counts as a *blocked* replan. The robot only stops to sweep at the start,
-//! when the band check asks for a full sweep, or when it ran to the end of a prefix that is not
-//! the goal (then it settles, sweeps standing and continues).
+//! remaining path counts as a *blocked* replan. When the band check fails it does not stop for
+//! a full sweep: it follows only the part of the prefix inside the band (at least one cell, so
+//! the supplier turns in place towards the path) and the next pass replans. The robot only
+//! stops to sweep at the start and when it ran to the end of a prefix short of the goal.
+//!
+//! ## What the robot trusts
+//!
+//! - The seed's rule: the prefix within `sonar range − planning radius` along the path and
+//!   visible from its first point (the body must stay inside the swept disc, sideways too).
+//! - Seen space ([`MissionConfig::trust_seen_space`], on by default): a second bit grid records
+//!   every cell a sonar ray crossed before its echo. The prefix may go on while the path
+//!   crosses cells whose whole neighbourhood within the planning radius has been seen (within
+//!   a cell, for the gaps between rays) or is occupied: no unseen obstacle can be within reach.
+//! - The band check (seed `traj_fora_faixa_leit`) looks at the prefix points within sonar range.
 //!
 //! ## It always ends
 //!
@@ -68,9 +79,10 @@
 //!
 //! ## Memory
 //!
-//! No heap. The size is dominated by the grid (1 bit per cell), the planner scratch (4 bits per
-//! cell plus its queue) and two paths of [`MAX_PATH_POINTS`](crate::plan::MAX_PATH_POINTS) points (8 KiB each) plus the
-//! supplier's copy. [`Mission::SIZE_BYTES`] gives the exact figure for an instantiation; see
+//! No heap. The size is dominated by the two grids (map and seen space, 1 bit per cell each),
+//! the planner scratch (4 bits per cell plus its queue) and two paths of
+//! [`MAX_PATH_POINTS`](crate::plan::MAX_PATH_POINTS) points (8 KiB each) plus the supplier's
+//! copy: 132 000 bytes for [`Mission300`]. [`Mission::SIZE_BYTES`] gives the exact figure for an instantiation; see
 //! `docs/simulate.md` for the numbers of [`Mission300`] and [`Mission400`].
 
 use heapless::Vec;

@@ -267,8 +267,9 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
                     eprintln!("   path {:?}", &p[..p.len().min(5)]);
                     let g = *mission.grid().geometry();
                     for q in &p[..p.len().min(2)] {
-                        let c = g.cell_of(*q).unwrap();
-                        eprintln!("   cell {:?} occ {}", c, mission.grid().is_occupied(c));
+                        if let Ok(c) = g.cell_of(*q) {
+                            eprintln!("   cell {:?} occ {}", c, mission.grid().is_occupied(c));
+                        }
                     }
                 }
             }
