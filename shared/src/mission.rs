@@ -176,6 +176,9 @@ pub struct MissionConfig {
     pub trust_seen_space: bool,
     /// Longest prefix kept through seen space, measured along the path, metres.
     pub max_trusted_path_m: f32,
+    /// Continuous mode: half-width of the sweeps taken while moving, degrees (narrower sweeps
+    /// come round to each direction more often).
+    pub moving_half_sweep_deg: f32,
 }
 
 impl MissionConfig {
@@ -200,6 +203,7 @@ impl MissionConfig {
             constant_depth_filter: false,
             trust_seen_space: true,
             max_trusted_path_m: 30.0,
+            moving_half_sweep_deg: 95.0,
         }
     }
 
@@ -805,7 +809,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
 
     fn start_sweep(&mut self, full: bool, moving: bool, out: &mut MissionOutput) {
         let plan = SweepPlan::new(
-            &self.config.robot,
+            &self.sweep_robot(moving),
             if full {
                 SweepKind::Full
             } else {
@@ -835,9 +839,19 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         push(out, MissionEvent::SweepStarted { full, moving });
     }
 
+    /// The robot config a sweep is planned with: moving sweeps use
+    /// [`MissionConfig::moving_half_sweep_deg`].
+    fn sweep_robot(&self, moving: bool) -> RobotConfig {
+        let mut robot = self.config.robot;
+        if moving {
+            robot.normal_half_sweep_deg = self.config.moving_half_sweep_deg;
+        }
+        robot
+    }
+
     fn sweep_angle_rad(&self, sweep: &SweepState, index: u16) -> f32 {
         let plan = SweepPlan::new(
-            &self.config.robot,
+            &self.sweep_robot(sweep.moving),
             if sweep.full {
                 SweepKind::Full
             } else {
@@ -1237,7 +1251,12 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         // Band check (seed traj_fora_faixa_leit): a kept point more than the normal half sweep
         // off the heading needs a full sweep first, unless the last sweep was one.
         let pose = self.pose_world();
-        let band_rad = self.config.robot.normal_half_sweep_deg * (core::f32::consts::PI / 180.0);
+        let band_deg = if moving {
+            self.config.moving_half_sweep_deg
+        } else {
+            self.config.robot.normal_half_sweep_deg
+        };
+        let band_rad = band_deg * (core::f32::consts::PI / 180.0);
         // Only the part within sonar range is the last sweep's business: farther points were
         // trusted through space seen earlier.
         let range_m = self.config.robot.sonar_range_m;

@@ -94,6 +94,10 @@ pub struct Args {
     /// the prefix may go on through space seen free by earlier sweeps.
     #[arg(long)]
     pub seed_prune: bool,
+    /// Continuous mode: half-width of the sweeps taken while moving, degrees (narrower sweeps
+    /// come round more often but see less to the sides; experimental).
+    #[arg(long, default_value_t = 95.0)]
+    pub moving_sweep: f32,
     /// GIF scale, pixels per cell.
     #[arg(long, default_value_t = 2)]
     pub gif_scale: u32,
@@ -193,6 +197,7 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         snapshot_period_s: if args.out.is_some() { 0.5 } else { 0.0 },
         constant_depth_filter: args.rcd,
         trust_seen_space: !args.seed_prune,
+        moving_half_sweep_deg: args.moving_sweep,
     })
 }
 
