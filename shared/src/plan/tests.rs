@@ -668,11 +668,11 @@ proptest! {
     }
 }
 
-/// The bundled office world (`worlds/office`), obstacles grown by the robot radius.
-fn office() -> (crate::grid::Grid300, crate::world::Params) {
+/// A bundled world (`worlds/NAME`), obstacles grown by the robot radius.
+fn world(name: &str) -> (crate::grid::Grid300, crate::world::Params) {
     use crate::world::{parse_da, parse_par, Obstacles};
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../worlds/");
-    let read = |ext: &str| std::fs::read_to_string(std::format!("{dir}office.{ext}")).unwrap();
+    let read = |ext: &str| std::fs::read_to_string(std::format!("{dir}{name}.{ext}")).unwrap();
     let params = parse_par(&read("par")).unwrap();
     let mut obstacles = Obstacles::new();
     parse_da(&read("da"), &mut obstacles).unwrap();
@@ -688,7 +688,7 @@ fn office() -> (crate::grid::Grid300, crate::world::Params) {
 fn reclaiming_stale_entries_lets_a_small_open_list_finish() {
     // On the office world the open list peaks above 8 000 entries, mostly stale (cells closed
     // since); reclaiming them lets 2 048 entries finish with the same cost.
-    let (g, params) = office();
+    let (g, params) = world("office");
     let mut path = PathM::new();
     let mut big = Box::new(Planner::<SCRATCH_WORDS_300, 16384>::new());
     let expected = big
@@ -702,4 +702,37 @@ fn reclaiming_stale_entries_lets_a_small_open_list_finish() {
         .unwrap();
     assert_eq!((r.status, r.cost), (expected.status, expected.cost));
     assert!(small.queue_peak() <= 2048);
+}
+
+#[test]
+fn names_and_sizes() {
+    assert_eq!(PlannerKind::AnyAngle.as_str(), "anyangle");
+    assert_eq!(PlanStatus::StartBlocked.as_str(), "start_blocked");
+    assert_eq!(PlanStatus::OutOfBounds.as_str(), "out_of_bounds");
+    // 4 bits per cell for 300 x 300 cells, 12 bytes per queue entry, 4 bytes per vertex.
+    assert_eq!(SCRATCH_WORDS_300 * 4, 45_000);
+    assert!(core::mem::size_of::<Planner300>() <= 45_000 + 3072 * 12 + 1024 * 4 + 64);
+}
+
+#[test]
+fn planner300_runs_every_bundled_world() {
+    for name in ["office", "corridor", "pillars"] {
+        let (g, params) = world(name);
+        let mut big = Box::new(Planner::<SCRATCH_WORDS_300, 32768>::new());
+        let mut p = Box::new(Planner300::new());
+        let mut path = PathM::new();
+        for kind in [PlannerKind::Bfs, PlannerKind::AStar, PlannerKind::AnyAngle] {
+            let expected = big
+                .plan(kind, &g, params.start, params.goal, &mut path)
+                .unwrap();
+            let r = p
+                .plan(kind, &g, params.start, params.goal, &mut path)
+                .unwrap();
+            assert_eq!(r.status, PlanStatus::Found, "{name} {kind:?}");
+            assert_eq!(r.cost, expected.cost, "{name} {kind:?}");
+            for pair in p.path_cells().windows(2) {
+                assert!(line_of_sight(&g, pair[0], pair[1]), "{name} {kind:?}");
+            }
+        }
+    }
 }
