@@ -942,7 +942,12 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         if length_m.is_nan() || length_m <= 0.0 {
             return;
         }
+        // A sonar off the map (a runaway odometry) marks nothing: the ray could be a million
+        // cells long.
         if let (Some(a), Some(b)) = (g.cell_xy_of(sonar), g.cell_xy_of(end)) {
+            if !g.contains_xy(a.0, a.1) {
+                return;
+            }
             for (x, y) in BresenhamLine::new(a, b) {
                 self.seen.set_xy(x, y, true);
             }
