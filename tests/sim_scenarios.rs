@@ -1,1 +1,288 @@
-//! Scenario tests (not written yet).
+//! Scenario tests of `twil simulate`: whole missions on the bundled worlds, in both modes.
+//!
+//! Most call the simulator as a library (fast, and the result can be inspected); the JSON
+//! shape, the output files, determinism and bad inputs go through the `twil` binary.
+
+mod common;
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use clap::Parser;
+use twil_host::cmd::simulate::{setup_from_args, Args};
+use twil_host::sim::{self, NoProgress, SimResult, SimStatus};
+
+#[derive(Parser)]
+struct Cli {
+    #[command(flatten)]
+    args: Args,
+}
+
+fn args(extra: &[&str]) -> Args {
+    let mut argv = vec!["twil".to_string()];
+    argv.extend(extra.iter().map(|s| s.to_string()));
+    Cli::parse_from(argv).args
+}
+
+fn world(name: &str) -> String {
+    common::world(name).display().to_string()
+}
+
+fn simulate(extra: &[&str]) -> SimResult {
+    let setup = setup_from_args(&args(extra)).expect("setup");
+    sim::run(&setup, &mut NoProgress).expect("simulation")
+}
+
+fn distance_to_goal(result: &SimResult, goal: (f32, f32)) -> f32 {
+    let last = result.trajectory.last().expect("a trajectory").pose;
+    ((last.x_m - goal.0).powi(2) + (last.y_m - goal.1).powi(2)).sqrt()
+}
+
+fn goal_of(par: &str) -> (f32, f32) {
+    let params = twil_host::cmd::simulate::read_par(Path::new(&world(par))).unwrap();
+    (params.goal.x_m, params.goal.y_m)
+}
+
+#[test]
+fn bundled_worlds_reach_the_goal_without_collision_in_both_modes() {
+    for name in ["office", "corridor", "pillars"] {
+        for mode in ["stop", "continuous"] {
+            let da = world(&format!("{name}.da"));
+            let par = world(&format!("{name}.par"));
+            let r = simulate(&["--real", &da, "--params", &par, "--mode", mode]);
+            let what = format!("{name} {mode}: {:?} {:?}", r.status, r.stats);
+            assert_eq!(r.status, SimStatus::Reached, "{what}");
+            assert!(
+                r.min_clearance_m > 0.0,
+                "{what}: clearance {}",
+                r.min_clearance_m
+            );
+            let d = distance_to_goal(&r, goal_of(&format!("{name}.par")));
+            assert!(d < 0.25, "{what}: ended {d} m from the goal");
+            assert!(r.stats.stops >= 1, "{what}");
+            // Never shorter than the plan on the fully known map.
+            let known = r.known_map_plan_length_m.expect("a known-map plan");
+            assert!(
+                r.distance_m > 0.9 * known,
+                "{what}: {} vs {known}",
+                r.distance_m
+            );
+        }
+    }
+}
+
+#[test]
+fn continuous_mode_stops_less_and_finishes_sooner_than_stop_mode() {
+    let (da, par) = (world("office.da"), world("office.par"));
+    let stop = simulate(&["--real", &da, "--params", &par, "--mode", "stop"]);
+    let cont = simulate(&["--real", &da, "--params", &par, "--mode", "continuous"]);
+    assert_eq!(stop.status, SimStatus::Reached);
+    assert_eq!(cont.status, SimStatus::Reached);
+    assert!(
+        cont.stats.stops < stop.stats.stops,
+        "{:?} vs {:?}",
+        cont.stats,
+        stop.stats
+    );
+    assert!(cont.sim_time_s < stop.sim_time_s);
+    assert!(cont.stats.moving_sweeps > 0);
+    assert_eq!(stop.stats.moving_sweeps, 0);
+}
+
+#[test]
+fn known_walls_make_the_office_mission_shorter() {
+    let (da, par, walls) = (
+        world("office.da"),
+        world("office.par"),
+        world("office-walls.da"),
+    );
+    let unknown = simulate(&["--real", &da, "--params", &par]);
+    let known = simulate(&["--real", &da, "--params", &par, "--known", &walls]);
+    assert_eq!(known.status, SimStatus::Reached);
+    assert!(known.distance_m < unknown.distance_m);
+    assert!(known.stats.stops < unknown.stats.stops);
+}
+
+#[test]
+fn an_enclosed_goal_ends_unreachable_whether_the_box_is_known_or_not() {
+    let (da, par) = (world("enclosed.da"), world("enclosed.par"));
+    for mode in ["stop", "continuous"] {
+        let r = simulate(&["--real", &da, "--params", &par, "--mode", mode]);
+        assert_eq!(r.status, SimStatus::Unreachable, "{mode}: {:?}", r.stats);
+        assert!(r.min_clearance_m > 0.0);
+        let known = simulate(&[
+            "--real", &da, "--known", &da, "--params", &par, "--mode", mode,
+        ]);
+        assert_eq!(known.status, SimStatus::Unreachable);
+        // The known map proves it after the first sweep, without moving.
+        assert_eq!(known.stats.stops, 1);
+        assert!(known.distance_m < 0.01);
+    }
+}
+
+#[test]
+fn the_time_limit_gives_timeout() {
+    let r = simulate(&[
+        "--real",
+        &world("office.da"),
+        "--params",
+        &world("office.par"),
+        "--time-limit",
+        "20",
+    ]);
+    assert_eq!(r.status, SimStatus::Timeout);
+    assert!(r.sim_time_s <= 20.1);
+}
+
+#[test]
+fn json_is_exactly_one_object_with_the_issue_keys() {
+    let out = common::twil()
+        .args(["simulate", "--real"])
+        .arg(common::world("pillars.da"))
+        .arg("--params")
+        .arg(common::world("pillars.par"))
+        .args(["--mode", "continuous", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(stdout.trim_end().lines().count(), 1, "{stdout}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let keys: BTreeSet<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+    let expected: BTreeSet<&str> = [
+        "status",
+        "stops",
+        "full_sweeps",
+        "replans",
+        "distance_m",
+        "sim_time_s",
+        "min_clearance_m",
+        "controller_overruns",
+    ]
+    .into_iter()
+    .collect();
+    assert_eq!(keys, expected);
+    assert_eq!(v["status"], "reached");
+    for k in ["stops", "full_sweeps", "replans", "controller_overruns"] {
+        assert!(v[k].is_u64(), "{k}: {}", v[k]);
+    }
+    for k in ["distance_m", "sim_time_s", "min_clearance_m"] {
+        assert!(v[k].is_f64(), "{k}: {}", v[k]);
+    }
+    assert_eq!(v["controller_overruns"], 0);
+}
+
+fn run_with_out(dir: &Path, seed: &str) -> String {
+    let out = common::twil()
+        .args(["simulate", "--real"])
+        .arg(common::world("pillars.da"))
+        .arg("--params")
+        .arg(common::world("pillars.par"))
+        .args([
+            "--mode",
+            "continuous",
+            "--sonar-noise",
+            "0.02",
+            "--seed",
+            seed,
+        ])
+        .arg("--out")
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::read_to_string(dir.join("trajectory.csv")).unwrap()
+}
+
+#[test]
+fn same_seed_same_trajectory_and_all_outputs_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let a = run_with_out(&tmp.path().join("a"), "7");
+    let b = run_with_out(&tmp.path().join("b"), "7");
+    assert_eq!(a, b, "same seed, different trajectory.csv");
+    let c = run_with_out(&tmp.path().join("c"), "8");
+    assert_ne!(a, c, "the noise seed has no effect");
+
+    // trajectory.csv: header and one row per 50 ms period.
+    let mut lines = a.lines();
+    assert_eq!(lines.next(), Some("t,x,y,theta"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.len() > 100);
+    for pair in rows.windows(2) {
+        assert!((pair[1][0] - pair[0][0] - 0.05).abs() < 2e-3, "{pair:?}");
+    }
+
+    // Pictures and summary.
+    let dir = tmp.path().join("a");
+    assert!(dir.join("plan-001.png").is_file());
+    let gif = std::fs::read(dir.join("mission.gif")).unwrap();
+    assert_eq!(&gif[..6], b"GIF89a");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "reached");
+    let plans = summary["plans"].as_u64().unwrap() as usize;
+    let pngs = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .starts_with("plan-")
+        })
+        .count();
+    assert_eq!(pngs, plans);
+}
+
+#[test]
+fn bad_inputs_exit_1_naming_the_file_and_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let bad = tmp.path().join("bad.da");
+    std::fs::write(&bad, "2\n4\n1.0 1.0\n2.0 oops\n").unwrap();
+    let out = common::twil()
+        .args(["simulate", "--real"])
+        .arg(&bad)
+        .arg("--params")
+        .arg(common::world("office.par"))
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(out.stdout.is_empty());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.da") && err.contains("line 4"), "{err}");
+
+    let out = common::twil()
+        .args(["simulate", "--real"])
+        .arg(common::world("office.da"))
+        .arg("--params")
+        .arg(common::world("office.par"))
+        .args(["--sonar-range", "9"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("sonar_range_m"), "{err}");
+
+    let out = common::twil()
+        .args(["simulate", "--real"])
+        .arg(common::world("office.da"))
+        .arg("--params")
+        .arg(common::world("office.par"))
+        .args(["--size", "5x5"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("goal") && err.contains("off"), "{err}");
+}

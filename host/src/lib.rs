@@ -4,4 +4,5 @@
 pub mod cmd;
 pub mod cspace;
 pub mod render;
+pub mod sim;
 pub mod world_io;

@@ -1,3 +1,1789 @@
-//! The mission state machine: sweep, mark, plan, prune, follow, settle (issue 3).
+//! The mission state machine: sweep → mark → plan → prune → (full sweep) → follow → settle → …
+//! → reached | unreachable | timeout | aborted (seed 003 §IV.5: the obstacle detector,
+//! trajectory generator, trajectory supplier, sonar reader and controller threads, as one
+//! sans-IO state machine).
 //!
-//! Status: not written yet.
+//! ## Shape
+//!
+//! A [`Mission`] owns everything the navigation needs: the occupancy grid, the planner and its
+//! scratch memory, the full path and the kept prefix, the [`TrajectorySupplier`], the
+//! [`Controller`] and the buffer of the sweep in progress. It does no I/O: the shell (the
+//! firmware, `twil simulate`, a test) calls [`Mission::step`] with
+//!
+//! - [`MissionInput::Tick`] once per controller period (50 ms) with the encoder count deltas;
+//!   the output carries the wheel voltages to apply and, when the sonar is sweeping and the
+//!   sweep's time budget allows, a [`SonarRequest`] (a neck angle to measure at);
+//! - [`MissionInput::SonarReading`] with the answer to each request; the output may carry the
+//!   next request (several readings fit in one period when the echo wait is short);
+//! - [`MissionInput::Abort`] when the shell must stop (e.g. a collision).
+//!
+//! Simulated and real time are the same thing here: the mission's clock advances by one
+//! controller period per tick, and a sonar reading costs `echo_wait_s + neck_step_time_s` of
+//! that budget, so a ±95° sweep of 105 readings takes ≈ 3.8 s of mission time with the default
+//! 35 ms echo wait.
+//!
+//! ## State machine
+//!
+//! ```text
+//!            ┌──────────────────────────────────────────────────────────────┐
+//!            v                                                              │
+//!  start ─> Sweep (robot held; ±95°, or ±180° when asked)                   │
+//!            │ last reading                                                 │
+//!            v                                                              │
+//!           Mark (filter the sweep, hits -> grid with expansion)            │
+//!            v                                                              │
+//!           Plan (planner on the map from the current pose) ── no path ──> Unreachable
+//!            v                                                              │
+//!           Prune (prefix within sonar range and visible)                   │
+//!            │ a kept point outside the ±95° band and last sweep not full   │
+//!            ├──────────────> Sweep (full) ───────────────────────────────> Mark …
+//!            v                                                              │
+//!           Follow (supplier -> controller, 50 ms)                          │
+//!            │ end of trajectory                                            │
+//!            v                                                              │
+//!           Settle (reference model within 2 %) ── at the goal ──> Reached  │
+//!            └──────────────────────────────────────────────────────────────┘
+//!  any state: time limit -> Timeout; Abort input -> Aborted;
+//!             N plans in a row without moving -> Unreachable (no progress)
+//! ```
+//!
+//! **Stop mode** is exactly the loop above (the seed's stop-and-sweep).
+//!
+//! **Continuous mode** keeps the sonar sweeping (±95°, alternating direction) while the robot
+//! follows the prefix. Each reading is placed in the world with the odometry pose *at that
+//! reading*. At the end of every pass the hits are marked and the mission replans from the
+//! point the supplier is handing out (so the motion does not restart from rest), prunes, and
+//! hands the new prefix to the supplier without stopping. A pass whose new obstacles block the
+//! remaining path counts as a *blocked* replan. When the band check fails it does not stop for
+//! a full sweep: it follows only the part of the prefix inside the band (at least one cell, so
+//! the supplier turns in place towards the path) and the next pass replans. The robot only
+//! stops to sweep at the start and when it ran to the end of a prefix short of the goal.
+//!
+//! ## What the robot trusts
+//!
+//! - The seed's rule: the prefix within `sonar range − planning radius` along the path and
+//!   visible from its first point (the body must stay inside the swept disc, sideways too).
+//! - Seen space ([`MissionConfig::trust_seen_space`], on by default): a second bit grid records
+//!   every cell a sonar ray crossed before its echo. The prefix may go on while the path
+//!   crosses cells whose whole neighbourhood within the planning radius has been seen (within
+//!   a cell, for the gaps between rays) or is occupied: no unseen obstacle can be within reach.
+//! - The band check (seed `traj_fora_faixa_leit`) looks at the prefix points within sonar range.
+//!
+//! ## It always ends
+//!
+//! - The map only ever gains obstacles, so when the planner says the goal is unreachable (or the
+//!   goal cell is occupied) on the current map, it stays so: [`MissionStatus::Unreachable`].
+//! - [`MissionConfig::max_stalled_plans`] plans in a row from (almost) the same place also end
+//!   in [`MissionStatus::Unreachable`] ([`UnreachableReason::NoProgress`]).
+//! - [`MissionConfig::time_limit_s`] of mission time: [`MissionStatus::Timeout`].
+//!
+//! ## Memory
+//!
+//! No heap. The size is dominated by the two grids (map and seen space, 1 bit per cell each),
+//! the planner scratch (4 bits per cell plus its queue) and two paths of
+//! [`MAX_PATH_POINTS`](crate::plan::MAX_PATH_POINTS) points (8 KiB each) plus the supplier's
+//! copy: 144 288 bytes for [`Mission300`]. [`Mission::SIZE_BYTES`] gives the exact figure for an instantiation; see
+//! `docs/simulate.md` for the numbers of [`Mission300`] and [`Mission400`].
+
+use heapless::Vec;
+
+use crate::control::{ControlInput, Controller, Pose};
+use crate::geom::{Cell, PointM};
+use crate::grid::{words_for_cells, Grid, GridError, GridGeometry};
+use crate::math::{cos, hypot_precise, sin};
+use crate::plan::{
+    needs_full_sweep, prune_visible_prefix, PathM, PlanError, PlanStatus, Planner, PlannerKind,
+    SCRATCH_WORDS_300, SCRATCH_WORDS_400,
+};
+use crate::raster::{mark_point_m, mark_polygon, BresenhamLine};
+use crate::robot::RobotConfig;
+use crate::sonar::{
+    filter_constant_depth, HitBuffer, RcdParams, Reading, SweepBuffer, SweepKind, SweepPlan,
+    SWEEP_CAPACITY,
+};
+use crate::trajectory::{FrameTransform, SupplierConfig, SupplyEvent, TrajectorySupplier};
+use crate::world::Params;
+
+/// Most readings one sweep can hold: a full ±180° sweep at 1.8° per step (200 steps + 1).
+pub const MAX_SWEEP_READINGS: usize = SWEEP_CAPACITY;
+
+/// Most events one [`Mission::step`] can report.
+pub const MAX_EVENTS_PER_STEP: usize = 8;
+
+/// Open-list capacity of the planner inside [`Mission300`] (entries, 12 bytes each: 36 KiB),
+/// as [`crate::plan::Planner300`]: the planner reclaims stale entries, and the bundled worlds
+/// need at most 2122 live ones.
+pub const MISSION_QUEUE: usize = 3072;
+
+/// Open-list capacity of the planner inside [`Mission400`], the host's (entries).
+pub const HOST_MISSION_QUEUE: usize = 65536;
+
+/// A mission on a grid of at most 300 × 300 cells (15 m × 15 m at 0.05 m): the MCU size.
+pub type Mission300 = Mission<{ words_for_cells(300 * 300) }, SCRATCH_WORDS_300, MISSION_QUEUE>;
+
+/// A mission on a grid of at most 400 × 400 cells (20 m × 20 m at 0.05 m): the host size.
+pub type Mission400 =
+    Mission<{ words_for_cells(400 * 400) }, SCRATCH_WORDS_400, HOST_MISSION_QUEUE>;
+
+/// How the robot uses its sonar.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionMode {
+    /// Stop, sweep, plan, follow the prefix, settle, repeat (the seed).
+    #[default]
+    Stop,
+    /// Sweep while moving and replan on the fly.
+    Continuous,
+}
+
+/// Everything a mission needs to know before it starts.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MissionConfig {
+    /// Stop-and-sweep or continuous.
+    pub mode: MissionMode,
+    /// Which planner to run.
+    pub planner: PlannerKind,
+    /// Robot constants (its `planning_radius_m` grows obstacles, its `sonar_range_m` prunes).
+    pub robot: RobotConfig,
+    /// Start position, world metres.
+    pub start: PointM,
+    /// Initial heading, world radians, counter-clockwise from +x.
+    pub initial_heading_rad: f32,
+    /// Goal position, world metres.
+    pub goal: PointM,
+    /// Cruise speed along the path, metres per second.
+    pub speed_m_s: f32,
+    /// Turn rate when turning in place, radians per second.
+    pub turn_rate_rad_s: f32,
+    /// Direction changes larger than this are done as turns in place, radians.
+    pub turn_in_place_above_rad: f32,
+    /// Mission time after which it ends in [`MissionStatus::Timeout`], seconds.
+    pub time_limit_s: f32,
+    /// Reached when the odometry position is this close to the goal (stop mode: checked after
+    /// the settle time; continuous mode: every period), metres.
+    pub goal_tolerance_m: f32,
+    /// Plans in a row that start within [`Self::stall_distance_m`] of the previous plan's start
+    /// before the mission gives up as unreachable.
+    pub max_stalled_plans: u16,
+    /// A plan that starts closer than this to the previous one counts as stalled, metres.
+    pub stall_distance_m: f32,
+    /// Filter each sweep with the regions-of-constant-depth filter of [`crate::sonar`] (the
+    /// seed's); `false` marks every valid reading.
+    pub constant_depth_filter: bool,
+    /// Also trust the path through space seen free by *earlier* sweeps (see
+    /// [`Mission::seen`]); `false` keeps the seed's rule only (within range of the robot and
+    /// visible from it).
+    pub trust_seen_space: bool,
+    /// Longest prefix kept through seen space, measured along the path, metres.
+    pub max_trusted_path_m: f32,
+    /// Continuous mode: half-width of the sweeps taken while moving, degrees (narrower sweeps
+    /// come round to each direction more often).
+    pub moving_half_sweep_deg: f32,
+}
+
+impl MissionConfig {
+    /// A configuration from a `.par` file's parameters and a robot config (whose planning
+    /// radius is replaced by the `.par` radius), stop mode, A*, a 600 s time limit.
+    pub fn from_params(params: &Params, robot: RobotConfig) -> Self {
+        let robot = robot.with_planning_radius_m(params.robot_radius_m);
+        Self {
+            mode: MissionMode::Stop,
+            planner: PlannerKind::AStar,
+            robot,
+            start: params.start,
+            initial_heading_rad: params.initial_heading_deg * (core::f32::consts::PI / 180.0),
+            goal: params.goal,
+            speed_m_s: params.speed_m_s,
+            turn_rate_rad_s: 0.8,
+            turn_in_place_above_rad: core::f32::consts::FRAC_PI_6,
+            time_limit_s: 600.0,
+            goal_tolerance_m: 0.10,
+            max_stalled_plans: 6,
+            stall_distance_m: 0.10,
+            constant_depth_filter: false,
+            trust_seen_space: true,
+            max_trusted_path_m: 30.0,
+            moving_half_sweep_deg: 95.0,
+        }
+    }
+
+    /// Check every value the mission relies on; the error names the field and its value.
+    pub fn validate(&self) -> Result<(), MissionError> {
+        if let Err(e) = self.robot.validate() {
+            return Err(MissionError::Robot(e));
+        }
+        let positive = [
+            ("speed_m_s", self.speed_m_s),
+            ("turn_rate_rad_s", self.turn_rate_rad_s),
+            ("time_limit_s", self.time_limit_s),
+            ("goal_tolerance_m", self.goal_tolerance_m),
+        ];
+        for (field, value) in positive {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(MissionError::BadValue { field, value });
+            }
+        }
+        let finite = [
+            ("start x", self.start.x_m),
+            ("start y", self.start.y_m),
+            ("goal x", self.goal.x_m),
+            ("goal y", self.goal.y_m),
+            ("initial_heading_rad", self.initial_heading_rad),
+            ("turn_in_place_above_rad", self.turn_in_place_above_rad),
+            ("stall_distance_m", self.stall_distance_m),
+        ];
+        for (field, value) in finite {
+            if !value.is_finite() {
+                return Err(MissionError::BadValue { field, value });
+            }
+        }
+        Ok(())
+    }
+
+    fn supplier_config(&self) -> SupplierConfig {
+        SupplierConfig {
+            speed_m_s: self.speed_m_s,
+            turn_rate_rad_s: self.turn_rate_rad_s,
+            turn_in_place_above_rad: self.turn_in_place_above_rad,
+            settle_time_s: crate::control::settle_time_s(&self.robot)
+                + 2.0 * self.robot.controller_period_s,
+        }
+    }
+}
+
+/// Why a mission could not be set up.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionError {
+    /// The robot config is invalid.
+    Robot(crate::robot::ConfigError),
+    /// A mission value is out of range.
+    BadValue {
+        /// Field name.
+        field: &'static str,
+        /// Its value.
+        value: f32,
+    },
+    /// The grid geometry does not fit the mission's grid capacity.
+    Grid(GridError),
+    /// The grid has more cells than the planner's scratch covers.
+    PlannerTooSmall {
+        /// Cells in the grid.
+        cells: u32,
+        /// Cells the planner covers.
+        capacity: u32,
+    },
+    /// The start or the goal lies off the map.
+    OffMap {
+        /// `"start"` or `"goal"`.
+        which: &'static str,
+    },
+}
+
+impl core::fmt::Display for MissionError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            MissionError::Robot(e) => write!(f, "robot config: {e}"),
+            MissionError::BadValue { field, value } => write!(f, "{field}: bad value {value}"),
+            MissionError::Grid(e) => write!(f, "grid: {e}"),
+            MissionError::PlannerTooSmall { cells, capacity } => write!(
+                f,
+                "grid of {cells} cells is larger than the planner's {capacity}"
+            ),
+            MissionError::OffMap { which } => write!(f, "the {which} lies off the map"),
+        }
+    }
+}
+
+/// How the mission stands.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionStatus {
+    /// Still going.
+    #[default]
+    Running,
+    /// The robot is at the goal.
+    Reached,
+    /// The map proves the goal cannot be reached, or the robot cannot make progress.
+    Unreachable,
+    /// The time limit ran out.
+    Timeout,
+    /// Stopped from outside ([`MissionInput::Abort`]) or by an internal capacity limit.
+    Aborted,
+}
+
+/// Why the mission ended unreachable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum UnreachableReason {
+    /// Start and goal are not connected on the map.
+    NoPath,
+    /// The goal cell is occupied on the map.
+    GoalBlocked,
+    /// Too many plans in a row without moving.
+    NoProgress,
+}
+
+/// The phase the state machine is in (for displays and logs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionPhase {
+    /// Standing, sweeping the sonar.
+    Sweep {
+        /// `true` for a ±180° sweep.
+        full: bool,
+    },
+    /// Following a prefix (in continuous mode the sonar sweeps meanwhile).
+    Follow,
+    /// Holding the last point for the settle time.
+    Settle,
+    /// Ended; see [`Mission::status`].
+    Done,
+}
+
+/// One input of [`Mission::step`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionInput {
+    /// A controller period went by.
+    Tick {
+        /// Left encoder counts since the previous tick.
+        left_delta_counts: i32,
+        /// Right encoder counts since the previous tick.
+        right_delta_counts: i32,
+        /// Real time since the previous tick, seconds (for the overrun flag).
+        elapsed_s: f32,
+    },
+    /// The answer to the last [`SonarRequest`].
+    SonarReading {
+        /// Neck angle the reading was taken at, robot frame, radians.
+        neck_angle_rad: f32,
+        /// Measured range from the sonar, metres, or `None` for no echo.
+        range_m: Option<f32>,
+    },
+    /// Stop the mission now ([`MissionStatus::Aborted`]).
+    Abort,
+}
+
+/// Take one sonar reading at this neck angle and answer with [`MissionInput::SonarReading`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SonarRequest {
+    /// Neck angle, robot frame (0 = straight ahead, counter-clockwise positive), radians.
+    pub neck_angle_rad: f32,
+}
+
+/// Something that happened during a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MissionEvent {
+    /// A sweep started.
+    SweepStarted {
+        /// ±180° sweep.
+        full: bool,
+        /// Taken while moving (continuous mode).
+        moving: bool,
+    },
+    /// A sweep ended and its hits were marked.
+    SweepDone {
+        /// Hits marked.
+        hits: u16,
+    },
+    /// The planner ran.
+    Planned {
+        /// Its verdict.
+        status: PlanStatus,
+        /// Continuous mode: the new obstacles blocked the remaining path.
+        blocked: bool,
+        /// Points in the kept prefix.
+        prefix_points: u16,
+    },
+    /// The kept prefix leaves the ±95° band: a full sweep comes first.
+    FullSweepRequested,
+    /// The end of the prefix was handed to the controller.
+    EndOfTrajectory,
+    /// The settle time after the end went by.
+    Settled,
+    /// The mission ended.
+    Finished(MissionStatus),
+}
+
+/// What one [`Mission::step`] asks of the shell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MissionOutput {
+    /// Left motor voltage to apply until the next tick, volts.
+    pub left_voltage_v: f32,
+    /// Right motor voltage, volts.
+    pub right_voltage_v: f32,
+    /// Take this sonar reading now (before the next tick).
+    pub sonar_request: Option<SonarRequest>,
+    /// What happened.
+    pub events: Vec<MissionEvent, MAX_EVENTS_PER_STEP>,
+    /// Status after the step.
+    pub status: MissionStatus,
+}
+
+/// Counters of a mission.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MissionStats {
+    /// Sweeps taken while standing (the seed's stops).
+    pub stops: u32,
+    /// Sweeps taken while moving (continuous mode).
+    pub moving_sweeps: u32,
+    /// Full ±180° sweeps (all standing).
+    pub full_sweeps: u32,
+    /// Planner runs.
+    pub plans: u32,
+    /// Planner runs after the first one.
+    pub replans: u32,
+    /// Continuous mode: replans whose new obstacles blocked the remaining path.
+    pub blocked_replans: u32,
+    /// Continuous mode: prefixes cut to the swept band instead of stopping for a full sweep.
+    pub band_cuts: u32,
+    /// Sonar readings taken.
+    pub readings: u32,
+    /// Hits marked in the grid.
+    pub hits: u32,
+    /// Distance travelled by the odometry, metres.
+    pub odometry_distance_m: f32,
+    /// Mission time, seconds.
+    pub time_s: f32,
+    /// Controller periods that overran.
+    pub controller_overruns: u32,
+    /// Controller periods with a saturated voltage.
+    pub saturated_periods: u32,
+    /// Set when the status is [`MissionStatus::Unreachable`].
+    pub unreachable_reason: Option<UnreachableReason>,
+    /// Planner scratch/queue/path errors met (the mission aborts on them).
+    pub plan_errors: u32,
+    /// The last planner error, if any.
+    #[serde(skip)]
+    pub last_plan_error: Option<PlanError>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SweepState {
+    full: bool,
+    moving: bool,
+    /// Index of the next reading to request, 0 ..= count.
+    next: u16,
+    /// Readings in this sweep.
+    count: u16,
+    /// Sweep from +half to −half instead.
+    reversed: bool,
+    /// A request is out and not answered yet.
+    waiting: bool,
+}
+
+/// The mission: see the module documentation.
+pub struct Mission<const W: usize, const S: usize, const Q: usize> {
+    config: MissionConfig,
+    supplier_config: SupplierConfig,
+    grid: Grid<W>,
+    seen: Grid<W>,
+    planner: Planner<S, Q>,
+    path: PathM,
+    prefix: PathM,
+    supplier: TrajectorySupplier,
+    controller: Controller,
+    frame: FrameTransform,
+    expansion_cells: u16,
+    readings: SweepBuffer,
+    filtered: HitBuffer,
+    hits: Vec<PointM, MAX_SWEEP_READINGS>,
+    sweep: Option<SweepState>,
+    next_sweep_reversed: bool,
+    last_sweep_full: bool,
+    sonar_budget_s: f32,
+    phase: MissionPhase,
+    status: MissionStatus,
+    stats: MissionStats,
+    /// Controller reference (control point), odometry frame.
+    reference: PointM,
+    pose_odom: Pose,
+    voltages_v: (f32, f32),
+    last_plan_origin: Option<PointM>,
+    stalled_plans: u16,
+}
+
+impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
+    /// Size of this mission type in bytes (it is meant to live in a `static` on the MCU).
+    pub const SIZE_BYTES: usize = core::mem::size_of::<Self>();
+
+    /// A mission on an empty map of `geometry`. Validates the config and checks that the grid
+    /// fits both the grid and the planner capacity and that start and goal are on the map.
+    pub fn new(config: MissionConfig, geometry: GridGeometry) -> Result<Self, MissionError> {
+        config.validate()?;
+        let grid = Grid::<W>::new(geometry).map_err(MissionError::Grid)?;
+        let seen = grid.clone();
+        let cells = geometry.cell_count();
+        if cells > Planner::<S, Q>::CAPACITY_CELLS {
+            return Err(MissionError::PlannerTooSmall {
+                cells: cells as u32,
+                capacity: Planner::<S, Q>::CAPACITY_CELLS as u32,
+            });
+        }
+        if geometry.cell_of(config.start).is_err() {
+            return Err(MissionError::OffMap { which: "start" });
+        }
+        if geometry.cell_of(config.goal).is_err() {
+            return Err(MissionError::OffMap { which: "goal" });
+        }
+        let frame = FrameTransform::new(config.start, config.initial_heading_rad);
+        let controller = Controller::new(&config.robot, Pose::default());
+        let reference = PointM::new(config.robot.point_offset_m, 0.0);
+        Ok(Self {
+            supplier_config: config.supplier_config(),
+            expansion_cells: geometry.expansion_cells(config.robot.planning_radius_m),
+            config,
+            grid,
+            seen,
+            planner: Planner::new(),
+            path: Vec::new(),
+            prefix: Vec::new(),
+            supplier: TrajectorySupplier::new(),
+            controller,
+            frame,
+            readings: SweepBuffer::new(),
+            filtered: HitBuffer::new(),
+            hits: Vec::new(),
+            sweep: None,
+            next_sweep_reversed: false,
+            last_sweep_full: false,
+            sonar_budget_s: 0.0,
+            phase: MissionPhase::Sweep { full: false },
+            status: MissionStatus::Running,
+            stats: MissionStats::default(),
+            reference,
+            pose_odom: Pose::default(),
+            voltages_v: (0.0, 0.0),
+            last_plan_origin: None,
+            stalled_plans: 0,
+        })
+    }
+
+    /// Rasterize an obstacle known a priori (a closed outline, world metres), grown by the
+    /// planning radius. Call before the first step; later calls are allowed (the map only
+    /// gains obstacles).
+    pub fn add_known_polygon(&mut self, vertices: &[PointM]) {
+        mark_polygon(&mut self.grid, vertices, self.expansion_cells);
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &MissionConfig {
+        &self.config
+    }
+
+    /// The map as the robot knows it (obstacles grown by the planning radius).
+    pub fn grid(&self) -> &Grid<W> {
+        &self.grid
+    }
+
+    /// Cells some sonar reading has seen free (set bit = seen): every cell a ray crossed
+    /// before its echo (or up to the range without one).
+    ///
+    /// With [`MissionConfig::trust_seen_space`] the kept prefix may go on beyond the seed's
+    /// limit (sonar range, visible from the robot) while the path crosses cells seen free
+    /// whose whole neighbourhood within the planning radius has been seen or is occupied, so
+    /// no unseen obstacle can lie within reach of the path.
+    pub fn seen(&self) -> &Grid<W> {
+        &self.seen
+    }
+
+    /// The latest full plan, world metres (empty before the first plan).
+    pub fn path(&self) -> &[PointM] {
+        &self.path
+    }
+
+    /// The kept prefix being followed, world metres.
+    pub fn prefix(&self) -> &[PointM] {
+        &self.prefix
+    }
+
+    /// Hits of the latest completed sweep, world metres.
+    pub fn last_hits(&self) -> &[PointM] {
+        &self.hits
+    }
+
+    /// Current status.
+    pub fn status(&self) -> MissionStatus {
+        self.status
+    }
+
+    /// Current phase.
+    pub fn phase(&self) -> MissionPhase {
+        self.phase
+    }
+
+    /// Counters.
+    pub fn stats(&self) -> MissionStats {
+        self.stats
+    }
+
+    /// The robot's pose in the world frame, as the odometry believes it.
+    pub fn pose_world(&self) -> Pose {
+        self.to_world(self.pose_odom)
+    }
+
+    /// Advance the mission by one input; see the module documentation.
+    pub fn step(&mut self, input: MissionInput) -> MissionOutput {
+        let mut out = MissionOutput {
+            left_voltage_v: self.voltages_v.0,
+            right_voltage_v: self.voltages_v.1,
+            sonar_request: None,
+            events: Vec::new(),
+            status: self.status,
+        };
+        if self.status != MissionStatus::Running {
+            out.left_voltage_v = 0.0;
+            out.right_voltage_v = 0.0;
+            return out;
+        }
+        match input {
+            MissionInput::Tick {
+                left_delta_counts,
+                right_delta_counts,
+                elapsed_s,
+            } => self.on_tick(left_delta_counts, right_delta_counts, elapsed_s, &mut out),
+            MissionInput::SonarReading {
+                neck_angle_rad,
+                range_m,
+            } => self.on_reading(neck_angle_rad, range_m, &mut out),
+            MissionInput::Abort => self.finish(MissionStatus::Aborted, &mut out),
+        }
+        if self.status != MissionStatus::Running {
+            self.voltages_v = (0.0, 0.0);
+            out.sonar_request = None;
+        }
+        out.left_voltage_v = self.voltages_v.0;
+        out.right_voltage_v = self.voltages_v.1;
+        out.status = self.status;
+        out
+    }
+
+    fn period_s(&self) -> f32 {
+        self.config.robot.controller_period_s
+    }
+
+    fn reading_time_s(&self) -> f32 {
+        self.config.robot.echo_wait_s + self.config.robot.neck_step_time_s
+    }
+
+    fn to_world(&self, pose_odom: Pose) -> Pose {
+        let p = self
+            .frame
+            .odom_to_world(PointM::new(pose_odom.x_m, pose_odom.y_m));
+        Pose {
+            x_m: p.x_m,
+            y_m: p.y_m,
+            heading_rad: self.frame.heading_odom_to_world(pose_odom.heading_rad),
+        }
+    }
+
+    fn position_world(&self) -> PointM {
+        let p = self.pose_world();
+        PointM::new(p.x_m, p.y_m)
+    }
+
+    fn finish(&mut self, status: MissionStatus, out: &mut MissionOutput) {
+        self.status = status;
+        self.phase = MissionPhase::Done;
+        self.sweep = None;
+        self.supplier.stop();
+        push(out, MissionEvent::Finished(status));
+    }
+
+    fn on_tick(&mut self, left: i32, right: i32, elapsed_s: f32, out: &mut MissionOutput) {
+        let period = self.period_s();
+        self.stats.time_s += period;
+
+        // Trajectory supplier -> reference of the control point.
+        if matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle) {
+            let supply = self.supplier.tick(period);
+            // Where the control point (offset ahead of the axle) should be, and how fast it
+            // moves: along the heading when moving, on a circle of radius `d` when turning.
+            let d = self.config.robot.point_offset_m;
+            let (c, s) = (cos(supply.heading_rad), sin(supply.heading_rad));
+            let vx = supply.speed_m_s * c - d * supply.turn_rate_rad_s * s;
+            let vy = supply.speed_m_s * s + d * supply.turn_rate_rad_s * c;
+            // Feed-forward through the first-order reference model: with p = y + τ·ẏ the
+            // model output follows y without the lag τ·v (0.2 m at 0.2 m/s), so the centre
+            // stays on the path and turns in place stay in place.
+            let tau = self.config.robot.reference_time_constant_s;
+            self.reference = PointM::new(
+                supply.point.x_m + d * c + tau * vx,
+                supply.point.y_m + d * s + tau * vy,
+            );
+            match supply.event {
+                Some(SupplyEvent::EndOfTrajectory) => {
+                    push(out, MissionEvent::EndOfTrajectory);
+                    self.phase = MissionPhase::Settle;
+                }
+                Some(SupplyEvent::Settled) => {
+                    push(out, MissionEvent::Settled);
+                    self.on_settled(out);
+                }
+                None => {}
+            }
+        }
+
+        // Controller.
+        let before = self.pose_odom;
+        let control = self.controller.step(ControlInput {
+            reference: self.reference,
+            encoder_left_delta_counts: left,
+            encoder_right_delta_counts: right,
+            elapsed_since_last_step_s: elapsed_s,
+        });
+        self.pose_odom = control.pose;
+        self.voltages_v = (control.left_voltage_v, control.right_voltage_v);
+        if control.overrun {
+            self.stats.controller_overruns += 1;
+        }
+        if control.saturated {
+            self.stats.saturated_periods += 1;
+        }
+        let moved = hypot_precise(
+            self.pose_odom.x_m - before.x_m,
+            self.pose_odom.y_m - before.y_m,
+        );
+        if moved.is_finite() {
+            self.stats.odometry_distance_m += moved;
+        }
+
+        if self.status != MissionStatus::Running {
+            return;
+        }
+        // Continuous mode: reached as soon as the robot is within the tolerance of the goal.
+        if self.config.mode == MissionMode::Continuous
+            && matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle)
+            && self.at_goal()
+        {
+            self.finish(MissionStatus::Reached, out);
+            return;
+        }
+        if self.stats.time_s >= self.config.time_limit_s {
+            self.finish(MissionStatus::Timeout, out);
+            return;
+        }
+
+        // Start a sweep when none runs: standing in the Sweep phase, or moving in continuous
+        // mode.
+        if self.sweep.is_none() {
+            match self.phase {
+                MissionPhase::Sweep { full } => self.start_sweep(full, false, out),
+                MissionPhase::Follow | MissionPhase::Settle
+                    if self.config.mode == MissionMode::Continuous =>
+                {
+                    self.start_sweep(false, true, out)
+                }
+                _ => {}
+            }
+        }
+        if self.sweep.is_some() {
+            self.sonar_budget_s += period;
+            self.request_next(out);
+        } else {
+            self.sonar_budget_s = 0.0;
+        }
+    }
+
+    fn at_goal(&self) -> bool {
+        hypot_precise(
+            self.position_world().x_m - self.config.goal.x_m,
+            self.position_world().y_m - self.config.goal.y_m,
+        ) <= self.config.goal_tolerance_m
+    }
+
+    fn on_settled(&mut self, out: &mut MissionOutput) {
+        if self.at_goal() {
+            self.finish(MissionStatus::Reached, out);
+            return;
+        }
+        // Stand and sweep again. In continuous mode a moving pass may be under way: it is
+        // dropped and a standing sweep starts.
+        self.supplier.stop();
+        self.sweep = None;
+        self.phase = MissionPhase::Sweep { full: false };
+    }
+
+    fn start_sweep(&mut self, full: bool, moving: bool, out: &mut MissionOutput) {
+        let plan = SweepPlan::new(
+            &self.sweep_robot(moving),
+            if full {
+                SweepKind::Full
+            } else {
+                SweepKind::Normal
+            },
+        );
+        let count = plan.readings().min(MAX_SWEEP_READINGS) as u16;
+        self.readings.clear();
+        let reversed = self.next_sweep_reversed;
+        self.next_sweep_reversed = !reversed;
+        self.sweep = Some(SweepState {
+            full,
+            moving,
+            next: 0,
+            count,
+            reversed,
+            waiting: false,
+        });
+        if moving {
+            self.stats.moving_sweeps += 1;
+        } else {
+            self.stats.stops += 1;
+            if full {
+                self.stats.full_sweeps += 1;
+            }
+        }
+        push(out, MissionEvent::SweepStarted { full, moving });
+    }
+
+    /// The robot config a sweep is planned with: moving sweeps use
+    /// [`MissionConfig::moving_half_sweep_deg`].
+    fn sweep_robot(&self, moving: bool) -> RobotConfig {
+        let mut robot = self.config.robot;
+        if moving {
+            robot.normal_half_sweep_deg = self.config.moving_half_sweep_deg;
+        }
+        robot
+    }
+
+    fn sweep_angle_rad(&self, sweep: &SweepState, index: u16) -> f32 {
+        let plan = SweepPlan::new(
+            &self.sweep_robot(sweep.moving),
+            if sweep.full {
+                SweepKind::Full
+            } else {
+                SweepKind::Normal
+            },
+        );
+        let last = sweep.count.saturating_sub(1);
+        let i = if sweep.reversed {
+            last.saturating_sub(index)
+        } else {
+            index
+        };
+        plan.neck_angle_rad(i as usize).unwrap_or(0.0)
+    }
+
+    /// Hand out the next reading of the sweep if its time budget allows.
+    fn request_next(&mut self, out: &mut MissionOutput) {
+        let reading_time = self.reading_time_s();
+        let Some(mut sweep) = self.sweep else {
+            return;
+        };
+        if sweep.waiting || sweep.next >= sweep.count || self.sonar_budget_s < reading_time {
+            return;
+        }
+        self.sonar_budget_s -= reading_time;
+        let angle = self.sweep_angle_rad(&sweep, sweep.next);
+        sweep.waiting = true;
+        self.sweep = Some(sweep);
+        out.sonar_request = Some(SonarRequest {
+            neck_angle_rad: angle,
+        });
+    }
+
+    fn on_reading(&mut self, neck_angle_rad: f32, range_m: Option<f32>, out: &mut MissionOutput) {
+        let Some(mut sweep) = self.sweep else {
+            return; // Nobody asked: ignored.
+        };
+        if !sweep.waiting {
+            return;
+        }
+        sweep.waiting = false;
+        sweep.next += 1;
+        self.stats.readings += 1;
+        let robot = &self.config.robot;
+        let range_m = range_m.filter(|r| {
+            r.is_finite() && *r >= robot.sonar_min_range_m && *r <= robot.sonar_range_m
+        });
+        let neck_angle_rad = if neck_angle_rad.is_finite() {
+            neck_angle_rad
+        } else {
+            self.sweep_angle_rad(&sweep, sweep.next - 1)
+        };
+        let pose = self.pose_world();
+        self.mark_seen(pose, neck_angle_rad, range_m);
+        // Capacity is the largest sweep: cannot fail.
+        let _ = self.readings.push(Reading {
+            neck_angle_rad,
+            range_m,
+            pose,
+        });
+        self.sweep = Some(sweep);
+        if sweep.next >= sweep.count {
+            self.sweep = None;
+            self.end_of_sweep(sweep, out);
+        } else {
+            self.request_next(out);
+        }
+    }
+
+    /// Mark the cells the ray of one reading crossed as seen, stopping a cell short of the
+    /// echo.
+    fn mark_seen(&mut self, pose: Pose, neck_angle_rad: f32, range_m: Option<f32>) {
+        let robot = &self.config.robot;
+        let g = *self.grid.geometry();
+        let length_m = match range_m {
+            Some(r) => r - g.resolution_m(),
+            None => robot.sonar_range_m,
+        };
+        let sonar = pose.point_ahead(robot.sonar_offset_m);
+        let angle = pose.heading_rad + neck_angle_rad;
+        let end = PointM::new(
+            sonar.x_m + length_m * cos(angle),
+            sonar.y_m + length_m * sin(angle),
+        );
+        if let Some(centre) = g.cell_xy_of(pose.position()) {
+            self.seen.set_xy(centre.0, centre.1, true);
+        }
+        if length_m.is_nan() || length_m <= 0.0 {
+            return;
+        }
+        // A sonar off the map (a runaway odometry) marks nothing: the ray could be a million
+        // cells long.
+        if let (Some(a), Some(b)) = (g.cell_xy_of(sonar), g.cell_xy_of(end)) {
+            if !g.contains_xy(a.0, a.1) {
+                return;
+            }
+            for (x, y) in BresenhamLine::new(a, b) {
+                self.seen.set_xy(x, y, true);
+            }
+        }
+    }
+
+    /// `true` when the cell of `p` is free, seen, and every cell within the planning radius
+    /// around it is seen or occupied.
+    fn trusted(&self, p: PointM) -> bool {
+        let g = self.grid.geometry();
+        let Some((x, y)) = g.cell_xy_of(p) else {
+            return false;
+        };
+        if !g.contains_xy(x, y) || self.grid.is_occupied_xy(x, y) || !self.seen_near(x, y) {
+            return false;
+        }
+        let h = self.expansion_cells as i32;
+        for cy in y - h..=y + h {
+            for cx in x - h..=x + h {
+                if g.contains_xy(cx, cy)
+                    && !self.grid.is_occupied_xy(cx, cy)
+                    && !self.seen_near(cx, cy)
+                {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// A ray crossed a cell within [`SEEN_NEAR_CELLS`] of (`x`, `y`).
+    fn seen_near(&self, x: i32, y: i32) -> bool {
+        let g = self.grid.geometry();
+        let h = SEEN_NEAR_CELLS;
+        for cy in y - h..=y + h {
+            for cx in x - h..=x + h {
+                if g.contains_xy(cx, cy) && self.seen.is_occupied_xy(cx, cy) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// The prefix of `path` through trusted cells (see [`Self::seen`]), at most
+    /// `max_trusted_path_m` along the path, written to `out`; returns its length.
+    fn prune_through_seen(&self, path: &[PointM], out: &mut PathM) -> f32 {
+        self.prune_through_seen_capped(path, self.config.max_trusted_path_m, out)
+    }
+
+    /// [`Self::prune_through_seen`] with a length cap of `cap_m`.
+    fn prune_through_seen_capped(&self, path: &[PointM], cap_m: f32, out: &mut PathM) -> f32 {
+        out.clear();
+        let Some(&first) = path.first() else {
+            return 0.0;
+        };
+        let _ = out.push(first);
+        let step_m = 0.5 * self.grid.geometry().resolution_m();
+        let mut length_m = 0.0f32;
+        for pair in path.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
+            let segment_m = hypot_precise(dx, dy);
+            if segment_m.is_nan() || segment_m <= 0.0 {
+                continue;
+            }
+            let allowed_m = segment_m.min(cap_m - length_m);
+            let samples = ((allowed_m / step_m) as u32)
+                .saturating_add(1)
+                .min(1_000_000);
+            let at = |t_m: f32| {
+                PointM::new(
+                    a.x_m + dx * (t_m / segment_m),
+                    a.y_m + dy * (t_m / segment_m),
+                )
+            };
+            let mut last_ok_m = 0.0f32;
+            for k in 1..=samples {
+                let t_m = allowed_m * (k as f32 / samples as f32);
+                if !self.trusted(at(t_m)) {
+                    if last_ok_m > 0.0 {
+                        let _ = out.push(at(last_ok_m));
+                    }
+                    return length_m + last_ok_m;
+                }
+                last_ok_m = t_m;
+            }
+            if allowed_m < segment_m {
+                let _ = out.push(at(allowed_m));
+                return length_m + allowed_m;
+            }
+            if out.push(b).is_err() {
+                return length_m;
+            }
+            length_m += segment_m;
+        }
+        length_m
+    }
+
+    fn end_of_sweep(&mut self, sweep: SweepState, out: &mut MissionOutput) {
+        // Mark.
+        let hits = self.mark_readings();
+        push(out, MissionEvent::SweepDone { hits });
+        self.last_sweep_full = sweep.full;
+        if sweep.moving {
+            // Continuous: only replan if still following (a settle may have ended the pass).
+            if matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle) {
+                let blocked = self.remaining_path_blocked();
+                if blocked {
+                    self.stats.blocked_replans += 1;
+                }
+                self.plan_and_go(blocked, out);
+            }
+        } else {
+            self.plan_and_go(false, out);
+        }
+    }
+
+    /// Filter the sweep (regions of constant depth, unless turned off), turn the kept readings
+    /// into world points with the pose of each reading, mark them. Returns the hits marked.
+    fn mark_readings(&mut self) -> u16 {
+        self.hits.clear();
+        let mut params = RcdParams::from_config(&self.config.robot);
+        if !self.config.constant_depth_filter {
+            params.min_pairs = 0;
+        }
+        filter_constant_depth(&self.readings, &params, &mut self.filtered);
+        let offset_m = self.config.robot.sonar_offset_m;
+        for hit in self.filtered.iter() {
+            let p = hit.world_point(offset_m);
+            if !p.is_finite() {
+                continue;
+            }
+            mark_point_m(&mut self.grid, p, self.expansion_cells);
+            let _ = self.hits.push(p);
+        }
+        self.stats.hits += self.hits.len() as u32;
+        self.hits.len() as u16
+    }
+
+    /// Continuous mode: does an occupied cell lie on what remains of the path?
+    fn remaining_path_blocked(&self) -> bool {
+        let from = self.supplier.segment().min(self.path.len());
+        let g = *self.grid.geometry();
+        let Some(rest) = self.path.get(from..) else {
+            return false;
+        };
+        for w in rest.windows(2) {
+            let (Some(a), Some(b)) = (g.cell_xy_of(w[0]), g.cell_xy_of(w[1])) else {
+                continue;
+            };
+            if BresenhamLine::new(a, b).any(|(x, y)| self.grid.is_occupied_xy(x, y)) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Plan from where the robot is (or, moving, from where it is told to be), prune, and
+    /// either follow, ask for a full sweep, or end.
+    fn plan_and_go(&mut self, blocked: bool, out: &mut MissionOutput) {
+        let moving = matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle)
+            && self.config.mode == MissionMode::Continuous;
+        // Where the new trajectory starts: the robot, or while moving the point the supplier
+        // hands out now (the reference model is a little behind it), so motion is continuous.
+        let origin = if moving && self.phase == MissionPhase::Follow {
+            let s = self.supplier.current_point_odom();
+            self.frame.odom_to_world(s)
+        } else {
+            self.position_world()
+        };
+
+        // Stall detection.
+        match self.last_plan_origin {
+            Some(prev)
+                if hypot_precise(origin.x_m - prev.x_m, origin.y_m - prev.y_m)
+                    < self.config.stall_distance_m =>
+            {
+                self.stalled_plans = self.stalled_plans.saturating_add(1)
+            }
+            _ => self.stalled_plans = 0,
+        }
+        self.last_plan_origin = Some(origin);
+        if self.stalled_plans >= self.config.max_stalled_plans {
+            self.stats.unreachable_reason = Some(UnreachableReason::NoProgress);
+            self.finish(MissionStatus::Unreachable, out);
+            return;
+        }
+
+        // The planner starts from the nearest free cell (the robot may stand in the expansion
+        // of an obstacle it has just seen: the body is smaller than the planning radius).
+        let g = *self.grid.geometry();
+        let start_point = match g.cell_xy_of(origin) {
+            Some((x, y)) => match nearest_free(&self.grid, x, y, self.expansion_cells as i32) {
+                Some(c) => g.center_of(c),
+                None => origin,
+            },
+            None => origin,
+        };
+        self.stats.plans += 1;
+        if self.stats.plans > 1 {
+            self.stats.replans += 1;
+        }
+        let result = self.planner.plan(
+            self.config.planner,
+            &self.grid,
+            start_point,
+            self.config.goal,
+            &mut self.path,
+        );
+        let report = match result {
+            Ok(r) => r,
+            Err(e) => {
+                self.stats.plan_errors += 1;
+                self.stats.last_plan_error = Some(e);
+                self.finish(MissionStatus::Aborted, out);
+                return;
+            }
+        };
+        match report.status {
+            PlanStatus::Found => {}
+            PlanStatus::Unreachable => {
+                push_planned(out, report.status, blocked, 0);
+                self.stats.unreachable_reason = Some(UnreachableReason::NoPath);
+                self.finish(MissionStatus::Unreachable, out);
+                return;
+            }
+            PlanStatus::GoalBlocked => {
+                push_planned(out, report.status, blocked, 0);
+                self.stats.unreachable_reason = Some(UnreachableReason::GoalBlocked);
+                self.finish(MissionStatus::Unreachable, out);
+                return;
+            }
+            PlanStatus::StartBlocked => {
+                // No free cell near the robot: stand, sweep all round and try again (the stall
+                // counter ends this if it never frees up).
+                push_planned(out, report.status, blocked, 0);
+                self.path.clear();
+                self.begin_standing_sweep(true);
+                return;
+            }
+            PlanStatus::OutOfBounds => {
+                push_planned(out, report.status, blocked, 0);
+                self.finish(MissionStatus::Aborted, out);
+                return;
+            }
+        }
+
+        // Prune: keep what the sonar has just seen. The seed's rule looks from the first path
+        // vertex; the first steps of a path often go to a neighbouring cell, and seen from the
+        // start cell the next segment may graze an obstacle corner (the no-corner-cutting
+        // rule) although it is clear from its own first cell. So the prune starts from the
+        // last vertex within 1.5 cells of the start, and if that keeps nothing beyond a cell,
+        // from each later vertex within 3 cells in turn.
+        let res_m = g.resolution_m();
+        let first = self.path.first().copied().unwrap_or(start_point);
+        let from_first = |p: &PointM| hypot_precise(p.x_m - first.x_m, p.y_m - first.y_m);
+        let skip = self
+            .path
+            .iter()
+            .take_while(|p| from_first(p) <= 1.5 * res_m)
+            .count()
+            .saturating_sub(1);
+        let last_try = self
+            .path
+            .iter()
+            .take_while(|p| from_first(p) <= 3.0 * res_m)
+            .count()
+            .saturating_sub(1)
+            .max(skip);
+        let mut kept = PathM::new();
+        for k in skip..=last_try {
+            let rest = self.path.get(k..).unwrap_or(&[]);
+            let mut pruned_m =
+                prune_visible_prefix(&self.grid, rest, self.prune_range_m(), &mut kept).length_m;
+            if self.config.trust_seen_space {
+                let mut through_seen = PathM::new();
+                let length_m = self.prune_through_seen(rest, &mut through_seen);
+                if length_m > pruned_m + 1.0e-3 {
+                    kept = through_seen;
+                    pruned_m = length_m;
+                }
+            }
+            if pruned_m > res_m {
+                break;
+            }
+        }
+        // The trajectory starts where the robot is (or where it is told to be).
+        self.prefix.clear();
+        let _ = self.prefix.push(origin);
+        // Path points within a cell of the origin are dropped: a cell centre a few centimetres
+        // behind the robot would otherwise make it turn round for nothing.
+        let near_m = g.resolution_m();
+        let mut leaving = true;
+        for p in kept.iter() {
+            if leaving && hypot_precise(p.x_m - origin.x_m, p.y_m - origin.y_m) < near_m {
+                continue;
+            }
+            leaving = false;
+            if self.prefix.push(*p).is_err() {
+                break;
+            }
+        }
+        push_planned(out, report.status, blocked, self.prefix.len() as u16);
+
+        // Band check (seed traj_fora_faixa_leit): a kept point more than the normal half sweep
+        // off the heading needs a full sweep first, unless the last sweep was one.
+        let pose = self.pose_world();
+        let band_deg = if moving {
+            self.config.moving_half_sweep_deg
+        } else {
+            self.config.robot.normal_half_sweep_deg
+        };
+        let band_rad = band_deg * (core::f32::consts::PI / 180.0);
+        // Only the part within sonar range is the last sweep's business: farther points were
+        // trusted through space seen earlier.
+        let range_m = self.config.robot.sonar_range_m;
+        let near = self
+            .prefix
+            .iter()
+            .take_while(|p| hypot_precise(p.x_m - pose.x_m, p.y_m - pose.y_m) <= range_m)
+            .count()
+            .max(1);
+        if !self.last_sweep_full
+            && needs_full_sweep(
+                self.prefix.get(..near).unwrap_or(&[]),
+                PointM::new(pose.x_m, pose.y_m),
+                pose.heading_rad,
+                band_rad,
+            )
+        {
+            if self.config.mode == MissionMode::Continuous {
+                // Sweeping while moving: instead of stopping for a full sweep, follow only the
+                // part inside the band (at least one cell towards the path, which makes the
+                // supplier turn in place first); the sonar keeps sweeping around the new
+                // heading and the next pass replans.
+                self.cut_prefix_to_band(
+                    PointM::new(pose.x_m, pose.y_m),
+                    pose.heading_rad,
+                    band_rad,
+                );
+                self.stats.band_cuts += 1;
+            } else {
+                push(out, MissionEvent::FullSweepRequested);
+                self.begin_standing_sweep(true);
+                return;
+            }
+        }
+
+        // Follow.
+        let heading_odom = self.pose_odom.heading_rad;
+        match self.supplier.start(
+            &self.prefix,
+            &self.frame,
+            heading_odom,
+            &self.supplier_config,
+        ) {
+            Ok(()) => self.phase = MissionPhase::Follow,
+            Err(_) => self.finish(MissionStatus::Aborted, out),
+        }
+    }
+
+    /// Keep the prefix up to its last vertex inside the ±`band_rad` band around `heading_rad`
+    /// seen from `position`; when the first vertex after the origin is already outside, keep
+    /// one cell of the first segment.
+    fn cut_prefix_to_band(&mut self, position: PointM, heading_rad: f32, band_rad: f32) {
+        let Some(&origin) = self.prefix.first() else {
+            return;
+        };
+        let mut keep = 1;
+        for p in self.prefix.iter().skip(1) {
+            if needs_full_sweep(&[*p], position, heading_rad, band_rad) {
+                break;
+            }
+            keep += 1;
+        }
+        if keep >= 2 {
+            self.prefix.truncate(keep);
+            return;
+        }
+        let Some(&next) = self.prefix.get(1) else {
+            return;
+        };
+        let d = hypot_precise(next.x_m - origin.x_m, next.y_m - origin.y_m);
+        let step_m = self.grid.geometry().resolution_m().min(d);
+        self.prefix.truncate(1);
+        if d > 0.0 {
+            let _ = self.prefix.push(PointM::new(
+                origin.x_m + (next.x_m - origin.x_m) * (step_m / d),
+                origin.y_m + (next.y_m - origin.y_m) * (step_m / d),
+            ));
+        }
+    }
+
+    /// How far along the path the seed's rule may keep: the sonar range minus the planning
+    /// radius. An obstacle just beyond the range is not seen, and the robot's disc must stay
+    /// clear of it wherever the path goes, also sideways where the sonar's 0.20 m offset ahead
+    /// of the centre does not help: with the full range (the seed's rule; the seed's cell
+    /// count came to 1.06 m) the robot drove its body into a wall 3.0 m to its side with a
+    /// 3 m sonar. At least one cell.
+    fn prune_range_m(&self) -> f32 {
+        let r = &self.config.robot;
+        (r.sonar_range_m - r.planning_radius_m).max(self.grid.geometry().resolution_m())
+    }
+
+    /// Hold the robot and sweep standing.
+    fn begin_standing_sweep(&mut self, full: bool) {
+        self.supplier.stop();
+        self.sweep = None;
+        // Hold where the controller is heading now.
+        self.phase = MissionPhase::Sweep { full };
+    }
+}
+
+/// A path cell counts as seen when a ray crossed a cell within this many cells of it (rays
+/// 1.8° apart are one cell apart at 1.6 m, two at 3.2 m).
+const SEEN_NEAR_CELLS: i32 = 1;
+
+fn push(out: &mut MissionOutput, event: MissionEvent) {
+    // Full: the oldest events are kept; the status field still tells the outcome.
+    let _ = out.events.push(event);
+}
+
+fn push_planned(out: &mut MissionOutput, status: PlanStatus, blocked: bool, prefix_points: u16) {
+    push(
+        out,
+        MissionEvent::Planned {
+            status,
+            blocked,
+            prefix_points,
+        },
+    );
+}
+
+/// The free cell nearest to (`x`, `y`) in growing square rings up to `max_ring`, or `None`.
+fn nearest_free<const W: usize>(grid: &Grid<W>, x: i32, y: i32, max_ring: i32) -> Option<Cell> {
+    let g = grid.geometry();
+    if !grid.is_occupied_xy(x, y) {
+        return g.cell_xy(x, y);
+    }
+    for r in 1..=max_ring.max(1) {
+        let mut best: Option<(i32, Cell)> = None;
+        for dy in -r..=r {
+            for dx in -r..=r {
+                if dx.abs() != r && dy.abs() != r {
+                    continue;
+                }
+                let (cx, cy) = (x + dx, y + dy);
+                if let Some(c) = g.cell_xy(cx, cy) {
+                    if !grid.is_occupied(c) {
+                        let d2 = dx * dx + dy * dy;
+                        if best.is_none_or(|(b, _)| d2 < b) {
+                            best = Some((d2, c));
+                        }
+                    }
+                }
+            }
+        }
+        if let Some((_, c)) = best {
+            return Some(c);
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use std::boxed::Box;
+
+    use super::*;
+    use crate::plant::Plant;
+    use crate::world::Obstacles;
+
+    fn square(x0: f32, y0: f32, x1: f32, y1: f32) -> [PointM; 4] {
+        [
+            PointM::new(x0, y0),
+            PointM::new(x1, y0),
+            PointM::new(x1, y1),
+            PointM::new(x0, y1),
+        ]
+    }
+
+    fn config(start: PointM, goal: PointM, mode: MissionMode) -> MissionConfig {
+        let params = Params {
+            robot_radius_m: 0.4,
+            speed_m_s: 0.2,
+            initial_heading_deg: 0.0,
+            start,
+            goal,
+        };
+        let mut c = MissionConfig::from_params(&params, RobotConfig::default());
+        c.mode = mode;
+        c
+    }
+
+    /// Drive a mission against the plant until it ends; returns the status, the plant and
+    /// the smallest clearance.
+    fn run(mission: &mut Mission300, real: &Obstacles, plant: &mut Plant) -> (MissionStatus, f32) {
+        let period = mission.config().robot.controller_period_s;
+        let range = mission.config().robot.sonar_range_m;
+        let mut previous = plant.encoder_counts();
+        let mut min_clearance = f32::INFINITY;
+        for _ in 0..200_000 {
+            let counts = plant.encoder_counts();
+            let mut out = mission.step(MissionInput::Tick {
+                left_delta_counts: counts.0 - previous.0,
+                right_delta_counts: counts.1 - previous.1,
+                elapsed_s: period,
+            });
+            previous = counts;
+            while let Some(request) = out.sonar_request {
+                let range_m = plant.sonar_range_m(real, request.neck_angle_rad, range);
+                out = mission.step(MissionInput::SonarReading {
+                    neck_angle_rad: request.neck_angle_rad,
+                    range_m,
+                });
+            }
+            if out.status != MissionStatus::Running {
+                return (out.status, min_clearance);
+            }
+            plant.step(period, out.left_voltage_v, out.right_voltage_v);
+            min_clearance = min_clearance.min(plant.clearance_m(real));
+        }
+        (mission.status(), min_clearance)
+    }
+
+    fn geometry() -> GridGeometry {
+        GridGeometry::from_size_m(8.0, 8.0, 0.05).unwrap()
+    }
+
+    fn room_with_block() -> Obstacles {
+        let mut o = Obstacles::new();
+        o.push(&square(0.0, 0.0, 8.0, 0.1)).unwrap();
+        o.push(&square(0.0, 7.9, 8.0, 8.0)).unwrap();
+        o.push(&square(0.0, 0.0, 0.1, 8.0)).unwrap();
+        o.push(&square(7.9, 0.0, 8.0, 8.0)).unwrap();
+        o.push(&square(3.5, 1.5, 4.0, 6.5)).unwrap();
+        o
+    }
+
+    #[test]
+    fn reaches_the_goal_around_an_unknown_block_in_both_modes() {
+        let real = room_with_block();
+        for mode in [MissionMode::Stop, MissionMode::Continuous] {
+            let start = PointM::new(1.5, 4.0);
+            let goal = PointM::new(6.5, 4.0);
+            let c = config(start, goal, mode);
+            let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+            let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
+            let (status, clearance) = run(&mut mission, &real, &mut plant);
+            assert_eq!(status, MissionStatus::Reached, "{mode:?}");
+            assert!(clearance > 0.0, "{mode:?}: clearance {clearance}");
+            let p = plant.pose();
+            assert!(
+                hypot_precise(p.x_m - goal.x_m, p.y_m - goal.y_m) < 0.25,
+                "{mode:?}: ended at {p:?}"
+            );
+            let s = mission.stats();
+            assert!(s.stops >= 1 && s.plans >= 2 && s.hits > 0, "{s:?}");
+        }
+    }
+
+    #[test]
+    fn a_goal_inside_a_known_box_is_unreachable_after_the_first_sweep() {
+        let real = room_with_block();
+        let start = PointM::new(1.5, 4.0);
+        let goal = PointM::new(6.0, 4.0);
+        let c = config(start, goal, MissionMode::Stop);
+        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+        for wall in [
+            square(5.0, 3.0, 7.0, 3.1),
+            square(5.0, 4.9, 7.0, 5.0),
+            square(5.0, 3.0, 5.1, 5.0),
+            square(6.9, 3.0, 7.0, 5.0),
+        ] {
+            mission.add_known_polygon(&wall);
+        }
+        let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
+        let (status, _) = run(&mut mission, &real, &mut plant);
+        assert_eq!(status, MissionStatus::Unreachable);
+        let s = mission.stats();
+        assert_eq!(s.stops, 1);
+        assert!(matches!(
+            s.unreachable_reason,
+            Some(UnreachableReason::NoPath | UnreachableReason::GoalBlocked)
+        ));
+    }
+
+    #[test]
+    fn the_time_limit_ends_the_mission() {
+        let real = room_with_block();
+        let start = PointM::new(1.5, 4.0);
+        let mut c = config(start, PointM::new(6.5, 4.0), MissionMode::Stop);
+        c.time_limit_s = 2.0;
+        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+        let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
+        let (status, _) = run(&mut mission, &real, &mut plant);
+        assert_eq!(status, MissionStatus::Timeout);
+        assert!(mission.stats().time_s >= 2.0 && mission.stats().time_s < 2.2);
+    }
+
+    #[test]
+    fn abort_stops_the_motors_and_ignores_later_inputs() {
+        let c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(6.5, 4.0),
+            MissionMode::Stop,
+        );
+        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+        let out = mission.step(MissionInput::Abort);
+        assert_eq!(out.status, MissionStatus::Aborted);
+        assert!(out
+            .events
+            .contains(&MissionEvent::Finished(MissionStatus::Aborted)));
+        let out = mission.step(MissionInput::Tick {
+            left_delta_counts: 1000,
+            right_delta_counts: -1000,
+            elapsed_s: 0.05,
+        });
+        assert_eq!((out.left_voltage_v, out.right_voltage_v), (0.0, 0.0));
+        assert_eq!(out.sonar_request, None);
+        assert_eq!(mission.phase(), MissionPhase::Done);
+    }
+
+    #[test]
+    fn readings_nobody_asked_for_and_nonsense_values_change_nothing() {
+        let c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(6.5, 4.0),
+            MissionMode::Stop,
+        );
+        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+        let before = mission.grid().count_occupied();
+        let out = mission.step(MissionInput::SonarReading {
+            neck_angle_rad: 0.0,
+            range_m: Some(1.0),
+        });
+        assert!(out.events.is_empty());
+        assert_eq!(mission.grid().count_occupied(), before);
+        assert_eq!(mission.stats().readings, 0);
+        // A requested reading with NaN/inf values: counted, nothing marked, no panic.
+        let out = mission.step(MissionInput::Tick {
+            left_delta_counts: 0,
+            right_delta_counts: 0,
+            elapsed_s: f32::NAN,
+        });
+        assert!(out.sonar_request.is_some());
+        mission.step(MissionInput::SonarReading {
+            neck_angle_rad: f32::NAN,
+            range_m: Some(f32::INFINITY),
+        });
+        assert_eq!(mission.stats().readings, 1);
+        assert_eq!(mission.grid().count_occupied(), before);
+    }
+
+    #[test]
+    fn bad_configs_are_errors_naming_the_field() {
+        let mut c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(6.5, 4.0),
+            MissionMode::Stop,
+        );
+        c.speed_m_s = f32::NAN;
+        assert!(matches!(
+            Mission300::new(c, geometry()),
+            Err(MissionError::BadValue {
+                field: "speed_m_s",
+                ..
+            })
+        ));
+        let c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(9.5, 4.0),
+            MissionMode::Stop,
+        );
+        assert!(matches!(
+            Mission300::new(c, geometry()),
+            Err(MissionError::OffMap { which: "goal" })
+        ));
+        let big = GridGeometry::new(400, 400, 0.05).unwrap();
+        let c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(6.5, 4.0),
+            MissionMode::Stop,
+        );
+        assert!(matches!(
+            Mission300::new(c, big),
+            Err(MissionError::Grid(_))
+        ));
+    }
+
+    #[test]
+    fn a_sweep_asks_for_the_seed_angles_at_the_echo_rate() {
+        let c = config(
+            PointM::new(1.5, 4.0),
+            PointM::new(6.5, 4.0),
+            MissionMode::Stop,
+        );
+        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+        let mut angles = std::vec::Vec::new();
+        let mut ticks = 0;
+        while mission.stats().plans == 0 && ticks < 1000 {
+            ticks += 1;
+            let mut out = mission.step(MissionInput::Tick {
+                left_delta_counts: 0,
+                right_delta_counts: 0,
+                elapsed_s: 0.05,
+            });
+            while let Some(r) = out.sonar_request {
+                angles.push(r.neck_angle_rad);
+                out = mission.step(MissionInput::SonarReading {
+                    neck_angle_rad: r.neck_angle_rad,
+                    range_m: None,
+                });
+            }
+        }
+        // ±95° at 1.8°: 52 steps each side, 105 readings from -93.6° to +93.6°.
+        assert_eq!(angles.len(), 105);
+        assert!((angles[0].to_degrees() + 93.6).abs() < 1e-3);
+        assert!((angles[104].to_degrees() - 93.6).abs() < 1e-3);
+        // 36 ms per reading: 105 readings take 3.78 s = 76 periods of 50 ms.
+        assert!((75..=77).contains(&ticks), "{ticks}");
+    }
+
+    #[test]
+    fn the_mcu_sized_mission_crosses_the_bundled_worlds() {
+        for (da, par) in [
+            (
+                include_str!("../../worlds/office.da"),
+                include_str!("../../worlds/office.par"),
+            ),
+            (
+                include_str!("../../worlds/pillars.da"),
+                include_str!("../../worlds/pillars.par"),
+            ),
+            (
+                include_str!("../../worlds/corridor.da"),
+                include_str!("../../worlds/corridor.par"),
+            ),
+        ] {
+            mcu_sized_mission_reaches(da, par);
+        }
+    }
+
+    fn mcu_sized_mission_reaches(da: &str, par: &str) {
+        let mut real = Obstacles::new();
+        crate::world::parse_da(da, &mut real).unwrap();
+        let params = crate::world::parse_par(par).unwrap();
+        for mode in [MissionMode::Stop, MissionMode::Continuous] {
+            let mut c = MissionConfig::from_params(&params, RobotConfig::default());
+            c.planner = PlannerKind::AStar;
+            c.mode = mode;
+            let mut mission = Box::new(Mission300::new(c, GridGeometry::seed_default()).unwrap());
+            let mut plant = Plant::new(
+                &c.robot,
+                Pose::new(params.start.x_m, params.start.y_m, c.initial_heading_rad),
+            );
+            let (status, clearance) = run(&mut mission, &real, &mut plant);
+            assert_eq!(
+                status,
+                MissionStatus::Reached,
+                "{mode:?} {:?}",
+                mission.stats()
+            );
+            assert!(clearance > 0.0, "{mode:?}");
+            assert_eq!(mission.stats().plan_errors, 0);
+        }
+    }
+
+    #[test]
+    fn mission_sizes_fit_their_targets() {
+        // Documented in docs/simulate.md.
+        std::println!(
+            "Mission300 {} B, Mission400 {} B",
+            Mission300::SIZE_BYTES,
+            Mission400::SIZE_BYTES
+        );
+        const { assert!(Mission300::SIZE_BYTES < 150_000) };
+        const { assert!(Mission300::SIZE_BYTES < Mission400::SIZE_BYTES) };
+    }
+
+    mod props {
+        use super::*;
+        use proptest::prelude::*;
+
+        fn any_f32() -> impl Strategy<Value = f32> {
+            prop_oneof![
+                -10.0f32..10.0,
+                Just(f32::NAN),
+                Just(f32::INFINITY),
+                Just(f32::NEG_INFINITY),
+                Just(0.0f32),
+            ]
+        }
+
+        fn any_input() -> impl Strategy<Value = MissionInput> {
+            prop_oneof![
+                8 => (-5000i32..5000, -5000i32..5000, any_f32()).prop_map(|(l, r, e)| {
+                    MissionInput::Tick {
+                        left_delta_counts: l,
+                        right_delta_counts: r,
+                        elapsed_s: e,
+                    }
+                }),
+                8 => (any_f32(), prop::option::of(any_f32())).prop_map(|(a, r)| {
+                    MissionInput::SonarReading {
+                        neck_angle_rad: a,
+                        range_m: r,
+                    }
+                }),
+                1 => Just(MissionInput::Abort),
+            ]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(32))]
+            /// Any sequence of inputs, however absurd: no panic, voltages within the
+            /// saturation, and once ended the mission stays ended with the motors off.
+            #[test]
+            fn nonsense_inputs_never_panic(inputs in prop::collection::vec(any_input(), 1..400)) {
+                let c = config(PointM::new(1.5, 4.0), PointM::new(6.5, 4.0), MissionMode::Continuous);
+                let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+                let max_v = c.robot.max_voltage_v;
+                let mut ended = false;
+                for input in inputs {
+                    let out = mission.step(input);
+                    prop_assert!(out.left_voltage_v.abs() <= max_v + 1e-4);
+                    prop_assert!(out.right_voltage_v.abs() <= max_v + 1e-4);
+                    if ended {
+                        prop_assert!(out.status != MissionStatus::Running);
+                        prop_assert_eq!((out.left_voltage_v, out.right_voltage_v), (0.0, 0.0));
+                    }
+                    ended |= out.status != MissionStatus::Running;
+                }
+            }
+        }
+    }
+}

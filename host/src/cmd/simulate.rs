@@ -1,10 +1,329 @@
-//! `twil simulate` (not written yet).
+//! `twil simulate`: run a whole mission against a simulated robot in a real world.
+//!
+//! ```text
+//! twil simulate --real worlds/office.da --params worlds/office.par --out out/office
+//! twil simulate --real R.da --params P.par --known K.da --mode continuous --json
+//! ```
+//!
+//! The robot starts knowing only `--known` (if given); the sonar discovers the `--real`
+//! obstacles. See `docs/simulate.md`.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde_json::json;
+use twil_core::grid::GridGeometry;
+use twil_core::mission::{MissionMode, MissionStats};
+use twil_core::plan::PlannerKind;
+use twil_core::robot::RobotConfig;
+use twil_core::world::{Obstacles, Params};
+
+use crate::world_io;
+
+use crate::sim::{self, output, SimResult, SimSetup};
+
+/// Sonar use.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Stop, sweep, plan, follow the visible prefix, settle, repeat (the seed's way).
+    Stop,
+    /// Sweep while moving; replan on the fly.
+    Continuous,
+}
+
+/// Planner choice.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlannerArg {
+    /// Breadth-first search (the seed's).
+    Bfs,
+    /// A* with octile costs.
+    Astar,
+    /// A* plus line-of-sight shortcuts.
+    Anyangle,
+}
 
 /// Arguments of `twil simulate`.
-#[derive(clap::Args, Debug)]
-pub struct Args {}
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// The real world (.da): what the simulated sonar sees and the robot can hit.
+    #[arg(long, value_name = "R.da")]
+    pub real: PathBuf,
+    /// The mission (.par): radius, speed, initial heading, start, goal.
+    #[arg(long, value_name = "P.par")]
+    pub params: PathBuf,
+    /// Obstacles known before the first sweep (.da).
+    #[arg(long, value_name = "K.da")]
+    pub known: Option<PathBuf>,
+    /// Map size in metres, WIDTHxHEIGHT.
+    #[arg(long, default_value = "15x15", value_name = "WxH")]
+    pub size: String,
+    /// Grid resolution, metres per cell.
+    #[arg(long, default_value_t = 0.05)]
+    pub resolution: f32,
+    /// Stop-and-sweep or continuous sweeping.
+    #[arg(long, value_enum, default_value_t = Mode::Stop)]
+    pub mode: Mode,
+    /// Planner.
+    #[arg(long, value_enum, default_value_t = PlannerArg::Anyangle)]
+    pub planner: PlannerArg,
+    /// Write trajectory.csv, plan PNGs, mission.gif and summary.json here.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Print exactly one JSON object on stdout and nothing else.
+    #[arg(long)]
+    pub json: bool,
+    /// Seed of the simulated sonar noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Sonar range, metres (0.26 < range ≤ 6; the seed's 1.5 by default).
+    #[arg(long, default_value_t = 1.5)]
+    pub sonar_range: f32,
+    /// Standard deviation of the simulated sonar noise, metres.
+    #[arg(long, default_value_t = 0.0)]
+    pub sonar_noise: f32,
+    /// Mission time limit, seconds of simulated time.
+    #[arg(long, default_value_t = 900.0)]
+    pub time_limit: f32,
+    /// Filter each sweep with the seed's regions-of-constant-depth filter before marking (made
+    /// for a wide-beam sonar: with the ideal ray-cast sonar it drops oblique walls).
+    #[arg(long)]
+    pub rcd: bool,
+    /// Keep only the seed's prefix (within sonar range, visible from the robot); by default
+    /// the prefix may go on through space seen free by earlier sweeps.
+    #[arg(long)]
+    pub seed_prune: bool,
+    /// Continuous mode: half-width of the sweeps taken while moving, degrees (narrower sweeps
+    /// come round more often but see less to the sides; experimental).
+    #[arg(long, default_value_t = 95.0)]
+    pub moving_sweep: f32,
+    /// GIF scale, pixels per cell.
+    #[arg(long, default_value_t = 2)]
+    pub gif_scale: u32,
+}
+
+/// Read a `.da` file; errors name the file and the line (see [`crate::world_io`]).
+pub fn read_da(path: &Path) -> Result<Obstacles> {
+    Ok(world_io::read_da(path)?)
+}
+
+/// Read a `.par` file; errors name the file and the line.
+pub fn read_par(path: &Path) -> Result<Params> {
+    Ok(world_io::read_par(path)?)
+}
+
+/// Parse `WxH` in metres.
+pub fn parse_size(text: &str) -> Result<(f32, f32)> {
+    let (w, h) = text
+        .split_once(['x', 'X'])
+        .with_context(|| format!("--size: expected WIDTHxHEIGHT in metres, got `{text}`"))?;
+    let w: f32 = w
+        .trim()
+        .parse()
+        .with_context(|| format!("--size: bad width `{w}`"))?;
+    let h: f32 = h
+        .trim()
+        .parse()
+        .with_context(|| format!("--size: bad height `{h}`"))?;
+    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
+        bail!("--size: width and height must be positive, got `{text}`");
+    }
+    Ok((w, h))
+}
+
+/// Turn the arguments into a simulation setup (reads and checks every file).
+pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
+    let real = read_da(&args.real)?;
+    let params = read_par(&args.params)?;
+    let known = args.known.as_deref().map(read_da).transpose()?;
+    let (w, h) = parse_size(&args.size)?;
+    let geometry = GridGeometry::from_size_m(w, h, args.resolution).map_err(|e| {
+        anyhow::anyhow!("--size {} --resolution {}: {e}", args.size, args.resolution)
+    })?;
+    let cells = geometry.cell_count();
+    if cells > 400 * 400 {
+        bail!(
+            "--size {} --resolution {}: {} x {} cells; the simulator holds at most 400 x 400",
+            args.size,
+            args.resolution,
+            geometry.width(),
+            geometry.height()
+        );
+    }
+    let robot = RobotConfig {
+        sonar_range_m: args.sonar_range,
+        sonar_noise_std_m: args.sonar_noise,
+        noise_seed: args.seed,
+        ..RobotConfig::default()
+    }
+    .with_planning_radius_m(params.robot_radius_m);
+    if let Err(e) = robot.validate() {
+        bail!("robot config: {e}");
+    }
+    if !(args.time_limit.is_finite() && args.time_limit > 0.0) {
+        bail!(
+            "--time-limit: must be a positive number of seconds, got {}",
+            args.time_limit
+        );
+    }
+    for (which, p) in [("start", params.start), ("goal", params.goal)] {
+        if geometry.cell_of(p).is_err() {
+            bail!(
+                "{}: the {which} ({}, {}) lies off the {} m map",
+                args.params.display(),
+                p.x_m,
+                p.y_m,
+                args.size
+            );
+        }
+    }
+    Ok(SimSetup {
+        real,
+        known,
+        params,
+        geometry,
+        mode: match args.mode {
+            Mode::Stop => MissionMode::Stop,
+            Mode::Continuous => MissionMode::Continuous,
+        },
+        planner: match args.planner {
+            PlannerArg::Bfs => PlannerKind::Bfs,
+            PlannerArg::Astar => PlannerKind::AStar,
+            PlannerArg::Anyangle => PlannerKind::AnyAngle,
+        },
+        robot,
+        time_limit_s: args.time_limit,
+        snapshot_period_s: if args.out.is_some() { 0.5 } else { 0.0 },
+        constant_depth_filter: args.rcd,
+        trust_seen_space: !args.seed_prune,
+        moving_half_sweep_deg: args.moving_sweep,
+    })
+}
+
+/// The `--json` object: exactly the keys of the issue.
+pub fn result_json(result: &SimResult) -> serde_json::Value {
+    json!({
+        "status": result.status.name(),
+        "stops": result.stats.stops,
+        "full_sweeps": result.stats.full_sweeps,
+        "replans": result.stats.replans,
+        "distance_m": round3(result.distance_m),
+        "sim_time_s": round3(result.sim_time_s),
+        "min_clearance_m": round3(result.min_clearance_m),
+        "controller_overruns": result.stats.controller_overruns,
+    })
+}
+
+/// `summary.json`: the `--json` object plus details.
+pub fn summary_json(args: &Args, setup: &SimSetup, result: &SimResult) -> serde_json::Value {
+    let mut v = result_json(result);
+    let stats: &MissionStats = &result.stats;
+    let extra = json!({
+        "mode": match setup.mode { MissionMode::Stop => "stop", MissionMode::Continuous => "continuous" },
+        "planner": format!("{:?}", args.planner).to_lowercase(),
+        "real": args.real.display().to_string(),
+        "known": args.known.as_ref().map(|p| p.display().to_string()),
+        "params": args.params.display().to_string(),
+        "seed": args.seed,
+        "sonar_range_m": args.sonar_range,
+        "moving_sweeps": stats.moving_sweeps,
+        "plans": stats.plans,
+        "blocked_replans": stats.blocked_replans,
+        "band_cuts": stats.band_cuts,
+        "trust_seen_space": setup.trust_seen_space,
+        "constant_depth_filter": setup.constant_depth_filter,
+        "readings": stats.readings,
+        "hits": stats.hits,
+        "odometry_distance_m": round3(stats.odometry_distance_m),
+        "saturated_periods": stats.saturated_periods,
+        "unreachable_reason": stats.unreachable_reason.map(|r| format!("{r:?}")),
+        "known_map_plan_length_m": result.known_map_plan_length_m.map(round3),
+        "final_true_pose": [round3(result.trajectory.last().map_or(0.0, |r| r.pose.x_m)),
+                            round3(result.trajectory.last().map_or(0.0, |r| r.pose.y_m))],
+        "final_odometry_pose": [round3(result.final_odometry_pose.x_m), round3(result.final_odometry_pose.y_m)],
+        "goal": [setup.params.goal.x_m, setup.params.goal.y_m],
+    });
+    if let (Some(obj), Some(extra)) = (v.as_object_mut(), extra.as_object()) {
+        for (k, val) in extra {
+            obj.insert(k.clone(), val.clone());
+        }
+    }
+    v
+}
+
+fn round3(x: f32) -> f64 {
+    ((x as f64) * 1000.0).round() / 1000.0
+}
+
+struct Bar(ProgressBar);
+
+impl sim::Progress for Bar {
+    fn update(&mut self, sim_time_s: f32, time_limit_s: f32, stats: &MissionStats) {
+        self.0.set_length(time_limit_s as u64);
+        self.0.set_position(sim_time_s as u64);
+        self.0.set_message(format!(
+            "stops {} replans {} hits {}",
+            stats.stops, stats.replans, stats.hits
+        ));
+    }
+}
 
 /// Run `twil simulate`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`twil simulate` is not implemented yet")
+pub fn run(args: Args) -> Result<()> {
+    let setup = setup_from_args(&args)?;
+    let bar = if args.json || !std::io::stderr().is_terminal() {
+        ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden())
+    } else {
+        let b = ProgressBar::new(setup.time_limit_s as u64);
+        if let Ok(style) =
+            ProgressStyle::with_template("{spinner} simulated {pos:>4}/{len} s  {msg}")
+        {
+            b.set_style(style);
+        }
+        b
+    };
+    let mut progress = Bar(bar);
+    let result = sim::run(&setup, &mut progress)?;
+    progress.0.finish_and_clear();
+
+    if let Some(dir) = &args.out {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create directory", dir.display()))?;
+        output::write_trajectory_csv(&dir.join("trajectory.csv"), &result)?;
+        output::write_plan_pngs(dir, &setup, &result)?;
+        output::write_gif(
+            &dir.join("mission.gif"),
+            &setup,
+            &result,
+            args.gif_scale.clamp(1, 8),
+        )?;
+        let summary = summary_json(&args, &setup, &result);
+        let path = dir.join("summary.json");
+        std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+    }
+    if args.json {
+        println!("{}", result_json(&result));
+    } else {
+        let s = &result.stats;
+        println!(
+            "{}: {:.2} m travelled in {:.1} s simulated; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {:.3} m",
+            result.status.name(),
+            result.distance_m,
+            result.sim_time_s,
+            s.stops,
+            s.full_sweeps,
+            s.moving_sweeps,
+            s.plans,
+            result.min_clearance_m
+        );
+        if let Some(len) = result.known_map_plan_length_m {
+            println!("known-map plan length: {len:.2} m");
+        }
+        if let Some(dir) = &args.out {
+            println!("wrote {}", dir.display());
+        }
+    }
+    Ok(())
 }

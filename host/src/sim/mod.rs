@@ -1,0 +1,378 @@
+//! The simulator behind `twil simulate`: a [`twil_core::mission::Mission`] driven against a
+//! [`twil_core::plant::Plant`] (the simulated robot) on the real world's polygons.
+//!
+//! The loop, once per controller period:
+//!
+//! 1. read the plant's encoder counts and feed their deltas to the mission as a `Tick`;
+//! 2. answer every sonar request of the mission by ray casting from the plant's true pose on
+//!    the real polygons (the mission only knows its odometry);
+//! 3. apply the mission's wheel voltages to the plant for one period;
+//! 4. record the true pose, the clearance to the real polygons (negative = collision, which
+//!    aborts the mission with status `collision`) and, for the pictures, snapshots.
+//!
+//! Everything is deterministic: the plant's noise generator is seeded, and the mission is pure.
+
+pub mod output;
+
+use anyhow::{bail, Result};
+use twil_core::control::Pose;
+use twil_core::geom::PointM;
+use twil_core::grid::{Grid400, GridGeometry};
+use twil_core::mission::{
+    Mission400, MissionConfig, MissionEvent, MissionInput, MissionMode, MissionStats, MissionStatus,
+};
+use twil_core::plan::PlannerKind;
+use twil_core::plant::Plant;
+use twil_core::robot::RobotConfig;
+use twil_core::world::{Obstacles, Params};
+
+/// Everything a simulation run needs.
+#[derive(Clone, Debug)]
+pub struct SimSetup {
+    /// The real world: what the simulated sonar sees and what the robot can hit.
+    pub real: Obstacles,
+    /// Obstacles known a priori (rasterized before the first sweep).
+    pub known: Option<Obstacles>,
+    /// The mission parameters (.par).
+    pub params: Params,
+    /// The map geometry.
+    pub geometry: GridGeometry,
+    /// Stop-and-sweep or continuous.
+    pub mode: MissionMode,
+    /// Planner.
+    pub planner: PlannerKind,
+    /// Robot constants (planning radius is taken from `params`).
+    pub robot: RobotConfig,
+    /// Mission time limit, seconds.
+    pub time_limit_s: f32,
+    /// Filter sweeps with the regions-of-constant-depth filter.
+    pub constant_depth_filter: bool,
+    /// Let the prefix go on through space seen free by earlier sweeps.
+    pub trust_seen_space: bool,
+    /// Continuous mode: half-width of moving sweeps, degrees.
+    pub moving_half_sweep_deg: f32,
+    /// Take a picture snapshot every this many seconds of simulated time (0: none).
+    pub snapshot_period_s: f32,
+}
+
+/// How a simulation ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SimStatus {
+    /// At the goal.
+    Reached,
+    /// The map proves the goal unreachable, or the robot could not make progress.
+    Unreachable,
+    /// The robot's body touched a real obstacle.
+    Collision,
+    /// The time limit ran out.
+    Timeout,
+}
+
+impl SimStatus {
+    /// The lowercase name used in the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            SimStatus::Reached => "reached",
+            SimStatus::Unreachable => "unreachable",
+            SimStatus::Collision => "collision",
+            SimStatus::Timeout => "timeout",
+        }
+    }
+}
+
+/// One row of `trajectory.csv`: true pose at a controller period.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrajectoryRow {
+    /// Simulated time, seconds.
+    pub t_s: f32,
+    /// True pose, world frame.
+    pub pose: Pose,
+}
+
+/// The state of the mission at one instant, for the pictures.
+#[derive(Clone, Debug)]
+pub struct Snapshot {
+    /// Simulated time, seconds.
+    pub t_s: f32,
+    /// True pose.
+    pub pose: Pose,
+    /// The robot's map.
+    pub grid: Box<Grid400>,
+    /// The full plan.
+    pub path: Vec<PointM>,
+    /// The kept prefix.
+    pub prefix: Vec<PointM>,
+    /// Hits of the latest sweep.
+    pub hits: Vec<PointM>,
+    /// Rows of the trajectory so far (the trail is `trajectory[..trail_len]`).
+    pub trail_len: usize,
+    /// Plan number (1 = first plan) when this snapshot was taken at a plan, else 0.
+    pub plan_number: u32,
+}
+
+/// What a simulation produced.
+#[derive(Debug)]
+pub struct SimResult {
+    /// How it ended.
+    pub status: SimStatus,
+    /// The mission's counters.
+    pub stats: MissionStats,
+    /// True distance travelled, metres.
+    pub distance_m: f32,
+    /// Simulated time, seconds.
+    pub sim_time_s: f32,
+    /// Smallest clearance between the robot's body and a real obstacle, metres.
+    pub min_clearance_m: f32,
+    /// True pose per controller period.
+    pub trajectory: Vec<TrajectoryRow>,
+    /// One snapshot per plan.
+    pub plans: Vec<Snapshot>,
+    /// Snapshots every `snapshot_period_s`, plus the final state.
+    pub frames: Vec<Snapshot>,
+    /// Final odometry pose, world frame.
+    pub final_odometry_pose: Pose,
+    /// Length of the plan on the fully known real map from the start (the reference), if
+    /// found.
+    pub known_map_plan_length_m: Option<f32>,
+}
+
+fn snapshot(
+    mission: &Mission400,
+    t_s: f32,
+    pose: Pose,
+    trail_len: usize,
+    plan_number: u32,
+) -> Snapshot {
+    Snapshot {
+        t_s,
+        pose,
+        grid: Box::new(mission.grid().clone()),
+        path: mission.path().to_vec(),
+        prefix: mission.prefix().to_vec(),
+        hits: mission.last_hits().to_vec(),
+        trail_len,
+        plan_number,
+    }
+}
+
+/// Progress reports during a run: simulated time and status text.
+pub trait Progress: Send {
+    /// Called about once per simulated second.
+    fn update(&mut self, sim_time_s: f32, time_limit_s: f32, stats: &MissionStats);
+}
+
+/// A [`Progress`] that ignores everything.
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    fn update(&mut self, _: f32, _: f32, _: &MissionStats) {}
+}
+
+/// Build the mission configuration of a setup.
+pub fn mission_config(setup: &SimSetup) -> MissionConfig {
+    let mut config = MissionConfig::from_params(&setup.params, setup.robot);
+    config.mode = setup.mode;
+    config.planner = setup.planner;
+    config.time_limit_s = setup.time_limit_s;
+    config.constant_depth_filter = setup.constant_depth_filter;
+    config.trust_seen_space = setup.trust_seen_space;
+    config.moving_half_sweep_deg = setup.moving_half_sweep_deg;
+    config
+}
+
+/// Stack for the simulation thread: the mission and the planner are large values (about 1 MB
+/// each for the 400 × 400 host size) and are built before they are boxed.
+const SIM_STACK_BYTES: usize = 64 << 20;
+
+/// Run a whole mission. Errors are setup errors (bad config, start off the map…); every
+/// mission outcome is a [`SimResult`]. Runs on its own thread with a large stack.
+pub fn run(setup: &SimSetup, progress: &mut dyn Progress) -> Result<SimResult> {
+    std::thread::scope(|scope| {
+        std::thread::Builder::new()
+            .name("twil-sim".into())
+            .stack_size(SIM_STACK_BYTES)
+            .spawn_scoped(scope, || run_on_this_thread(setup, progress))
+            .map_err(|e| anyhow::anyhow!("cannot start the simulation thread: {e}"))?
+            .join()
+            .map_err(|_| anyhow::anyhow!("the simulation thread panicked"))?
+    })
+}
+
+fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<SimResult> {
+    let config = mission_config(setup);
+    let robot = config.robot;
+    let mut mission = Box::new(
+        Mission400::new(config, setup.geometry).map_err(|e| anyhow::anyhow!("mission: {e}"))?,
+    );
+    if let Some(known) = &setup.known {
+        for polygon in known.iter() {
+            mission.add_known_polygon(polygon);
+        }
+    }
+    let start_pose = Pose {
+        x_m: setup.params.start.x_m,
+        y_m: setup.params.start.y_m,
+        heading_rad: config.initial_heading_rad,
+    };
+    let mut plant = Plant::new(&robot, start_pose);
+    let period_s = robot.controller_period_s;
+    let mut trajectory = Vec::new();
+    let mut plans = Vec::new();
+    let mut frames = Vec::new();
+    let mut t_s = 0.0f32;
+    let mut distance_m = 0.0f32;
+    let mut min_clearance_m = plant.clearance_m(&setup.real);
+    let mut collision = min_clearance_m < 0.0;
+    let mut previous_counts = plant.encoder_counts();
+    let mut next_snapshot_s = 0.0f32;
+    let mut next_progress_s = 0.0f32;
+    trajectory.push(TrajectoryRow {
+        t_s,
+        pose: plant.pose(),
+    });
+    // A hard cap on loop iterations in case the mission never returns a final status.
+    let max_ticks = ((setup.time_limit_s / period_s) as u64).saturating_add(100);
+    let mut ticks = 0u64;
+    while !collision {
+        ticks += 1;
+        if ticks > max_ticks {
+            bail!("the mission did not end within its time limit (internal error)");
+        }
+        let counts = plant.encoder_counts();
+        let deltas = (
+            counts.0.wrapping_sub(previous_counts.0),
+            counts.1.wrapping_sub(previous_counts.1),
+        );
+        previous_counts = counts;
+        let mut out = mission.step(MissionInput::Tick {
+            left_delta_counts: deltas.0,
+            right_delta_counts: deltas.1,
+            elapsed_s: period_s,
+        });
+        let debug = std::env::var_os("TWIL_SIM_DEBUG").is_some();
+        if debug && !out.events.is_empty() {
+            eprintln!("{t_s:8.2} {:?} pose {:?}", out.events, mission.pose_world());
+        }
+        let mut planned = has_plan(&out.events);
+        while let Some(request) = out.sonar_request {
+            let range_m =
+                plant.sonar_range_m(&setup.real, request.neck_angle_rad, robot.sonar_range_m);
+            out = mission.step(MissionInput::SonarReading {
+                neck_angle_rad: request.neck_angle_rad,
+                range_m,
+            });
+            planned |= has_plan(&out.events);
+            if debug && !out.events.is_empty() {
+                eprintln!("{t_s:8.2} {:?} prefix {:?}", out.events, mission.prefix());
+                if mission.prefix().len() < 2 {
+                    let p = mission.path();
+                    eprintln!("   path {:?}", &p[..p.len().min(5)]);
+                    let g = *mission.grid().geometry();
+                    for q in &p[..p.len().min(2)] {
+                        if let Ok(c) = g.cell_of(*q) {
+                            eprintln!("   cell {:?} occ {}", c, mission.grid().is_occupied(c));
+                        }
+                    }
+                }
+            }
+        }
+        if planned {
+            plans.push(snapshot(
+                &mission,
+                t_s,
+                plant.pose(),
+                trajectory.len(),
+                mission.stats().plans,
+            ));
+        }
+        if out.status != MissionStatus::Running {
+            break;
+        }
+        let before = plant.pose();
+        plant.step(period_s, out.left_voltage_v, out.right_voltage_v);
+        t_s += period_s;
+        let after = plant.pose();
+        let d = ((after.x_m - before.x_m).powi(2) + (after.y_m - before.y_m).powi(2)).sqrt();
+        if d.is_finite() {
+            distance_m += d;
+        }
+        trajectory.push(TrajectoryRow { t_s, pose: after });
+        let clearance = plant.clearance_m(&setup.real);
+        if clearance < min_clearance_m {
+            min_clearance_m = clearance;
+        }
+        if clearance < 0.0 {
+            collision = true;
+            mission.step(MissionInput::Abort);
+        }
+        if setup.snapshot_period_s > 0.0 && t_s >= next_snapshot_s {
+            next_snapshot_s += setup.snapshot_period_s;
+            frames.push(snapshot(&mission, t_s, after, trajectory.len(), 0));
+        }
+        if t_s >= next_progress_s {
+            next_progress_s += 1.0;
+            progress.update(t_s, setup.time_limit_s, &mission.stats());
+        }
+    }
+    frames.push(snapshot(&mission, t_s, plant.pose(), trajectory.len(), 0));
+    let status = if collision {
+        SimStatus::Collision
+    } else {
+        match mission.status() {
+            MissionStatus::Reached => SimStatus::Reached,
+            MissionStatus::Unreachable => SimStatus::Unreachable,
+            MissionStatus::Timeout => SimStatus::Timeout,
+            MissionStatus::Aborted => {
+                bail!(
+                    "the mission aborted: planner error {:?}",
+                    mission.stats().last_plan_error
+                )
+            }
+            MissionStatus::Running => bail!("the mission stopped while running (internal error)"),
+        }
+    };
+    Ok(SimResult {
+        status,
+        stats: mission.stats(),
+        distance_m,
+        sim_time_s: t_s,
+        min_clearance_m,
+        trajectory,
+        plans,
+        frames,
+        final_odometry_pose: mission.pose_world(),
+        known_map_plan_length_m: known_map_plan_length_m(setup),
+    })
+}
+
+fn has_plan(events: &[MissionEvent]) -> bool {
+    events
+        .iter()
+        .any(|e| matches!(e, MissionEvent::Planned { .. }))
+}
+
+/// The length of the plan from start to goal on the real world fully known (the yardstick the
+/// mission's travelled distance is compared with).
+pub fn known_map_plan_length_m(setup: &SimSetup) -> Option<f32> {
+    use twil_core::plan::{PathM, Planner};
+    let mut grid = Box::new(Grid400::new(setup.geometry).ok()?);
+    let half = setup.geometry.expansion_cells(setup.params.robot_radius_m);
+    for polygon in setup.real.iter() {
+        twil_core::raster::mark_polygon(&mut grid, polygon, half);
+    }
+    let mut planner: Box<
+        Planner<{ twil_core::plan::SCRATCH_WORDS_400 }, { twil_core::mission::HOST_MISSION_QUEUE }>,
+    > = Box::new(Planner::new());
+    let mut path = Box::new(PathM::new());
+    let report = planner
+        .plan(
+            setup.planner,
+            &grid,
+            setup.params.start,
+            setup.params.goal,
+            &mut path,
+        )
+        .ok()?;
+    (report.status == twil_core::plan::PlanStatus::Found).then_some(report.length_m)
+}
