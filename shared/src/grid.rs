@@ -110,7 +110,7 @@ pub struct GridGeometry {
 
 impl GridGeometry {
     /// A geometry of `width` x `height` cells of `resolution_m` metres.
-    pub fn new(width: u32, height: u32, resolution_m: f32) -> Result<Self, GridError> {
+    pub const fn new(width: u32, height: u32, resolution_m: f32) -> Result<Self, GridError> {
         if !(resolution_m.is_finite() && resolution_m > 0.0) {
             return Err(GridError::BadResolution { resolution_m });
         }
@@ -148,7 +148,7 @@ impl GridGeometry {
     }
 
     /// The seed's default: 15 m x 15 m at 0.05 m (300 x 300 cells).
-    pub fn seed_default() -> Self {
+    pub const fn seed_default() -> Self {
         Self {
             width: DEFAULT_SIDE_CELLS,
             height: DEFAULT_SIDE_CELLS,
@@ -309,6 +309,22 @@ impl<const WORDS: usize> Grid<WORDS> {
         Ok(())
     }
 
+    /// An empty grid, as a `const fn`: a grid of a large capacity can then be built at compile
+    /// time straight into a `static` (the firmware does this; a large value returned by
+    /// [`Grid::new`] would pass through the stack). Same contract as [`Grid::new`].
+    pub const fn new_const(geometry: GridGeometry) -> Result<Self, GridError> {
+        if geometry.cell_count() > Self::CAPACITY_CELLS {
+            return Err(GridError::CapacityExceeded {
+                cells: geometry.cell_count() as u32,
+                capacity: Self::CAPACITY_CELLS as u32,
+            });
+        }
+        Ok(Self {
+            geometry,
+            bits: [0; WORDS],
+        })
+    }
+
     /// Change the geometry and clear the map. On error nothing changes.
     pub fn reset(&mut self, geometry: GridGeometry) -> Result<(), GridError> {
         Self::check_capacity(geometry)?;
@@ -409,7 +425,7 @@ impl<const WORDS: usize> Grid<WORDS> {
             .iter()
             .map(|w| w.count_ones() as usize)
             .sum();
-        if n % 32 != 0 {
+        if !n.is_multiple_of(32) {
             count += (self.bits[full] & ((1u32 << (n % 32)) - 1)).count_ones() as usize;
         }
         count
@@ -424,7 +440,7 @@ impl<const WORDS: usize> Grid<WORDS> {
     /// the used cells are refused with `CapacityExceeded` and nothing is written.
     pub fn write_words(&mut self, offset: usize, words: &[u32]) -> Result<(), GridError> {
         let used = words_for_cells(self.geometry.cell_count());
-        let end = offset.checked_add(words.len()).unwrap_or(usize::MAX);
+        let end = offset.saturating_add(words.len());
         if end > used {
             return Err(GridError::CapacityExceeded {
                 cells: end.saturating_mul(32).min(u32::MAX as usize) as u32,
@@ -434,7 +450,7 @@ impl<const WORDS: usize> Grid<WORDS> {
         self.bits[offset..end].copy_from_slice(words);
         // Keep the bits past the last cell clear, whatever was sent.
         let n = self.geometry.cell_count();
-        if n % 32 != 0 && end == used {
+        if !n.is_multiple_of(32) && end == used {
             self.bits[used - 1] &= (1u32 << (n % 32)) - 1;
         }
         Ok(())
