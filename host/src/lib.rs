@@ -2,3 +2,4 @@
 //! other tools share it.
 
 pub mod cmd;
+pub mod remote;

@@ -1,0 +1,490 @@
+//! The host end of the link: open a device (`--remote qemu`, `--remote tcp:HOST:PORT`,
+//! `--remote /dev/ttyUSB0`), send requests, collect replies.
+//!
+//! The wire format and the messages are `twil_core::link`'s; this module only moves bytes.
+//! [`Remote::request`] sends one request and waits for the reply with the same sequence number,
+//! skipping telemetry and stale replies. `--remote qemu` starts `qemu-system-arm` with the QEMU
+//! build of the firmware ([`Qemu`]); the process is killed when the [`Remote`] is dropped, on
+//! success and on error alike.
+
+use std::io::{Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::str::FromStr;
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, bail, Context, Result};
+use twil_core::geom::PointM;
+use twil_core::link::frame::{self, FrameDecoder, FrameFault, MAX_FRAME_BYTES};
+use twil_core::link::{
+    DeviceFrame, DeviceInfo, MapParams, PlanSummary, Reply, Request, RequestFrame, Telemetry,
+    MAP_CHUNK_WORDS, OBSTACLE_CHUNK_VERTICES, PROTOCOL_VERSION,
+};
+use twil_core::plan::PlannerKind;
+use twil_core::world::Obstacles;
+
+/// Where the firmware is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RemoteSpec {
+    /// Start QEMU with the QEMU build of the firmware.
+    Qemu,
+    /// A TCP socket (`tcp:HOST:PORT`), e.g. `cargo xtask qemu`'s.
+    Tcp(String),
+    /// A serial port at 115200 8N1 (any other text: `/dev/ttyUSB0`, `COM3`).
+    Serial(String),
+}
+
+impl FromStr for RemoteSpec {
+    type Err = anyhow::Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        if s == "qemu" {
+            Ok(RemoteSpec::Qemu)
+        } else if let Some(addr) = s.strip_prefix("tcp:") {
+            if !addr.contains(':') {
+                bail!("`--remote {s}`: expected tcp:HOST:PORT");
+            }
+            Ok(RemoteSpec::Tcp(addr.to_string()))
+        } else if s.is_empty() {
+            bail!("`--remote` needs `qemu`, `tcp:HOST:PORT` or a serial port path")
+        } else {
+            Ok(RemoteSpec::Serial(s.to_string()))
+        }
+    }
+}
+
+/// How long to wait for a reply (QEMU plans in milliseconds; a board at 115200 baud moves a
+/// frame in at most 45 ms).
+pub const REPLY_TIMEOUT: Duration = Duration::from_secs(20);
+
+trait Io: Read + Write + Send {}
+impl<T: Read + Write + Send> Io for T {}
+
+/// A path planned by the device.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RemotePlan {
+    /// The device's report (status, cost, instructions…).
+    pub summary: PlanSummary,
+    /// The path, metres.
+    pub path: Vec<PointM>,
+}
+
+/// An open link to a device.
+pub struct Remote {
+    io: Box<dyn Io>,
+    decoder: FrameDecoder,
+    backlog: Vec<u8>,
+    seq: u16,
+    timeout: Duration,
+    /// Telemetry received while waiting for replies.
+    pub telemetry: Vec<Telemetry>,
+    /// Error replies to damaged frames (no sequence number) seen while waiting.
+    pub unmatched_errors: Vec<Reply>,
+    /// Kept last so that the socket closes before QEMU is killed.
+    qemu: Option<Qemu>,
+}
+
+impl Remote {
+    /// Open the link and do the version handshake.
+    pub fn connect(spec: &RemoteSpec) -> Result<(Self, DeviceInfo)> {
+        let mut remote = Self::open(spec)?;
+        let info = remote.hello()?;
+        Ok((remote, info))
+    }
+
+    /// Open the link without any exchange.
+    pub fn open(spec: &RemoteSpec) -> Result<Self> {
+        let (io, qemu): (Box<dyn Io>, Option<Qemu>) = match spec {
+            RemoteSpec::Qemu => {
+                let (qemu, stream) = Qemu::start(&Qemu::elf_path()?)?;
+                stream.set_read_timeout(Some(Duration::from_millis(200)))?;
+                stream.set_nodelay(true)?;
+                (Box::new(stream), Some(qemu))
+            }
+            RemoteSpec::Tcp(addr) => {
+                let stream = connect_tcp(addr, Duration::from_secs(5))?;
+                stream.set_read_timeout(Some(Duration::from_millis(200)))?;
+                stream.set_nodelay(true)?;
+                (Box::new(stream), None)
+            }
+            RemoteSpec::Serial(path) => {
+                let port = serialport::new(path, 115_200)
+                    .data_bits(serialport::DataBits::Eight)
+                    .parity(serialport::Parity::None)
+                    .stop_bits(serialport::StopBits::One)
+                    .timeout(Duration::from_millis(200))
+                    .open()
+                    .with_context(|| format!("cannot open serial port {path}"))?;
+                (Box::new(port), None)
+            }
+        };
+        Ok(Self {
+            io,
+            decoder: FrameDecoder::new(),
+            backlog: Vec::new(),
+            seq: 0,
+            timeout: REPLY_TIMEOUT,
+            telemetry: Vec::new(),
+            unmatched_errors: Vec::new(),
+            qemu,
+        })
+    }
+
+    /// The QEMU process behind this link, if `--remote qemu`.
+    pub fn qemu(&self) -> Option<&Qemu> {
+        self.qemu.as_ref()
+    }
+
+    /// Version handshake: the device's description, or an error if the versions differ.
+    pub fn hello(&mut self) -> Result<DeviceInfo> {
+        match self.call(Request::Hello {
+            protocol_version: PROTOCOL_VERSION,
+        })? {
+            Reply::Hello(info) => Ok(info),
+            other => bail!("unexpected reply to Hello: {other:?}"),
+        }
+    }
+
+    /// Round trip of one ping.
+    pub fn ping(&mut self, nonce: u32) -> Result<Duration> {
+        let start = Instant::now();
+        match self.call(Request::Ping { nonce })? {
+            Reply::Pong { nonce: n } if n == nonce => Ok(start.elapsed()),
+            other => bail!("unexpected reply to Ping: {other:?}"),
+        }
+    }
+
+    /// Send raw bytes (tests use this to send damaged frames).
+    pub fn send_raw(&mut self, bytes: &[u8]) -> Result<()> {
+        self.io.write_all(bytes).context("writing to the device")?;
+        self.io.flush().context("writing to the device")?;
+        Ok(())
+    }
+
+    /// Send one request and return the device's reply to it (an error reply is returned as
+    /// `Reply::Error`, not as `Err`). `Err` means the link failed (timeout, closed).
+    pub fn request(&mut self, request: Request) -> Result<Reply> {
+        self.seq = self.seq.wrapping_add(1);
+        let seq = self.seq;
+        let mut out = [0u8; MAX_FRAME_BYTES];
+        let bytes = frame::encode(&RequestFrame { seq, request }, &mut out)
+            .map_err(|e| anyhow!("request does not fit a frame: {e:?}"))?;
+        // A leading 0x00 ends whatever partial frame the device may hold.
+        let mut wire = Vec::with_capacity(bytes.len() + 1);
+        wire.push(0);
+        wire.extend_from_slice(bytes);
+        self.send_raw(&wire)?;
+        let deadline = Instant::now() + self.timeout;
+        loop {
+            match self.next_frame(deadline)? {
+                Ok(DeviceFrame::Reply {
+                    seq: Some(s),
+                    reply,
+                }) if s == seq => return Ok(reply),
+                Ok(DeviceFrame::Reply { seq: None, reply }) => self.unmatched_errors.push(reply),
+                Ok(DeviceFrame::Reply { .. }) => {} // a stale reply to an earlier request
+                Ok(DeviceFrame::Telemetry(t)) => self.telemetry.push(t),
+                Err(fault) => eprintln!("twil: dropped a damaged frame from the device: {fault:?}"),
+            }
+        }
+    }
+
+    /// Like [`Remote::request`], but an error reply becomes `Err` with the device's message.
+    pub fn call(&mut self, request: Request) -> Result<Reply> {
+        match self.request(request)? {
+            Reply::Error(e) => Err(anyhow!("{e}")),
+            reply => Ok(reply),
+        }
+    }
+
+    /// The next frame from the device (a decoded frame or a fault), waiting until `deadline`.
+    pub fn next_frame(&mut self, deadline: Instant) -> Result<Result<DeviceFrame, FrameFault>> {
+        let mut buf = [0u8; 512];
+        loop {
+            if !self.backlog.is_empty() {
+                let backlog = std::mem::take(&mut self.backlog);
+                let (got, rest) = self.decoder.feed::<DeviceFrame>(&backlog);
+                self.backlog = rest.to_vec();
+                if let Some(got) = got {
+                    return Ok(got);
+                }
+            }
+            if Instant::now() > deadline {
+                bail!(
+                    "no reply from the device within {} s",
+                    self.timeout.as_secs_f32()
+                );
+            }
+            match self.io.read(&mut buf) {
+                Ok(0) => bail!("the device closed the link"),
+                Ok(n) => self.backlog.extend_from_slice(&buf[..n]),
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock
+                            | std::io::ErrorKind::TimedOut
+                            | std::io::ErrorKind::Interrupted
+                    ) => {}
+                Err(e) => return Err(e).context("reading from the device"),
+            }
+        }
+    }
+
+    /// Set the map and radius, forget old obstacles, upload `obstacles` in chunks.
+    pub fn upload_world(&mut self, params: MapParams, obstacles: &Obstacles) -> Result<()> {
+        self.call(Request::ClearMap)?;
+        self.call(Request::SetParams(params))?;
+        for (i, polygon) in obstacles.iter().enumerate() {
+            self.upload_polygon(polygon)
+                .with_context(|| format!("uploading obstacle {}", i + 1))?;
+        }
+        Ok(())
+    }
+
+    /// Upload one polygon in chunks of [`OBSTACLE_CHUNK_VERTICES`].
+    pub fn upload_polygon(&mut self, polygon: &[PointM]) -> Result<()> {
+        let chunks = polygon.chunks(OBSTACLE_CHUNK_VERTICES);
+        let n = chunks.len();
+        for (i, chunk) in chunks.enumerate() {
+            let request = Request::ObstacleChunk {
+                first_vertex: (i * OBSTACLE_CHUNK_VERTICES) as u16,
+                vertices: heapless::Vec::from_slice(chunk)
+                    .map_err(|_| anyhow!("chunk larger than its capacity"))?,
+                last: i + 1 == n,
+            };
+            self.call(request)?;
+        }
+        Ok(())
+    }
+
+    /// Overwrite the whole map with packed words (row-major, 32 cells per word).
+    pub fn write_map(&mut self, words: &[u32]) -> Result<()> {
+        for (i, chunk) in words.chunks(MAP_CHUNK_WORDS).enumerate() {
+            self.call(Request::WriteMap {
+                offset_words: (i * MAP_CHUNK_WORDS) as u32,
+                words: heapless::Vec::from_slice(chunk)
+                    .map_err(|_| anyhow!("chunk larger than its capacity"))?,
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Read the whole map: (width, height, packed words).
+    pub fn read_map(&mut self) -> Result<(u16, u16, Vec<u32>)> {
+        let mut words = Vec::new();
+        loop {
+            match self.call(Request::ReadMap {
+                offset_words: words.len() as u32,
+            })? {
+                Reply::MapChunk {
+                    total_words,
+                    width_cells,
+                    height_cells,
+                    words: chunk,
+                    ..
+                } => {
+                    words.extend_from_slice(&chunk);
+                    if words.len() >= total_words as usize || chunk.is_empty() {
+                        return Ok((width_cells, height_cells, words));
+                    }
+                }
+                other => bail!("unexpected reply to ReadMap: {other:?}"),
+            }
+        }
+    }
+
+    /// Plan on the device and read the whole path back.
+    pub fn plan(&mut self, kind: PlannerKind, start: PointM, goal: PointM) -> Result<RemotePlan> {
+        let summary = match self.call(Request::Plan { kind, start, goal })? {
+            Reply::Plan(summary) => summary,
+            other => bail!("unexpected reply to Plan: {other:?}"),
+        };
+        let mut path = Vec::with_capacity(summary.points as usize);
+        while path.len() < summary.points as usize {
+            match self.call(Request::ReadPath {
+                offset: path.len() as u16,
+            })? {
+                Reply::PathChunk { points, .. } if !points.is_empty() => {
+                    path.extend_from_slice(&points)
+                }
+                other => bail!("unexpected reply to ReadPath: {other:?}"),
+            }
+        }
+        Ok(RemotePlan { summary, path })
+    }
+}
+
+fn connect_tcp(addr: &str, patience: Duration) -> Result<TcpStream> {
+    let deadline = Instant::now() + patience;
+    loop {
+        match TcpStream::connect(addr) {
+            Ok(s) => return Ok(s),
+            Err(e) if Instant::now() < deadline => {
+                let _ = e;
+                std::thread::sleep(Duration::from_millis(100));
+            }
+            Err(e) => return Err(e).with_context(|| format!("cannot connect to {addr}")),
+        }
+    }
+}
+
+/// A `qemu-system-arm` process running the firmware (`netduinoplus2`, USART1 on a TCP socket,
+/// `-icount shift=0` so that one instruction is 1 ns of virtual time). Killed on drop.
+pub struct Qemu {
+    child: Child,
+    /// The TCP port QEMU's USART1 is connected through.
+    pub port: u16,
+}
+
+/// File name of the QEMU build of the firmware (next to the hardware ELF).
+pub const QEMU_ELF_NAME: &str = "twil-firmware-qemu";
+
+impl Qemu {
+    /// The QEMU arguments for `elf` with USART1 on `serial` (a QEMU chardev spec).
+    pub fn args(elf: &Path, serial: &str) -> Vec<String> {
+        [
+            "-machine",
+            "netduinoplus2",
+            "-display",
+            "none",
+            "-monitor",
+            "none",
+            "-serial",
+            serial,
+            "-semihosting-config",
+            "enable=on,target=native",
+            "-icount",
+            "shift=0,sleep=off",
+            "-kernel",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .chain([elf.display().to_string()])
+        .collect()
+    }
+
+    /// Where the QEMU ELF is: `$TWIL_QEMU_ELF`, else
+    /// `<target dir>/thumbv7em-none-eabihf/firmware/twil-firmware-qemu` (built by
+    /// `cargo xtask firmware`).
+    pub fn elf_path() -> Result<PathBuf> {
+        if let Some(p) = std::env::var_os("TWIL_QEMU_ELF") {
+            let p = PathBuf::from(p);
+            if p.is_file() {
+                return Ok(p);
+            }
+            bail!("TWIL_QEMU_ELF={} does not exist", p.display());
+        }
+        let mut target_dirs = Vec::new();
+        if let Some(d) = std::env::var_os("CARGO_TARGET_DIR") {
+            target_dirs.push(PathBuf::from(d));
+        }
+        // The running binary is target/<profile>/twil or target/<profile>/deps/test-….
+        if let Ok(exe) = std::env::current_exe() {
+            target_dirs.extend(exe.ancestors().skip(2).take(2).map(Path::to_path_buf));
+        }
+        target_dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("../target"));
+        let candidates: Vec<PathBuf> = target_dirs
+            .iter()
+            .map(|d| {
+                d.join("thumbv7em-none-eabihf")
+                    .join("firmware")
+                    .join(QEMU_ELF_NAME)
+            })
+            .collect();
+        candidates
+            .iter()
+            .find(|p| p.is_file())
+            .cloned()
+            .ok_or_else(|| {
+                anyhow!(
+                "the QEMU firmware is not built (looked for {}): run `cargo xtask firmware` first",
+                candidates
+                    .first()
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_default()
+            )
+            })
+    }
+
+    /// Start QEMU on `elf` and return it with the stream to its USART1. QEMU connects to a port
+    /// this process listens on (port 0: the OS picks a free one, so parallel runs never clash).
+    pub fn start(elf: &Path) -> Result<(Qemu, TcpStream)> {
+        let listener =
+            TcpListener::bind("127.0.0.1:0").context("cannot listen on a local TCP port")?;
+        let port = listener.local_addr()?.port();
+        let log = match std::env::var_os("TWIL_QEMU_LOG") {
+            Some(path) => Stdio::from(
+                std::fs::File::create(&path)
+                    .with_context(|| format!("cannot create {}", Path::new(&path).display()))?,
+            ),
+            None => Stdio::null(),
+        };
+        let child = Command::new("qemu-system-arm")
+            .args(Self::args(elf, &format!("tcp:127.0.0.1:{port}")))
+            .stdin(Stdio::null())
+            .stdout(log)
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| {
+                if e.kind() == std::io::ErrorKind::NotFound {
+                    anyhow!("qemu-system-arm is not installed (apt-get install qemu-system-arm, or run `cargo xtask test`, which installs it)")
+                } else {
+                    anyhow!("cannot start qemu-system-arm: {e}")
+                }
+            })?;
+        let mut qemu = Qemu { child, port };
+        listener.set_nonblocking(true)?;
+        let deadline = Instant::now() + Duration::from_secs(15);
+        let stream = loop {
+            match listener.accept() {
+                Ok((stream, _)) => break stream,
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+                Err(e) => return Err(e).context("waiting for QEMU to connect"),
+            }
+            if let Some(status) = qemu.child.try_wait()? {
+                let mut err = String::new();
+                if let Some(mut s) = qemu.child.stderr.take() {
+                    let _ = s.read_to_string(&mut err);
+                }
+                bail!(
+                    "qemu-system-arm exited ({status}) before connecting: {}",
+                    err.trim()
+                );
+            }
+            if Instant::now() > deadline {
+                bail!("qemu-system-arm did not connect to port {port} within 15 s");
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        stream.set_nonblocking(false)?;
+        Ok((qemu, stream))
+    }
+}
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn remote_specs_parse() {
+        assert_eq!("qemu".parse::<RemoteSpec>().unwrap(), RemoteSpec::Qemu);
+        assert_eq!(
+            "tcp:127.0.0.1:4000".parse::<RemoteSpec>().unwrap(),
+            RemoteSpec::Tcp("127.0.0.1:4000".into())
+        );
+        assert_eq!(
+            "/dev/ttyUSB0".parse::<RemoteSpec>().unwrap(),
+            RemoteSpec::Serial("/dev/ttyUSB0".into())
+        );
+        assert!("tcp:nohost".parse::<RemoteSpec>().is_err());
+        assert!("".parse::<RemoteSpec>().is_err());
+    }
+}
