@@ -1,2 +1,324 @@
-//! Placeholder: the planner benchmark (issue 2) goes here.
-fn main() {}
+//! Planner benchmark: our BFS and A* against the `pathfinding` crate's `bfs` / `astar` on the same
+//! 300 × 300 grids (open floor, 20 % random obstacles, a maze), same neighbour rule, same costs.
+//!
+//! Run: `cargo bench -p twil-core --bench planners` (optionally `-- REPEATS`, default 30).
+//! For each case and algorithm it prints the fastest time of ours and theirs over the repeats
+//! (interleaved), the ratios, the costs (which must be identical; the bench exits non-zero otherwise) and the
+//! cells we expanded. Any-angle is timed too (ours only: pathfinding has none).
+
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+use twil_core::geom::Cell;
+use twil_core::grid::{Grid300, GridGeometry};
+use twil_core::plan::{
+    PlanError, PlanReport, PlanStatus, Planner, PlannerKind, DIAGONAL_COST, SCRATCH_WORDS_300,
+    STRAIGHT_COST,
+};
+
+const SIDE: u16 = 300;
+const QUEUE: usize = 32 * 1024;
+type Bench300 = Planner<SCRATCH_WORDS_300, QUEUE>;
+
+/// Deterministic xorshift64 generator (the bench must not depend on a `rand` crate).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+}
+
+fn empty() -> Grid300 {
+    Grid300::new(GridGeometry::new(SIDE as u32, SIDE as u32, 0.05).expect("geometry"))
+        .expect("grid")
+}
+
+fn open_case() -> (Grid300, Cell, Cell) {
+    (empty(), Cell::new(3, 5), Cell::new(296, 291))
+}
+
+/// 20 % of the cells occupied at random (seeded); the seed is advanced until start and goal are
+/// connected, so the case always has a path.
+fn random_case(planner: &mut Bench300) -> (Grid300, Cell, Cell) {
+    let (s, t) = (Cell::new(2, 2), Cell::new(297, 297));
+    for seed in 1u64.. {
+        let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed);
+        let mut g = empty();
+        for y in 0..SIDE as i32 {
+            for x in 0..SIDE as i32 {
+                if rng.next() % 100 < 20 {
+                    g.set_xy(x, y, true);
+                }
+            }
+        }
+        g.set(s, false);
+        g.set(t, false);
+        let r = planner
+            .plan_cells(PlannerKind::Bfs, &g, s, t)
+            .expect("capacity");
+        if r.status == PlanStatus::Found {
+            return (g, s, t);
+        }
+    }
+    unreachable!()
+}
+
+/// A perfect maze (recursive backtracker, seeded) with 1-cell corridors: rooms on odd
+/// coordinates, walls elsewhere. Start and goal are opposite corners.
+fn maze_case() -> (Grid300, Cell, Cell) {
+    let mut g = empty();
+    for y in 0..SIDE as i32 {
+        g.fill_row(y, 0, SIDE as i32 - 1);
+    }
+    let rooms = (SIDE as i32 - 1) / 2; // 149 x 149 rooms
+    let mut visited = vec![false; (rooms * rooms) as usize];
+    let mut stack = vec![(0i32, 0i32)];
+    visited[0] = true;
+    g.set_xy(1, 1, false);
+    let mut rng = Rng(0xDEAD_BEEF_CAFE_F00D);
+    while let Some(&(rx, ry)) = stack.last() {
+        let mut options = [(0i32, 0i32); 4];
+        let mut n = 0;
+        for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+            let (nx, ny) = (rx + dx, ry + dy);
+            if nx >= 0
+                && ny >= 0
+                && nx < rooms
+                && ny < rooms
+                && !visited[(ny * rooms + nx) as usize]
+            {
+                options[n] = (dx, dy);
+                n += 1;
+            }
+        }
+        if n == 0 {
+            stack.pop();
+            continue;
+        }
+        let (dx, dy) = options[(rng.next() % n as u64) as usize];
+        let (nx, ny) = (rx + dx, ry + dy);
+        visited[(ny * rooms + nx) as usize] = true;
+        g.set_xy(2 * rx + 1 + dx, 2 * ry + 1 + dy, false);
+        g.set_xy(2 * nx + 1, 2 * ny + 1, false);
+        stack.push((nx, ny));
+    }
+    let far = (2 * (rooms - 1) + 1) as u16;
+    (g, Cell::new(1, 1), Cell::new(far, far))
+}
+
+type Node = (u16, u16);
+
+/// The neighbour rule for the oracle, without allocation: at most 8 successors.
+fn successors(g: &Grid300, &(x, y): &Node) -> impl Iterator<Item = (Node, u32)> {
+    let (x, y) = (x as i32, y as i32);
+    let free = |x: i32, y: i32| !g.is_occupied_xy(x, y);
+    let (e, w, n, s) = (
+        free(x + 1, y),
+        free(x - 1, y),
+        free(x, y + 1),
+        free(x, y - 1),
+    );
+    let node = |x: i32, y: i32| (x as u16, y as u16);
+    [
+        e.then(|| (node(x + 1, y), STRAIGHT_COST)),
+        n.then(|| (node(x, y + 1), STRAIGHT_COST)),
+        w.then(|| (node(x - 1, y), STRAIGHT_COST)),
+        s.then(|| (node(x, y - 1), STRAIGHT_COST)),
+        (n && e && free(x + 1, y + 1)).then(|| (node(x + 1, y + 1), DIAGONAL_COST)),
+        (n && w && free(x - 1, y + 1)).then(|| (node(x - 1, y + 1), DIAGONAL_COST)),
+        (s && w && free(x - 1, y - 1)).then(|| (node(x - 1, y - 1), DIAGONAL_COST)),
+        (s && e && free(x + 1, y - 1)).then(|| (node(x + 1, y - 1), DIAGONAL_COST)),
+    ]
+    .into_iter()
+    .flatten()
+}
+
+fn octile(a: &Node, b: &Node) -> u32 {
+    let dx = a.0.abs_diff(b.0) as u32;
+    let dy = a.1.abs_diff(b.1) as u32;
+    let (lo, hi) = (dx.min(dy), dx.max(dy));
+    DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
+}
+
+/// Fastest of `repeats` runs of each closure, interleaved (ours, theirs, theirs, ours, ...) so
+/// that load from other processes hits all of them alike. The minimum is the least noisy
+/// estimate of the cost of the code itself.
+fn race<A, B, C>(
+    repeats: usize,
+    mut a: impl FnMut() -> A,
+    mut b: impl FnMut() -> B,
+    mut c: impl FnMut() -> C,
+) -> ([Duration; 3], A, B, C) {
+    let mut best = [Duration::MAX; 3];
+    let once = |best: &mut Duration, f: &mut dyn FnMut()| {
+        let t0 = Instant::now();
+        f();
+        *best = (*best).min(t0.elapsed());
+    };
+    let (mut ra, mut rb, mut rc) = (None, None, None);
+    for _ in 0..repeats {
+        once(&mut best[0], &mut || ra = Some(black_box(a())));
+        once(&mut best[1], &mut || rb = Some(black_box(b())));
+        once(&mut best[2], &mut || rc = Some(black_box(c())));
+    }
+    (best, ra.expect("ran"), rb.expect("ran"), rc.expect("ran"))
+}
+
+/// Plan and return the report; a path with more vertices than the output holds still counts
+/// (the search ran to the goal; the report is kept by the planner).
+fn run(planner: &mut Bench300, kind: PlannerKind, g: &Grid300, s: Cell, t: Cell) -> PlanReport {
+    match planner.plan_cells(kind, g, s, t) {
+        Ok(report) => report,
+        Err(PlanError::PathFull { .. }) => planner.last_report().expect("report"),
+        Err(e) => panic!("{kind:?}: {e}"),
+    }
+}
+
+fn us(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e6
+}
+
+fn main() {
+    let repeats: usize = std::env::args()
+        .skip(1)
+        .find_map(|a| a.parse().ok())
+        .unwrap_or(30)
+        .max(1);
+    let mut planner: Box<Bench300> = Box::new(Planner::new());
+    let cases = [
+        ("open", open_case()),
+        ("random20", random_case(&mut planner)),
+        ("maze", maze_case()),
+    ];
+    println!(
+        "300x300 grids, fastest of {repeats} interleaved runs; our scratch {} B + queue {} B",
+        SCRATCH_WORDS_300 * 4,
+        QUEUE * 12
+    );
+    println!("pf = pathfinding 4 with allocation-free successors, pf-vec = with Vec successors");
+    println!(
+        "{:<9} {:<9} {:>9} {:>9} {:>7} {:>9} {:>7} {:>10} {:>9} {:>6}",
+        "case",
+        "planner",
+        "ours_us",
+        "pf_us",
+        "ratio",
+        "pf-vec_us",
+        "ratio",
+        "cost",
+        "expanded",
+        "peak_q"
+    );
+    let mut ok = true;
+    let mut row = |name: &str,
+                   algo: &str,
+                   t: [Duration; 3],
+                   ours: PlanReport,
+                   peak: u32,
+                   theirs: [Option<u32>; 2]| {
+        let same = ours.status == PlanStatus::Found && theirs.iter().all(|c| *c == Some(ours.cost));
+        ok &= same;
+        println!(
+            "{:<9} {:<9} {:>9.0} {:>9.0} {:>6.1}x {:>9.0} {:>6.1}x {:>10} {:>9} {:>6}{}",
+            name,
+            algo,
+            us(t[0]),
+            us(t[1]),
+            us(t[1]) / us(t[0]),
+            us(t[2]),
+            us(t[2]) / us(t[0]),
+            ours.cost,
+            ours.expanded,
+            peak,
+            if same { "" } else { "  COST MISMATCH" }
+        );
+    };
+    let mut any_rows = Vec::new();
+    for (name, (g, s, t)) in &cases {
+        let (s, t) = (*s, *t);
+        let (sn, tn) = ((s.x, s.y), (t.x, t.y));
+
+        let (times, ours, theirs, theirs_vec) = race(
+            repeats,
+            || run(&mut planner, PlannerKind::Bfs, g, s, t),
+            || pathfinding::prelude::bfs(&sn, |n| successors(g, n).map(|(m, _)| m), |n| *n == tn),
+            || {
+                pathfinding::prelude::bfs(
+                    &sn,
+                    |n| successors(g, n).map(|(m, _)| m).collect::<Vec<_>>(),
+                    |n| *n == tn,
+                )
+            },
+        );
+        let steps = |p: Option<Vec<Node>>| p.map(|p| p.len() as u32 - 1);
+        row(
+            name,
+            "bfs",
+            times,
+            ours,
+            planner.queue_peak(),
+            [steps(theirs), steps(theirs_vec)],
+        );
+
+        let (times, ours, theirs, theirs_vec) = race(
+            repeats,
+            || run(&mut planner, PlannerKind::AStar, g, s, t),
+            || {
+                pathfinding::prelude::astar(
+                    &sn,
+                    |n| successors(g, n),
+                    |n| octile(n, &tn),
+                    |n| *n == tn,
+                )
+            },
+            || {
+                pathfinding::prelude::astar(
+                    &sn,
+                    |n| successors(g, n).collect::<Vec<_>>(),
+                    |n| octile(n, &tn),
+                    |n| *n == tn,
+                )
+            },
+        );
+        let cost = |p: Option<(Vec<Node>, u32)>| p.map(|(_, c)| c);
+        row(
+            name,
+            "astar",
+            times,
+            ours,
+            planner.queue_peak(),
+            [cost(theirs), cost(theirs_vec)],
+        );
+
+        let mut best = Duration::MAX;
+        let mut any = None;
+        for _ in 0..repeats {
+            let t0 = Instant::now();
+            any = Some(black_box(run(&mut planner, PlannerKind::AnyAngle, g, s, t)));
+            best = best.min(t0.elapsed());
+        }
+        let any = any.expect("ran");
+        any_rows.push((name, best, any, ours));
+    }
+    println!();
+    println!(
+        "{:<9} {:>12} {:>12} {:>12}",
+        "case", "anyangle_us", "length_m", "astar_len_m"
+    );
+    for (name, best, any, astar) in any_rows {
+        println!(
+            "{:<9} {:>12.0} {:>12.2} {:>12.2}",
+            name,
+            us(best),
+            any.length_m,
+            astar.length_m
+        );
+    }
+    if !ok {
+        eprintln!("costs differ from pathfinding");
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,644 @@
+//! Unit and property tests of the planners; the `pathfinding` crate is the oracle.
+
+extern crate std;
+
+use std::boxed::Box;
+use std::vec::Vec;
+
+use proptest::prelude::*;
+
+use super::*;
+use crate::grid::{words_for_cells, Grid};
+
+const SMALL_CELLS: usize = 40 * 40;
+type SmallGrid = Grid<{ words_for_cells(SMALL_CELLS) }>;
+type SmallPlanner = Planner<{ scratch_words_for_cells(SMALL_CELLS) }, 4096>;
+
+fn grid_from_rows(rows: &[&str]) -> SmallGrid {
+    // rows[0] is the top row (largest y), as drawn.
+    let h = rows.len() as u32;
+    let w = rows[0].len() as u32;
+    let mut g = SmallGrid::new(GridGeometry::new(w, h, 0.1).unwrap()).unwrap();
+    for (r, row) in rows.iter().enumerate() {
+        let y = h as i32 - 1 - r as i32;
+        for (x, ch) in row.chars().enumerate() {
+            if ch == '#' {
+                g.set_xy(x as i32, y, true);
+            }
+        }
+    }
+    g
+}
+
+/// The neighbour rule, written independently for the oracle.
+fn successors(g: &SmallGrid, c: (i32, i32)) -> Vec<((i32, i32), u32)> {
+    let free = |x: i32, y: i32| !g.is_occupied_xy(x, y);
+    let mut out = Vec::new();
+    for dx in -1..=1 {
+        for dy in -1..=1 {
+            if dx == 0 && dy == 0 {
+                continue;
+            }
+            let (nx, ny) = (c.0 + dx, c.1 + dy);
+            if !free(nx, ny) {
+                continue;
+            }
+            if dx != 0 && dy != 0 {
+                if free(c.0 + dx, c.1) && free(c.0, c.1 + dy) {
+                    out.push(((nx, ny), DIAGONAL_COST));
+                }
+            } else {
+                out.push(((nx, ny), STRAIGHT_COST));
+            }
+        }
+    }
+    out
+}
+
+fn oracle_astar(g: &SmallGrid, s: Cell, t: Cell) -> Option<u32> {
+    let goal = (t.x as i32, t.y as i32);
+    pathfinding::prelude::astar(
+        &(s.x as i32, s.y as i32),
+        |&c| successors(g, c),
+        |&(x, y)| octile(x.abs_diff(goal.0), y.abs_diff(goal.1)),
+        |&c| c == goal,
+    )
+    .map(|(_, cost)| cost)
+}
+
+fn oracle_bfs(g: &SmallGrid, s: Cell, t: Cell) -> Option<u32> {
+    let goal = (t.x as i32, t.y as i32);
+    pathfinding::prelude::bfs(
+        &(s.x as i32, s.y as i32),
+        |&c| successors(g, c).into_iter().map(|(n, _)| n),
+        |&c| c == goal,
+    )
+    .map(|p| p.len() as u32 - 1)
+}
+
+/// Every segment of the polyline is free by the line-of-sight rule, and consecutive vertices
+/// differ.
+fn assert_collision_free(g: &SmallGrid, cells: &[Cell]) {
+    for pair in cells.windows(2) {
+        assert_ne!(pair[0], pair[1], "repeated vertex in {cells:?}");
+        assert!(
+            line_of_sight(g, pair[0], pair[1]),
+            "segment {:?} -> {:?} blocked",
+            pair[0],
+            pair[1]
+        );
+    }
+}
+
+/// Exact (f64) Euclidean length of a cell polyline, in cells.
+fn exact_length(cells: &[Cell]) -> f64 {
+    cells
+        .windows(2)
+        .map(|p| {
+            let dx = p[0].x as f64 - p[1].x as f64;
+            let dy = p[0].y as f64 - p[1].y as f64;
+            (dx * dx + dy * dy).sqrt()
+        })
+        .sum()
+}
+
+/// A merged BFS/A* polyline: segments are straight or 45° runs; returns (steps, octile cost).
+fn steps_and_cost(cells: &[Cell]) -> (u32, u32) {
+    let (mut steps, mut cost) = (0, 0);
+    for p in cells.windows(2) {
+        let dx = p[0].x.abs_diff(p[1].x) as u32;
+        let dy = p[0].y.abs_diff(p[1].y) as u32;
+        assert!(
+            dx == 0 || dy == 0 || dx == dy,
+            "not an 8-direction run: {p:?}"
+        );
+        steps += dx.max(dy);
+        cost += octile(dx, dy);
+    }
+    (steps, cost)
+}
+
+const MAZE: &[&str] = &[
+    "..........",
+    ".########.",
+    ".#......#.",
+    ".#.####.#.",
+    ".#.#..#.#.",
+    ".#.#.##.#.",
+    ".#.#....#.",
+    ".#.######.",
+    ".#........",
+    "##########",
+];
+
+#[test]
+fn maze_all_planners_agree_with_oracle() {
+    let g = grid_from_rows(MAZE);
+    let mut p = Box::new(SmallPlanner::new());
+    let (s, t) = (Cell::new(4, 5), Cell::new(9, 1));
+    let bfs = p.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
+    assert_eq!(bfs.status, PlanStatus::Found);
+    assert_eq!(Some(bfs.cost), oracle_bfs(&g, s, t));
+    assert_eq!(steps_and_cost(p.path_cells()).0, bfs.cost);
+    assert_eq!(p.path_cells().first(), Some(&s));
+    assert_eq!(p.path_cells().last(), Some(&t));
+    assert_collision_free(&g, p.path_cells());
+
+    let astar = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+    assert_eq!(Some(astar.cost), oracle_astar(&g, s, t));
+    assert_eq!(steps_and_cost(p.path_cells()).1, astar.cost);
+    assert_collision_free(&g, p.path_cells());
+    let astar_len = exact_length(p.path_cells());
+    assert!((astar.length_m as f64 - astar_len * 0.1).abs() < 1e-4);
+
+    let any = p.plan_cells(PlannerKind::AnyAngle, &g, s, t).unwrap();
+    assert_eq!(any.cost, astar.cost);
+    assert_collision_free(&g, p.path_cells());
+    assert!(exact_length(p.path_cells()) <= astar_len + 1e-9);
+    assert!(any.length_m <= astar.length_m + 1e-5);
+}
+
+#[test]
+fn corner_cutting_is_refused() {
+    // The centre is blocked: no diagonal step may clip its corner, so the way round costs
+    // four side steps, not 2 side + 1 diagonal.
+    let g = grid_from_rows(&["...", ".#.", "..."]);
+    let mut p = Box::new(SmallPlanner::new());
+    let (s, t) = (Cell::new(0, 0), Cell::new(2, 2));
+    let r = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+    assert_eq!(r.status, PlanStatus::Found);
+    assert_eq!(r.cost, 4 * STRAIGHT_COST);
+    let g2 = grid_from_rows(&[".#.", "#..", "..."]);
+    // The top-left cell is reachable only diagonally between two occupied cells.
+    let r2 = p
+        .plan_cells(PlannerKind::Bfs, &g2, Cell::new(1, 1), Cell::new(0, 2))
+        .unwrap();
+    assert_eq!(r2.status, PlanStatus::Unreachable);
+}
+
+#[test]
+fn statuses() {
+    let g = grid_from_rows(&["...", ".#.", "..."]);
+    let mut p = Box::new(SmallPlanner::new());
+    let mut path = PathM::new();
+    for kind in [PlannerKind::Bfs, PlannerKind::AStar, PlannerKind::AnyAngle] {
+        let r = p
+            .plan(
+                kind,
+                &g,
+                PointM::new(0.15, 0.15),
+                PointM::new(0.05, 0.05),
+                &mut path,
+            )
+            .unwrap();
+        assert_eq!(r.status, PlanStatus::StartBlocked);
+        assert!(path.is_empty());
+        let r = p
+            .plan(
+                kind,
+                &g,
+                PointM::new(0.05, 0.05),
+                PointM::new(0.15, 0.15),
+                &mut path,
+            )
+            .unwrap();
+        assert_eq!(r.status, PlanStatus::GoalBlocked);
+        for bad in [
+            PointM::new(-0.01, 0.1),
+            PointM::new(0.3, 0.1),
+            PointM::new(f32::NAN, 0.1),
+            PointM::new(0.1, f32::INFINITY),
+        ] {
+            let r = p
+                .plan(kind, &g, bad, PointM::new(0.05, 0.05), &mut path)
+                .unwrap();
+            assert_eq!(r.status, PlanStatus::OutOfBounds);
+            let r = p
+                .plan(kind, &g, PointM::new(0.05, 0.05), bad, &mut path)
+                .unwrap();
+            assert_eq!(r.status, PlanStatus::OutOfBounds);
+        }
+        let r = p
+            .plan(
+                kind,
+                &g,
+                PointM::new(0.01, 0.01),
+                PointM::new(0.09, 0.02),
+                &mut path,
+            )
+            .unwrap();
+        assert_eq!(r.status, PlanStatus::Found);
+        assert_eq!(r.cost, 0);
+        assert_eq!(path.as_slice(), &[PointM::new(0.05, 0.05)]);
+        let r = p
+            .plan(
+                kind,
+                &g,
+                PointM::new(0.05, 0.05),
+                PointM::new(0.25, 0.25),
+                &mut path,
+            )
+            .unwrap();
+        assert_eq!(r.status, PlanStatus::Found);
+        assert_eq!(path.first(), Some(&PointM::new(0.05, 0.05)));
+        assert_eq!(path.last(), Some(&PointM::new(0.25, 0.25)));
+    }
+    let walled = grid_from_rows(&[".#.", ".#.", ".#."]);
+    for kind in [PlannerKind::Bfs, PlannerKind::AStar, PlannerKind::AnyAngle] {
+        let r = p
+            .plan_cells(kind, &walled, Cell::new(0, 0), Cell::new(2, 2))
+            .unwrap();
+        assert_eq!(r.status, PlanStatus::Unreachable);
+        assert!(r.expanded >= 3, "{kind:?} expanded {}", r.expanded);
+        assert!(p.path_cells().is_empty());
+    }
+}
+
+#[test]
+fn open_grid_path_is_one_segment_and_merged() {
+    let g = SmallGrid::new(GridGeometry::new(40, 40, 0.05).unwrap()).unwrap();
+    let mut p = Box::new(SmallPlanner::new());
+    let r = p
+        .plan_cells(PlannerKind::AStar, &g, Cell::new(0, 0), Cell::new(39, 0))
+        .unwrap();
+    assert_eq!(p.path_cells(), &[Cell::new(0, 0), Cell::new(39, 0)]);
+    assert_eq!(r.cost, 39 * STRAIGHT_COST);
+    assert!((r.length_m - 39.0 * 0.05).abs() < 1e-4);
+    // Tie-breaking on larger g walks straight: few expansions.
+    assert!(r.expanded <= 40, "expanded {}", r.expanded);
+    let r = p
+        .plan_cells(
+            PlannerKind::AnyAngle,
+            &g,
+            Cell::new(0, 0),
+            Cell::new(39, 10),
+        )
+        .unwrap();
+    assert_eq!(p.path_cells(), &[Cell::new(0, 0), Cell::new(39, 10)]);
+    assert!((r.length_m as f64 - (39f64.hypot(10.0)) * 0.05).abs() < 1e-4);
+}
+
+#[test]
+fn scratch_too_small_and_queue_full_are_errors() {
+    let g = SmallGrid::new(GridGeometry::new(40, 40, 0.05).unwrap()).unwrap();
+    let mut tiny = Planner::<10, 4096>::new();
+    assert_eq!(
+        tiny.plan_cells(PlannerKind::AStar, &g, Cell::new(0, 0), Cell::new(1, 1)),
+        Err(PlanError::ScratchTooSmall {
+            cells: 1600,
+            capacity: 80
+        })
+    );
+    let mut short = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 4>::new());
+    for kind in [PlannerKind::Bfs, PlannerKind::AStar, PlannerKind::AnyAngle] {
+        assert_eq!(
+            short.plan_cells(kind, &g, Cell::new(20, 20), Cell::new(0, 39)),
+            Err(PlanError::QueueFull { capacity: 4 })
+        );
+        assert!(short.path_cells().is_empty());
+    }
+    let mut none = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 0>::new());
+    assert_eq!(
+        none.plan_cells(PlannerKind::Bfs, &g, Cell::new(20, 20), Cell::new(0, 39)),
+        Err(PlanError::QueueFull { capacity: 0 })
+    );
+    assert_eq!(
+        none.plan_cells(PlannerKind::AStar, &g, Cell::new(20, 20), Cell::new(0, 39)),
+        Err(PlanError::QueueFull { capacity: 0 })
+    );
+}
+
+#[test]
+fn path_full_keeps_the_report() {
+    // A zig-zag staircase on a 200x200 map needs > 1024 vertices.
+    const CELLS: usize = 200 * 200;
+    let geometry = GridGeometry::new(200, 200, 0.05).unwrap();
+    let mut g = Grid::<{ words_for_cells(CELLS) }>::new(geometry).unwrap();
+    // Columns of walls with alternating gaps: a serpentine with 2 turns per column.
+    for x in (1..200).step_by(2) {
+        let gap_top = (x / 2) % 2 == 0;
+        for y in 0..200 {
+            let gap = if gap_top { y == 199 } else { y == 0 };
+            if !gap {
+                g.set_xy(x, y, true);
+            }
+        }
+    }
+    let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 8192>::new());
+    let mut path = PathM::new();
+    let r = p.plan(
+        PlannerKind::AStar,
+        &g,
+        geometry.center_of(Cell::new(0, 0)),
+        geometry.center_of(Cell::new(198, 0)),
+        &mut path,
+    );
+    // 100 columns of free cells, 2+ vertices each: about 300 vertices. Fits.
+    let r = r.unwrap();
+    assert_eq!(r.status, PlanStatus::Found);
+    assert!(path.len() > 150, "{} vertices", path.len());
+    // A 2-row corridor 4000 cells long whose odd columns are open in alternate rows: the path
+    // turns every two cells, about 2000 vertices.
+    let long = GridGeometry::new(4000, 2, 0.05).unwrap();
+    let mut g2 = Grid::<{ words_for_cells(CELLS) }>::new(long).unwrap();
+    for x in 0..4000 {
+        match x % 4 {
+            1 => g2.set_xy(x, 1, true),
+            3 => g2.set_xy(x, 0, true),
+            _ => {}
+        }
+    }
+    let err = p.plan(
+        PlannerKind::Bfs,
+        &g2,
+        long.center_of(Cell::new(0, 0)),
+        long.center_of(Cell::new(3998, 0)),
+        &mut path,
+    );
+    assert_eq!(err, Err(PlanError::PathFull { capacity: 1024 }));
+    assert!(path.is_empty());
+    let last = p.last_report().unwrap();
+    assert_eq!(last.status, PlanStatus::Found);
+    // 3998 steps east plus a row change at every even column 2..=3996.
+    assert_eq!(last.cost, 3998 + 1998);
+    assert!(p.path_cells().is_empty());
+    assert!(last.expanded > 100);
+}
+
+#[test]
+fn line_of_sight_is_symmetric_and_blocks() {
+    let g = grid_from_rows(&["....", "..#.", "....", "...."]);
+    let a = Cell::new(0, 0);
+    let b = Cell::new(3, 3);
+    assert!(!line_of_sight(&g, a, b));
+    assert!(!line_of_sight(&g, b, a));
+    assert!(
+        line_of_sight(&g, Cell::new(0, 3), Cell::new(3, 0))
+            == line_of_sight(&g, Cell::new(3, 0), Cell::new(0, 3))
+    );
+    assert!(!line_of_sight(&g, a, Cell::new(4, 0)), "off the grid");
+    assert!(line_of_sight(&g, a, a));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Property tests against the oracle.
+
+fn arb_grid() -> impl Strategy<Value = (SmallGrid, Cell, Cell)> {
+    (2u32..=24, 2u32..=24, 0u32..=45, any::<u64>())
+        .prop_flat_map(|(w, h, density, seed)| {
+            (Just((w, h, density, seed)), 0..w, 0..h, 0..w, 0..h)
+        })
+        .prop_map(|((w, h, density, seed), sx, sy, tx, ty)| {
+            let mut g = SmallGrid::new(GridGeometry::new(w, h, 0.1).unwrap()).unwrap();
+            let mut state = seed | 1;
+            for y in 0..h as i32 {
+                for x in 0..w as i32 {
+                    // xorshift64
+                    state ^= state << 13;
+                    state ^= state >> 7;
+                    state ^= state << 17;
+                    if (state % 100) < density as u64 {
+                        g.set_xy(x, y, true);
+                    }
+                }
+            }
+            (
+                g,
+                Cell::new(sx as u16, sy as u16),
+                Cell::new(tx as u16, ty as u16),
+            )
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn planners_match_pathfinding((g, s, t) in arb_grid()) {
+        let mut p = Box::new(SmallPlanner::new());
+        let bfs = p.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
+        let blocked = g.is_occupied(s) || g.is_occupied(t);
+        if g.is_occupied(s) {
+            prop_assert_eq!(bfs.status, PlanStatus::StartBlocked);
+        } else if g.is_occupied(t) {
+            prop_assert_eq!(bfs.status, PlanStatus::GoalBlocked);
+        }
+        if !blocked {
+            let expected = oracle_bfs(&g, s, t);
+            prop_assert_eq!(bfs.status == PlanStatus::Found, expected.is_some());
+            if let Some(steps) = expected {
+                prop_assert_eq!(bfs.cost, steps);
+                prop_assert_eq!(steps_and_cost(p.path_cells()).0, steps);
+                prop_assert_eq!(p.path_cells().first(), Some(&s));
+                prop_assert_eq!(p.path_cells().last(), Some(&t));
+                assert_collision_free(&g, p.path_cells());
+            }
+        }
+
+        let astar = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+        prop_assert_eq!(astar.status, bfs.status);
+        let astar_cells: Vec<Cell> = p.path_cells().to_vec();
+        if astar.status == PlanStatus::Found {
+            prop_assert_eq!(Some(astar.cost), oracle_astar(&g, s, t));
+            prop_assert_eq!(steps_and_cost(&astar_cells).1, astar.cost);
+            assert_collision_free(&g, &astar_cells);
+            prop_assert_eq!(astar_cells.first(), Some(&s));
+            prop_assert_eq!(astar_cells.last(), Some(&t));
+        } else {
+            prop_assert!(astar_cells.is_empty());
+        }
+
+        let any = p.plan_cells(PlannerKind::AnyAngle, &g, s, t).unwrap();
+        prop_assert_eq!(any.status, astar.status);
+        prop_assert_eq!(any.cost, astar.cost);
+        prop_assert_eq!(any.expanded, astar.expanded);
+        if any.status == PlanStatus::Found {
+            let cells = p.path_cells();
+            assert_collision_free(&g, cells);
+            prop_assert_eq!(cells.first(), Some(&s));
+            prop_assert_eq!(cells.last(), Some(&t));
+            prop_assert!(exact_length(cells) <= exact_length(&astar_cells) + 1e-9);
+            prop_assert!(any.length_m <= astar.length_m * (1.0 + 1e-5) + 1e-6);
+            prop_assert!(cells.len() <= astar_cells.len());
+        }
+    }
+
+    #[test]
+    fn tiny_queues_never_panic((g, s, t) in arb_grid(), kind in 0u8..3) {
+        let kind = [PlannerKind::Bfs, PlannerKind::AStar, PlannerKind::AnyAngle][kind as usize];
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 3>::new());
+        match p.plan_cells(kind, &g, s, t) {
+            Ok(r) => {
+                if r.status == PlanStatus::Found {
+                    assert_collision_free(&g, p.path_cells());
+                }
+            }
+            Err(e) => prop_assert_eq!(e, PlanError::QueueFull { capacity: 3 }),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pruning and the band check.
+
+fn along_path_length(path: &[PointM]) -> f64 {
+    path.windows(2)
+        .map(|p| ((p[1].x_m - p[0].x_m) as f64).hypot((p[1].y_m - p[0].y_m) as f64))
+        .sum()
+}
+
+#[test]
+fn prune_cuts_at_range_mid_segment() {
+    let g = SmallGrid::new(GridGeometry::new(40, 40, 0.1).unwrap()).unwrap();
+    let path = [
+        PointM::new(0.55, 0.55),
+        PointM::new(2.55, 0.55),
+        PointM::new(2.55, 3.55),
+    ];
+    let mut out = PathM::new();
+    let pruned = prune_visible_prefix(&g, &path, 3.0, &mut out);
+    assert_eq!(pruned.end, PruneEnd::Range);
+    assert_eq!(out.len(), 3);
+    assert_eq!(&out[..2], &path[..2]);
+    assert!((out[2].x_m - 2.55).abs() < 1e-5);
+    assert!((out[2].y_m - 1.55).abs() < 1e-4, "{:?}", out[2]);
+    assert!((pruned.length_m - 3.0).abs() < 1e-5);
+
+    let pruned = prune_visible_prefix(&g, &path, 100.0, &mut out);
+    assert_eq!(pruned.end, PruneEnd::PathEnd);
+    assert_eq!(out.as_slice(), &path);
+    assert!((pruned.length_m - 5.0).abs() < 1e-4);
+}
+
+#[test]
+fn prune_stops_where_a_wall_hides_the_path() {
+    // A wall along x = 2.0 m from y = 1.5 m upwards; the path runs south, east below the wall's
+    // end, then north behind it. The part behind the wall is hidden from the start.
+    let mut g = SmallGrid::new(GridGeometry::new(40, 40, 0.1).unwrap()).unwrap();
+    for y in 15..40 {
+        g.set_xy(20, y, true);
+    }
+    let path = [
+        PointM::new(0.55, 2.55),
+        PointM::new(0.55, 0.55),
+        PointM::new(2.55, 0.55),
+        PointM::new(2.55, 3.55),
+    ];
+    let mut out = PathM::new();
+    let pruned = prune_visible_prefix(&g, &path, 100.0, &mut out);
+    assert_eq!(pruned.end, PruneEnd::Hidden);
+    assert_eq!(&out[..3], &path[..3]);
+    assert_eq!(out.len(), 4);
+    let cut = out[3];
+    assert!((cut.x_m - 2.55).abs() < 1e-5);
+    assert!(cut.y_m > 0.55 && cut.y_m < 3.55, "{cut:?}");
+    for p in out.iter() {
+        assert!(line_of_sight_m(&g, out[0], *p), "{p:?} not visible");
+    }
+    // A little further along the last segment is no longer visible.
+    let beyond = PointM::new(2.55, cut.y_m + 0.1);
+    assert!(!line_of_sight_m(&g, out[0], beyond));
+    assert!((pruned.length_m as f64 - along_path_length(&out)).abs() < 1e-4);
+}
+
+#[test]
+fn prune_degenerate_inputs() {
+    let mut g = SmallGrid::new(GridGeometry::new(10, 10, 0.1).unwrap()).unwrap();
+    let mut out = PathM::new();
+    let p = prune_visible_prefix(&g, &[], 3.0, &mut out);
+    assert_eq!((p.end, out.len()), (PruneEnd::PathEnd, 0));
+    let path = [PointM::new(0.15, 0.15), PointM::new(0.85, 0.15)];
+    for range in [0.0, -1.0, f32::NAN, f32::NEG_INFINITY] {
+        let p = prune_visible_prefix(&g, &path, range, &mut out);
+        assert_eq!((p.end, out.as_slice()), (PruneEnd::Range, &path[..1]));
+    }
+    let p = prune_visible_prefix(&g, &[PointM::new(-1.0, 0.0), path[1]], 3.0, &mut out);
+    assert_eq!((p.end, out.len()), (PruneEnd::Hidden, 1));
+    let p = prune_visible_prefix(&g, &[path[0], PointM::new(f32::NAN, 0.1)], 3.0, &mut out);
+    assert_eq!((p.end, out.len()), (PruneEnd::Hidden, 1));
+    // Repeated points are skipped, not emitted twice.
+    let p = prune_visible_prefix(&g, &[path[0], path[0], path[1]], 3.0, &mut out);
+    assert_eq!((p.end, out.as_slice()), (PruneEnd::PathEnd, &path[..]));
+    g.set_xy(1, 1, true);
+    let p = prune_visible_prefix(&g, &path, 3.0, &mut out);
+    assert_eq!((p.end, out.len()), (PruneEnd::Hidden, 1));
+    // An absurd range on a long path cannot hang: samples are capped.
+    let far = [PointM::new(0.15, 0.15), PointM::new(0.15, 1.0e30)];
+    let p = prune_visible_prefix(&g, &far, f32::MAX, &mut out);
+    assert_eq!(p.end, PruneEnd::Hidden);
+}
+
+#[test]
+fn band_check_matches_the_seed_rule() {
+    let pose = PointM::new(5.0, 5.0);
+    let at = |deg: f32| {
+        let r = deg.to_radians();
+        PointM::new(5.0 + r.cos(), 5.0 + r.sin())
+    };
+    let band = NORMAL_HALF_BAND_RAD;
+    assert!(!needs_full_sweep(
+        &[pose, at(0.0), at(90.0), at(-94.0)],
+        pose,
+        0.0,
+        band
+    ));
+    assert!(needs_full_sweep(
+        &[pose, at(0.0), at(96.0)],
+        pose,
+        0.0,
+        band
+    ));
+    assert!(needs_full_sweep(&[at(-170.0)], pose, 0.0, band));
+    // Heading 180°: behind is now ahead; wrap-around at ±π.
+    assert!(!needs_full_sweep(
+        &[at(170.0), at(-170.0)],
+        pose,
+        core::f32::consts::PI,
+        band
+    ));
+    assert!(needs_full_sweep(
+        &[at(0.0)],
+        pose,
+        core::f32::consts::PI,
+        band
+    ));
+    // The robot's own position has no direction.
+    assert!(!needs_full_sweep(&[pose], pose, 0.0, band));
+    assert!(!needs_full_sweep(&[], pose, 0.0, band));
+    assert!(needs_full_sweep(&[at(0.0)], pose, f32::NAN, band));
+    assert!(needs_full_sweep(
+        &[PointM::new(f32::NAN, 0.0)],
+        pose,
+        0.0,
+        band
+    ));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    #[test]
+    fn pruned_prefix_is_visible_and_in_range((g, s, t) in arb_grid(), range_m in 0.05f32..3.0) {
+        let mut p = Box::new(SmallPlanner::new());
+        let mut path = PathM::new();
+        let geometry = *g.geometry();
+        let r = p.plan(PlannerKind::AnyAngle, &g, geometry.center_of(s), geometry.center_of(t), &mut path).unwrap();
+        prop_assume!(r.status == PlanStatus::Found);
+        let mut out = PathM::new();
+        let pruned = prune_visible_prefix(&g, &path, range_m, &mut out);
+        prop_assert!(!out.is_empty());
+        prop_assert_eq!(out[0], path[0]);
+        // A prefix: all but the last kept point are path vertices, in order.
+        let n = out.len();
+        prop_assert_eq!(&out[..n - 1], &path[..n - 1]);
+        for q in out.iter() {
+            prop_assert!(line_of_sight_m(&g, out[0], *q), "{:?} hidden", q);
+        }
+        let along = along_path_length(&out);
+        prop_assert!(along <= range_m as f64 + 1e-4, "{} > {}", along, range_m);
+        prop_assert!((pruned.length_m as f64 - along).abs() < 1e-3);
+        if pruned.end == PruneEnd::PathEnd {
+            prop_assert_eq!(out.as_slice(), path.as_slice());
+        }
+    }
+}
