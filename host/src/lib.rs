@@ -3,3 +3,5 @@
 
 pub mod cmd;
 pub mod remote;
+pub mod render;
+pub mod world_io;

@@ -1,10 +1,489 @@
-//! `twil plan` (not written yet).
+//! `twil plan`: plan a path on a known world and report it as text, JSON and a picture.
+//!
+//! The command is split into steps that other commands and the tests reuse:
+//!
+//! 1. [`load`] reads the files and builds the map: the `.da` polygons grown by the `.par` robot
+//!    radius (`GridGeometry::expansion_cells` + `raster::mark_polygon`, seed `marca_linha`), and/or
+//!    a saved map (already grown, see [`crate::world_io`]), on a [`Grid400`].
+//! 2. [`plan`] runs one planner of `twil_core::plan` and times it.
+//! 3. [`plan_json`] builds the JSON object; [`render_png`] draws the picture.
+//!
+//! Exit status: 0 whenever the command ran, whatever the plan status (`found`, `unreachable`,
+//! `start_blocked`, `goal_blocked`, `out_of_bounds`: read it from the output); 1 on any error
+//! (unreadable or malformed file, impossible geometry, planner capacity), with one message on
+//! stderr naming the file, the line and the value; 2 on command-line usage errors.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use serde::Serialize;
+use twil_core::geom::PointM;
+use twil_core::grid::{Grid400, GridGeometry};
+use twil_core::plan::{PathM, PlanReport, PlanStatus, Planner, PlannerKind};
+use twil_core::raster::mark_polygon;
+use twil_core::world::{Obstacles, Params};
+
+use crate::render::{palette, Canvas, Marker};
+use crate::world_io;
+
+/// Cells of the largest host grid (400 x 400).
+pub const HOST_CELLS: usize = 400 * 400;
+/// Planner scratch words for [`HOST_CELLS`] (4 bits per cell, 8 cells per word).
+pub const HOST_SCRATCH_WORDS: usize = HOST_CELLS / 8;
+/// Planner queue capacity on the host: one entry per cell.
+pub const HOST_QUEUE: usize = HOST_CELLS;
+/// The planner the host uses.
+pub type HostPlanner = Planner<HOST_SCRATCH_WORDS, HOST_QUEUE>;
 
 /// Arguments of `twil plan`.
-#[derive(clap::Args, Debug)]
-pub struct Args {}
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// Environment file (.da): obstacle polygons, grown by the robot radius.
+    #[arg(long, value_name = "W.da", required_unless_present = "map")]
+    pub world: Option<PathBuf>,
+    /// Mission parameters (.par): robot radius, speed, heading, start, goal.
+    #[arg(long, value_name = "P.par")]
+    pub params: PathBuf,
+    /// Saved map (the seed's `-s` file: width*height bytes, x-major, nonzero = occupied,
+    /// already grown). Replaces --world, or is combined with it (cells of both are occupied).
+    #[arg(long, value_name = "FILE")]
+    pub map: Option<PathBuf>,
+    /// Map size in metres, WIDTHxHEIGHT (or one number for a square).
+    #[arg(long, default_value = "15x15", value_parser = parse_size)]
+    pub size: SizeM,
+    /// Cell side in metres.
+    #[arg(long, default_value_t = 0.05)]
+    pub resolution: f32,
+    /// Which planner.
+    #[arg(long, value_enum, default_value_t = PlannerArg::Astar)]
+    pub planner: PlannerArg,
+    /// Print one JSON object instead of the human summary.
+    #[arg(long)]
+    pub json: bool,
+    /// Draw the map, the grown obstacles, the path, start and goal to this PNG file.
+    #[arg(long, value_name = "OUT.png")]
+    pub png: Option<PathBuf>,
+    /// Pixels per cell in the PNG (default: about 900 px for the longer side).
+    #[arg(long, value_name = "PX")]
+    pub scale: Option<u32>,
+}
+
+/// Map size in metres.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SizeM {
+    /// Width, metres.
+    pub width_m: f32,
+    /// Height, metres.
+    pub height_m: f32,
+}
+
+/// Parse `15x15`, `15X10` or `15`.
+fn parse_size(text: &str) -> Result<SizeM, String> {
+    let number = |t: &str| -> Result<f32, String> {
+        match t.trim().parse::<f32>() {
+            Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+            _ => Err(format!("`{t}` is not a positive number of metres")),
+        }
+    };
+    match text.split_once(['x', 'X']) {
+        Some((w, h)) => Ok(SizeM {
+            width_m: number(w)?,
+            height_m: number(h)?,
+        }),
+        None => {
+            let s = number(text)?;
+            Ok(SizeM {
+                width_m: s,
+                height_m: s,
+            })
+        }
+    }
+}
+
+/// Planner choice on the command line.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlannerArg {
+    /// Breadth-first search (the seed's planner): fewest 8-connected steps.
+    Bfs,
+    /// A* with octile costs: shortest 8-connected path.
+    Astar,
+    /// Any-angle (Theta*-like): straight segments with line of sight, never longer than A*.
+    Anyangle,
+}
+
+impl From<PlannerArg> for PlannerKind {
+    fn from(p: PlannerArg) -> Self {
+        match p {
+            PlannerArg::Bfs => PlannerKind::Bfs,
+            PlannerArg::Astar => PlannerKind::AStar,
+            PlannerArg::Anyangle => PlannerKind::AnyAngle,
+        }
+    }
+}
+
+/// The planner's name as in the JSON and on the command line.
+pub fn planner_name(kind: PlannerKind) -> &'static str {
+    match kind {
+        PlannerKind::Bfs => "bfs",
+        PlannerKind::AStar => "astar",
+        PlannerKind::AnyAngle => "anyangle",
+    }
+}
+
+/// The status's name as in the JSON.
+pub fn status_name(status: PlanStatus) -> &'static str {
+    match status {
+        PlanStatus::Found => "found",
+        PlanStatus::Unreachable => "unreachable",
+        PlanStatus::StartBlocked => "start_blocked",
+        PlanStatus::GoalBlocked => "goal_blocked",
+        PlanStatus::OutOfBounds => "out_of_bounds",
+    }
+}
+
+/// Everything read from the files, and the map built from it.
+#[derive(Clone, Debug)]
+pub struct World {
+    /// The mission parameters.
+    pub params: Params,
+    /// The polygons of the `.da` file (empty without `--world`).
+    pub obstacles: Obstacles,
+    /// The grid the planner uses: grown polygons, plus the saved map's cells.
+    pub grid: Box<Grid400>,
+    /// The cells of the polygon outlines themselves, not grown (for the picture).
+    pub raw: Box<Grid400>,
+    /// The saved map's cells alone, when `--map` was given (for the picture).
+    pub saved: Option<Box<Grid400>>,
+    /// Half-side of the growth square, cells.
+    pub expansion_cells: u16,
+    /// The `--world` file, if any.
+    pub world_path: Option<PathBuf>,
+    /// The `--map` file, if any.
+    pub map_path: Option<PathBuf>,
+}
+
+/// The geometry for a size and resolution, refused with a clear message when it does not fit
+/// a [`Grid400`].
+pub fn geometry_for(size: SizeM, resolution_m: f32) -> anyhow::Result<GridGeometry> {
+    let g = GridGeometry::from_size_m(size.width_m, size.height_m, resolution_m).map_err(|e| {
+        anyhow::anyhow!(
+            "--size {}x{} at --resolution {resolution_m}: {e}",
+            size.width_m,
+            size.height_m
+        )
+    })?;
+    if g.cell_count() > HOST_CELLS || Grid400::new(g).is_err() {
+        bail!(
+            "--size {}x{} m at --resolution {} m needs {}x{} cells, more than the {} cells \
+             (400x400) of the host grid; use a coarser --resolution or a smaller --size",
+            size.width_m,
+            size.height_m,
+            resolution_m,
+            g.width(),
+            g.height(),
+            HOST_CELLS
+        );
+    }
+    Ok(g)
+}
+
+/// Read the files named by `args` and build the map.
+pub fn load(args: &Args) -> anyhow::Result<World> {
+    let geometry = geometry_for(args.size, args.resolution)?;
+    let params = world_io::read_par(&args.params)?;
+    let empty = || {
+        Grid400::new(geometry)
+            .map(Box::new)
+            .map_err(|e| anyhow::anyhow!("{e}"))
+    };
+    let mut grid = empty()?;
+    let mut raw = empty()?;
+    let expansion_cells = geometry.expansion_cells(params.robot_radius_m);
+    let obstacles = match &args.world {
+        Some(path) => world_io::read_da(path)?,
+        None => Obstacles::new(),
+    };
+    for polygon in obstacles.iter() {
+        mark_polygon(&mut grid, polygon, expansion_cells);
+        mark_polygon(&mut raw, polygon, 0);
+    }
+    let saved = match &args.map {
+        Some(path) => {
+            let mut saved = empty()?;
+            world_io::read_saved_map(path, &mut saved)?;
+            grid.union_with(&saved);
+            Some(saved)
+        }
+        None => None,
+    };
+    Ok(World {
+        params,
+        obstacles,
+        grid,
+        raw,
+        saved,
+        expansion_cells,
+        world_path: args.world.clone(),
+        map_path: args.map.clone(),
+    })
+}
+
+/// One planning run.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The planner used.
+    pub kind: PlannerKind,
+    /// Status, cost, length, expanded cells.
+    pub report: PlanReport,
+    /// The path, world metres, start to goal (empty unless found).
+    pub path: Vec<PointM>,
+    /// Wall-clock time of the planner call, microseconds.
+    pub elapsed_us: u64,
+}
+
+/// Run planner `kind` from the `.par` start to its goal on `world`'s grid.
+///
+/// The planner's scratch and queue (a few MB for 400 x 400 cells) live on the stack of a
+/// helper thread with a large stack, so this works from any thread (test threads have 2 MB).
+pub fn plan(world: &World, kind: PlannerKind) -> anyhow::Result<Outcome> {
+    let grid: &Grid400 = &world.grid;
+    let (start, goal) = (world.params.start, world.params.goal);
+    let result = std::thread::scope(|scope| {
+        std::thread::Builder::new()
+            .name("planner".into())
+            .stack_size(64 * 1024 * 1024)
+            .spawn_scoped(scope, move || {
+                let mut planner = HostPlanner::new();
+                let mut path = PathM::new();
+                let t0 = Instant::now();
+                let report = planner.plan(kind, grid, start, goal, &mut path);
+                let elapsed_us = t0.elapsed().as_micros() as u64;
+                report.map(|report| Outcome {
+                    kind,
+                    report,
+                    path: path.iter().copied().collect(),
+                    elapsed_us,
+                })
+            })
+            .map(|h| h.join())
+    });
+    match result {
+        Ok(Ok(Ok(outcome))) => Ok(outcome),
+        Ok(Ok(Err(e))) => bail!("planner {}: {e:?}", planner_name(kind)),
+        Ok(Err(_)) => bail!("planner {} failed unexpectedly", planner_name(kind)),
+        Err(e) => bail!("cannot start the planner thread: {e}"),
+    }
+}
+
+/// The JSON object of `twil plan --json`, fields in this order. Other commands add fields
+/// (e.g. `--remote` adds `mcu_instructions`, `static_ram_bytes`) through [`PlanJson::extra`],
+/// which is flattened after the standard fields.
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct PlanJson {
+    /// `found`, `unreachable`, `start_blocked`, `goal_blocked` or `out_of_bounds`.
+    pub status: &'static str,
+    /// `bfs`, `astar` or `anyangle`.
+    pub planner: &'static str,
+    /// The path, `[x, y]` in world metres, start to goal (empty unless found).
+    pub path: Vec<[f32; 2]>,
+    /// Euclidean length of the path, metres.
+    pub length_m: f32,
+    /// Cells expanded by the planner.
+    pub expanded: u32,
+    /// Planner wall-clock time, microseconds.
+    pub elapsed_us: u64,
+    /// Further fields, serialized after the standard ones.
+    #[serde(flatten)]
+    pub extra: serde_json::Map<String, serde_json::Value>,
+}
+
+/// The JSON object for a planning outcome (add fields to `extra` before printing).
+pub fn plan_json(outcome: &Outcome) -> PlanJson {
+    PlanJson {
+        status: status_name(outcome.report.status),
+        planner: planner_name(outcome.kind),
+        path: outcome.path.iter().map(|p| [p.x_m, p.y_m]).collect(),
+        length_m: outcome.report.length_m,
+        expanded: outcome.report.expanded,
+        elapsed_us: outcome.elapsed_us,
+        extra: serde_json::Map::new(),
+    }
+}
+
+/// A short human summary (several lines, no trailing newline).
+pub fn summary(world: &World, outcome: &Outcome) -> String {
+    let g = world.grid.geometry();
+    let source = match (&world.world_path, &world.map_path) {
+        (Some(w), Some(m)) => format!("{} + {}", w.display(), m.display()),
+        (Some(w), None) => w.display().to_string(),
+        (None, Some(m)) => m.display().to_string(),
+        (None, None) => "(empty map)".into(),
+    };
+    let p = &world.params;
+    let mut s = format!(
+        "{} on {source}: {}x{} cells of {} m, robot radius {} m grows obstacles by {} cells\n\
+         start ({}, {}) m -> goal ({}, {}) m: {}",
+        planner_name(outcome.kind),
+        g.width(),
+        g.height(),
+        g.resolution_m(),
+        p.robot_radius_m,
+        world.expansion_cells,
+        p.start.x_m,
+        p.start.y_m,
+        p.goal.x_m,
+        p.goal.y_m,
+        status_name(outcome.report.status),
+    );
+    if outcome.report.status == PlanStatus::Found {
+        s.push_str(&format!(
+            ", {} points, {:.3} m",
+            outcome.path.len(),
+            outcome.report.length_m
+        ));
+    }
+    s.push_str(&format!(
+        "\n{} cells expanded in {} us",
+        outcome.report.expanded, outcome.elapsed_us
+    ));
+    s
+}
+
+/// Draw `world` and `outcome` to a PNG: faint metre lines, grown obstacles (light orange),
+/// saved-map cells (grey), the obstacle polygons (grey, filled, outlined dark), the path
+/// (blue, with its vertices), the robot's size at the start (a disc with its heading), start
+/// (green disc) and goal (red diamond), and a two-line caption (legend, result).
+pub fn render_png(
+    world: &World,
+    outcome: &Outcome,
+    out: &Path,
+    px_per_cell: Option<u32>,
+) -> anyhow::Result<()> {
+    let g = *world.grid.geometry();
+    let scale = px_per_cell.unwrap_or_else(|| Canvas::fit_scale(g, 900));
+    let mut c = Canvas::with_caption(g, scale, 2)?;
+    c.draw_metre_lines(1.0, palette::METRE_LINES);
+    c.draw_grid(&world.grid, palette::EXPANSION);
+    if let Some(saved) = &world.saved {
+        c.draw_grid(saved, palette::OBSTACLE);
+    }
+    c.draw_grid(&world.raw, palette::OBSTACLE);
+    c.fill_polygons(&world.obstacles, palette::OBSTACLE);
+    c.draw_polygons(&world.obstacles, palette::POLYGON, 1.0);
+    let p = &world.params;
+    c.draw_robot(
+        p.start,
+        p.robot_radius_m,
+        p.initial_heading_deg.to_radians(),
+        palette::ROBOT,
+    );
+    c.draw_polyline(&outcome.path, palette::PATH, 3.0);
+    if outcome.path.len() <= 16 {
+        c.draw_points(&outcome.path, 3.0, palette::PATH);
+    }
+    c.draw_marker(p.start, Marker::Disc, 14, palette::START);
+    c.draw_marker(p.goal, Marker::Diamond, 18, palette::GOAL);
+    let mut legend = vec![
+        ("obstacle", palette::OBSTACLE),
+        ("grown by radius", palette::EXPANSION),
+        ("path", palette::PATH),
+        ("start", palette::START),
+        ("goal", palette::GOAL),
+    ];
+    if world.saved.is_some() {
+        legend[0].0 = "obstacle/saved map";
+    }
+    c.caption_legend(0, &legend);
+    let mut result = format!(
+        "{}: {}",
+        planner_name(outcome.kind),
+        status_name(outcome.report.status).replace('_', " ")
+    );
+    if outcome.report.status == PlanStatus::Found {
+        result.push_str(&format!(", {:.2} m", outcome.report.length_m));
+    }
+    result.push_str(&format!(
+        ", {} cells expanded, {}x{} cells of {} m",
+        outcome.report.expanded,
+        g.width(),
+        g.height(),
+        g.resolution_m()
+    ));
+    c.caption_text(1, &result, palette::TEXT);
+    c.save_png(out)?;
+    Ok(())
+}
 
 /// Run `twil plan`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`twil plan` is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let world = load(&args)?;
+    let outcome = plan(&world, args.planner.into())?;
+    if let Some(out) = &args.png {
+        render_png(&world, &outcome, out, args.scale)
+            .with_context(|| format!("drawing {}", out.display()))?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string(&plan_json(&outcome))?);
+    } else {
+        println!("{}", summary(&world, &outcome));
+        if let Some(out) = &args.png {
+            println!("picture: {}", out.display());
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse() {
+        assert_eq!(
+            parse_size("15x10").unwrap(),
+            SizeM {
+                width_m: 15.0,
+                height_m: 10.0
+            }
+        );
+        assert_eq!(parse_size("7").unwrap().height_m, 7.0);
+        assert!(parse_size("0x3").is_err());
+        assert!(parse_size("ax3").is_err());
+        assert!(parse_size("inf").is_err());
+    }
+
+    #[test]
+    fn geometry_beyond_the_host_grid_is_refused() {
+        let ok = geometry_for(parse_size("20x20").unwrap(), 0.05).unwrap();
+        assert_eq!((ok.width(), ok.height()), (400, 400));
+        let e = geometry_for(parse_size("30x15").unwrap(), 0.05).unwrap_err();
+        assert!(e.to_string().contains("600x300 cells"), "{e}");
+        assert!(geometry_for(parse_size("15").unwrap(), 0.0).is_err());
+        assert!(geometry_for(parse_size("1e9").unwrap(), 0.05).is_err());
+    }
+
+    #[test]
+    fn json_keeps_field_order_and_takes_extras() {
+        let outcome = Outcome {
+            kind: PlannerKind::AnyAngle,
+            report: PlanReport {
+                status: PlanStatus::Found,
+                expanded: 7,
+                cost: 0,
+                length_m: 1.5,
+            },
+            path: vec![PointM::new(0.25, 0.5), PointM::new(1.75, 0.5)],
+            elapsed_us: 3,
+        };
+        let mut json = plan_json(&outcome);
+        assert_eq!(
+            serde_json::to_string(&json).unwrap(),
+            r#"{"status":"found","planner":"anyangle","path":[[0.25,0.5],[1.75,0.5]],"length_m":1.5,"expanded":7,"elapsed_us":3}"#
+        );
+        json.extra.insert("static_ram_bytes".into(), 42.into());
+        assert!(serde_json::to_string(&json)
+            .unwrap()
+            .ends_with(r#""elapsed_us":3,"static_ram_bytes":42}"#));
+    }
 }
