@@ -1,7 +1,17 @@
 //! Twil firmware for the STM32F405: the link to the host on USART1 and the planner, on RTIC 2.
 //!
-//! All logic is in `twil-core`: this program owns a [`twil_core::link::Device`] (grid, planner,
-//! obstacles, framing) in static memory and moves bytes between it and USART1.
+//! All logic is in `twil-core`: this program owns a [`twil_core::link::Device`] (grid,
+//! obstacles, last path, framing) and a [`twil_core::plan::Planner`] in static memory and moves
+//! bytes between them and USART1.
+//!
+//! ## Memory
+//!
+//! - SRAM (`.bss`): the planner (4-bit scratch for 300 x 300 cells, a [`QUEUE`]-entry open list,
+//!   its path buffer), the receive queue, RTIC's state. Its size is what `static_ram_bytes`
+//!   reports and what the 112 KiB budget is about.
+//! - CCM (64 KiB at 0x1000_0000, `.ccmram`, see `build.rs`): the [`TwilDevice`]: the 300 x 300
+//!   grid, the obstacles, the last path, the frame decoder. Its initial value is stored in
+//!   flash and copied by `init` before anything reads it.
 //!
 //! ## Tasks (highest priority first)
 //!
@@ -40,7 +50,8 @@ use panic_semihosting as _;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use twil_core::grid::words_for_cells;
-use twil_core::link::{Build, Device, DeviceInfo};
+use twil_core::link::{Build, Device, DeviceInfo, PROTOCOL_VERSION};
+use twil_core::plan::Planner;
 
 /// Log a line: defmt over RTT on a board, semihosting under QEMU. Arguments must implement
 /// both `defmt::Format` and `Display` (integers, `&str`).
@@ -64,8 +75,43 @@ pub const QUEUE: usize = 4096;
 /// Bytes of the receive queue (holds one less).
 pub const RX_QUEUE_BYTES: usize = 1024;
 
-/// The device: grid, planner, obstacles, framing.
-pub type TwilDevice = Device<GRID_WORDS, SCRATCH_WORDS, QUEUE>;
+/// The device: grid, obstacles, last path, framing.
+pub type TwilDevice = Device<GRID_WORDS>;
+/// The planner.
+pub type TwilPlanner = Planner<SCRATCH_WORDS, QUEUE>;
+
+/// The device in the CCM. Never read before [`init_ccm`] has copied its initial value.
+#[link_section = ".ccmram.device"]
+static mut DEVICE: TwilDevice = TwilDevice::new(DeviceInfo {
+    protocol_version: PROTOCOL_VERSION,
+    build: Build::Hardware,
+    grid_capacity_cells: 0,
+    planner_capacity_cells: 0,
+    max_polygons: 0,
+    max_vertices: 0,
+    max_frame_bytes: 0,
+    static_ram_bytes: 0,
+});
+
+/// Copy the initial values of `.ccmram` from flash (the start-up code only does this for
+/// `.data`) and hand out the device. Called once, from `init`.
+fn init_ccm() -> &'static mut TwilDevice {
+    extern "C" {
+        static mut __sccmram: u32;
+        static mut __eccmram: u32;
+        static __siccmram: u32;
+    }
+    // SAFETY: runs once, in `init` with interrupts disabled, before anything touches the CCM
+    // statics; the linker script (`ccm.x`) makes [__sccmram, __eccmram) word-aligned in the CCM
+    // and __siccmram its image in flash, of the same length.
+    unsafe {
+        let start = core::ptr::addr_of_mut!(__sccmram);
+        let end = core::ptr::addr_of_mut!(__eccmram);
+        let words = (end as usize - start as usize) / 4;
+        core::ptr::copy_nonoverlapping(core::ptr::addr_of!(__siccmram), start, words);
+        &mut *core::ptr::addr_of_mut!(DEVICE)
+    }
+}
 
 /// SysTick reload: the full 24 bits.
 const SYST_RELOAD: u32 = 0x00FF_FFFF;
@@ -99,15 +145,16 @@ fn instructions() -> u64 {
     }
 }
 
-/// Statically allocated RAM (`.data` + `.bss` + `.uninit`), from the linker's symbols.
+/// Statically allocated SRAM (`.data` + `.bss` + `.uninit`, not the CCM), from the linker's
+/// symbols.
 fn static_ram_bytes() -> u32 {
     extern "C" {
-        static __sheap: u8;
+        static __euninit: u8;
     }
     const RAM_ORIGIN: usize = 0x2000_0000;
     // Only the address of the linker symbol is taken, never its contents.
-    let heap_start = core::ptr::addr_of!(__sheap) as usize;
-    heap_start.saturating_sub(RAM_ORIGIN) as u32
+    let end = core::ptr::addr_of!(__euninit) as usize;
+    end.saturating_sub(RAM_ORIGIN) as u32
 }
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
@@ -120,7 +167,7 @@ mod app {
         prelude::*,
         serial::{Config, Rx, Serial, Tx},
     };
-    use twil_core::link::{DeviceFrame, Telemetry, PROTOCOL_VERSION};
+    use twil_core::link::{DeviceFrame, Telemetry};
 
     #[shared]
     struct Shared {}
@@ -133,20 +180,12 @@ mod app {
         consumer: Consumer<'static, u8, RX_QUEUE_BYTES>,
         syst: cortex_m::peripheral::SYST,
         device: &'static mut TwilDevice,
+        planner: &'static mut TwilPlanner,
     }
 
     #[init(local = [
         queue: Queue<u8, RX_QUEUE_BYTES> = Queue::new(),
-        device_memory: TwilDevice = TwilDevice::new(DeviceInfo {
-            protocol_version: PROTOCOL_VERSION,
-            build: Build::Hardware,
-            grid_capacity_cells: 0,
-            planner_capacity_cells: 0,
-            max_polygons: 0,
-            max_vertices: 0,
-            max_frame_bytes: 0,
-            static_ram_bytes: 0,
-        }),
+        planner_memory: TwilPlanner = TwilPlanner::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let rcc = cx.device.RCC.constrain();
@@ -173,7 +212,7 @@ mod app {
         syst.disable_counter();
         syst.enable_interrupt();
 
-        let device = cx.local.device_memory;
+        let device = init_ccm();
         device.handler.set_build(if cfg!(feature = "qemu") {
             Build::Qemu
         } else {
@@ -198,6 +237,7 @@ mod app {
                 consumer,
                 syst,
                 device,
+                planner: cx.local.planner_memory,
             },
         )
     }
@@ -227,7 +267,7 @@ mod app {
         SYST_WRAPS.fetch_add(1, Ordering::AcqRel);
     }
 
-    #[idle(local = [consumer, tx, syst, device])]
+    #[idle(local = [consumer, tx, syst, device, planner])]
     fn idle(cx: idle::Context) -> ! {
         let mut chunk = [0u8; 64];
         loop {
@@ -261,11 +301,12 @@ mod app {
             cx.local.syst.clear_current();
             cx.local.syst.enable_counter();
             let tx = &mut *cx.local.tx;
-            cx.local
-                .device
-                .receive(&chunk[..n], &mut instructions, &mut |bytes: &[u8]| {
-                    write_all(tx, bytes)
-                });
+            cx.local.device.receive(
+                &chunk[..n],
+                &mut **cx.local.planner,
+                &mut instructions,
+                &mut |bytes: &[u8]| write_all(tx, bytes),
+            );
             cx.local.syst.disable_counter();
         }
     }

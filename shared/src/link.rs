@@ -11,8 +11,9 @@
 //!   postcard (`0x00` ends every frame). The receiver splits frames with postcard's
 //!   [`CobsAccumulator`](postcard::accumulator::CobsAccumulator). Nothing here is hand-written:
 //!   COBS, CRC and the varints are postcard's and the `crc` crate's.
-//! - [`handler`]: what the device does. [`Handler`] owns the grid, the planner, the obstacles
-//!   being uploaded and the last path; [`Handler::handle`] turns one request into one reply.
+//! - [`handler`]: what the device does. [`Handler`] owns the grid, the obstacles being uploaded
+//!   and the last path; [`Handler::handle`] turns one request into one reply, using the planner
+//!   it is given.
 //!   [`Device`] adds the framing: bytes in, frames out. The firmware is a thin shell around a
 //!   `Device` in static memory; the host tests drive the same `Device` in a loopback.
 //!
@@ -30,13 +31,15 @@
 //! use twil_core::link::frame::{FrameDecoder, MAX_FRAME_BYTES};
 //!
 //! // A small device (grid of 64 x 64 cells) on the host, driven through the wire format.
-//! let mut device: Device<128, 512, 256> = Device::new(Default::default());
+//! use twil_core::plan::Planner;
+//! let mut device: Device<128> = Device::new(Default::default());
+//! let mut planner = Planner::<512, 256>::new();
 //! let mut wire = [0u8; MAX_FRAME_BYTES];
 //! let request = RequestFrame { seq: 7, request: Request::Ping { nonce: 42 } };
 //! let bytes = frame::encode(&request, &mut wire).unwrap();
 //!
 //! let mut answer = Vec::new();
-//! device.receive(bytes, &mut || 0, &mut |out: &[u8]| answer.extend_from_slice(out));
+//! device.receive(bytes, &mut planner, &mut || 0, &mut |out: &[u8]| answer.extend_from_slice(out));
 //!
 //! let mut decoder = FrameDecoder::new();
 //! let (got, _rest) = decoder.feed::<DeviceFrame>(&answer);

@@ -1,10 +1,11 @@
 //! The device side of the link: the state a request acts on, and one reply per request.
 //!
-//! [`Handler`] owns everything in fixed-size fields: the grid (`GRID_WORDS` words), the planner
-//! (`SCRATCH_WORDS` scratch words, a `QUEUE`-entry open list), the stored obstacles
-//! ([`Obstacles`]), the polygon being uploaded (at most [`MAX_PENDING_VERTICES`]) and the last
-//! path. [`Handler::new`] is a `const fn`, so the firmware places the whole handler in a
-//! `static` at compile time.
+//! [`Handler`] owns everything in fixed-size fields: the grid (`GRID_WORDS` words), the stored
+//! obstacles ([`Obstacles`]), the polygon being uploaded (at most [`MAX_PENDING_VERTICES`]) and
+//! the last path. [`Handler::new`] is a `const fn`, so the firmware places the whole handler in a
+//! `static` at compile time. The planner (its scratch and queue, the largest block of memory) is
+//! passed to each call instead of owned, so that the firmware can place it in another memory
+//! region than the rest (the STM32F405 has 112 + 16 KiB of SRAM and a separate 64 KiB CCM).
 //!
 //! [`Device`] puts a [`FrameDecoder`] in front: [`Device::receive`] takes bytes as they arrive
 //! and emits one encoded reply frame per request frame (and one error frame per undecodable
@@ -32,11 +33,10 @@ pub const MAX_PENDING_VERTICES: usize = 256;
 pub const MAX_ROBOT_RADIUS_M: f32 = 10.0;
 
 /// The request handler and all the state it acts on.
-pub struct Handler<const GRID_WORDS: usize, const SCRATCH_WORDS: usize, const QUEUE: usize> {
+pub struct Handler<const GRID_WORDS: usize> {
     info: DeviceInfo,
     params: MapParams,
     grid: Grid<GRID_WORDS>,
-    planner: Planner<SCRATCH_WORDS, QUEUE>,
     obstacles: Obstacles,
     pending: Vec<PointM, MAX_PENDING_VERTICES>,
     path: PathM,
@@ -45,9 +45,7 @@ pub struct Handler<const GRID_WORDS: usize, const SCRATCH_WORDS: usize, const QU
     rx_dropped_bytes: u32,
 }
 
-impl<const GRID_WORDS: usize, const SCRATCH_WORDS: usize, const QUEUE: usize>
-    Handler<GRID_WORDS, SCRATCH_WORDS, QUEUE>
-{
+impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
     /// Compile-time check: the grid holds at least one cell.
     const GRID_NOT_EMPTY: () = assert!(GRID_WORDS > 0, "the grid needs at least one word");
 
@@ -89,7 +87,6 @@ impl<const GRID_WORDS: usize, const SCRATCH_WORDS: usize, const QUEUE: usize>
         let mut info = info;
         info.protocol_version = PROTOCOL_VERSION;
         info.grid_capacity_cells = Grid::<GRID_WORDS>::CAPACITY_CELLS as u32;
-        info.planner_capacity_cells = Planner::<SCRATCH_WORDS, QUEUE>::CAPACITY_CELLS as u32;
         info.max_polygons = MAX_POLYGONS as u16;
         info.max_vertices = MAX_VERTICES as u16;
         info.max_frame_bytes = MAX_FRAME_BYTES as u16;
@@ -97,7 +94,6 @@ impl<const GRID_WORDS: usize, const SCRATCH_WORDS: usize, const QUEUE: usize>
             info,
             params,
             grid,
-            planner: Planner::new(),
             obstacles: Obstacles::new(),
             pending: Vec::new(),
             path: Vec::new(),
@@ -159,17 +155,24 @@ impl<const GRID_WORDS: usize, const SCRATCH_WORDS: usize, const QUEUE: usize>
     /// Answer one request. `clock` returns a count of instructions (or cycles); it is read just
     /// before and after the planner runs. A request that fails answers [`Reply::Error`] and
     /// changes nothing.
-    pub fn handle(&mut self, request: &Request, clock: &mut impl FnMut() -> u64) -> Reply {
+    pub fn handle<const SCRATCH_WORDS: usize, const QUEUE: usize>(
+        &mut self,
+        request: &Request,
+        planner: &mut Planner<SCRATCH_WORDS, QUEUE>,
+        clock: &mut impl FnMut() -> u64,
+    ) -> Reply {
         self.requests = self.requests.saturating_add(1);
-        match self.try_handle(request, clock) {
+        self.info.planner_capacity_cells = Planner::<SCRATCH_WORDS, QUEUE>::CAPACITY_CELLS as u32;
+        match self.try_handle(request, planner, clock) {
             Ok(reply) => reply,
             Err(error) => Reply::Error(error),
         }
     }
 
-    fn try_handle(
+    fn try_handle<const SCRATCH_WORDS: usize, const QUEUE: usize>(
         &mut self,
         request: &Request,
+        planner: &mut Planner<SCRATCH_WORDS, QUEUE>,
         clock: &mut impl FnMut() -> u64,
     ) -> Result<Reply, ErrorReply> {
         match request {
@@ -216,9 +219,7 @@ impl<const GRID_WORDS: usize, const SCRATCH_WORDS: usize, const QUEUE: usize>
             }
             Request::Plan { kind, start, goal } => {
                 let before = clock();
-                let result = self
-                    .planner
-                    .plan(*kind, &self.grid, *start, *goal, &mut self.path);
+                let result = planner.plan(*kind, &self.grid, *start, *goal, &mut self.path);
                 let after = clock();
                 let report = result.map_err(|e| {
                     self.path.clear();
@@ -445,15 +446,13 @@ fn plan_error(e: PlanError) -> ErrorReply {
 }
 
 /// A [`Handler`] behind a [`FrameDecoder`]: bytes in, reply frames out.
-pub struct Device<const GRID_WORDS: usize, const SCRATCH_WORDS: usize, const QUEUE: usize> {
+pub struct Device<const GRID_WORDS: usize> {
     decoder: FrameDecoder,
     /// The handler (public so the firmware can set its build and RAM figures).
-    pub handler: Handler<GRID_WORDS, SCRATCH_WORDS, QUEUE>,
+    pub handler: Handler<GRID_WORDS>,
 }
 
-impl<const GRID_WORDS: usize, const SCRATCH_WORDS: usize, const QUEUE: usize>
-    Device<GRID_WORDS, SCRATCH_WORDS, QUEUE>
-{
+impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
     /// A device with an empty map (see [`Handler::new`]).
     pub const fn new(info: DeviceInfo) -> Self {
         Self {
@@ -463,10 +462,11 @@ impl<const GRID_WORDS: usize, const SCRATCH_WORDS: usize, const QUEUE: usize>
     }
 
     /// Feed received bytes; for every complete frame, call `send` once with the encoded reply
-    /// frame (terminator included). `clock` is passed to [`Handler::handle`].
-    pub fn receive(
+    /// frame (terminator included). `planner` and `clock` are passed to [`Handler::handle`].
+    pub fn receive<const SCRATCH_WORDS: usize, const QUEUE: usize>(
         &mut self,
         bytes: &[u8],
+        planner: &mut Planner<SCRATCH_WORDS, QUEUE>,
         clock: &mut impl FnMut() -> u64,
         send: &mut impl FnMut(&[u8]),
     ) {
@@ -476,7 +476,10 @@ impl<const GRID_WORDS: usize, const SCRATCH_WORDS: usize, const QUEUE: usize>
             rest = r;
             let (seq, reply) = match got {
                 None => continue,
-                Some(Ok(frame)) => (Some(frame.seq), self.handler.handle(&frame.request, clock)),
+                Some(Ok(frame)) => (
+                    Some(frame.seq),
+                    self.handler.handle(&frame.request, planner, clock),
+                ),
                 Some(Err(fault)) => self.handler.fault_reply(fault),
             };
             self.send_frame(&DeviceFrame::Reply { seq, reply }, send);
@@ -515,8 +518,9 @@ mod tests {
     use crate::raster::mark_polygon;
     use std::vec::Vec as StdVec;
 
-    /// Small capacities keep the tests fast: a 300 x 300 grid, a small planner.
-    type TestDevice = Device<{ words_for_cells(300 * 300) }, 64, 64>;
+    /// A 300 x 300 grid; a small planner (512 cells) unless a test brings its own.
+    type TestDevice = Device<{ words_for_cells(300 * 300) }>;
+    type SmallPlanner = Planner<64, 64>;
 
     fn device() -> std::boxed::Box<TestDevice> {
         std::boxed::Box::new(Device::new(DeviceInfo::default()))
@@ -525,7 +529,10 @@ mod tests {
     /// Send requests as frames through the device; decode every frame it sends back.
     fn exchange(device: &mut TestDevice, stream: &[u8]) -> StdVec<DeviceFrame> {
         let mut out = StdVec::new();
-        device.receive(stream, &mut || 0, &mut |b: &[u8]| out.extend_from_slice(b));
+        let mut planner = SmallPlanner::new();
+        device.receive(stream, &mut planner, &mut || 0, &mut |b: &[u8]| {
+            out.extend_from_slice(b)
+        });
         let mut decoder = FrameDecoder::new();
         let mut frames = StdVec::new();
         let mut rest = &out[..];
@@ -948,6 +955,83 @@ mod tests {
         );
         assert_eq!(error_code(&r), Some(ErrorCode::PlannerCapacity), "{r:?}");
         assert!(d.handler.path().is_empty());
+    }
+
+    #[test]
+    fn a_plan_over_the_link_equals_the_planner_on_the_same_grid() {
+        use crate::plan::SCRATCH_WORDS_300;
+        let mut d = device();
+        let params = MapParams {
+            robot_radius_m: 0.3,
+            ..MapParams::default()
+        };
+        call(&mut d, 1, Request::SetParams(params));
+        let wall = [PointM::new(2.0, 7.0), PointM::new(12.0, 7.5)];
+        call(&mut d, 2, chunk(0, &wall, true));
+        let (start, goal) = (PointM::new(7.0, 2.0), PointM::new(7.0, 13.0));
+        let mut planner = std::boxed::Box::new(Planner::<SCRATCH_WORDS_300, 4096>::new());
+        for kind in [PlannerKind::Bfs, PlannerKind::AStar, PlannerKind::AnyAngle] {
+            let mut out = StdVec::new();
+            let mut t = 0u64;
+            let request = frame(10, Request::Plan { kind, start, goal });
+            d.receive(
+                &request,
+                &mut *planner,
+                &mut || {
+                    t += 1000;
+                    t
+                },
+                &mut |b: &[u8]| out.extend_from_slice(b),
+            );
+            let mut decoder = FrameDecoder::new();
+            let (got, _) = decoder.feed::<DeviceFrame>(&out);
+            let summary = match got {
+                Some(Ok(DeviceFrame::Reply {
+                    reply: Reply::Plan(s),
+                    ..
+                })) => s,
+                other => panic!("{other:?}"),
+            };
+            assert_eq!(
+                summary.mcu_instructions, 1000,
+                "the clock is read around the planner"
+            );
+            // The reference: the same planner type on a grid built directly.
+            let mut grid = Grid300::new(GridGeometry::seed_default()).unwrap();
+            mark_polygon(
+                &mut grid,
+                &wall,
+                GridGeometry::seed_default().expansion_cells(0.3),
+            );
+            let mut path = PathM::new();
+            let mut reference = std::boxed::Box::new(Planner::<SCRATCH_WORDS_300, 4096>::new());
+            let report = reference.plan(kind, &grid, start, goal, &mut path).unwrap();
+            assert_eq!(summary.status, PlanStatus::Found);
+            assert_eq!(
+                (
+                    summary.status,
+                    summary.expanded,
+                    summary.cost,
+                    summary.length_m
+                ),
+                (report.status, report.expanded, report.cost, report.length_m)
+            );
+            // Read the path in chunks.
+            let mut points = StdVec::new();
+            while points.len() < summary.points as usize {
+                let offset = points.len() as u16;
+                match call(&mut d, 11, Request::ReadPath { offset }) {
+                    Reply::PathChunk {
+                        points: p, total, ..
+                    } => {
+                        assert_eq!(total, summary.points);
+                        points.extend_from_slice(&p);
+                    }
+                    other => panic!("{other:?}"),
+                }
+            }
+            assert_eq!(&points[..], &path[..]);
+        }
     }
 
     /// Print the example frame of docs/protocol.md (`cargo test -p twil-core example_frame --
