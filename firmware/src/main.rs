@@ -120,19 +120,29 @@ static SYST_WRAPS: AtomicU32 = AtomicU32::new(0);
 /// Bytes dropped by the receive interrupt (queue full or a line error).
 static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
 
-/// SysTick ticks since [`start_ticks`]: wraps × 2^24 + the count down of the current period.
+/// SysTick ticks counted so far (the counter runs only while requests are handled): wraps ×
+/// 2^24 + the count down of the current period. Differences of two readings are elapsed ticks.
 fn ticks() -> u64 {
+    use cortex_m::peripheral::{SCB, SYST};
     loop {
-        let before = SYST_WRAPS.load(Ordering::Acquire);
-        let value = cortex_m::peripheral::SYST::get_current();
-        let after = SYST_WRAPS.load(Ordering::Acquire);
-        if before == after {
-            return ((before as u64) << 24) + (SYST_RELOAD - value) as u64;
+        // The wrap is counted by the exception on the 1 -> 0 step; a wrap whose exception has
+        // not run yet shows as a pending SysTick. Readings that straddle either are retried.
+        let wraps_before = SYST_WRAPS.load(Ordering::Acquire);
+        let pending_before = SCB::is_pendst_pending();
+        let value = SYST::get_current();
+        let pending_after = SCB::is_pendst_pending();
+        let wraps_after = SYST_WRAPS.load(Ordering::Acquire);
+        if wraps_before != wraps_after || pending_before != pending_after {
+            continue;
         }
+        let wraps = wraps_before as u64 + pending_before as u64;
+        // Ticks into the period: 0 at the 1 -> 0 step, then RELOAD, RELOAD - 1, ... count 1, 2, ...
+        let into_period = (SYST_RELOAD - value).wrapping_add(1) & SYST_RELOAD;
+        return (wraps << 24) + into_period as u64;
     }
 }
 
-/// Instructions (QEMU) or cycles (board) since [`start_ticks`].
+/// Instructions (QEMU) or cycles (board) counted so far (see [`ticks`]).
 ///
 /// QEMU's SysTick runs at 168 MHz of virtual time; with `-icount shift=0` one instruction takes
 /// 1 ns, so instructions = ticks × 1000 / 168. On a board at 168 MHz, ticks are core cycles.
@@ -209,8 +219,14 @@ mod app {
         let mut syst = cx.core.SYST;
         syst.set_clock_source(SystClkSource::Core);
         syst.set_reload(SYST_RELOAD);
-        syst.disable_counter();
+        syst.clear_current();
         syst.enable_interrupt();
+        // The first tick after a clear loads the reload value without counting a wrap: let it
+        // happen now, so that `ticks()` only ever grows. From here the counter is paused and
+        // resumed, never cleared.
+        syst.enable_counter();
+        while cortex_m::peripheral::SYST::get_current() == 0 {}
+        syst.disable_counter();
 
         let device = init_ccm();
         device.handler.set_build(if cfg!(feature = "qemu") {
@@ -226,7 +242,6 @@ mod app {
             &mut |bytes: &[u8]| write_all(&mut tx, bytes),
         );
         log!("twil firmware up: static RAM {} bytes", static_ram_bytes());
-
         let (producer, consumer) = cx.local.queue.split();
         (
             Shared {},
@@ -269,6 +284,18 @@ mod app {
 
     #[idle(local = [consumer, tx, syst, device, planner])]
     fn idle(cx: idle::Context) -> ! {
+        // Calibration of the instruction count: `asm::delay(n)` runs n + 1 times a two-instruction
+        // loop, so 500 000 gives 1 000 002 instructions (+ a few for the reads).
+        cx.local.syst.enable_counter();
+        let before = instructions();
+        cortex_m::asm::delay(500_000);
+        let after = instructions();
+        cx.local.syst.disable_counter();
+        log!(
+            "calibration: 1000002 instructions measured as {}",
+            (after - before) as u32
+        );
+
         let mut chunk = [0u8; 64];
         loop {
             let mut n = 0;
@@ -297,8 +324,6 @@ mod app {
             }
             // SysTick runs only while requests are handled, so the core sleeps otherwise (and
             // QEMU's virtual clock has no timer to chase).
-            SYST_WRAPS.store(0, Ordering::Release);
-            cx.local.syst.clear_current();
             cx.local.syst.enable_counter();
             let tx = &mut *cx.local.tx;
             cx.local.device.receive(

@@ -119,7 +119,8 @@ impl Remote {
                 (Box::new(port), None)
             }
         };
-        Ok(Self {
+        let started_qemu = qemu.is_some();
+        let mut remote = Self {
             io,
             decoder: FrameDecoder::new(),
             backlog: Vec::new(),
@@ -128,7 +129,33 @@ impl Remote {
             telemetry: Vec::new(),
             unmatched_errors: Vec::new(),
             qemu,
-        })
+        };
+        if started_qemu {
+            // QEMU's USART drops bytes until the firmware has enabled it: wait for the boot
+            // report before sending anything.
+            remote.wait_for_boot(Duration::from_secs(15))?;
+        }
+        Ok(remote)
+    }
+
+    /// Wait for [`Telemetry::Boot`] (sent once by the firmware after reset).
+    pub fn wait_for_boot(&mut self, patience: Duration) -> Result<()> {
+        let deadline = Instant::now() + patience;
+        loop {
+            match self.next_frame(deadline) {
+                Ok(Ok(DeviceFrame::Telemetry(t))) => {
+                    let boot = matches!(t, Telemetry::Boot { .. });
+                    self.telemetry.push(t);
+                    if boot {
+                        return Ok(());
+                    }
+                }
+                Ok(_) => {}
+                Err(e) => {
+                    return Err(e).context("the firmware did not report its boot");
+                }
+            }
+        }
     }
 
     /// The QEMU process behind this link, if `--remote qemu`.
@@ -136,11 +163,24 @@ impl Remote {
         self.qemu.as_ref()
     }
 
-    /// Version handshake: the device's description, or an error if the versions differ.
+    /// Version handshake: the device's description, or an error if the versions differ. Sent
+    /// up to 3 times, 2 s apart (a board may still be starting when the port opens).
     pub fn hello(&mut self) -> Result<DeviceInfo> {
-        match self.call(Request::Hello {
-            protocol_version: PROTOCOL_VERSION,
-        })? {
+        let timeout = std::mem::replace(&mut self.timeout, Duration::from_secs(2));
+        let mut result = Err(anyhow!("no attempt"));
+        for _ in 0..3 {
+            result = self.call(Request::Hello {
+                protocol_version: PROTOCOL_VERSION,
+            });
+            if let Err(e) = &result {
+                if e.to_string().starts_with("no reply") {
+                    continue;
+                }
+            }
+            break;
+        }
+        self.timeout = timeout;
+        match result.context("version handshake")? {
             Reply::Hello(info) => Ok(info),
             other => bail!("unexpected reply to Hello: {other:?}"),
         }
@@ -174,6 +214,9 @@ impl Remote {
         let mut wire = Vec::with_capacity(bytes.len() + 1);
         wire.push(0);
         wire.extend_from_slice(bytes);
+        if std::env::var_os("TWIL_LINK_DEBUG").is_some() {
+            eprintln!("twil: link: -> seq {seq} ({} bytes)", wire.len());
+        }
         self.send_raw(&wire)?;
         let deadline = Instant::now() + self.timeout;
         loop {
@@ -218,7 +261,12 @@ impl Remote {
             }
             match self.io.read(&mut buf) {
                 Ok(0) => bail!("the device closed the link"),
-                Ok(n) => self.backlog.extend_from_slice(&buf[..n]),
+                Ok(n) => {
+                    if std::env::var_os("TWIL_LINK_DEBUG").is_some() {
+                        eprintln!("twil: link: <- {n} bytes");
+                    }
+                    self.backlog.extend_from_slice(&buf[..n])
+                }
                 Err(e)
                     if matches!(
                         e.kind(),
@@ -487,4 +535,61 @@ mod tests {
         assert!("tcp:nohost".parse::<RemoteSpec>().is_err());
         assert!("".parse::<RemoteSpec>().is_err());
     }
+}
+
+/// `twil plan --remote DEVICE`: upload `world` to the device, let it plan the same request as
+/// `local` (the host's outcome), and return the device's outcome. `extra` receives the JSON
+/// fields `mcu_instructions`, `static_ram_bytes` and `matches_host` (the device's status,
+/// expanded cells and path equal the host's).
+pub fn plan_on_device(
+    device: &RemoteSpec,
+    world: &crate::cmd::plan::World,
+    local: &crate::cmd::plan::Outcome,
+    extra: &mut serde_json::Map<String, serde_json::Value>,
+) -> Result<crate::cmd::plan::Outcome> {
+    let (mut remote, info) = Remote::connect(device)?;
+    let geometry = *world.grid.geometry();
+    if geometry.cell_count() as u64 > info.grid_capacity_cells as u64 {
+        bail!(
+            "the map has {}x{} cells but the device's grid holds {} cells",
+            geometry.width(),
+            geometry.height(),
+            info.grid_capacity_cells
+        );
+    }
+    let params = MapParams {
+        width_cells: geometry.width(),
+        height_cells: geometry.height(),
+        resolution_m: geometry.resolution_m(),
+        robot_radius_m: world.params.robot_radius_m,
+    };
+    remote
+        .upload_world(params, &world.obstacles)
+        .context("uploading the world to the device")?;
+    if world.saved.is_some() {
+        // A saved map has no polygons: send the host's map as it is.
+        remote
+            .write_map(world.grid.words())
+            .context("uploading the saved map to the device")?;
+    }
+    let started = Instant::now();
+    let planned = remote.plan(local.kind, world.params.start, world.params.goal)?;
+    let elapsed_us = started.elapsed().as_micros() as u64;
+    let s = planned.summary;
+    let outcome = crate::cmd::plan::Outcome {
+        kind: local.kind,
+        report: twil_core::plan::PlanReport {
+            status: s.status,
+            expanded: s.expanded,
+            cost: s.cost,
+            length_m: s.length_m,
+        },
+        path: planned.path,
+        elapsed_us,
+    };
+    let matches = outcome.report == local.report && outcome.path == local.path;
+    extra.insert("mcu_instructions".into(), s.mcu_instructions.into());
+    extra.insert("static_ram_bytes".into(), info.static_ram_bytes.into());
+    extra.insert("matches_host".into(), matches.into());
+    Ok(outcome)
 }
