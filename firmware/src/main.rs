@@ -71,7 +71,7 @@ pub const GRID_WORDS: usize = words_for_cells(GRID_CELLS);
 /// Planner scratch words (4 bits per cell, 8 cells per word).
 pub const SCRATCH_WORDS: usize = GRID_CELLS.div_ceil(8);
 /// Planner open-list capacity, entries.
-pub const QUEUE: usize = 4096;
+pub const QUEUE: usize = 5120;
 /// Bytes of the receive queue (holds one less).
 pub const RX_QUEUE_BYTES: usize = 1024;
 
