@@ -440,8 +440,8 @@ fn mcu_bench() {
         info.static_ram_bytes, info.grid_capacity_cells, info.planner_capacity_cells
     );
     println!();
-    println!("| grid 300x300 | planner | status | expanded | MCU instructions | per expanded cell | budget 5 M |");
-    println!("|---|---|---|---:|---:|---:|---|");
+    println!("| grid 300x300 | planner | status | expanded | queue peak | MCU instructions | per expanded cell | budget 5 M |");
+    println!("|---|---|---|---:|---:|---:|---:|---|");
     let mut over = Vec::new();
     for (name, (grid, start, goal)) in &cases {
         remote.call(Request::ClearMap).expect("clear");
@@ -453,29 +453,29 @@ fn mcu_bench() {
         let (start, goal) = (g.center_of(*start), g.center_of(*goal));
         for kind in [PlannerKind::Bfs, PlannerKind::AStar, PlannerKind::AnyAngle] {
             let kind_name = host_plan::planner_name(kind);
-            match remote
+            let reply = remote
                 .request(Request::Plan { kind, start, goal })
-                .expect("link")
-            {
-                Reply::Plan(s) => {
-                    let ok = s.mcu_instructions <= PLAN_INSTRUCTION_BUDGET;
-                    println!(
-                        "| {name} | {kind_name} | {:?} | {} | {} | {:.0} | {} |",
-                        s.status,
-                        s.expanded,
-                        s.mcu_instructions,
-                        s.mcu_instructions as f64 / s.expanded.max(1) as f64,
-                        if ok { "ok" } else { "OVER" }
-                    );
-                    if !ok {
-                        over.push(format!("{name} {kind_name}: {}", s.mcu_instructions));
-                    }
-                }
-                Reply::Error(e) => {
-                    println!("| {name} | {kind_name} | error: {e} | | | | FAIL |");
-                    over.push(format!("{name} {kind_name}: {e}"));
-                }
+                .expect("link");
+            let status = match remote.call(Request::Status).expect("status") {
+                Reply::Status(s) => s,
                 other => panic!("{other:?}"),
+            };
+            let (text, failed) = match reply {
+                Reply::Plan(s) => (format!("{:?}", s.status), false),
+                Reply::Error(e) => (format!("error: {e}"), true),
+                other => panic!("{other:?}"),
+            };
+            let n = status.last_plan_instructions;
+            let ok = n <= PLAN_INSTRUCTION_BUDGET && !failed;
+            println!(
+                "| {name} | {kind_name} | {text} | {} | {} | {n} | {:.0} | {} |",
+                status.last_plan_expanded,
+                status.last_plan_queue_peak,
+                n as f64 / status.last_plan_expanded.max(1) as f64,
+                if ok { "ok" } else { "**over**" }
+            );
+            if !ok {
+                over.push(format!("{name} {kind_name}: {n} ({text})"));
             }
         }
     }

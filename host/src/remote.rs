@@ -469,7 +469,7 @@ impl Qemu {
             None => Stdio::null(),
         };
         let child = Command::new("qemu-system-arm")
-            .args(Self::args(elf, &format!("tcp:127.0.0.1:{port}")))
+            .args(Self::args(elf, &format!("tcp:127.0.0.1:{port},nodelay=on")))
             .stdin(Stdio::null())
             .stdout(log)
             .stderr(Stdio::piped())

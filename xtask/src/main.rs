@@ -260,7 +260,7 @@ fn qemu(port: Option<&str>) -> Result<()> {
         "-monitor",
         "none",
         "-serial",
-        &format!("tcp:127.0.0.1:{port},server=on,wait=on"),
+        &format!("tcp:127.0.0.1:{port},server=on,wait=on,nodelay=on"),
         "-semihosting-config",
         "enable=on,target=native",
         "-icount",

@@ -43,6 +43,15 @@ pub struct Handler<const GRID_WORDS: usize> {
     requests: u32,
     frame_errors: u32,
     rx_dropped_bytes: u32,
+    last_plan: LastPlan,
+}
+
+/// What the status reports about the last plan.
+#[derive(Clone, Copy, Default)]
+struct LastPlan {
+    instructions: u64,
+    expanded: u32,
+    queue_peak: u32,
 }
 
 impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
@@ -100,6 +109,11 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             requests: 0,
             frame_errors: 0,
             rx_dropped_bytes: 0,
+            last_plan: LastPlan {
+                instructions: 0,
+                expanded: 0,
+                queue_peak: 0,
+            },
         }
     }
 
@@ -221,6 +235,11 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                 let before = clock();
                 let result = planner.plan(*kind, &self.grid, *start, *goal, &mut self.path);
                 let after = clock();
+                self.last_plan = LastPlan {
+                    instructions: after.saturating_sub(before),
+                    expanded: planner.last_report().map(|r| r.expanded).unwrap_or(0),
+                    queue_peak: planner.queue_peak(),
+                };
                 let report = result.map_err(|e| {
                     self.path.clear();
                     plan_error(e)
@@ -297,6 +316,9 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             requests: self.requests,
             frame_errors: self.frame_errors,
             rx_dropped_bytes: self.rx_dropped_bytes,
+            last_plan_instructions: self.last_plan.instructions,
+            last_plan_expanded: self.last_plan.expanded,
+            last_plan_queue_peak: self.last_plan.queue_peak,
         }
     }
 
@@ -955,6 +977,7 @@ mod tests {
         );
         assert_eq!(error_code(&r), Some(ErrorCode::PlannerCapacity), "{r:?}");
         assert!(d.handler.path().is_empty());
+        assert_eq!(d.handler.status().last_plan_expanded, 0);
     }
 
     #[test]

@@ -229,6 +229,13 @@ pub struct DeviceStatus {
     /// Bytes the receiver had to drop (its queue was full); always 0 unless the firmware's
     /// interrupt could not keep up.
     pub rx_dropped_bytes: u32,
+    /// Instructions spent by the last `Plan` request, also when it failed (e.g. a path longer
+    /// than the planner's buffer).
+    pub last_plan_instructions: u64,
+    /// Cells the last search expanded, also when the plan failed afterwards (0 if unknown).
+    pub last_plan_expanded: u32,
+    /// Largest number of open-list entries the last search used.
+    pub last_plan_queue_peak: u32,
 }
 
 /// What the device answers.
