@@ -517,26 +517,6 @@ impl Drop for Qemu {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn remote_specs_parse() {
-        assert_eq!("qemu".parse::<RemoteSpec>().unwrap(), RemoteSpec::Qemu);
-        assert_eq!(
-            "tcp:127.0.0.1:4000".parse::<RemoteSpec>().unwrap(),
-            RemoteSpec::Tcp("127.0.0.1:4000".into())
-        );
-        assert_eq!(
-            "/dev/ttyUSB0".parse::<RemoteSpec>().unwrap(),
-            RemoteSpec::Serial("/dev/ttyUSB0".into())
-        );
-        assert!("tcp:nohost".parse::<RemoteSpec>().is_err());
-        assert!("".parse::<RemoteSpec>().is_err());
-    }
-}
-
 /// `twil plan --remote DEVICE`: upload `world` to the device, let it plan the same request as
 /// `local` (the host's outcome), and return the device's outcome. `extra` receives the JSON
 /// fields `mcu_instructions`, `static_ram_bytes` and `matches_host` (the device's status,
@@ -592,4 +572,24 @@ pub fn plan_on_device(
     extra.insert("static_ram_bytes".into(), info.static_ram_bytes.into());
     extra.insert("matches_host".into(), matches.into());
     Ok(outcome)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn remote_specs_parse() {
+        assert_eq!("qemu".parse::<RemoteSpec>().unwrap(), RemoteSpec::Qemu);
+        assert_eq!(
+            "tcp:127.0.0.1:4000".parse::<RemoteSpec>().unwrap(),
+            RemoteSpec::Tcp("127.0.0.1:4000".into())
+        );
+        assert_eq!(
+            "/dev/ttyUSB0".parse::<RemoteSpec>().unwrap(),
+            RemoteSpec::Serial("/dev/ttyUSB0".into())
+        );
+        assert!("tcp:nohost".parse::<RemoteSpec>().is_err());
+        assert!("".parse::<RemoteSpec>().is_err());
+    }
 }
