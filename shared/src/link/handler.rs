@@ -1057,6 +1057,104 @@ mod tests {
         }
     }
 
+    fn any_request() -> impl proptest::strategy::Strategy<Value = Request> {
+        use proptest::prelude::*;
+        let point = (-1.0f32..16.0, -1.0f32..16.0).prop_map(|(x, y)| PointM::new(x, y));
+        prop_oneof![
+            any::<u32>().prop_map(|nonce| Request::Ping { nonce }),
+            any::<u16>().prop_map(|v| Request::Hello {
+                protocol_version: v
+            }),
+            Just(Request::Status),
+            Just(Request::ClearMap),
+            (1u16..400, 1u16..400, 0.01f32..1.0, -1.0f32..2.0).prop_map(|(w, h, r, radius)| {
+                Request::SetParams(MapParams {
+                    width_cells: w,
+                    height_cells: h,
+                    resolution_m: r,
+                    robot_radius_m: radius,
+                })
+            }),
+            (
+                0u16..80,
+                proptest::collection::vec(point.clone(), 0..OBSTACLE_CHUNK_VERTICES),
+                any::<bool>()
+            )
+                .prop_map(|(first_vertex, v, last)| Request::ObstacleChunk {
+                    first_vertex,
+                    vertices: Vec::from_slice(&v).unwrap(),
+                    last,
+                }),
+            (
+                0u32..3000,
+                proptest::collection::vec(any::<u32>(), 0..MAP_CHUNK_WORDS)
+            )
+                .prop_map(|(offset_words, w)| Request::WriteMap {
+                    offset_words,
+                    words: Vec::from_slice(&w).unwrap(),
+                }),
+            (0u32..3000).prop_map(|offset_words| Request::ReadMap { offset_words }),
+            (0u16..50).prop_map(|offset| Request::ReadPath { offset }),
+            (point.clone(), point).prop_map(|(start, goal)| Request::Plan {
+                kind: PlannerKind::Bfs,
+                start,
+                goal,
+            }),
+        ]
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        /// Whatever the requests, each gets exactly one reply with its sequence number, the
+        /// map never has bits set past its last cell, and the state stays within capacity.
+        #[test]
+        fn every_request_gets_exactly_one_reply(
+            requests in proptest::collection::vec(any_request(), 1..40)
+        ) {
+            let mut d = device();
+            for (i, request) in requests.into_iter().enumerate() {
+                let seq = i as u16;
+                let frames = exchange(&mut d, &frame(seq, request));
+                proptest::prop_assert_eq!(frames.len(), 1);
+                let is_reply_to_seq =
+                    matches!(frames[0], DeviceFrame::Reply { seq: Some(s), .. } if s == seq);
+                proptest::prop_assert!(is_reply_to_seq);
+                let g = *d.handler.grid().geometry();
+                proptest::prop_assert!(d.handler.grid().count_occupied() <= g.cell_count());
+                proptest::prop_assert!(d.handler.obstacles().len() <= MAX_POLYGONS);
+            }
+        }
+
+        /// Random bytes never panic the device and get at most one reply per frame terminator.
+        #[test]
+        fn random_bytes_get_at_most_one_reply_per_frame(
+            bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..3000)
+        ) {
+            let mut d = device();
+            let frames = exchange(&mut d, &bytes);
+            let zeros = bytes.iter().filter(|&&b| b == 0).count();
+            proptest::prop_assert!(frames.len() <= zeros);
+            // The link still works: a leading 0x00 (as the host sends) ends any partial frame,
+            // which gets its own error reply; then the ping is answered.
+            let mut resync = std::vec![0u8];
+            resync.extend(frame(1, Request::Ping { nonce: 3 }));
+            let frames = exchange(&mut d, &resync);
+            proptest::prop_assert!(!frames.is_empty() && frames.len() <= 2, "{:?}", frames);
+            if frames.len() == 2 {
+                let is_error = matches!(
+                    frames[0],
+                    DeviceFrame::Reply { seq: None, reply: Reply::Error(_) }
+                );
+                proptest::prop_assert!(is_error, "{:?}", frames);
+            }
+            proptest::prop_assert_eq!(
+                frames.last(),
+                Some(&DeviceFrame::Reply { seq: Some(1), reply: Reply::Pong { nonce: 3 } })
+            );
+        }
+    }
+
     /// Print the example frame of docs/protocol.md (`cargo test -p twil-core example_frame --
     /// --nocapture`) and pin it so the document cannot go stale silently.
     #[test]
