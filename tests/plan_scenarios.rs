@@ -282,7 +282,7 @@ fn json_has_exactly_the_documented_shape() {
 #[test]
 fn human_summary_and_picture() {
     let dir = tempfile::tempdir().unwrap();
-    let png = dir.path().join("office.png");
+    let png = dir.path().join("new-folder").join("office.png");
     let out = run(&[
         "--world",
         path_str(&common::world("office.da")),

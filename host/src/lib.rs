@@ -2,6 +2,7 @@
 //! other tools share it.
 
 pub mod cmd;
+pub mod cspace;
 pub mod remote;
 pub mod render;
 pub mod world_io;

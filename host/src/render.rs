@@ -115,12 +115,12 @@ pub enum RenderError {
         px_per_cell: u32,
     },
     /// Writing the file failed.
-    #[error("{path}: cannot write the picture: {source}")]
+    #[error("{path}: cannot write the picture: {error}")]
     Save {
         /// The file.
         path: String,
-        /// Why.
-        source: image::ImageError,
+        /// Why (part of the message, so not also a `source`).
+        error: image::ImageError,
     },
 }
 
@@ -255,9 +255,9 @@ impl Canvas {
     pub fn save_png(&self, path: &Path) -> Result<(), RenderError> {
         self.image
             .save_with_format(path, image::ImageFormat::Png)
-            .map_err(|source| RenderError::Save {
+            .map_err(|error| RenderError::Save {
                 path: path.display().to_string(),
-                source,
+                error,
             })
     }
 
@@ -664,33 +664,52 @@ impl Canvas {
         }
     }
 
-    /// Draw `text` on caption line `line` (0 = first line below the map). Does nothing for a
-    /// line that the canvas does not have.
+    /// Draw `text` on caption line `line` (0 = first line below the map), in the 5x7 font at
+    /// scale 2, or 1 when the text would not fit the width. Does nothing for a line that the
+    /// canvas does not have.
     pub fn caption_text(&mut self, line: u32, text: &str, color: Rgb<u8>) {
         if let Some(y) = self.caption_y(line) {
-            self.draw_text(6, y, text, color, 2);
+            let scale = self.caption_scale(Canvas::text_width_px(text, 2));
+            self.draw_text(6, y, text, color, scale);
         }
     }
 
-    /// A legend on caption line `line`: for each entry a colour swatch then its label.
+    /// A legend on caption line `line`: for each entry a colour swatch then its label (scale 2,
+    /// or 1 when the legend would not fit the width).
     pub fn caption_legend(&mut self, line: u32, entries: &[(&str, Rgb<u8>)]) {
         let Some(y) = self.caption_y(line) else {
             return;
         };
+        let width_at_2: u32 = entries
+            .iter()
+            .map(|(label, _)| 36 + Canvas::text_width_px(label, 2))
+            .sum();
+        let scale = self.caption_scale(width_at_2) as i64;
         let saved = self.opacity;
         self.opacity = 1.0;
         let mut x = 6i64;
+        let swatch = 7 * scale;
         for (label, color) in entries {
-            for yy in y..y + 14 {
-                for xx in x..x + 14 {
+            for yy in y..y + swatch {
+                for xx in x..x + swatch {
                     self.put(xx, yy, *color);
                 }
             }
-            x += 20;
-            self.draw_text(x, y, label, palette::TEXT, 2);
-            x += Canvas::text_width_px(label, 2) as i64 + 16;
+            x += swatch + 3 * scale;
+            self.draw_text(x, y, label, palette::TEXT, scale as u32);
+            x += Canvas::text_width_px(label, scale as u32) as i64 + 8 * scale;
         }
         self.opacity = saved;
+    }
+
+    /// Font scale for a caption that is `width_at_2` pixels wide at scale 2: 2 when it fits
+    /// the picture, else 1 (the caption is clipped if even that does not fit).
+    fn caption_scale(&self, width_at_2: u32) -> u32 {
+        if width_at_2.saturating_add(12) <= self.image.width() {
+            2
+        } else {
+            1
+        }
     }
 
     fn caption_y(&self, line: u32) -> Option<i64> {
@@ -1004,7 +1023,13 @@ mod tests {
             .collect();
         assert!(!text_rows.is_empty());
         assert!(text_rows.iter().all(|&y| y >= 60));
-        assert!(count(&img, palette::PATH) >= 14 * 14);
+        // The 80 px wide picture is too narrow for scale 2: the swatch is drawn at scale 1.
+        assert_eq!(count(&img, palette::PATH), 7 * 7);
+        // A wide picture keeps scale 2.
+        let mut wide =
+            Canvas::with_caption(GridGeometry::new(200, 10, 0.1).unwrap(), 2, 1).unwrap();
+        wide.caption_legend(0, &[("PATH", palette::PATH)]);
+        assert_eq!(count(wide.image(), palette::PATH), 14 * 14);
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! Planner benchmark: our BFS and A* against the `pathfinding` crate's `bfs` / `astar` on the same
-//! 300 × 300 grids (open floor, 20 % random obstacles, a maze), same neighbour rule, same costs.
+//! 300 × 300 grids (open floor, 20 % random obstacles, a maze, and the bundled seed worlds
+//! `worlds/{office,corridor,pillars}` grown by the robot radius), same neighbour rule, same costs.
 //!
 //! Run: `cargo bench -p twil-core --bench planners` (optionally `-- REPEATS`, default 30).
 //! For each case and algorithm it prints the fastest time of ours and theirs over the repeats
@@ -15,6 +16,8 @@ use twil_core::plan::{
     PlanError, PlanReport, PlanStatus, Planner, PlannerKind, DIAGONAL_COST, SCRATCH_WORDS_300,
     STRAIGHT_COST,
 };
+use twil_core::raster::mark_polygon;
+use twil_core::world::{parse_da, parse_par, Obstacles};
 
 const SIDE: u16 = 300;
 const QUEUE: usize = 32 * 1024;
@@ -109,6 +112,28 @@ fn maze_case() -> (Grid300, Cell, Cell) {
     (g, Cell::new(1, 1), Cell::new(far, far))
 }
 
+/// A bundled seed world (`worlds/NAME.da` + `.par`), obstacles grown by the robot radius as
+/// the seed does, start and goal from the `.par`.
+fn world_case(name: &str) -> (Grid300, Cell, Cell) {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../worlds/");
+    let read = |ext: &str| {
+        std::fs::read_to_string(format!("{dir}{name}.{ext}"))
+            .unwrap_or_else(|e| panic!("{dir}{name}.{ext}: {e}"))
+    };
+    let params = parse_par(&read("par")).expect("par");
+    let mut obstacles = Obstacles::new();
+    parse_da(&read("da"), &mut obstacles).expect("da");
+    let mut g = empty();
+    let half_side = g.geometry().expansion_cells(params.robot_radius_m);
+    for polygon in obstacles.iter() {
+        mark_polygon(&mut g, polygon, half_side);
+    }
+    let geometry = *g.geometry();
+    let s = geometry.cell_of(params.start).expect("start on the map");
+    let t = geometry.cell_of(params.goal).expect("goal on the map");
+    (g, s, t)
+}
+
 type Node = (u16, u16);
 
 /// The neighbour rule for the oracle, without allocation: at most 8 successors.
@@ -192,7 +217,30 @@ fn main() {
         ("open", open_case()),
         ("random20", random_case(&mut planner)),
         ("maze", maze_case()),
+        ("office", world_case("office")),
+        ("corridor", world_case("corridor")),
+        ("pillars", world_case("pillars")),
     ];
+    // `--only CASE:PLANNER` runs just our planner, `repeats` times, and prints nothing else: for
+    // counting instructions (`perf stat -e instructions:u`, difference of two repeat counts).
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(i) = args.iter().position(|a| a == "--only") {
+        let spec = args.get(i + 1).map(String::as_str).unwrap_or("");
+        let (case, algo) = spec.split_once(':').unwrap_or((spec, "astar"));
+        let kind = match algo {
+            "bfs" => PlannerKind::Bfs,
+            "anyangle" => PlannerKind::AnyAngle,
+            _ => PlannerKind::AStar,
+        };
+        let (_, (g, s, t)) = cases
+            .iter()
+            .find(|(name, _)| *name == case)
+            .expect("case: open, random20, maze, office, corridor or pillars");
+        for _ in 0..repeats {
+            black_box(run(&mut planner, kind, g, *s, *t));
+        }
+        return;
+    }
     println!(
         "300x300 grids, fastest of {repeats} interleaved runs; our scratch {} B + queue {} B",
         SCRATCH_WORDS_300 * 4,

@@ -12,6 +12,7 @@
 //! - [`world`]: obstacle polygons and the seed's `.da` / `.par` text formats.
 //! - [`plan`]: BFS, A* and any-angle planners with static queues and 4-bit scratch cells, and the
 //!   pruning of a path to what the sonar has just seen.
+//! - [`robot`]: the robot's physical constants, in one validated, serializable struct.
 //! - [`sonar`], [`plant`], [`control`], [`trajectory`], [`mission`]: the navigation loop and
 //!   the simulated robot it can drive.
 //! - [`link`]: the host <-> firmware protocol.
@@ -32,6 +33,7 @@ pub mod mission;
 pub mod plan;
 pub mod plant;
 pub mod raster;
+pub mod robot;
 pub mod sonar;
 pub mod trajectory;
 pub mod world;

@@ -7,9 +7,16 @@
 
 use micromath::F32Ext;
 
-/// Square root (micromath's fast approximation).
+/// Square root to full `f32` precision: see [`sqrt_precise`] (micromath's own square root is a
+/// fast estimate up to 6 % off, too coarse for path lengths and odometry).
 #[inline]
 pub fn sqrt(x: f32) -> f32 {
+    sqrt_precise(x)
+}
+
+/// micromath's fast square-root estimate: the starting point of [`sqrt_precise`].
+#[inline]
+fn sqrt_estimate(x: f32) -> f32 {
     F32Ext::sqrt(x)
 }
 
@@ -69,4 +76,140 @@ pub fn wrap_angle_rad(angle_rad: f32) -> f32 {
         a += 2.0 * PI;
     }
     a
+}
+
+/// `e` raised to `x`, relative error below 1e-6 (range reduction by powers of two and a
+/// degree-7 series; plain arithmetic, so every target gets the same bits). Underflows to 0
+/// below −87, overflows to `+∞` above 88; `NaN` stays `NaN`.
+pub fn exp(x: f32) -> f32 {
+    if x.is_nan() {
+        return x;
+    }
+    if x > 88.0 {
+        return f32::INFINITY;
+    }
+    if x < -87.0 {
+        return 0.0;
+    }
+    let ln2 = core::f32::consts::LN_2;
+    let k = floor(x / ln2 + 0.5);
+    // ln 2 in two parts (Cody-Waite) so k·ln2 is subtracted without rounding loss.
+    let r = (x - k * 0.693_145_75) - k * 1.428_606_8e-6; // |r| <= ln2 / 2
+    let mut term = 1.0f32;
+    let mut sum = 1.0f32;
+    for n in 1..=7 {
+        term *= r / n as f32;
+        sum += term;
+    }
+    // 2^k as bits: k is in [-126, 127] here.
+    let scale = f32::from_bits(((k as i32 + 127) as u32) << 23);
+    sum * scale
+}
+
+/// Natural logarithm, absolute error below 1e-6; `NaN` for negative or `NaN` `x`, `−∞` at 0.
+/// (micromath's `ln` is off by up to a few percent, too much for settle times.) Splits
+/// `x = m · 2^e` with `m` in `[√½, √2)` and sums `2·atanh((m−1)/(m+1))`.
+pub fn ln(x: f32) -> f32 {
+    if x.is_nan() || x < 0.0 {
+        return f32::NAN;
+    }
+    if x == 0.0 {
+        return f32::NEG_INFINITY;
+    }
+    if x.is_infinite() {
+        return x;
+    }
+    // Subnormals: scale up first.
+    let (x, extra) = if x < f32::MIN_POSITIVE {
+        (x * 16_777_216.0, -24i32)
+    } else {
+        (x, 0)
+    };
+    let bits = x.to_bits();
+    let mut e = ((bits >> 23) & 0xff) as i32 - 127 + extra;
+    let mut m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000); // [1, 2)
+    if m > core::f32::consts::SQRT_2 {
+        m *= 0.5;
+        e += 1;
+    }
+    let s = (m - 1.0) / (m + 1.0); // |s| < 0.172
+    let s2 = s * s;
+    let series =
+        s * (2.0 + s2 * (2.0 / 3.0 + s2 * (2.0 / 5.0 + s2 * (2.0 / 7.0 + s2 * (2.0 / 9.0)))));
+    series + e as f32 * core::f32::consts::LN_2
+}
+
+/// Square root to full `f32` precision (within an ulp): micromath's square root is a fast estimate
+/// that can be 6 % off (`sqrt(2.25)` gives 1.5625), refined here by three Newton steps, which
+/// are plain arithmetic and so identical on every target. `NaN` for negative or `NaN` input.
+pub fn sqrt_precise(x: f32) -> f32 {
+    if x.is_nan() || x < 0.0 {
+        return f32::NAN;
+    }
+    if x == 0.0 || x.is_infinite() {
+        return x;
+    }
+    // Subnormals: scale by 2^24 (the root by 2^12) so the estimate is meaningful.
+    let (v, unscale) = if x < f32::MIN_POSITIVE {
+        (x * 16_777_216.0, 1.0 / 4096.0)
+    } else {
+        (x, 1.0)
+    };
+    let mut y = sqrt_estimate(v);
+    if !(y.is_finite() && y > 0.0) {
+        y = v;
+    }
+    for _ in 0..3 {
+        y = 0.5 * (y + v / y);
+    }
+    y * unscale
+}
+
+/// `sqrt(x² + y²)` with [`sqrt_precise`].
+pub fn hypot_precise(x: f32, y: f32) -> f32 {
+    sqrt_precise(x * x + y * y)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    #[test]
+    fn exp_and_ln_are_accurate() {
+        for i in -800..800 {
+            let x = i as f32 * 0.1;
+            let e = super::exp(x) as f64;
+            let exact = (x as f64).exp();
+            assert!(
+                ((e - exact) / exact).abs() < 2e-6,
+                "exp({x}) = {e} vs {exact}"
+            );
+        }
+        for i in 1..2000 {
+            let x = i as f32 * 0.0123;
+            let l = super::ln(x) as f64;
+            assert!((l - (x as f64).ln()).abs() < 2e-6, "ln({x}) = {l}");
+        }
+        assert!((super::ln(1.0e-40) as f64 - (1.0e-40f64).ln()).abs() < 1e-4);
+        assert!(super::ln(-1.0).is_nan());
+        assert_eq!(super::ln(0.0), f32::NEG_INFINITY);
+        assert_eq!(super::exp(100.0), f32::INFINITY);
+        assert_eq!(super::exp(-100.0), 0.0);
+        assert!(super::exp(f32::NAN).is_nan());
+    }
+
+    #[test]
+    fn sqrt_precise_is_precise() {
+        for i in 0..100_000 {
+            let x = i as f32 * 0.013 + 1.0e-3;
+            let r = super::sqrt_precise(x) as f64;
+            let exact = (x as f64).sqrt();
+            assert!(((r - exact) / exact).abs() < 2e-7, "sqrt({x}) = {r}");
+        }
+        assert_eq!(super::sqrt_precise(2.25), 1.5);
+        assert!((super::sqrt_precise(1.0e-40) as f64 - 1.0e-20).abs() < 1e-25);
+        assert!(super::sqrt_precise(-1.0).is_nan());
+        assert_eq!(super::sqrt_precise(f32::INFINITY), f32::INFINITY);
+        assert_eq!(super::hypot_precise(3.0, 4.0), 5.0);
+    }
 }

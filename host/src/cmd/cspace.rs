@@ -1,10 +1,331 @@
-//! `twil cspace` (not written yet).
+//! `twil cspace`: plan for the two-joint manipulator of seed 000 in its configuration space.
+//!
+//! Reads a `.ROB` file, builds the configuration map for the given joint increments, runs the
+//! any-angle A* from start to goal (joint values), and writes what was asked: the map (`.MAP`),
+//! the path (`.TRA`, 1-based indices as in the thesis), a PNG of the map with the path beside
+//! the workspace, a GIF of the arm moving along the path, and a JSON summary on stdout. All the
+//! logic is `twil_core::cspace`; this file reads and writes files.
+//!
+//! The exit code is 0 whenever the search ran, whatever its status (`found`, `unreachable`,
+//! `start_blocked`, ...); it is 1 for unreadable or malformed files and impossible increments.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use serde::Serialize;
+use twil_core::cspace::{
+    map::ConfigMap,
+    rob::{parse_rob, Robot},
+    search::{path_is_free, path_length, NodeSet, Search, SearchReport, SearchStatus},
+    tra::Trajectory,
+};
+
+use crate::cspace::render::{self, Ink, Scene};
+
+/// Which cells become search nodes.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Nodes {
+    /// Convex corners of the collision regions (the thesis' method).
+    #[default]
+    Corners,
+    /// Every free cell next to a collision.
+    Boundary,
+    /// Every free cell (slow).
+    All,
+}
+
+impl From<Nodes> for NodeSet {
+    fn from(n: Nodes) -> Self {
+        match n {
+            Nodes::Corners => NodeSet::Corners,
+            Nodes::Boundary => NodeSet::Boundary,
+            Nodes::All => NodeSet::All,
+        }
+    }
+}
 
 /// Arguments of `twil cspace`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// The robot and obstacles (`.ROB`, seed 000 appendix A.1/B.1).
+    #[arg(long, value_name = "F.ROB")]
+    pub rob: PathBuf,
+    /// Increments of joint 1 and joint 2 (degrees for rotational joints, units for prismatic).
+    #[arg(
+        long,
+        value_name = "D1,D2",
+        value_parser = parse_pair,
+        allow_hyphen_values = true,
+        required_unless_present = "from_map"
+    )]
+    pub increments: Option<[f32; 2]>,
+    /// Plan on this configuration map (`.MAP`, e.g. one edited by hand) instead of building it;
+    /// the `.ROB` still gives the arm for the pictures and which joints wrap.
+    #[arg(long, value_name = "F.MAP")]
+    pub from_map: Option<PathBuf>,
+    /// Start configuration, joint units (snapped to the nearest map values).
+    #[arg(long, value_name = "A,B", value_parser = parse_pair, allow_hyphen_values = true)]
+    pub start: [f32; 2],
+    /// Goal configuration, joint units.
+    #[arg(long, value_name = "C,D", value_parser = parse_pair, allow_hyphen_values = true)]
+    pub goal: [f32; 2],
+    /// Search nodes.
+    #[arg(long, value_enum, default_value_t = Nodes::Corners)]
+    pub nodes: Nodes,
+    /// Write the configuration map here (`.MAP`).
+    #[arg(long, value_name = "OUT.MAP")]
+    pub map: Option<PathBuf>,
+    /// Write the path here (`.TRA`, 1-based indices).
+    #[arg(long, value_name = "OUT.TRA")]
+    pub tra: Option<PathBuf>,
+    /// Write a PNG of the map with the path and of the workspace.
+    #[arg(long, value_name = "OUT.png")]
+    pub png: Option<PathBuf>,
+    /// Write a GIF of the arm moving along the path.
+    #[arg(long, value_name = "OUT.gif")]
+    pub gif: Option<PathBuf>,
+    /// Frames of the GIF.
+    #[arg(long, default_value_t = 60, value_parser = clap::value_parser!(u16).range(2..=1000))]
+    pub frames: u16,
+    /// A reference path (`.TRA`, e.g. the thesis' one): drawn in orange, checked against the map
+    /// and its length reported.
+    #[arg(long, value_name = "REF.TRA")]
+    pub compare: Option<PathBuf>,
+    /// Print a JSON summary on stdout instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The JSON summary.
+#[derive(Serialize, Debug)]
+pub struct Summary {
+    /// `found`, `unreachable`, `start_outside`, `goal_outside`, `start_blocked`, `goal_blocked`.
+    pub status: &'static str,
+    /// Path corners in joint units, start first.
+    pub path: Vec<[f32; 2]>,
+    /// Path length in joint units, `Σ √(Δq₁² + Δq₂²)`.
+    pub length: f32,
+    /// `[NC, NL]`: values of joint 1 and of joint 2 in the map.
+    pub cells: [u16; 2],
+    /// Free configurations in the map.
+    pub free_cells: usize,
+    /// Search nodes (start, goal and corners).
+    pub nodes: u32,
+    /// Nodes expanded by A*.
+    pub expanded: u32,
+    /// Line tests made.
+    pub line_tests: u32,
+    /// The reference path of `--compare`, if given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub compare: Option<CompareSummary>,
+}
+
+/// The `--compare` part of the summary.
+#[derive(Serialize, Debug)]
+pub struct CompareSummary {
+    /// Its length in joint units.
+    pub length: f32,
+    /// `true` when every segment passes the line test on our map.
+    pub free: bool,
+}
+
+fn read(path: &Path) -> anyhow::Result<String> {
+    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
+}
+
+/// Parse `A,B` into two finite numbers.
+pub fn parse_pair(s: &str) -> Result<[f32; 2], String> {
+    let mut it = s.split(',').map(|t| t.trim().parse::<f32>());
+    match (it.next(), it.next(), it.next()) {
+        (Some(Ok(a)), Some(Ok(b)), None) if a.is_finite() && b.is_finite() => Ok([a, b]),
+        _ => Err(format!(
+            "expected two numbers separated by a comma, got `{s}`"
+        )),
+    }
+}
+
+/// Read and check a `.ROB` file; errors name the file, line, field and value.
+pub fn load_robot(path: &Path) -> anyhow::Result<Robot> {
+    let text = read(path)?;
+    parse_rob(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}
+
+/// Read a `.MAP` file; which joints wrap comes from the robot.
+pub fn load_map(path: &Path, robot: &Robot) -> anyhow::Result<ConfigMap> {
+    let text = read(path)?;
+    let wraps = [robot.joints[0].wraps(), robot.joints[1].wraps()];
+    let (_, map) = ConfigMap::parse_map(&text, wraps)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(map)
+}
+
+/// Read a `.TRA` file.
+pub fn load_tra(path: &Path) -> anyhow::Result<Trajectory> {
+    let text = read(path)?;
+    Trajectory::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}
 
 /// Run `twil cspace`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`twil cspace` is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let (start, goal) = (args.start, args.goal);
+    let robot = load_robot(&args.rob)?;
+    let map = match (&args.from_map, args.increments) {
+        (Some(path), increments) => {
+            let map = load_map(path, &robot)?;
+            let axes = map.axes();
+            let own = [axes[0].increment, axes[1].increment];
+            if let Some(inc) = increments.filter(|inc| *inc != own) {
+                bail!(
+                    "--increments {},{} disagree with {} ({},{})",
+                    inc[0],
+                    inc[1],
+                    path.display(),
+                    own[0],
+                    own[1]
+                );
+            }
+            map
+        }
+        (None, Some(increments)) => {
+            ConfigMap::build(&robot, increments).map_err(|e| anyhow::anyhow!("{e}"))?
+        }
+        (None, None) => bail!("--increments is needed unless --from-map is given"),
+    };
+    let increments = [map.axes()[0].increment, map.axes()[1].increment];
+    let mut search = Box::new(Search::new());
+    let report: SearchReport = search
+        .run(&map, start, goal, args.nodes.into())
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let axes = map.axes();
+    let to_q = |p: &[i32; 2]| [axes[0].value(p[0]), axes[1].value(p[1])];
+    let path_q: Vec<[f32; 2]> = report.path.iter().map(to_q).collect();
+    let rob_name = args
+        .rob
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+
+    let compare = match &args.compare {
+        Some(p) => {
+            let t = load_tra(p)?;
+            let idx = t.to_map_indices();
+            let q: Vec<[f32; 2]> = (0..t.points.len()).filter_map(|k| t.value(k)).collect();
+            let same_grid = t.min == [axes[0].min, axes[1].min]
+                && t.increments == [axes[0].increment, axes[1].increment];
+            let free = same_grid && path_is_free(&map, &idx);
+            Some((
+                q,
+                CompareSummary {
+                    length: path_length(&idx, t.increments),
+                    free,
+                },
+            ))
+        }
+        None => None,
+    };
+
+    if let Some(out) = &args.map {
+        let mut text = String::new();
+        map.write_map(&rob_name, &mut text)?;
+        std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+    }
+    if let Some(out) = &args.tra {
+        if report.status == SearchStatus::Found {
+            let t = Trajectory::from_map_indices(
+                &rob_name,
+                [axes[0].min, axes[1].min],
+                increments,
+                &report.path,
+            );
+            let mut text = String::new();
+            t.write(&mut text)?;
+            std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+        } else {
+            eprintln!("twil: no path, so no {} written", out.display());
+        }
+    }
+    let mut legend = Vec::new();
+    if report.status == SearchStatus::Found {
+        legend.push((format!("path {:.1}", report.length), Ink::Path));
+    } else {
+        legend.push((report.status.as_str().replace('_', " "), Ink::Path));
+    }
+    if let Some((_, c)) = &compare {
+        legend.push((format!("reference {:.1}", c.length), Ink::Compare));
+    }
+    let scene = Scene {
+        legend,
+        robot: &robot,
+        map: &map,
+        path: &path_q,
+        start,
+        goal,
+        compare: compare.as_ref().map(|c| c.0.as_slice()),
+    };
+    if let Some(out) = &args.png {
+        render::write_png(&scene, out)?;
+    }
+    if let Some(out) = &args.gif {
+        render::write_gif(&scene, args.frames as usize, out)?;
+    }
+
+    let (nc, nl) = map.size();
+    let summary = Summary {
+        status: report.status.as_str(),
+        path: path_q.clone(),
+        length: report.length,
+        cells: [nc, nl],
+        free_cells: map.free_count(),
+        nodes: report.nodes,
+        expanded: report.expanded,
+        line_tests: report.line_tests,
+        compare: compare.map(|c| c.1),
+    };
+    let mut text = String::new();
+    if args.json {
+        text = serde_json::to_string(&summary)?;
+        text.push('\n');
+    } else {
+        use std::fmt::Write as _;
+        writeln!(
+            text,
+            "map {nc} x {nl} (joint 1 x joint 2), {} free of {}",
+            summary.free_cells,
+            nc as usize * nl as usize
+        )?;
+        writeln!(
+            text,
+            "status {}: {} points, length {:.3} (joint units); {} nodes, {} expanded, {} line tests",
+            summary.status,
+            summary.path.len(),
+            summary.length,
+            summary.nodes,
+            summary.expanded,
+            summary.line_tests
+        )?;
+        for q in &summary.path {
+            writeln!(text, "  {:>9.3} {:>9.3}", q[0], q[1])?;
+        }
+        if let Some(c) = &summary.compare {
+            writeln!(
+                text,
+                "reference path: length {:.3}, {} on this map",
+                c.length,
+                if c.free {
+                    "collision-free"
+                } else {
+                    "NOT collision-free"
+                }
+            )?;
+        }
+    }
+    // A closed pipe (`| head`) is not an error worth a panic.
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(anyhow::Error::new(e).context("writing to stdout"))
+        }
+        _ => Ok(()),
+    }
 }

@@ -171,24 +171,32 @@ pub struct World {
 /// The geometry for a size and resolution, refused with a clear message when it does not fit
 /// a [`Grid400`].
 pub fn geometry_for(size: SizeM, resolution_m: f32) -> anyhow::Result<GridGeometry> {
-    let g = GridGeometry::from_size_m(size.width_m, size.height_m, resolution_m).map_err(|e| {
+    let what = format!(
+        "--size {}x{} m at --resolution {resolution_m} m",
+        size.width_m, size.height_m
+    );
+    if !(resolution_m.is_finite() && resolution_m > 0.0) {
+        bail!("{what}: the resolution must be a positive number of metres");
+    }
+    if resolution_m > size.width_m.min(size.height_m) {
+        bail!("{what}: a cell is larger than the map");
+    }
+    // Cells per side, computed in f64 so that absurd values give a readable count.
+    let cells = |side_m: f32| (side_m as f64 / resolution_m as f64).ceil();
+    let (w, h) = (cells(size.width_m), cells(size.height_m));
+    let too_big = || {
         anyhow::anyhow!(
-            "--size {}x{} at --resolution {resolution_m}: {e}",
-            size.width_m,
-            size.height_m
+            "{what} needs about {w:.0}x{h:.0} cells, more than the {HOST_CELLS} cells (400x400) \
+             of the host grid; use a coarser --resolution or a smaller --size"
         )
-    })?;
+    };
+    if w * h > HOST_CELLS as f64 * 1.01 {
+        return Err(too_big());
+    }
+    let g = GridGeometry::from_size_m(size.width_m, size.height_m, resolution_m)
+        .map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
     if g.cell_count() > HOST_CELLS || Grid400::new(g).is_err() {
-        bail!(
-            "--size {}x{} m at --resolution {} m needs {}x{} cells, more than the {} cells \
-             (400x400) of the host grid; use a coarser --resolution or a smaller --size",
-            size.width_m,
-            size.height_m,
-            resolution_m,
-            g.width(),
-            g.height(),
-            HOST_CELLS
-        );
+        return Err(too_big());
     }
     Ok(g)
 }
@@ -290,10 +298,11 @@ pub struct PlanJson {
     pub status: &'static str,
     /// `bfs`, `astar` or `anyangle`.
     pub planner: &'static str,
-    /// The path, `[x, y]` in world metres, start to goal (empty unless found).
-    pub path: Vec<[f32; 2]>,
-    /// Euclidean length of the path, metres.
-    pub length_m: f32,
+    /// The path, `[x, y]` in world metres, start to goal (empty unless found), rounded to
+    /// 0.1 mm so that `f32` noise (`7.5750003`) does not show.
+    pub path: Vec<[f64; 2]>,
+    /// Euclidean length of the path, metres, rounded to 0.1 mm.
+    pub length_m: f64,
     /// Cells expanded by the planner.
     pub expanded: u32,
     /// Planner wall-clock time, microseconds.
@@ -303,13 +312,22 @@ pub struct PlanJson {
     pub extra: serde_json::Map<String, serde_json::Value>,
 }
 
+/// Metres rounded to 0.1 mm, as `f64` so that the JSON shows the short decimal.
+pub fn round_m(value_m: f32) -> f64 {
+    (value_m as f64 * 1e4).round() / 1e4
+}
+
 /// The JSON object for a planning outcome (add fields to `extra` before printing).
 pub fn plan_json(outcome: &Outcome) -> PlanJson {
     PlanJson {
         status: status_name(outcome.report.status),
         planner: planner_name(outcome.kind),
-        path: outcome.path.iter().map(|p| [p.x_m, p.y_m]).collect(),
-        length_m: outcome.report.length_m,
+        path: outcome
+            .path
+            .iter()
+            .map(|p| [round_m(p.x_m), round_m(p.y_m)])
+            .collect(),
+        length_m: round_m(outcome.report.length_m),
         expanded: outcome.report.expanded,
         elapsed_us: outcome.elapsed_us,
         extra: serde_json::Map::new(),
@@ -358,7 +376,8 @@ pub fn summary(world: &World, outcome: &Outcome) -> String {
 /// Draw `world` and `outcome` to a PNG: faint metre lines, grown obstacles (light orange),
 /// saved-map cells (grey), the obstacle polygons (grey, filled, outlined dark), the path
 /// (blue, with its vertices), the robot's size at the start (a disc with its heading), start
-/// (green disc) and goal (red diamond), and a two-line caption (legend, result).
+/// (green disc) and goal (red diamond), and a two-line caption (legend, result). Missing
+/// parent folders of `out` are created.
 pub fn render_png(
     world: &World,
     outcome: &Outcome,
@@ -416,6 +435,10 @@ pub fn render_png(
         g.resolution_m()
     ));
     c.caption_text(1, &result, palette::TEXT);
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("{}: cannot create the folder", parent.display()))?;
+    }
     c.save_png(out)?;
     Ok(())
 }
@@ -430,8 +453,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => outcome,
     };
     if let Some(out) = &args.png {
-        render_png(&world, &outcome, out, args.scale)
-            .with_context(|| format!("drawing {}", out.display()))?;
+        render_png(&world, &outcome, out, args.scale)?;
     }
     if args.json {
         let mut json = plan_json(&outcome);
@@ -475,7 +497,12 @@ mod tests {
         let e = geometry_for(parse_size("30x15").unwrap(), 0.05).unwrap_err();
         assert!(e.to_string().contains("600x300 cells"), "{e}");
         assert!(geometry_for(parse_size("15").unwrap(), 0.0).is_err());
-        assert!(geometry_for(parse_size("1e9").unwrap(), 0.05).is_err());
+        let e = geometry_for(parse_size("1e9").unwrap(), 0.05).unwrap_err();
+        assert!(e.to_string().contains("cells, more than the 160000"), "{e}");
+        let e = geometry_for(parse_size("15").unwrap(), 1.0e-30).unwrap_err();
+        assert!(e.to_string().contains("400x400"), "{e}");
+        let e = geometry_for(parse_size("15").unwrap(), 1.0e30).unwrap_err();
+        assert!(e.to_string().contains("larger than the map"), "{e}");
     }
 
     #[test]
@@ -488,13 +515,13 @@ mod tests {
                 cost: 0,
                 length_m: 1.5,
             },
-            path: vec![PointM::new(0.25, 0.5), PointM::new(1.75, 0.5)],
+            path: vec![PointM::new(0.25, 0.5), PointM::new(7.575_000_3, 0.5)],
             elapsed_us: 3,
         };
         let mut json = plan_json(&outcome);
         assert_eq!(
             serde_json::to_string(&json).unwrap(),
-            r#"{"status":"found","planner":"anyangle","path":[[0.25,0.5],[1.75,0.5]],"length_m":1.5,"expanded":7,"elapsed_us":3}"#
+            r#"{"status":"found","planner":"anyangle","path":[[0.25,0.5],[7.575,0.5]],"length_m":1.5,"expanded":7,"elapsed_us":3}"#
         );
         json.extra.insert("static_ram_bytes".into(), 42.into());
         assert!(serde_json::to_string(&json)

@@ -368,6 +368,37 @@ impl<'a> RadixQueue<'a> {
         true
     }
 
+    /// Drop every stale entry (`stale(node)`) from every bucket, recomputing the buckets'
+    /// minima. Returns how many slots were freed. O(entries); used only when the pool is full.
+    #[cold]
+    fn collect(&mut self, stale: impl Fn(u32) -> bool) -> usize {
+        let mut freed = 0;
+        for b in 0..BUCKETS {
+            let mut slot = self.heads[b];
+            let (mut head, mut min) = (NIL, u32::MAX);
+            while slot != NIL {
+                let e = &mut self.pool[slot as usize];
+                let next = e.next;
+                if stale(e.node) {
+                    e.next = self.free;
+                    self.free = slot;
+                    freed += 1;
+                } else {
+                    min = min.min(e.f);
+                    e.next = head;
+                    head = slot;
+                }
+                slot = next;
+            }
+            self.heads[b] = head;
+            self.mins[b] = min;
+            if head == NIL {
+                self.nonempty &= !(1 << b);
+            }
+        }
+        freed
+    }
+
     /// Remove an entry of the smallest key: `(key, node)`. `stale(node)` tells which entries
     /// may be dropped unseen when a bucket is redistributed.
     #[inline(always)]
@@ -806,9 +837,16 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     let n = $n;
                     if nibble(scratch, n) == 0 {
                         let f = g.saturating_add($cost).saturating_add(h($nx, $ny));
-                        if !open.push(f, pack($nx, $ny, $code)) {
-                            self.queue_peak = open.bump;
-                            return Err(full);
+                        let node = pack($nx, $ny, $code);
+                        if !open.push(f, node) {
+                            // Full: drop the entries of cells closed meanwhile and retry, unless
+                            // that frees too little to be worth it (no thrashing).
+                            let freed =
+                                open.collect(|node| nibble(scratch, unpack_index(node)) != 0);
+                            if freed < (open.pool.len() / 16).max(1) || !open.push(f, node) {
+                                self.queue_peak = open.bump;
+                                return Err(full);
+                            }
                         }
                     }
                 }};

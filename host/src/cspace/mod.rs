@@ -1,0 +1,3 @@
+//! Host-side helpers of `twil cspace`: pictures of the configuration map and the arm.
+
+pub mod render;
