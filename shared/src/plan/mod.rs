@@ -17,20 +17,25 @@
 //! ## Memory layout
 //!
 //! The scratch memory is one nibble (4 bits) per cell, 8 cells per `u32` word, row-major like
-//! the grid:
+//! the grid. Each search starts by copying the map into it (occupied → 15, free → 0, 8 cells per
+//! word with a few shifts), so one nibble read answers both "free?" and "reached?":
 //!
 //! | code      | meaning                                                        |
 //! |-----------|----------------------------------------------------------------|
-//! | 0         | not reached yet                                                |
+//! | 0         | free, not reached yet                                          |
 //! | 1 ..= 8   | reached, final; the code names the step *from* the parent      |
 //! | 9         | the start cell (no parent)                                     |
-//! | 10 ..= 15 | unused                                                         |
+//! | 10 ..= 14 | unused                                                         |
+//! | 15        | occupied                                                       |
 //!
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
-//! [`SCRATCH_WORDS_300`]), plus the queue: 12 bytes per entry (`QUEUE = 4096` → 49 152 bytes),
-//! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (4 096 bytes). Nothing else is
-//! allocated; the grid itself is only read. [`Planner::queue_peak`] tells how much of the queue
-//! a search used (on the benchmark's 300 × 300 grids: BFS ≤ 600 entries, A* ≤ 3 800).
+//! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
+//! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (4 096 bytes), plus about 2.2 KB of
+//! bucket heads on the stack during an A* search. Nothing else is allocated; the grid itself is
+//! only read. [`Planner::queue_peak`] tells how much of the queue a search used. Measured on the
+//! 300 × 300 benchmark grids and the bundled worlds: BFS needs at most 600 entries; A* peaks at
+//! 2 100 (pillars) to 14 800 (corridor) entries, mostly stale ones, and thanks to reclaiming
+//! (below) every one of them, 20 % random obstacles included, runs in 2 560.
 //!
 //! ## Why A* needs no g-table
 //!
@@ -43,38 +48,49 @@
 //! same cell are skipped. Cells already closed are never pushed again. `g` itself is not stored:
 //! it is `f - h(cell)`.
 //!
-//! The open list is a *radix heap* (a monotone priority queue: a consistent heuristic never
-//! pushes an `f` below the last one popped): 33 buckets by the highest bit in which a key differs
-//! from the last popped key, each a linked list threaded through the fixed pool of entries. A
-//! push is O(1); a pop takes the head of bucket 0 (keys equal to the last) or, when that is
-//! empty, relinks the lowest non-empty bucket around its minimum, dropping entries whose cell
-//! was closed meanwhile. On the benchmark this is 6–8× faster than the binary heap it replaced.
-//! Ties on `f` pop the last pushed entry first: the children of the cell just expanded, i.e. the
-//! deeper entries, which on open floors walks straight to the goal instead of flooding the whole
-//! diamond of equal-`f` cells (294 cells expanded corner to corner on an empty 300 × 300 grid).
+//! The open list is a *two-level bucket queue* (see `BucketQueue` in the source). With a
+//! consistent heuristic a pushed `f` is never below the last popped `f` and never more than
+//! `2 · DIAGONAL_COST` above it, so 512 circular coarse buckets of 32 key values, plus 32 exact
+//! buckets for the current coarse one, order all keys without comparisons: a push links the
+//! entry at the head of a list (O(1)); a pop takes the head of the lowest exact bucket, or
+//! spreads the next non-empty coarse bucket into the exact ones, dropping entries whose cell was
+//! closed meanwhile. Every entry moves at most once. (It replaced a binary heap and then a radix
+//! heap: on the 20 % random benchmark grid they took 12 ms and 1.5 ms, this takes 1.3 ms.) Ties on `f` pop the last pushed entry first: the children of the
+//! cell just expanded, i.e. the deeper entries, which on open floors walks straight to the goal
+//! instead of flooding the diamond of equal-`f` cells (294 cells expanded corner to corner on an
+//! empty 300 × 300 grid).
+//!
+//! When the pool of entries is full, the queue first *reclaims* the entries of cells closed
+//! since they were pushed (one pass over all lists) and carries on; only when that frees less
+//! than 1/16 of the pool does the search end with [`PlanError::QueueFull`]. Entries are then
+//! dropped in a different order, so an equal-cost path may differ from the one a larger queue
+//! finds; the cost does not.
 //!
 //! BFS marks a cell (with its parent step) when it is first *discovered*: in a FIFO queue the
 //! first discovery is by a fewest-steps parent, so every cell enters the ring buffer at most once.
 //!
 //! Search loops carry cell coordinates in their queue entries (no division per cell) and test
-//! the 8 neighbours with index arithmetic on the row-major bit and nibble arrays.
+//! the 8 neighbours with index arithmetic on the row-major nibble array.
 //!
 //! ## Complexity
 //!
-//! BFS: `O(n)` time for `n` free cells. A*: `O(n · 8)` pushes, each O(1), and pops amortized
-//! O(log C) for the cost range `C` (32-bit keys: at most 32 moves per entry). Clearing the
-//! scratch costs `n / 8` word writes. Rebuilding the path walks the parent steps from the goal
-//! back to the start: `O(path cells)`, plus, for the any-angle planner, one line-of-sight test
-//! per path cell (`O(path cells × segment length)`).
+//! BFS: `O(n)` time for `n` free cells, about 190 x86-64 instructions per cell. A*: at most 8
+//! pushes per expanded cell, each O(1), pops O(1) amortized (each entry moves once, plus a scan
+//! of a 512-bit map per 32 key values); about 650 instructions per expanded cell on room maps,
+//! mostly spent on the duplicate entries that a g-table would have avoided. Copying the map into
+//! the scratch costs `n / 8` word writes. Rebuilding the path walks the parent steps from the
+//! goal back to the start: `O(path cells)`, plus, for the any-angle planner, one line-of-sight
+//! test per straight run and a bisection in the runs where a shortcut ends
+//! (`O(runs × log(run) × segment length)`).
 //!
 //! ## Any-angle
 //!
-//! [`PlannerKind::AnyAngle`] runs A*, then pulls the string on the A* cell path: walking from the
-//! goal towards the start, it keeps an anchor vertex and advances along the cell path while the
-//! next cell is visible from the anchor by [`line_of_sight`]; at the first cell that is not, the
-//! last visible cell becomes a vertex and the new anchor. Every segment therefore passes the same
-//! no-corner-cutting line-of-sight test, and by the triangle inequality the polyline is never
-//! longer than the A* path it shortcuts.
+//! [`PlannerKind::AnyAngle`] runs A*, then pulls the string on the A* cell path, run by run
+//! (maximal straight pieces), from the goal towards the start: if the far end of the next run
+//! is visible from the anchor by [`line_of_sight`], the whole run is skipped; otherwise the last
+//! visible cell of the run is found by bisection and becomes a vertex and the new anchor. Every
+//! segment therefore passes the same no-corner-cutting line-of-sight test, and by the triangle
+//! inequality the polyline is never longer than the A* path it shortcuts.
 //!
 //! ```
 //! use twil_core::geom::PointM;
@@ -134,6 +150,11 @@ pub const SCRATCH_WORDS_300: usize = scratch_words_for_cells(300 * 300);
 /// Scratch words for a 400 × 400 grid (80 000 bytes).
 pub const SCRATCH_WORDS_400: usize = scratch_words_for_cells(400 * 400);
 
+/// The usual planner for the seed's 300 × 300 grid: 45 000 bytes of scratch, 3 072 queue
+/// entries (36 864 bytes; A* on every bundled world and on 20 % random obstacles needs 2 560
+/// thanks to reclaiming) and the 4 096-byte vertex buffer: about 86 KB in all.
+pub type Planner300 = Planner<SCRATCH_WORDS_300, 3072>;
+
 /// Which planner to run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -145,6 +166,17 @@ pub enum PlannerKind {
     AStar,
     /// A* followed by line-of-sight shortcuts: straight segments, never longer than A*.
     AnyAngle,
+}
+
+impl PlannerKind {
+    /// The planner's name on the command line and in JSON: `bfs`, `astar`, `anyangle`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            PlannerKind::Bfs => "bfs",
+            PlannerKind::AStar => "astar",
+            PlannerKind::AnyAngle => "anyangle",
+        }
+    }
 }
 
 /// How a planning request ended.
@@ -161,6 +193,20 @@ pub enum PlanStatus {
     GoalBlocked,
     /// Start or goal lies outside the map.
     OutOfBounds,
+}
+
+impl PlanStatus {
+    /// The status in snake case, as in the JSON of `twil plan`: `found`, `unreachable`,
+    /// `start_blocked`, `goal_blocked`, `out_of_bounds`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            PlanStatus::Found => "found",
+            PlanStatus::Unreachable => "unreachable",
+            PlanStatus::StartBlocked => "start_blocked",
+            PlanStatus::GoalBlocked => "goal_blocked",
+            PlanStatus::OutOfBounds => "out_of_bounds",
+        }
+    }
 }
 
 /// A capacity ran out while planning.
@@ -250,6 +296,17 @@ impl OpenEntry {
 
 /// Nibble code of the start cell.
 const CODE_START: u32 = 9;
+/// Nibble code of an occupied cell (copied from the map before a search).
+const BLOCKED: u32 = 0xF;
+
+/// Spread the 8 bits of `byte` to the low bit of 8 nibbles (bit k -> bit 4k).
+#[inline(always)]
+fn spread_bits_to_nibbles(byte: u32) -> u32 {
+    let mut x = byte & 0xFF;
+    x = (x | (x << 12)) & 0x000F_000F;
+    x = (x | (x << 6)) & 0x0303_0303;
+    (x | (x << 3)) & 0x1111_1111
+}
 
 /// Step of each code 1..=8 (index = code - 1): E, N, W, S, NE, NW, SW, SE.
 const STEPS: [(i32, i32); 8] = [
@@ -298,52 +355,54 @@ fn octile(dx: u32, dy: u32) -> u32 {
 
 /// End of a bucket list.
 const NIL: u32 = u32::MAX;
-/// Radix buckets: 0 holds keys equal to the last popped key, `b` keys whose highest bit that
-/// differs from it is bit `b - 1`.
-const BUCKETS: usize = 33;
+/// Exact-key buckets per coarse bucket (`f & 31`).
+const FINE_BUCKETS: usize = 32;
+/// Coarse buckets (`(f >> 5) % 512`): they span 16 384 key values, more than the 16 238 by
+/// which a pushed `f` can exceed the last popped one (see [`BucketQueue`]).
+const COARSE_BUCKETS: usize = 512;
 
-/// A monotone priority queue (radix heap) over a fixed pool of entries: keys pushed are never
-/// below the last key popped, which A* with a consistent heuristic guarantees for `f`.
+/// The open list of A*: a two-level bucket queue over a fixed pool of entries.
 ///
-/// Buckets are singly linked lists threaded through the pool, so a push is O(1) (link at the
-/// head of its bucket, update the bucket's minimum) and a pop is O(1) from bucket 0, or, when
-/// bucket 0 is empty, one pass over the lowest non-empty bucket that relinks its entries into
-/// lower buckets relative to the bucket's minimum (the new reference key). Each entry moves down
-/// at most 32 times; in practice once or twice, since `f` grows slowly. Entries that went stale
-/// (their cell was closed meanwhile) are dropped during that pass instead of being moved.
-/// Within bucket 0 (equal `f`) the last pushed entry pops first: the children of the cell just
-/// expanded, i.e. the deeper entries (larger `g`), which on open floors keeps the search on one
-/// straight line instead of flooding every cell of equal `f`.
-struct RadixQueue<'a> {
+/// With a consistent heuristic, a child's `f` exceeds its parent's by at most twice the step
+/// cost (`0 ≤ Δf = cost + Δh ≤ 2 · DIAGONAL_COST = 16 238`), and the parent's `f` is the last
+/// key popped. So every key in the queue lies in the window `[last, last + 16 238]`, and a
+/// circular array of 512 coarse buckets of 32 key values each orders them without comparisons:
+/// keys of the current coarse bucket sit in 32 exact buckets (`f & 31`), the others in their
+/// coarse bucket. A push links an entry at the head of one list, O(1); a pop takes the head of
+/// the lowest non-empty exact bucket, or, when they are all empty, finds the next non-empty
+/// coarse bucket in a 512-bit map and spreads it into the exact buckets (dropping entries whose
+/// cell was closed meanwhile). Every entry is thus moved at most once.
+///
+/// Ties (equal `f`) pop the last pushed entry first: the children of the cell just expanded,
+/// i.e. the deeper entries (larger `g`), which on open floors keeps the search on one straight
+/// line instead of flooding every cell of equal `f`.
+struct BucketQueue<'a> {
     pool: &'a mut [OpenEntry],
-    heads: [u32; BUCKETS],
-    mins: [u32; BUCKETS],
-    nonempty: u64,
-    last: u32,
+    coarse: [u32; COARSE_BUCKETS],
+    coarse_map: [u32; COARSE_BUCKETS / 32],
+    fine: [u32; FINE_BUCKETS],
+    fine_map: u32,
+    /// Absolute coarse index (`f >> 5`) of the keys held in `fine`.
+    current: u32,
     bump: u32,
     free: u32,
 }
 
-impl<'a> RadixQueue<'a> {
-    fn new(pool: &'a mut [OpenEntry]) -> Self {
+impl<'a> BucketQueue<'a> {
+    fn new(pool: &'a mut [OpenEntry], first_key: u32) -> Self {
         Self {
             pool,
-            heads: [NIL; BUCKETS],
-            mins: [u32::MAX; BUCKETS],
-            nonempty: 0,
-            last: 0,
+            coarse: [NIL; COARSE_BUCKETS],
+            coarse_map: [0; COARSE_BUCKETS / 32],
+            fine: [NIL; FINE_BUCKETS],
+            fine_map: 0,
+            current: first_key >> 5,
             bump: 0,
             free: NIL,
         }
     }
 
-    #[inline(always)]
-    fn bucket(&self, key: u32) -> usize {
-        let diff = key ^ self.last;
-        (u32::BITS - diff.leading_zeros()) as usize
-    }
-
-    /// Insert; `false` when the pool is full.
+    /// Insert; `false` when the pool is full. `key` must not be below the last key popped.
     #[inline(always)]
     fn push(&mut self, key: u32, node: u32) -> bool {
         let slot = if self.free != NIL {
@@ -356,65 +415,54 @@ impl<'a> RadixQueue<'a> {
         } else {
             return false;
         };
-        let b = self.bucket(key);
+        let head = if key >> 5 == self.current {
+            let b = (key & 31) as usize;
+            self.fine_map |= 1 << b;
+            &mut self.fine[b]
+        } else {
+            let b = (key >> 5) as usize % COARSE_BUCKETS;
+            self.coarse_map[b / 32] |= 1 << (b % 32);
+            &mut self.coarse[b]
+        };
         self.pool[slot as usize] = OpenEntry {
             f: key,
             node,
-            next: self.heads[b],
+            next: *head,
         };
-        self.heads[b] = slot;
-        self.mins[b] = self.mins[b].min(key);
-        self.nonempty |= 1 << b;
+        *head = slot;
         true
     }
 
-    /// Drop every stale entry (`stale(node)`) from every bucket, recomputing the buckets'
-    /// minima. Returns how many slots were freed. O(entries); used only when the pool is full.
-    #[cold]
-    fn collect(&mut self, stale: impl Fn(u32) -> bool) -> usize {
-        let mut freed = 0;
-        for b in 0..BUCKETS {
-            let mut slot = self.heads[b];
-            let (mut head, mut min) = (NIL, u32::MAX);
-            while slot != NIL {
-                let e = &mut self.pool[slot as usize];
-                let next = e.next;
-                if stale(e.node) {
-                    e.next = self.free;
-                    self.free = slot;
-                    freed += 1;
-                } else {
-                    min = min.min(e.f);
-                    e.next = head;
-                    head = slot;
-                }
-                slot = next;
-            }
-            self.heads[b] = head;
-            self.mins[b] = min;
-            if head == NIL {
-                self.nonempty &= !(1 << b);
+    /// The first non-empty coarse bucket at or after `from`, circularly.
+    #[inline]
+    fn next_coarse(&self, from: usize) -> Option<usize> {
+        let words = COARSE_BUCKETS / 32;
+        let first = from / 32;
+        let masked = self.coarse_map[first] & (u32::MAX << (from % 32));
+        if masked != 0 {
+            return Some(first * 32 + masked.trailing_zeros() as usize);
+        }
+        for k in 1..=words {
+            let w = (first + k) % words;
+            if self.coarse_map[w] != 0 {
+                return Some(w * 32 + self.coarse_map[w].trailing_zeros() as usize);
             }
         }
-        freed
+        None
     }
 
     /// Remove an entry of the smallest key: `(key, node)`. `stale(node)` tells which entries
-    /// may be dropped unseen when a bucket is redistributed.
+    /// may be dropped unseen when a coarse bucket is spread.
     #[inline(always)]
     fn pop(&mut self, stale: impl Fn(u32) -> bool) -> Option<(u32, u32)> {
-        while self.heads[0] == NIL {
-            let rest = self.nonempty & !1;
-            if rest == 0 {
-                return None;
-            }
-            let b = rest.trailing_zeros() as usize;
-            let min = self.mins[b];
-            self.last = min;
-            let mut slot = self.heads[b];
-            self.heads[b] = NIL;
-            self.mins[b] = u32::MAX;
-            self.nonempty &= !(1 << b);
+        while self.fine_map == 0 {
+            let from = (self.current as usize + 1) % COARSE_BUCKETS;
+            let b = self.next_coarse(from)?;
+            let ahead = (b + COARSE_BUCKETS - from) % COARSE_BUCKETS;
+            self.current = self.current.wrapping_add(1 + ahead as u32);
+            let mut slot = self.coarse[b];
+            self.coarse[b] = NIL;
+            self.coarse_map[b / 32] &= !(1 << (b % 32));
             while slot != NIL {
                 let e = &mut self.pool[slot as usize];
                 let next = e.next;
@@ -422,26 +470,68 @@ impl<'a> RadixQueue<'a> {
                     e.next = self.free;
                     self.free = slot;
                 } else {
-                    let key = e.f;
-                    let nb = (u32::BITS - (key ^ min).leading_zeros()) as usize;
-                    e.next = self.heads[nb];
-                    self.heads[nb] = slot;
-                    self.mins[nb] = self.mins[nb].min(key);
-                    self.nonempty |= 1 << nb;
+                    let fb = (e.f & 31) as usize;
+                    e.next = self.fine[fb];
+                    self.fine[fb] = slot;
+                    self.fine_map |= 1 << fb;
                 }
                 slot = next;
             }
         }
-        let slot = self.heads[0];
+        let b = self.fine_map.trailing_zeros() as usize;
+        let slot = self.fine[b];
         let e = self.pool[slot as usize];
-        self.heads[0] = e.next;
+        self.fine[b] = e.next;
         if e.next == NIL {
-            self.nonempty &= !1;
-            self.mins[0] = u32::MAX;
+            self.fine_map &= !(1 << b);
         }
         self.pool[slot as usize].next = self.free;
         self.free = slot;
         Some((e.f, e.node))
+    }
+
+    /// Unlink the stale entries (`stale(node)`) of one list into the free list; returns the
+    /// new head and how many were freed.
+    fn sweep(&mut self, mut slot: u32, stale: &impl Fn(u32) -> bool) -> (u32, usize) {
+        let (mut head, mut freed) = (NIL, 0);
+        while slot != NIL {
+            let e = &mut self.pool[slot as usize];
+            let next = e.next;
+            if stale(e.node) {
+                e.next = self.free;
+                self.free = slot;
+                freed += 1;
+            } else {
+                e.next = head;
+                head = slot;
+            }
+            slot = next;
+        }
+        (head, freed)
+    }
+
+    /// Drop every stale entry from every bucket. Returns how many slots were freed.
+    /// O(entries); used only when the pool is full.
+    #[cold]
+    fn collect(&mut self, stale: impl Fn(u32) -> bool) -> usize {
+        let mut freed = 0;
+        for b in 0..FINE_BUCKETS {
+            let (head, n) = self.sweep(self.fine[b], &stale);
+            self.fine[b] = head;
+            freed += n;
+            if head == NIL {
+                self.fine_map &= !(1 << b);
+            }
+        }
+        for b in 0..COARSE_BUCKETS {
+            let (head, n) = self.sweep(self.coarse[b], &stale);
+            self.coarse[b] = head;
+            freed += n;
+            if head == NIL {
+                self.coarse_map[b / 32] &= !(1 << (b % 32));
+            }
+        }
+        freed
     }
 }
 
@@ -581,9 +671,14 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             self.last = Some(report);
             return Ok(report);
         }
+        // Scratch starts as a copy of the map: occupied cells BLOCKED, free cells 0. The search
+        // then reads one nibble per neighbour for both "free?" and "reached?".
         let used_words = scratch_words_for_cells(geometry.cell_count());
-        if let Some(used) = self.scratch.get_mut(..used_words) {
-            used.fill(0);
+        let used = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
+        for (quad, &bits) in used.chunks_mut(4).zip(grid.words()) {
+            for (k, word) in quad.iter_mut().enumerate() {
+                *word = spread_bits_to_nibbles(bits >> (8 * k)) * BLOCKED;
+            }
         }
         let start_index = geometry.index(start);
         let goal_index = geometry.index(goal);
@@ -698,6 +793,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         count += 1;
 
         while count > 0 {
+            peak = peak.max(count);
             let (index, x, y) = match queue.get(head) {
                 Some(e) => (
                     e.node as usize,
@@ -710,65 +806,82 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             count -= 1;
             expanded += 1;
 
-            let free_e = x + 1 < width && !grid.bit(index + 1);
-            let free_w = x > 0 && !grid.bit(index - 1);
-            let free_n = y + 1 < height && !grid.bit(index + width);
-            let free_s = y > 0 && !grid.bit(index - width);
+            // Side neighbours' nibbles (off the map counts as BLOCKED).
+            let c_e = if x + 1 < width {
+                nibble(scratch, index + 1)
+            } else {
+                BLOCKED
+            };
+            let c_w = if x > 0 {
+                nibble(scratch, index - 1)
+            } else {
+                BLOCKED
+            };
+            let c_n = if y + 1 < height {
+                nibble(scratch, index + width)
+            } else {
+                BLOCKED
+            };
+            let c_s = if y > 0 {
+                nibble(scratch, index - width)
+            } else {
+                BLOCKED
+            };
+            let (free_e, free_w) = (c_e != BLOCKED, c_w != BLOCKED);
+            let (free_n, free_s) = (c_n != BLOCKED, c_s != BLOCKED);
 
             macro_rules! visit {
                 ($n:expr, $nx:expr, $ny:expr, $code:expr) => {{
+                    // Reached for the first time: mark with the step, then queue it.
                     let n = $n;
-                    if nibble(scratch, n) == 0 {
-                        set_nibble(scratch, n, $code);
-                        if n == goal {
-                            self.queue_peak = peak as u32;
-                            return Ok(Search {
-                                found: true,
-                                expanded,
-                                cost: 0,
-                            });
-                        }
-                        if count == capacity {
-                            self.queue_peak = peak as u32;
-                            return Err(full);
-                        }
-                        if let Some(slot) = queue.get_mut(tail) {
-                            slot.node = n as u32;
-                            slot.f = (($ny as u32) << 16) | $nx as u32;
-                        }
-                        tail = if tail + 1 == capacity { 0 } else { tail + 1 };
-                        count += 1;
-                        peak = peak.max(count);
+                    set_nibble(scratch, n, $code);
+                    if n == goal {
+                        self.queue_peak = peak.max(count) as u32;
+                        return Ok(Search {
+                            found: true,
+                            expanded,
+                            cost: 0,
+                        });
                     }
+                    if count == capacity {
+                        self.queue_peak = peak.max(count) as u32;
+                        return Err(full);
+                    }
+                    if let Some(slot) = queue.get_mut(tail) {
+                        slot.node = n as u32;
+                        slot.f = (($ny as u32) << 16) | $nx as u32;
+                    }
+                    tail = if tail + 1 == capacity { 0 } else { tail + 1 };
+                    count += 1;
                 }};
             }
 
-            if free_e {
+            if c_e == 0 {
                 visit!(index + 1, x + 1, y, E);
             }
-            if free_n {
+            if c_n == 0 {
                 visit!(index + width, x, y + 1, N);
             }
-            if free_w {
+            if c_w == 0 {
                 visit!(index - 1, x - 1, y, W);
             }
-            if free_s {
+            if c_s == 0 {
                 visit!(index - width, x, y - 1, S);
             }
-            if free_n && free_e && !grid.bit(index + width + 1) {
+            if free_n && free_e && nibble(scratch, index + width + 1) == 0 {
                 visit!(index + width + 1, x + 1, y + 1, NE);
             }
-            if free_n && free_w && !grid.bit(index + width - 1) {
+            if free_n && free_w && nibble(scratch, index + width - 1) == 0 {
                 visit!(index + width - 1, x - 1, y + 1, NW);
             }
-            if free_s && free_w && !grid.bit(index - width - 1) {
+            if free_s && free_w && nibble(scratch, index - width - 1) == 0 {
                 visit!(index - width - 1, x - 1, y - 1, SW);
             }
-            if free_s && free_e && !grid.bit(index - width + 1) {
+            if free_s && free_e && nibble(scratch, index - width + 1) == 0 {
                 visit!(index - width + 1, x + 1, y - 1, SE);
             }
         }
-        self.queue_peak = peak as u32;
+        self.queue_peak = peak.max(count) as u32;
         Ok(Search {
             found: false,
             expanded,
@@ -789,14 +902,14 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let height = geometry.height() as usize;
         let (gx, gy) = (goal_cell.x as usize, goal_cell.y as usize);
         let scratch = &mut self.scratch[..];
-        let mut open = RadixQueue::new(&mut self.queue[..]);
+        let h = |x: usize, y: usize| octile(x.abs_diff(gx) as u32, y.abs_diff(gy) as u32);
+        let (sx, sy) = (start % width, start / width);
+        let mut open = BucketQueue::new(&mut self.queue[..], h(sx, sy));
         let full = PlanError::QueueFull {
             capacity: open.pool.len() as u32,
         };
         let mut expanded = 0u32;
 
-        let h = |x: usize, y: usize| octile(x.abs_diff(gx) as u32, y.abs_diff(gy) as u32);
-        let (sx, sy) = (start % width, start / width);
         // Entries carry `y << 16 | x << 4 | step code` (sides are at most 4096 cells), so the
         // loop never divides.
         let pack = |x: usize, y: usize, code: u32| ((y as u32) << 16) | ((x as u32) << 4) | code;
@@ -827,54 +940,69 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 });
             }
 
-            let free_e = x + 1 < width && !grid.bit(index + 1);
-            let free_w = x > 0 && !grid.bit(index - 1);
-            let free_n = y + 1 < height && !grid.bit(index + width);
-            let free_s = y > 0 && !grid.bit(index - width);
+            // Side neighbours' nibbles (off the map counts as BLOCKED).
+            let c_e = if x + 1 < width {
+                nibble(scratch, index + 1)
+            } else {
+                BLOCKED
+            };
+            let c_w = if x > 0 {
+                nibble(scratch, index - 1)
+            } else {
+                BLOCKED
+            };
+            let c_n = if y + 1 < height {
+                nibble(scratch, index + width)
+            } else {
+                BLOCKED
+            };
+            let c_s = if y > 0 {
+                nibble(scratch, index - width)
+            } else {
+                BLOCKED
+            };
+            let (free_e, free_w) = (c_e != BLOCKED, c_w != BLOCKED);
+            let (free_n, free_s) = (c_n != BLOCKED, c_s != BLOCKED);
 
             macro_rules! visit {
-                ($n:expr, $nx:expr, $ny:expr, $cost:expr, $code:expr) => {{
-                    let n = $n;
-                    if nibble(scratch, n) == 0 {
-                        let f = g.saturating_add($cost).saturating_add(h($nx, $ny));
-                        let node = pack($nx, $ny, $code);
-                        if !open.push(f, node) {
-                            // Full: drop the entries of cells closed meanwhile and retry, unless
-                            // that frees too little to be worth it (no thrashing).
-                            let freed =
-                                open.collect(|node| nibble(scratch, unpack_index(node)) != 0);
-                            if freed < (open.pool.len() / 16).max(1) || !open.push(f, node) {
-                                self.queue_peak = open.bump;
-                                return Err(full);
-                            }
+                ($nx:expr, $ny:expr, $cost:expr, $code:expr) => {{
+                    let f = g.saturating_add($cost).saturating_add(h($nx, $ny));
+                    let node = pack($nx, $ny, $code);
+                    if !open.push(f, node) {
+                        // Full: drop the entries of cells closed meanwhile and retry, unless
+                        // that frees too little to be worth it (no thrashing).
+                        let freed = open.collect(|node| nibble(scratch, unpack_index(node)) != 0);
+                        if freed < (open.pool.len() / 16).max(1) || !open.push(f, node) {
+                            self.queue_peak = open.bump;
+                            return Err(full);
                         }
                     }
                 }};
             }
 
-            if free_e {
-                visit!(index + 1, x + 1, y, STRAIGHT_COST, E);
+            if c_e == 0 {
+                visit!(x + 1, y, STRAIGHT_COST, E);
             }
-            if free_n {
-                visit!(index + width, x, y + 1, STRAIGHT_COST, N);
+            if c_n == 0 {
+                visit!(x, y + 1, STRAIGHT_COST, N);
             }
-            if free_w {
-                visit!(index - 1, x - 1, y, STRAIGHT_COST, W);
+            if c_w == 0 {
+                visit!(x - 1, y, STRAIGHT_COST, W);
             }
-            if free_s {
-                visit!(index - width, x, y - 1, STRAIGHT_COST, S);
+            if c_s == 0 {
+                visit!(x, y - 1, STRAIGHT_COST, S);
             }
-            if free_n && free_e && !grid.bit(index + width + 1) {
-                visit!(index + width + 1, x + 1, y + 1, DIAGONAL_COST, NE);
+            if free_n && free_e && nibble(scratch, index + width + 1) == 0 {
+                visit!(x + 1, y + 1, DIAGONAL_COST, NE);
             }
-            if free_n && free_w && !grid.bit(index + width - 1) {
-                visit!(index + width - 1, x - 1, y + 1, DIAGONAL_COST, NW);
+            if free_n && free_w && nibble(scratch, index + width - 1) == 0 {
+                visit!(x - 1, y + 1, DIAGONAL_COST, NW);
             }
-            if free_s && free_w && !grid.bit(index - width - 1) {
-                visit!(index - width - 1, x - 1, y - 1, DIAGONAL_COST, SW);
+            if free_s && free_w && nibble(scratch, index - width - 1) == 0 {
+                visit!(x - 1, y - 1, DIAGONAL_COST, SW);
             }
-            if free_s && free_e && !grid.bit(index - width + 1) {
-                visit!(index - width + 1, x + 1, y - 1, DIAGONAL_COST, SE);
+            if free_s && free_e && nibble(scratch, index - width + 1) == 0 {
+                visit!(x + 1, y - 1, DIAGONAL_COST, SE);
             }
         }
         self.queue_peak = open.bump;
@@ -927,6 +1055,11 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
 
     /// Rebuild the A* path and pull the string with line-of-sight shortcuts. Returns the length
     /// in cells, the number of A* steps and whether every vertex fitted.
+    ///
+    /// Works run by run (maximal straight pieces of the A* path), from the goal back: if the far
+    /// end of the next run is visible from the anchor, the whole run is skipped; otherwise the
+    /// last visible cell of the run is found by bisection and becomes a vertex and the new
+    /// anchor. Every emitted segment has been tested with [`line_of_sight`].
     fn rebuild_any_angle<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
@@ -936,23 +1069,59 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let mut fits = self.cells.push(goal).is_ok();
         let mut length = 0.0f32;
         let mut anchor = goal;
-        let mut cell = goal;
+        let mut cur = goal;
         let mut steps = 0u32;
-        for _ in 0..geometry.cell_count() {
-            let Some((parent, _)) = self.parent(&geometry, cell) else {
+        // Each pass either moves `cur` towards the start or moves the anchor forward; the
+        // bound only guards against a corrupt parent chain.
+        for _ in 0..2 * geometry.cell_count() {
+            // The run that ends at `cur`: `run` steps of `code`, back to `end`.
+            let Some((mut end, code)) = self.parent(&geometry, cur) else {
                 break;
             };
-            if !line_of_sight(grid, anchor, parent) {
-                fits &= self.cells.push(cell).is_ok();
-                length += cells_distance(anchor, cell);
-                anchor = cell;
+            let mut run = 1u32;
+            while let Some((p, c)) = self.parent(&geometry, end) {
+                if c != code {
+                    break;
+                }
+                end = p;
+                run += 1;
             }
-            steps += 1;
-            cell = parent;
+            if line_of_sight(grid, anchor, end) {
+                cur = end;
+                steps += run;
+                continue;
+            }
+            // `cur` is visible, `end` is not: bisect for the last visible cell of the run.
+            let Some(&(dx, dy)) = STEPS.get(code as usize - 1) else {
+                break;
+            };
+            let at = |i: u32| {
+                Cell::new(
+                    (cur.x as i32 - dx * i as i32) as u16,
+                    (cur.y as i32 - dy * i as i32) as u16,
+                )
+            };
+            let (mut lo, mut hi) = (0u32, run);
+            while hi - lo > 1 {
+                let mid = lo + (hi - lo) / 2;
+                if line_of_sight(grid, anchor, at(mid)) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            // The step after the anchor is an A* move, always visible; never stall.
+            let cut = if lo == 0 && cur == anchor { 1 } else { lo };
+            let vertex = at(cut);
+            fits &= self.cells.push(vertex).is_ok();
+            length += cells_distance(anchor, vertex);
+            anchor = vertex;
+            cur = vertex;
+            steps += cut;
         }
-        if cell != anchor {
-            fits &= self.cells.push(cell).is_ok();
-            length += cells_distance(anchor, cell);
+        if cur != anchor {
+            fits &= self.cells.push(cur).is_ok();
+            length += cells_distance(anchor, cur);
         }
         self.cells.reverse();
         (length, steps, fits)

@@ -642,3 +642,97 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// A small open list reclaims stale entries when it fills: it either finds exactly what a
+    /// large one finds, or reports QueueFull; never a different cost.
+    #[test]
+    fn small_open_list_is_exact_or_full((g, s, t) in arb_grid()) {
+        let mut big = Box::new(SmallPlanner::new());
+        let mut small = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 48>::new());
+        let expected = big.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+        match small.plan_cells(PlannerKind::AStar, &g, s, t) {
+            Ok(r) => {
+                // Equal-cost paths may differ: reclaiming reorders entries of equal f.
+                prop_assert_eq!((r.status, r.cost), (expected.status, expected.cost));
+                if r.status == PlanStatus::Found {
+                    prop_assert_eq!(steps_and_cost(small.path_cells()).1, r.cost);
+                    assert_collision_free(&g, small.path_cells());
+                }
+                prop_assert!(small.queue_peak() <= 48);
+            }
+            Err(e) => prop_assert_eq!(e, PlanError::QueueFull { capacity: 48 }),
+        }
+    }
+}
+
+/// A bundled world (`worlds/NAME`), obstacles grown by the robot radius.
+fn world(name: &str) -> (crate::grid::Grid300, crate::world::Params) {
+    use crate::world::{parse_da, parse_par, Obstacles};
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../worlds/");
+    let read = |ext: &str| std::fs::read_to_string(std::format!("{dir}{name}.{ext}")).unwrap();
+    let params = parse_par(&read("par")).unwrap();
+    let mut obstacles = Obstacles::new();
+    parse_da(&read("da"), &mut obstacles).unwrap();
+    let mut g = crate::grid::Grid300::new(GridGeometry::seed_default()).unwrap();
+    let half_side = g.geometry().expansion_cells(params.robot_radius_m);
+    for polygon in obstacles.iter() {
+        crate::raster::mark_polygon(&mut g, polygon, half_side);
+    }
+    (g, params)
+}
+
+#[test]
+fn reclaiming_stale_entries_lets_a_small_open_list_finish() {
+    // On the office world the open list peaks above 8 000 entries, mostly stale (cells closed
+    // since); reclaiming them lets 2 048 entries finish with the same cost.
+    let (g, params) = world("office");
+    let mut path = PathM::new();
+    let mut big = Box::new(Planner::<SCRATCH_WORDS_300, 16384>::new());
+    let expected = big
+        .plan(PlannerKind::AStar, &g, params.start, params.goal, &mut path)
+        .unwrap();
+    assert_eq!(expected.status, PlanStatus::Found);
+    assert!(big.queue_peak() > 8000, "peak {}", big.queue_peak());
+    let mut small = Box::new(Planner::<SCRATCH_WORDS_300, 2048>::new());
+    let r = small
+        .plan(PlannerKind::AStar, &g, params.start, params.goal, &mut path)
+        .unwrap();
+    assert_eq!((r.status, r.cost), (expected.status, expected.cost));
+    assert!(small.queue_peak() <= 2048);
+}
+
+#[test]
+fn names_and_sizes() {
+    assert_eq!(PlannerKind::AnyAngle.as_str(), "anyangle");
+    assert_eq!(PlanStatus::StartBlocked.as_str(), "start_blocked");
+    assert_eq!(PlanStatus::OutOfBounds.as_str(), "out_of_bounds");
+    // 4 bits per cell for 300 x 300 cells, 12 bytes per queue entry, 4 bytes per vertex.
+    assert_eq!(SCRATCH_WORDS_300 * 4, 45_000);
+    assert!(core::mem::size_of::<Planner300>() <= 45_000 + 3072 * 12 + 1024 * 4 + 64);
+}
+
+#[test]
+fn planner300_runs_every_bundled_world() {
+    for name in ["office", "corridor", "pillars"] {
+        let (g, params) = world(name);
+        let mut big = Box::new(Planner::<SCRATCH_WORDS_300, 32768>::new());
+        let mut p = Box::new(Planner300::new());
+        let mut path = PathM::new();
+        for kind in [PlannerKind::Bfs, PlannerKind::AStar, PlannerKind::AnyAngle] {
+            let expected = big
+                .plan(kind, &g, params.start, params.goal, &mut path)
+                .unwrap();
+            let r = p
+                .plan(kind, &g, params.start, params.goal, &mut path)
+                .unwrap();
+            assert_eq!(r.status, PlanStatus::Found, "{name} {kind:?}");
+            assert_eq!(r.cost, expected.cost, "{name} {kind:?}");
+            for pair in p.path_cells().windows(2) {
+                assert!(line_of_sight(&g, pair[0], pair[1]), "{name} {kind:?}");
+            }
+        }
+    }
+}
