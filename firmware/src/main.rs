@@ -49,9 +49,7 @@ use panic_semihosting as _;
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use twil_core::grid::words_for_cells;
-use twil_core::link::{Build, Device, DeviceInfo, PROTOCOL_VERSION};
-use twil_core::plan::Planner;
+use twil_core::link::{Build, DeviceInfo, PROTOCOL_VERSION};
 
 /// Log a line: defmt over RTT on a board, semihosting under QEMU. Arguments must implement
 /// both `defmt::Format` and `Display` (integers, `&str`).
@@ -64,21 +62,15 @@ macro_rules! log {
     }};
 }
 
-/// Grid capacity: 300 x 300 cells (the seed's 15 m x 15 m at 0.05 m).
-pub const GRID_CELLS: usize = 300 * 300;
-/// Grid words (32 cells each).
-pub const GRID_WORDS: usize = words_for_cells(GRID_CELLS);
-/// Planner scratch words (4 bits per cell, 8 cells per word).
-pub const SCRATCH_WORDS: usize = GRID_CELLS.div_ceil(8);
-/// Planner open-list capacity, entries.
-pub const QUEUE: usize = 5120;
+/// Planner open-list capacity, entries (`twil_core::link::mcu`, shared with the host).
+pub const QUEUE: usize = twil_core::link::mcu::PLANNER_QUEUE;
 /// Bytes of the receive queue (holds one less).
 pub const RX_QUEUE_BYTES: usize = 1024;
 
-/// The device: grid, obstacles, last path, framing.
-pub type TwilDevice = Device<GRID_WORDS>;
-/// The planner.
-pub type TwilPlanner = Planner<SCRATCH_WORDS, QUEUE>;
+/// The device: grid (300 x 300 cells), obstacles, last path, framing.
+pub type TwilDevice = twil_core::link::mcu::McuDevice;
+/// The planner (scratch for 300 x 300 cells, [`QUEUE`] open-list entries).
+pub type TwilPlanner = twil_core::link::mcu::McuPlanner;
 
 /// The device in the CCM. Never read before [`init_ccm`] has copied its initial value.
 #[link_section = ".ccmram.device"]

@@ -519,8 +519,11 @@ impl Drop for Qemu {
 
 /// `twil plan --remote DEVICE`: upload `world` to the device, let it plan the same request as
 /// `local` (the host's outcome), and return the device's outcome. `extra` receives the JSON
-/// fields `mcu_instructions`, `static_ram_bytes` and `matches_host` (the device's status,
-/// expanded cells and path equal the host's).
+/// fields `mcu_instructions`, `static_ram_bytes` and `matches_host`: the device's report
+/// (status, expanded cells, cost, length) and path equal those of the same planner type run on
+/// the host ([`twil_core::link::mcu::McuPlanner`]: the firmware's capacities; A*'s expanded
+/// count depends on the open-list capacity, so the host tool's own larger planner may expand a
+/// few cells more or less, for the same cost).
 pub fn plan_on_device(
     device: &RemoteSpec,
     world: &crate::cmd::plan::World,
@@ -567,11 +570,44 @@ pub fn plan_on_device(
         path: planned.path,
         elapsed_us,
     };
-    let matches = outcome.report == local.report && outcome.path == local.path;
+    let reference = plan_like_the_mcu(world, local.kind)?;
+    let matches = outcome.report == reference.report && outcome.path == reference.path;
     extra.insert("mcu_instructions".into(), s.mcu_instructions.into());
     extra.insert("static_ram_bytes".into(), info.static_ram_bytes.into());
     extra.insert("matches_host".into(), matches.into());
     Ok(outcome)
+}
+
+/// Run the firmware's planner type ([`twil_core::link::mcu::McuPlanner`]) on the host, on
+/// `world`'s map: what the device must answer.
+pub fn plan_like_the_mcu(
+    world: &crate::cmd::plan::World,
+    kind: PlannerKind,
+) -> Result<crate::cmd::plan::Outcome> {
+    let grid = &*world.grid;
+    let (start, goal) = (world.params.start, world.params.goal);
+    std::thread::scope(|scope| {
+        std::thread::Builder::new()
+            .name("mcu-planner".into())
+            .stack_size(16 * 1024 * 1024)
+            .spawn_scoped(scope, move || {
+                let mut planner = Box::new(twil_core::link::mcu::McuPlanner::new());
+                let mut path = twil_core::plan::PathM::new();
+                let started = Instant::now();
+                let report = planner
+                    .plan(kind, grid, start, goal, &mut path)
+                    .map_err(|e| anyhow!("the firmware's planner on the host: {e:?}"))?;
+                Ok(crate::cmd::plan::Outcome {
+                    kind,
+                    report,
+                    path: path.to_vec(),
+                    elapsed_us: started.elapsed().as_micros() as u64,
+                })
+            })
+            .context("cannot start the planner thread")?
+            .join()
+            .map_err(|_| anyhow!("the planner thread failed"))?
+    })
 }
 
 #[cfg(test)]

@@ -54,5 +54,26 @@ pub mod handler;
 pub mod message;
 
 pub use frame::{FrameDecoder, FrameFault, MAX_FRAME_BYTES};
+
+/// Capacities of the firmware's device (the STM32F405 build). They live here so that the host
+/// can run the very same planner type and check the device's results exactly (the order in
+/// which A* pops equal keys, hence its expanded count, depends on the open-list capacity).
+pub mod mcu {
+    use crate::grid::words_for_cells;
+    use crate::plan::{scratch_words_for_cells, Planner};
+
+    /// Grid capacity, cells (the seed's 300 x 300).
+    pub const GRID_CELLS: usize = 300 * 300;
+    /// Grid capacity, 32-bit words.
+    pub const GRID_WORDS: usize = words_for_cells(GRID_CELLS);
+    /// Planner scratch, 32-bit words (4 bits per cell).
+    pub const PLANNER_SCRATCH_WORDS: usize = scratch_words_for_cells(GRID_CELLS);
+    /// Planner open-list capacity, entries (12 bytes each): what the 112 KiB SRAM budget leaves.
+    pub const PLANNER_QUEUE: usize = 5120;
+    /// The firmware's planner.
+    pub type McuPlanner = Planner<PLANNER_SCRATCH_WORDS, PLANNER_QUEUE>;
+    /// The firmware's device.
+    pub type McuDevice = super::Device<GRID_WORDS>;
+}
 pub use handler::{Device, Handler};
 pub use message::*;

@@ -285,6 +285,7 @@ fn mcu_bench() -> Result<()> {
         "--test",
         "firmware_qemu",
         "--",
+        "--ignored",
         "--exact",
         "mcu_bench",
         "--nocapture",
