@@ -120,16 +120,7 @@ impl Remote {
             }
         };
         let started_qemu = qemu.is_some();
-        let mut remote = Self {
-            io,
-            decoder: FrameDecoder::new(),
-            backlog: Vec::new(),
-            seq: 0,
-            timeout: REPLY_TIMEOUT,
-            telemetry: Vec::new(),
-            unmatched_errors: Vec::new(),
-            qemu,
-        };
+        let mut remote = Self::with_io(io, qemu);
         if started_qemu {
             // QEMU's USART drops bytes until the firmware has enabled it: wait for the boot
             // report before sending anything.
@@ -155,6 +146,25 @@ impl Remote {
                     return Err(e).context("the firmware did not report its boot");
                 }
             }
+        }
+    }
+
+    /// A link over any byte stream (e.g. an in-process device in tests). Reads should time out
+    /// (`WouldBlock` / `TimedOut`) rather than block forever.
+    pub fn over(io: impl Read + Write + Send + 'static) -> Self {
+        Self::with_io(Box::new(io), None)
+    }
+
+    fn with_io(io: Box<dyn Io>, qemu: Option<Qemu>) -> Self {
+        Self {
+            io,
+            decoder: FrameDecoder::new(),
+            backlog: Vec::new(),
+            seq: 0,
+            timeout: REPLY_TIMEOUT,
+            telemetry: Vec::new(),
+            unmatched_errors: Vec::new(),
+            qemu,
         }
     }
 
@@ -627,5 +637,110 @@ mod tests {
         );
         assert!("tcp:nohost".parse::<RemoteSpec>().is_err());
         assert!("".parse::<RemoteSpec>().is_err());
+    }
+
+    /// The firmware's device and planner in this process, behind a byte-stream interface.
+    struct Loopback {
+        device: Box<twil_core::link::mcu::McuDevice>,
+        planner: Box<twil_core::link::mcu::McuPlanner>,
+        out: std::collections::VecDeque<u8>,
+    }
+
+    impl Loopback {
+        fn new() -> Self {
+            Self {
+                device: Box::new(twil_core::link::mcu::McuDevice::new(DeviceInfo::default())),
+                planner: Box::new(twil_core::link::mcu::McuPlanner::new()),
+                out: Default::default(),
+            }
+        }
+    }
+
+    impl Write for Loopback {
+        fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+            let out = &mut self.out;
+            self.device
+                .receive(bytes, &mut *self.planner, &mut || 0, &mut |b: &[u8]| {
+                    out.extend(b)
+                });
+            Ok(bytes.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    impl Read for Loopback {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            if self.out.is_empty() {
+                return Err(std::io::ErrorKind::WouldBlock.into());
+            }
+            let n = buf.len().min(self.out.len());
+            for (b, o) in buf.iter_mut().zip(self.out.drain(..n)) {
+                *b = o;
+            }
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn remote_over_an_in_process_device_uploads_plans_and_reads_back() {
+        let mut remote = Remote::over(Loopback::new());
+        let info = remote.hello().unwrap();
+        assert_eq!(
+            info.grid_capacity_cells as usize,
+            twil_core::link::mcu::GRID_WORDS * 32
+        );
+        assert!(remote.ping(9).is_ok());
+
+        let mut obstacles = Obstacles::new();
+        // A wall with a 40-vertex outline (two chunks).
+        let wall: Vec<PointM> = (0..40)
+            .map(|i| PointM::new(3.0 + i as f32 * 0.2, if i % 2 == 0 { 7.0 } else { 7.2 }))
+            .collect();
+        obstacles.push(&wall).unwrap();
+        let params = MapParams {
+            robot_radius_m: 0.3,
+            ..MapParams::default()
+        };
+        remote.upload_world(params, &obstacles).unwrap();
+
+        let mut grid =
+            twil_core::grid::Grid300::new(twil_core::grid::GridGeometry::seed_default()).unwrap();
+        let half = grid.geometry().expansion_cells(0.3);
+        twil_core::raster::mark_polygon(&mut grid, &wall, half);
+        let (w, h, words) = remote.read_map().unwrap();
+        assert_eq!((w, h), (300, 300));
+        assert_eq!(&words[..], grid.words());
+
+        let (start, goal) = (PointM::new(7.0, 2.0), PointM::new(7.5, 13.0));
+        let planned = remote.plan(PlannerKind::AStar, start, goal).unwrap();
+        let mut planner = Box::new(twil_core::link::mcu::McuPlanner::new());
+        let mut path = twil_core::plan::PathM::new();
+        let report = planner
+            .plan(PlannerKind::AStar, &grid, start, goal, &mut path)
+            .unwrap();
+        assert_eq!(planned.summary.expanded, report.expanded);
+        assert_eq!(planned.path, path.to_vec());
+
+        // Writing the map back replaces it.
+        remote.write_map(&vec![0u32; words.len()]).unwrap();
+        assert!(remote.read_map().unwrap().2.iter().all(|&w| w == 0));
+
+        // Device errors become readable `Err`s; the link keeps working.
+        let e = remote.call(Request::ReadPath { offset: 5000 }).unwrap_err();
+        assert!(e.to_string().starts_with("read from 5000"), "{e}");
+        assert!(remote.ping(10).is_ok());
+    }
+
+    #[test]
+    fn a_missing_serial_port_is_a_clear_error() {
+        let e = Remote::open(&RemoteSpec::Serial("/dev/twil-no-such-port".into()))
+            .err()
+            .expect("no such port");
+        assert!(
+            format!("{e:#}").contains("cannot open serial port /dev/twil-no-such-port"),
+            "{e:#}"
+        );
     }
 }
