@@ -66,7 +66,7 @@ fn ping_reports_the_version_and_the_round_trip() {
     assert_eq!(stdout.matches("round trip").count(), 2, "{stdout}");
 }
 
-/// Planner runs whose open list overflows the firmware's queue (`QUEUE` = 5 120 entries).
+/// Planner runs whose open list overflows the firmware's queue (`QUEUE` = 2 300 entries).
 /// Empty since the planner reclaims stale entries; kept so that a case that starts to overflow
 /// must be listed here (and one listed that fits again fails the test until it is removed).
 const KNOWN_QUEUE_OVERFLOWS: &[(&str, PlannerKind)] = &[];
@@ -304,7 +304,7 @@ fn uploads_beyond_capacity_get_clear_errors_and_keep_what_was_stored() {
     // A map larger than the grid.
     let e = remote
         .call(Request::SetParams(MapParams {
-            width_cells: 400,
+            width_cells: 401,
             height_cells: 400,
             ..MapParams::default()
         }))
@@ -312,7 +312,7 @@ fn uploads_beyond_capacity_get_clear_errors_and_keep_what_was_stored() {
     assert_eq!(
         e.to_string(),
         format!(
-            "the map needs 160000 cells but the device's grid holds {} cells",
+            "the map needs 160400 cells but the device's grid holds {} cells",
             info.grid_capacity_cells
         )
     );
@@ -488,4 +488,34 @@ fn mcu_bench() {
         over.is_empty(),
         "over the 5 M instruction budget or failed: {over:?}"
     );
+}
+
+#[test]
+fn the_device_plans_on_a_400_by_400_map() {
+    let out = common::twil()
+        .args(["plan", "--world"])
+        .arg(common::world("office.da"))
+        .arg("--params")
+        .arg(common::world("office.par"))
+        .args([
+            "--size",
+            "20x20",
+            "--planner",
+            "astar",
+            "--json",
+            "--remote",
+            "qemu",
+        ])
+        .output()
+        .expect("run twil");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(json["status"], "found");
+    assert_eq!(json["matches_host"], serde_json::Value::Bool(true));
+    let ram = json["static_ram_bytes"].as_u64().expect("static_ram_bytes");
+    assert!(ram <= STATIC_RAM_BUDGET, "{ram}");
 }

@@ -6,12 +6,12 @@
 //!
 //! ## Memory
 //!
-//! - SRAM (`.bss`): the planner (4-bit scratch for 300 x 300 cells, a [`QUEUE`]-entry open list,
-//!   its path buffer), the receive queue, RTIC's state. Its size is what `static_ram_bytes`
-//!   reports and what the 112 KiB budget is about.
-//! - CCM (64 KiB at 0x1000_0000, `.ccmram`, see `build.rs`): the [`TwilDevice`]: the 300 x 300
-//!   grid, the obstacles, the last path, the frame decoder. Its initial value is stored in
-//!   flash and copied by `init` before anything reads it.
+//! - SRAM (`.data`, `.bss`): the planner (4-bit scratch for 400 x 400 cells, a [`QUEUE`]-entry
+//!   open list, its path buffer), RTIC's state. Its size is what `static_ram_bytes` reports and
+//!   what the 112 KiB budget is about.
+//! - CCM (64 KiB at 0x1000_0000, `.ccmram`, see `build.rs`): the [`TwilDevice`] (the 400 x 400
+//!   grid, the obstacles, the last path, the frame decoder) and the receive queue. Their initial
+//!   values are stored in flash and copied by `init` before anything reads them.
 //!
 //! ## Tasks (highest priority first)
 //!
@@ -49,6 +49,7 @@ use panic_semihosting as _;
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
+use heapless::spsc::Queue;
 use twil_core::link::{Build, DeviceInfo, PROTOCOL_VERSION};
 
 /// Log a line: defmt over RTT on a board, semihosting under QEMU. Arguments must implement
@@ -67,10 +68,14 @@ pub const QUEUE: usize = twil_core::link::mcu::PLANNER_QUEUE;
 /// Bytes of the receive queue (holds one less).
 pub const RX_QUEUE_BYTES: usize = 1024;
 
-/// The device: grid (300 x 300 cells), obstacles, last path, framing.
+/// The device: grid (400 x 400 cells), obstacles, last path, framing.
 pub type TwilDevice = twil_core::link::mcu::McuDevice;
-/// The planner (scratch for 300 x 300 cells, [`QUEUE`] open-list entries).
+/// The planner (scratch for 400 x 400 cells, [`QUEUE`] open-list entries).
 pub type TwilPlanner = twil_core::link::mcu::McuPlanner;
+
+/// The receive queue, in the CCM (SRAM is the planner's). Never touched before [`init_ccm`].
+#[link_section = ".ccmram.rx_queue"]
+static mut RX_QUEUE: Queue<u8, RX_QUEUE_BYTES> = Queue::new();
 
 /// The device in the CCM. Never read before [`init_ccm`] has copied its initial value.
 #[link_section = ".ccmram.device"]
@@ -86,8 +91,11 @@ static mut DEVICE: TwilDevice = TwilDevice::new(DeviceInfo {
 });
 
 /// Copy the initial values of `.ccmram` from flash (the start-up code only does this for
-/// `.data`) and hand out the device. Called once, from `init`.
-fn init_ccm() -> &'static mut TwilDevice {
+/// `.data`) and hand out the device and the receive queue. Called once, from `init`.
+fn init_ccm() -> (
+    &'static mut TwilDevice,
+    &'static mut Queue<u8, RX_QUEUE_BYTES>,
+) {
     extern "C" {
         static mut __sccmram: u32;
         static mut __eccmram: u32;
@@ -101,7 +109,10 @@ fn init_ccm() -> &'static mut TwilDevice {
         let end = core::ptr::addr_of_mut!(__eccmram);
         let words = (end as usize - start as usize) / 4;
         core::ptr::copy_nonoverlapping(core::ptr::addr_of!(__siccmram), start, words);
-        &mut *core::ptr::addr_of_mut!(DEVICE)
+        (
+            &mut *core::ptr::addr_of_mut!(DEVICE),
+            &mut *core::ptr::addr_of_mut!(RX_QUEUE),
+        )
     }
 }
 
@@ -163,7 +174,7 @@ fn static_ram_bytes() -> u32 {
 mod app {
     use super::*;
     use cortex_m::peripheral::syst::SystClkSource;
-    use heapless::spsc::{Consumer, Producer, Queue};
+    use heapless::spsc::{Consumer, Producer};
     use stm32f4xx_hal::{
         pac::USART1,
         prelude::*,
@@ -186,7 +197,6 @@ mod app {
     }
 
     #[init(local = [
-        queue: Queue<u8, RX_QUEUE_BYTES> = Queue::new(),
         planner_memory: TwilPlanner = TwilPlanner::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
@@ -220,7 +230,7 @@ mod app {
         while cortex_m::peripheral::SYST::get_current() == 0 {}
         syst.disable_counter();
 
-        let device = init_ccm();
+        let (device, rx_queue) = init_ccm();
         device.handler.set_build(if cfg!(feature = "qemu") {
             Build::Qemu
         } else {
@@ -234,7 +244,7 @@ mod app {
             &mut |bytes: &[u8]| write_all(&mut tx, bytes),
         );
         log!("twil firmware up: static RAM {} bytes", static_ram_bytes());
-        let (producer, consumer) = cx.local.queue.split();
+        let (producer, consumer) = rx_queue.split();
         (
             Shared {},
             Local {
