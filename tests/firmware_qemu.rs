@@ -519,3 +519,29 @@ fn the_device_plans_on_a_400_by_400_map() {
     let ram = json["static_ram_bytes"].as_u64().expect("static_ram_bytes");
     assert!(ram <= STATIC_RAM_BUDGET, "{ram}");
 }
+
+#[test]
+fn a_missing_elf_or_qemu_is_a_clear_error() {
+    let out = common::twil()
+        .args(["ping", "--remote", "qemu"])
+        .env("TWIL_QEMU_ELF", "/nonexistent/twil-firmware-qemu")
+        .output()
+        .expect("run twil");
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("TWIL_QEMU_ELF=/nonexistent/twil-firmware-qemu does not exist"),
+        "{stderr}"
+    );
+    let out = common::twil()
+        .args(["ping", "--remote", "qemu"])
+        .env("PATH", "/nonexistent")
+        .output()
+        .expect("run twil");
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("qemu-system-arm is not installed"),
+        "{stderr}"
+    );
+}
