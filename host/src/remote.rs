@@ -168,6 +168,11 @@ impl Remote {
         }
     }
 
+    /// How long [`Remote::request`] waits for a reply (default [`REPLY_TIMEOUT`]).
+    pub fn set_timeout(&mut self, timeout: Duration) {
+        self.timeout = timeout;
+    }
+
     /// The QEMU process behind this link, if `--remote qemu`.
     pub fn qemu(&self) -> Option<&Qemu> {
         self.qemu.as_ref()
@@ -229,13 +234,33 @@ impl Remote {
         }
         self.send_raw(&wire)?;
         let deadline = Instant::now() + self.timeout;
+        // The leading 0x00 can end at most one stale partial frame, answered by one error without
+        // a sequence number; a second such error is the answer to this request's frame.
+        let mut unnumbered_errors = 0;
         loop {
-            match self.next_frame(deadline)? {
+            let frame = match self.next_frame(deadline) {
+                Ok(frame) => frame,
+                Err(e) => match self.unmatched_errors.last() {
+                    Some(Reply::Error(last)) if unnumbered_errors > 0 => {
+                        return Err(e.context(format!("the device last reported: {last}")))
+                    }
+                    _ => return Err(e),
+                },
+            };
+            match frame {
                 Ok(DeviceFrame::Reply {
                     seq: Some(s),
                     reply,
                 }) if s == seq => return Ok(reply),
-                Ok(DeviceFrame::Reply { seq: None, reply }) => self.unmatched_errors.push(reply),
+                Ok(DeviceFrame::Reply { seq: None, reply }) => {
+                    unnumbered_errors += 1;
+                    if unnumbered_errors >= 2 {
+                        if let Reply::Error(e) = &reply {
+                            bail!("the device could not read request {seq}: {e}");
+                        }
+                    }
+                    self.unmatched_errors.push(reply);
+                }
                 Ok(DeviceFrame::Reply { .. }) => {} // a stale reply to an earlier request
                 Ok(DeviceFrame::Telemetry(t)) => self.telemetry.push(t),
                 Err(fault) => eprintln!("twil: dropped a damaged frame from the device: {fault:?}"),
@@ -644,6 +669,8 @@ mod tests {
         device: Box<twil_core::link::mcu::McuDevice>,
         planner: Box<twil_core::link::mcu::McuPlanner>,
         out: std::collections::VecDeque<u8>,
+        /// Flip a bit in the next write (a line error).
+        corrupt_next: std::sync::Arc<std::sync::atomic::AtomicBool>,
     }
 
     impl Loopback {
@@ -652,15 +679,24 @@ mod tests {
                 device: Box::new(twil_core::link::mcu::McuDevice::new(DeviceInfo::default())),
                 planner: Box::new(twil_core::link::mcu::McuPlanner::new()),
                 out: Default::default(),
+                corrupt_next: Default::default(),
             }
         }
     }
 
     impl Write for Loopback {
         fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+            let mut bytes = bytes.to_vec();
+            if self
+                .corrupt_next
+                .swap(false, std::sync::atomic::Ordering::Relaxed)
+            {
+                let last = bytes.len() - 2;
+                bytes[last] ^= 0x08;
+            }
             let out = &mut self.out;
             self.device
-                .receive(bytes, &mut *self.planner, &mut || 0, &mut |b: &[u8]| {
+                .receive(&bytes, &mut *self.planner, &mut || 0, &mut |b: &[u8]| {
                     out.extend(b)
                 });
             Ok(bytes.len())
@@ -731,6 +767,32 @@ mod tests {
         let e = remote.call(Request::ReadPath { offset: 5000 }).unwrap_err();
         assert!(e.to_string().starts_with("read from 5000"), "{e}");
         assert!(remote.ping(10).is_ok());
+    }
+
+    #[test]
+    fn a_request_damaged_on_the_line_is_reported() {
+        let loopback = Loopback::new();
+        let corrupt = loopback.corrupt_next.clone();
+        let mut remote = Remote::over(loopback);
+        remote.set_timeout(Duration::from_millis(300));
+        // Damaged alone: the device's unnumbered error is named when the wait times out.
+        corrupt.store(true, std::sync::atomic::Ordering::Relaxed);
+        let e = remote.request(Request::Ping { nonce: 1 }).unwrap_err();
+        assert!(
+            format!("{e:#}")
+                .contains("the device last reported: the device received a frame with a bad CRC"),
+            "{e:#}"
+        );
+        // After a stale partial frame: two unnumbered errors, the second is ours: no waiting.
+        remote.send_raw(&[0x05, 0x01, 0x02]).unwrap();
+        corrupt.store(true, std::sync::atomic::Ordering::Relaxed);
+        let e = remote.request(Request::Ping { nonce: 2 }).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("the device could not read request"),
+            "{e:#}"
+        );
+        assert!(remote.ping(3).is_ok());
     }
 
     #[test]
