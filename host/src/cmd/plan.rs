@@ -127,24 +127,14 @@ impl From<PlannerArg> for PlannerKind {
     }
 }
 
-/// The planner's name as in the JSON and on the command line.
+/// The planner's name as in the JSON and on the command line (`PlannerKind::as_str`).
 pub fn planner_name(kind: PlannerKind) -> &'static str {
-    match kind {
-        PlannerKind::Bfs => "bfs",
-        PlannerKind::AStar => "astar",
-        PlannerKind::AnyAngle => "anyangle",
-    }
+    kind.as_str()
 }
 
-/// The status's name as in the JSON.
+/// The status's name as in the JSON (`PlanStatus::as_str`).
 pub fn status_name(status: PlanStatus) -> &'static str {
-    match status {
-        PlanStatus::Found => "found",
-        PlanStatus::Unreachable => "unreachable",
-        PlanStatus::StartBlocked => "start_blocked",
-        PlanStatus::GoalBlocked => "goal_blocked",
-        PlanStatus::OutOfBounds => "out_of_bounds",
-    }
+    status.as_str()
 }
 
 /// Everything read from the files, and the map built from it.
@@ -474,6 +464,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn command_line_names_match_the_json_names() {
+        use clap::ValueEnum;
+        for arg in PlannerArg::value_variants() {
+            let name = arg.to_possible_value().unwrap().get_name().to_string();
+            assert_eq!(planner_name((*arg).into()), name);
+        }
+    }
 
     #[test]
     fn sizes_parse() {
