@@ -545,3 +545,41 @@ fn a_missing_elf_or_qemu_is_a_clear_error() {
         "{stderr}"
     );
 }
+
+#[test]
+fn pipelined_requests_are_all_answered_in_order_without_losing_bytes() {
+    let (mut remote, _) = qemu();
+    // 60 pings in one write (about 800 bytes, less than the firmware's 1023-byte RX queue),
+    // sent while the firmware is busy answering the first ones.
+    let mut burst = Vec::new();
+    let mut wire = [0u8; MAX_FRAME_BYTES];
+    for seq in 1000..1060u16 {
+        let frame = twil_core::link::frame::encode(
+            &twil_core::link::RequestFrame {
+                seq,
+                request: Request::Ping {
+                    nonce: seq as u32 * 7,
+                },
+            },
+            &mut wire,
+        )
+        .expect("encode");
+        burst.extend_from_slice(frame);
+    }
+    assert!(burst.len() < 1023, "{}", burst.len());
+    remote.send_raw(&burst).expect("send");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    for seq in 1000..1060u16 {
+        match remote.next_frame(deadline).expect("reply") {
+            Ok(DeviceFrame::Reply {
+                seq: Some(s),
+                reply: Reply::Pong { nonce },
+            }) => assert_eq!((s, nonce), (seq, seq as u32 * 7)),
+            other => panic!("{seq}: {other:?}"),
+        }
+    }
+    match remote.call(Request::Status).expect("status") {
+        Reply::Status(s) => assert_eq!((s.rx_dropped_bytes, s.frame_errors), (0, 0)),
+        other => panic!("{other:?}"),
+    }
+}
