@@ -79,6 +79,7 @@ fn default_args(da: Option<PathBuf>, par: PathBuf) -> Args {
         json: true,
         png: None,
         scale: None,
+        remote: None,
     }
 }
 

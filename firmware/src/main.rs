@@ -1,18 +1,348 @@
-//! Twil firmware for the STM32F405 (bring-up: a grid in static memory).
+//! Twil firmware for the STM32F405: the link to the host on USART1 and the planner, on RTIC 2.
+//!
+//! All logic is in `twil-core`: this program owns a [`twil_core::link::Device`] (grid,
+//! obstacles, last path, framing) and a [`twil_core::plan::Planner`] in static memory and moves
+//! bytes between them and USART1.
+//!
+//! ## Memory
+//!
+//! - SRAM (`.data`, `.bss`): the planner (4-bit scratch for 400 x 400 cells, a [`QUEUE`]-entry
+//!   open list, its path buffer), RTIC's state. Its size is what `static_ram_bytes` reports and
+//!   what the 112 KiB budget is about.
+//! - CCM (64 KiB at 0x1000_0000, `.ccmram`, see `build.rs`): the [`TwilDevice`] (the 400 x 400
+//!   grid, the obstacles, the last path, the frame decoder) and the receive queue. Their initial
+//!   values are stored in flash and copied by `init` before anything reads them.
+//!
+//! ## Tasks (highest priority first)
+//!
+//! | task       | binds    | prio | does                                                        |
+//! |------------|----------|------|-------------------------------------------------------------|
+//! | `systick`  | SysTick  | 3    | counts SysTick wraps while a request is handled (timing)     |
+//! | `usart1_rx`| USART1   | 2    | moves every received byte into the RX queue (never blocks)   |
+//! | `idle`     | -        | 0    | drains the queue into the `Device`, plans, writes replies    |
+//!
+//! The receive interrupt preempts everything that is slow (planning, writing replies), so no
+//! byte is lost at full rate: at 115200 baud a byte arrives every 87 µs and the interrupt needs
+//! well under 1 µs. The queue holds [`RX_QUEUE_BYTES`] - 1 bytes, several frames; bytes that do
+//! not fit are counted (`rx_dropped_bytes` in the `Status` reply), never silently lost.
+//!
+//! ## Builds
+//!
+//! - default (`hardware`): PLL at 168 MHz from the HSI, defmt over RTT, `panic-probe`.
+//! - `--no-default-features --features qemu`: for QEMU's `netduinoplus2`; QEMU does not emulate
+//!   the RCC, so the clock stays on the HSI and nothing waits on a ready flag; logs and panics
+//!   go out over semihosting.
 #![no_std]
 #![no_main]
 
-use cortex_m_rt::entry;
-use defmt_rtt as _;
-use panic_probe as _;
-use twil_core::grid::{Grid300, GridGeometry};
+#[cfg(all(feature = "qemu", feature = "hardware"))]
+compile_error!("features `hardware` and `qemu` exclude each other: build QEMU with --no-default-features --features qemu");
+#[cfg(not(any(feature = "qemu", feature = "hardware")))]
+compile_error!("choose a build: feature `hardware` (default) or `qemu`");
 
-#[entry]
-fn main() -> ! {
-    let mut grid = Grid300::new(GridGeometry::seed_default()).unwrap();
-    grid.fill_row(10, 0, 299);
-    defmt::info!("twil firmware up: {} occupied cells", grid.count_occupied());
+#[cfg(feature = "hardware")]
+use defmt_rtt as _;
+#[cfg(feature = "hardware")]
+use panic_probe as _;
+#[cfg(feature = "qemu")]
+use panic_semihosting as _;
+
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use heapless::spsc::Queue;
+use twil_core::link::{Build, DeviceInfo, PROTOCOL_VERSION};
+
+/// Log a line: defmt over RTT on a board, semihosting under QEMU. Arguments must implement
+/// both `defmt::Format` and `Display` (integers, `&str`).
+macro_rules! log {
+    ($($arg:tt)*) => {{
+        #[cfg(feature = "hardware")]
+        defmt::info!($($arg)*);
+        #[cfg(feature = "qemu")]
+        cortex_m_semihosting::hprintln!($($arg)*);
+    }};
+}
+
+/// Planner open-list capacity, entries (`twil_core::link::mcu`, shared with the host).
+pub const QUEUE: usize = twil_core::link::mcu::PLANNER_QUEUE;
+/// Bytes of the receive queue (holds one less).
+pub const RX_QUEUE_BYTES: usize = 1024;
+
+/// The device: grid (400 x 400 cells), obstacles, last path, framing.
+pub type TwilDevice = twil_core::link::mcu::McuDevice;
+/// The planner (scratch for 400 x 400 cells, [`QUEUE`] open-list entries).
+pub type TwilPlanner = twil_core::link::mcu::McuPlanner;
+
+/// The receive queue, in the CCM (SRAM is the planner's). Never touched before [`init_ccm`].
+#[link_section = ".ccmram.rx_queue"]
+static mut RX_QUEUE: Queue<u8, RX_QUEUE_BYTES> = Queue::new();
+
+/// The device in the CCM. Never read before [`init_ccm`] has copied its initial value.
+#[link_section = ".ccmram.device"]
+static mut DEVICE: TwilDevice = TwilDevice::new(DeviceInfo {
+    protocol_version: PROTOCOL_VERSION,
+    build: Build::Hardware,
+    grid_capacity_cells: 0,
+    planner_capacity_cells: 0,
+    max_polygons: 0,
+    max_vertices: 0,
+    max_frame_bytes: 0,
+    static_ram_bytes: 0,
+});
+
+/// Copy the initial values of `.ccmram` from flash (the start-up code only does this for
+/// `.data`) and hand out the device and the receive queue. Called once, from `init`.
+fn init_ccm() -> (
+    &'static mut TwilDevice,
+    &'static mut Queue<u8, RX_QUEUE_BYTES>,
+) {
+    extern "C" {
+        static mut __sccmram: u32;
+        static mut __eccmram: u32;
+        static __siccmram: u32;
+    }
+    // SAFETY: runs once, in `init` with interrupts disabled, before anything touches the CCM
+    // statics; the linker script (`ccm.x`) makes [__sccmram, __eccmram) word-aligned in the CCM
+    // and __siccmram its image in flash, of the same length.
+    unsafe {
+        let start = core::ptr::addr_of_mut!(__sccmram);
+        let end = core::ptr::addr_of_mut!(__eccmram);
+        let words = (end as usize - start as usize) / 4;
+        core::ptr::copy_nonoverlapping(core::ptr::addr_of!(__siccmram), start, words);
+        (
+            &mut *core::ptr::addr_of_mut!(DEVICE),
+            &mut *core::ptr::addr_of_mut!(RX_QUEUE),
+        )
+    }
+}
+
+/// SysTick reload: the full 24 bits.
+const SYST_RELOAD: u32 = 0x00FF_FFFF;
+/// SysTick wraps since the timer was started (counted by the SysTick exception).
+static SYST_WRAPS: AtomicU32 = AtomicU32::new(0);
+/// Bytes dropped by the receive interrupt (queue full or a line error).
+static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
+
+/// SysTick ticks counted so far (the counter runs only while requests are handled): wraps ×
+/// 2^24 + the count down of the current period. Differences of two readings are elapsed ticks.
+fn ticks() -> u64 {
+    use cortex_m::peripheral::{SCB, SYST};
     loop {
-        cortex_m::asm::wfi();
+        // The wrap is counted by the exception on the 1 -> 0 step; a wrap whose exception has
+        // not run yet shows as a pending SysTick. Readings that straddle either are retried.
+        let wraps_before = SYST_WRAPS.load(Ordering::Acquire);
+        let pending_before = SCB::is_pendst_pending();
+        let value = SYST::get_current();
+        let pending_after = SCB::is_pendst_pending();
+        let wraps_after = SYST_WRAPS.load(Ordering::Acquire);
+        if wraps_before != wraps_after || pending_before != pending_after {
+            continue;
+        }
+        let wraps = wraps_before as u64 + pending_before as u64;
+        // Ticks into the period: 0 at the 1 -> 0 step, then RELOAD, RELOAD - 1, ... count 1, 2, ...
+        let into_period = (SYST_RELOAD - value).wrapping_add(1) & SYST_RELOAD;
+        return (wraps << 24) + into_period as u64;
+    }
+}
+
+/// Instructions (QEMU) or cycles (board) counted so far (see [`ticks`]).
+///
+/// QEMU's SysTick runs at 168 MHz of virtual time; with `-icount shift=0` one instruction takes
+/// 1 ns, so instructions = ticks × 1000 / 168. On a board at 168 MHz, ticks are core cycles.
+fn instructions() -> u64 {
+    let t = ticks();
+    if cfg!(feature = "qemu") {
+        t * 1000 / 168
+    } else {
+        t
+    }
+}
+
+/// Statically allocated SRAM (`.data` + `.bss` + `.uninit`, not the CCM), from the linker's
+/// symbols.
+fn static_ram_bytes() -> u32 {
+    extern "C" {
+        static __euninit: u8;
+    }
+    const RAM_ORIGIN: usize = 0x2000_0000;
+    // Only the address of the linker symbol is taken, never its contents.
+    let end = core::ptr::addr_of!(__euninit) as usize;
+    end.saturating_sub(RAM_ORIGIN) as u32
+}
+
+#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
+mod app {
+    use super::*;
+    use cortex_m::peripheral::syst::SystClkSource;
+    use heapless::spsc::{Consumer, Producer};
+    use stm32f4xx_hal::{
+        pac::USART1,
+        prelude::*,
+        serial::{Config, Rx, Serial, Tx},
+    };
+    use twil_core::link::{DeviceFrame, Telemetry};
+
+    #[shared]
+    struct Shared {}
+
+    #[local]
+    struct Local {
+        rx: Rx<USART1>,
+        tx: Tx<USART1>,
+        producer: Producer<'static, u8, RX_QUEUE_BYTES>,
+        consumer: Consumer<'static, u8, RX_QUEUE_BYTES>,
+        syst: cortex_m::peripheral::SYST,
+        device: &'static mut TwilDevice,
+        planner: &'static mut TwilPlanner,
+    }
+
+    #[init(local = [
+        planner_memory: TwilPlanner = TwilPlanner::new(),
+    ])]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        let rcc = cx.device.RCC.constrain();
+        // QEMU: stay on the HSI (16 MHz), no PLL (its ready flag is never set under QEMU).
+        #[cfg(feature = "qemu")]
+        let clocks = rcc.cfgr.freeze();
+        #[cfg(feature = "hardware")]
+        let clocks = rcc.cfgr.sysclk(168.MHz()).freeze();
+
+        let gpioa = cx.device.GPIOA.split();
+        let serial: Serial<USART1> = Serial::new(
+            cx.device.USART1,
+            (gpioa.pa9, gpioa.pa10),
+            Config::default().baudrate(115_200.bps()),
+            &clocks,
+        )
+        .unwrap_or_else(|_| panic!("115200 baud is reachable from any clock"));
+        let (mut tx, mut rx) = serial.split();
+        rx.listen();
+
+        let mut syst = cx.core.SYST;
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(SYST_RELOAD);
+        syst.clear_current();
+        syst.enable_interrupt();
+        // The first tick after a clear loads the reload value without counting a wrap: let it
+        // happen now, so that `ticks()` only ever grows. From here the counter is paused and
+        // resumed, never cleared.
+        syst.enable_counter();
+        while cortex_m::peripheral::SYST::get_current() == 0 {}
+        syst.disable_counter();
+
+        let (device, rx_queue) = init_ccm();
+        device.handler.set_build(if cfg!(feature = "qemu") {
+            Build::Qemu
+        } else {
+            Build::Hardware
+        });
+        device.handler.set_static_ram_bytes(static_ram_bytes());
+        device.send_frame(
+            &DeviceFrame::Telemetry(Telemetry::Boot {
+                protocol_version: PROTOCOL_VERSION,
+            }),
+            &mut |bytes: &[u8]| write_all(&mut tx, bytes),
+        );
+        log!("twil firmware up: static RAM {} bytes", static_ram_bytes());
+        let (producer, consumer) = rx_queue.split();
+        (
+            Shared {},
+            Local {
+                rx,
+                tx,
+                producer,
+                consumer,
+                syst,
+                device,
+                planner: cx.local.planner_memory,
+            },
+        )
+    }
+
+    /// Every received byte goes into the queue; nothing here waits.
+    #[task(binds = USART1, priority = 2, local = [rx, producer])]
+    fn usart1_rx(cx: usart1_rx::Context) {
+        loop {
+            match cx.local.rx.read() {
+                Ok(byte) => {
+                    if cx.local.producer.enqueue(byte).is_err() {
+                        RX_DROPPED.fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+                Err(nb::Error::WouldBlock) => break,
+                // Overrun, framing, noise, parity: the HAL has cleared the flag; a byte is lost.
+                Err(nb::Error::Other(_)) => {
+                    RX_DROPPED.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+        }
+    }
+
+    /// Counts SysTick periods (only while a request is being handled).
+    #[task(binds = SysTick, priority = 3)]
+    fn systick(_cx: systick::Context) {
+        SYST_WRAPS.fetch_add(1, Ordering::AcqRel);
+    }
+
+    #[idle(local = [consumer, tx, syst, device, planner])]
+    fn idle(cx: idle::Context) -> ! {
+        // Calibration of the instruction count: `asm::delay(n)` runs n + 1 times a two-instruction
+        // loop, so 500 000 gives 1 000 002 instructions (+ a few for the reads).
+        cx.local.syst.enable_counter();
+        let before = instructions();
+        cortex_m::asm::delay(500_000);
+        let after = instructions();
+        cx.local.syst.disable_counter();
+        log!(
+            "calibration: 1000002 instructions measured as {}",
+            (after - before) as u32
+        );
+
+        let mut chunk = [0u8; 64];
+        loop {
+            let mut n = 0;
+            while n < chunk.len() {
+                match cx.local.consumer.dequeue() {
+                    Some(b) => {
+                        chunk[n] = b;
+                        n += 1;
+                    }
+                    None => break,
+                }
+            }
+            if n == 0 {
+                // Sleep until the next interrupt. Interrupts are masked while checking so a
+                // byte that arrives between the check and WFI still wakes the core.
+                cortex_m::interrupt::free(|_| {
+                    if !cx.local.consumer.ready() {
+                        cortex_m::asm::wfi();
+                    }
+                });
+                continue;
+            }
+            let dropped = RX_DROPPED.swap(0, Ordering::Relaxed);
+            if dropped > 0 {
+                cx.local.device.handler.note_rx_dropped(dropped);
+            }
+            // SysTick runs only while requests are handled, so the core sleeps otherwise (and
+            // QEMU's virtual clock has no timer to chase).
+            cx.local.syst.enable_counter();
+            let tx = &mut *cx.local.tx;
+            cx.local.device.receive(
+                &chunk[..n],
+                &mut **cx.local.planner,
+                &mut instructions,
+                &mut |bytes: &[u8]| write_all(tx, bytes),
+            );
+            cx.local.syst.disable_counter();
+        }
+    }
+
+    /// Write bytes, waiting for the transmitter.
+    fn write_all(tx: &mut Tx<USART1>, bytes: &[u8]) {
+        for &b in bytes {
+            // Writing a byte cannot fail on this USART; WouldBlock is waited out.
+            let _ = nb::block!(tx.write(b));
+        }
     }
 }

@@ -3,6 +3,7 @@
 
 pub mod cmd;
 pub mod cspace;
+pub mod remote;
 pub mod render;
 pub mod sim;
 pub mod world_io;

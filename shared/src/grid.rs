@@ -110,7 +110,7 @@ pub struct GridGeometry {
 
 impl GridGeometry {
     /// A geometry of `width` x `height` cells of `resolution_m` metres.
-    pub fn new(width: u32, height: u32, resolution_m: f32) -> Result<Self, GridError> {
+    pub const fn new(width: u32, height: u32, resolution_m: f32) -> Result<Self, GridError> {
         if !(resolution_m.is_finite() && resolution_m > 0.0) {
             return Err(GridError::BadResolution { resolution_m });
         }
@@ -148,7 +148,7 @@ impl GridGeometry {
     }
 
     /// The seed's default: 15 m x 15 m at 0.05 m (300 x 300 cells).
-    pub fn seed_default() -> Self {
+    pub const fn seed_default() -> Self {
         Self {
             width: DEFAULT_SIDE_CELLS,
             height: DEFAULT_SIDE_CELLS,
@@ -307,6 +307,22 @@ impl<const WORDS: usize> Grid<WORDS> {
             });
         }
         Ok(())
+    }
+
+    /// An empty grid, as a `const fn`: a grid of a large capacity can then be built at compile
+    /// time straight into a `static` (the firmware does this; a large value returned by
+    /// [`Grid::new`] would pass through the stack). Same contract as [`Grid::new`].
+    pub const fn new_const(geometry: GridGeometry) -> Result<Self, GridError> {
+        if geometry.cell_count() > Self::CAPACITY_CELLS {
+            return Err(GridError::CapacityExceeded {
+                cells: geometry.cell_count() as u32,
+                capacity: Self::CAPACITY_CELLS as u32,
+            });
+        }
+        Ok(Self {
+            geometry,
+            bits: [0; WORDS],
+        })
     }
 
     /// Change the geometry and clear the map. On error nothing changes.

@@ -1,18 +1,37 @@
 //! `cargo xtask …`: firmware builds, QEMU runs and the CI entry point.
 
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use anyhow::{bail, Context, Result};
 
-const USAGE: &str = "usage: cargo xtask <test|firmware>
-  test       run every test (host, scenarios, firmware build); what .ci/run calls
-  firmware   build the firmware ELF for thumbv7em-none-eabihf";
+const USAGE: &str = "usage: cargo xtask <command>
+  test        install qemu-system-arm if missing, build the firmware, run every test
+  firmware    build both firmware ELFs (hardware, and QEMU: twil-firmware-qemu) and print their sizes
+  size        print flash / static RAM / CCM of the built ELFs
+  qemu [PORT] run the QEMU firmware with USART1 on tcp:127.0.0.1:PORT (default: a free port)
+  mcu-bench   instructions per plan on 300x300 grids (open, 20% random, maze) under QEMU";
+
+/// Target of the firmware.
+const THUMB: &str = "thumbv7em-none-eabihf";
+/// Static RAM budget of the firmware (SRAM1: the 112 KiB that are not SRAM2), bytes.
+const STATIC_RAM_BUDGET: u64 = 112 * 1024;
+/// SRAM of the STM32F405 (`memory.x`).
+const RAM: std::ops::Range<u64> = 0x2000_0000..0x2002_0000;
+/// CCM of the STM32F405 (`memory.x`), and where the QEMU build puts it (see firmware/build.rs).
+const CCM: std::ops::Range<u64> = 0x1000_0000..0x1001_0000;
+const QEMU_CCM: std::ops::Range<u64> = 0x2002_0000..0x2003_0000;
+/// Flash of the STM32F405.
+const FLASH: std::ops::Range<u64> = 0x0800_0000..0x0810_0000;
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
         Some("test") => test(),
         Some("firmware") => firmware(),
+        Some("size") => size(),
+        Some("qemu") => qemu(args.get(1).map(String::as_str)),
+        Some("mcu-bench") => mcu_bench(),
         _ => {
             eprintln!("{USAGE}");
             std::process::exit(2);
@@ -26,11 +45,23 @@ fn cargo() -> Command {
     c
 }
 
-fn workspace_root() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .expect("xtask lives in the workspace")
         .to_path_buf()
+}
+
+fn target_dir() -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| workspace_root().join("target"))
+}
+
+/// The two ELFs: (hardware, QEMU).
+fn elf_paths() -> (PathBuf, PathBuf) {
+    let dir = target_dir().join(THUMB).join("firmware");
+    (dir.join("twil-firmware"), dir.join("twil-firmware-qemu"))
 }
 
 fn run(mut c: Command) -> Result<()> {
@@ -49,16 +80,11 @@ fn run(mut c: Command) -> Result<()> {
 fn ensure_thumb_target() -> Result<()> {
     let out = Command::new("rustc")
         .current_dir(workspace_root())
-        .args([
-            "--print",
-            "target-libdir",
-            "--target",
-            "thumbv7em-none-eabihf",
-        ])
+        .args(["--print", "target-libdir", "--target", THUMB])
         .output()
         .context("could not run rustc")?;
     let libdir = String::from_utf8_lossy(&out.stdout).trim().to_string();
-    if out.status.success() && std::path::Path::new(&libdir).exists() {
+    if out.status.success() && Path::new(&libdir).exists() {
         return Ok(());
     }
     let mut c = Command::new("rustup");
@@ -67,22 +93,208 @@ fn ensure_thumb_target() -> Result<()> {
     run(c)
 }
 
-fn firmware() -> Result<()> {
-    ensure_thumb_target()?;
+/// Install `qemu-system-arm` with apt when it is missing (CI runs on a fresh Debian machine).
+fn ensure_qemu() -> Result<()> {
+    let found = Command::new("qemu-system-arm")
+        .arg("--version")
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if found {
+        return Ok(());
+    }
+    eprintln!("xtask: qemu-system-arm is missing; installing it with apt-get");
+    let root = Command::new("id")
+        .arg("-u")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+        .unwrap_or(false);
+    let apt = |args: &[&str]| -> Command {
+        let mut c = if root {
+            Command::new("apt-get")
+        } else {
+            let mut c = Command::new("sudo");
+            c.arg("apt-get");
+            c
+        };
+        c.args(args).env("DEBIAN_FRONTEND", "noninteractive");
+        c
+    };
+    run(apt(&["update"]))?;
+    run(apt(&[
+        "install",
+        "-y",
+        "--no-install-recommends",
+        "qemu-system-arm",
+    ]))
+    .context("could not install qemu-system-arm; install it by hand")?;
+    Ok(())
+}
+
+fn build_firmware(qemu: bool) -> Result<()> {
     let mut c = cargo();
     c.args([
         "build",
         "--package",
         "twil-firmware",
         "--target",
-        "thumbv7em-none-eabihf",
+        THUMB,
         "--profile",
         "firmware",
+    ]);
+    if qemu {
+        c.args(["--no-default-features", "--features", "qemu"]);
+    }
+    run(c)
+}
+
+/// Build the QEMU ELF (copied to `twil-firmware-qemu`), then the hardware ELF, and report sizes.
+fn firmware() -> Result<()> {
+    ensure_thumb_target()?;
+    let (hardware, qemu) = elf_paths();
+    build_firmware(true)?;
+    std::fs::copy(&hardware, &qemu)
+        .with_context(|| format!("copying {} to {}", hardware.display(), qemu.display()))?;
+    build_firmware(false)?;
+    size()
+}
+
+/// Sizes of an ELF, bytes.
+#[derive(Debug, Default, Clone, Copy, PartialEq)]
+struct Sizes {
+    /// Flash: code, constants, vector table and the initial values of `.data` and `.ccmram`.
+    flash: u64,
+    /// SRAM: `.data` + `.bss` + `.uninit` (+ RTIC's and the HAL's statics, all in these).
+    static_ram: u64,
+    /// CCM: `.ccmram`.
+    ccm: u64,
+}
+
+fn sizes(elf: &Path) -> Result<Sizes> {
+    use object::{Object, ObjectSection, SectionFlags};
+    let data = std::fs::read(elf)
+        .with_context(|| format!("cannot read {} (run `cargo xtask firmware`)", elf.display()))?;
+    let file =
+        object::File::parse(&*data).with_context(|| format!("{} is not an ELF", elf.display()))?;
+    let mut s = Sizes::default();
+    for section in file.sections() {
+        let SectionFlags::Elf { sh_flags } = section.flags() else {
+            continue;
+        };
+        const SHF_ALLOC: u64 = 0x2;
+        if sh_flags & SHF_ALLOC == 0 || section.size() == 0 {
+            continue;
+        }
+        let addr = section.address();
+        // NOBITS sections (.bss, .uninit) have no bytes in the file, hence none in flash.
+        let nobits = section.file_range().is_none();
+        if FLASH.contains(&addr) {
+            s.flash += section.size();
+        } else if RAM.contains(&addr) {
+            s.static_ram += section.size();
+            if !nobits {
+                s.flash += section.size(); // initial values of .data
+            }
+        } else if CCM.contains(&addr) || QEMU_CCM.contains(&addr) {
+            s.ccm += section.size();
+            if !nobits {
+                s.flash += section.size();
+            }
+        }
+    }
+    Ok(s)
+}
+
+fn size() -> Result<()> {
+    let (hardware, qemu) = elf_paths();
+    println!("| build | flash (bytes) | static SRAM (bytes) | CCM (bytes) |");
+    println!("|-------|--------------:|--------------------:|------------:|");
+    let mut over = Vec::new();
+    for (name, elf) in [("hardware", &hardware), ("qemu", &qemu)] {
+        let s = sizes(elf)?;
+        println!(
+            "| {name} | {} | {} ({:.1} KiB) | {} |",
+            s.flash,
+            s.static_ram,
+            s.static_ram as f64 / 1024.0,
+            s.ccm
+        );
+        if s.static_ram > STATIC_RAM_BUDGET {
+            over.push(format!(
+                "{name}: {} bytes of static SRAM, budget {STATIC_RAM_BUDGET}",
+                s.static_ram
+            ));
+        }
+    }
+    if !over.is_empty() {
+        bail!("static RAM over budget: {}", over.join("; "));
+    }
+    Ok(())
+}
+
+/// Run the QEMU firmware with USART1 on a TCP server port until interrupted.
+fn qemu(port: Option<&str>) -> Result<()> {
+    ensure_qemu()?;
+    let (_, elf) = elf_paths();
+    if !elf.is_file() {
+        firmware()?;
+    }
+    let port: u16 = match port {
+        Some(p) => p
+            .parse()
+            .with_context(|| format!("`{p}` is not a TCP port"))?,
+        None => std::net::TcpListener::bind("127.0.0.1:0")?
+            .local_addr()?
+            .port(),
+    };
+    println!("xtask: QEMU netduinoplus2 running {}", elf.display());
+    println!("xtask: USART1 on tcp:127.0.0.1:{port} (QEMU waits for a client)");
+    println!("xtask: try `cargo run --release -p twil-host -- ping --remote tcp:127.0.0.1:{port}`");
+    println!("xtask: semihosting output follows; Ctrl-C stops QEMU");
+    let mut c = Command::new("qemu-system-arm");
+    c.args([
+        "-machine",
+        "netduinoplus2",
+        "-display",
+        "none",
+        "-monitor",
+        "none",
+        "-serial",
+        &format!("tcp:127.0.0.1:{port},server=on,wait=on,nodelay=on"),
+        "-semihosting-config",
+        "enable=on,target=native",
+        "-icount",
+        "shift=0,sleep=off",
+        "-kernel",
+    ])
+    .arg(&elf);
+    run(c)
+}
+
+/// Measure instructions per plan under QEMU (the `mcu_bench` test of tests/firmware_qemu.rs,
+/// which also asserts the 5 M budget) and print the table.
+fn mcu_bench() -> Result<()> {
+    ensure_qemu()?;
+    firmware()?;
+    let mut c = cargo();
+    c.args([
+        "test",
+        "--release",
+        "--package",
+        "twil-host",
+        "--test",
+        "firmware_qemu",
+        "--",
+        "--ignored",
+        "--exact",
+        "mcu_bench",
+        "--nocapture",
     ]);
     run(c)
 }
 
 fn test() -> Result<()> {
+    ensure_qemu()?;
     firmware()?;
     let mut c = cargo();
     c.args([

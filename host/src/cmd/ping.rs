@@ -1,10 +1,42 @@
-//! `twil ping` (not written yet).
+//! `twil ping --remote …`: check the link to the firmware, print its version and the round trip.
+
+use anyhow::Result;
+
+use crate::remote::{Remote, RemoteSpec};
 
 /// Arguments of `twil ping`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// The device: `qemu` (starts QEMU with the firmware), `tcp:HOST:PORT`, or a serial port
+    /// (`/dev/ttyUSB0`, 115200 8N1).
+    #[arg(long)]
+    pub remote: RemoteSpec,
+    /// Pings to send.
+    #[arg(long, default_value_t = 1)]
+    pub count: u32,
+}
 
 /// Run `twil ping`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("`twil ping` is not implemented yet")
+pub fn run(args: Args) -> Result<()> {
+    let (mut remote, info) = Remote::connect(&args.remote)?;
+    println!(
+        "twil firmware: protocol v{}, build {:?}, grid {} cells, planner {} cells, {} polygons / {} vertices, frames up to {} bytes, static RAM {} bytes",
+        info.protocol_version,
+        info.build,
+        info.grid_capacity_cells,
+        info.planner_capacity_cells,
+        info.max_polygons,
+        info.max_vertices,
+        info.max_frame_bytes,
+        info.static_ram_bytes
+    );
+    for i in 0..args.count {
+        let rtt = remote.ping(0x7711_0000 + i)?;
+        println!(
+            "ping {}: round trip {:.3} ms",
+            i + 1,
+            rtt.as_secs_f64() * 1e3
+        );
+    }
+    Ok(())
 }

@@ -67,6 +67,11 @@ pub struct Args {
     /// Pixels per cell in the PNG (default: about 900 px for the longer side).
     #[arg(long, value_name = "PX")]
     pub scale: Option<u32>,
+    /// Plan on the firmware instead: `qemu` (starts QEMU with the firmware), `tcp:HOST:PORT`
+    /// or a serial port. The world is uploaded, the device plans; the output is the device's
+    /// plan, and the JSON adds `mcu_instructions`, `static_ram_bytes` and `matches_host`.
+    #[arg(long, value_name = "DEVICE")]
+    pub remote: Option<crate::remote::RemoteSpec>,
 }
 
 /// Map size in metres.
@@ -432,13 +437,23 @@ pub fn render_png(
 pub fn run(args: Args) -> anyhow::Result<()> {
     let world = load(&args)?;
     let outcome = plan(&world, args.planner.into())?;
+    let mut extra = serde_json::Map::new();
+    let outcome = match &args.remote {
+        Some(device) => crate::remote::plan_on_device(device, &world, &outcome, &mut extra)?,
+        None => outcome,
+    };
     if let Some(out) = &args.png {
         render_png(&world, &outcome, out, args.scale)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string(&plan_json(&outcome))?);
+        let mut json = plan_json(&outcome);
+        json.extra = extra;
+        println!("{}", serde_json::to_string(&json)?);
     } else {
         println!("{}", summary(&world, &outcome));
+        for (key, value) in &extra {
+            println!("{key}: {value}");
+        }
         if let Some(out) = &args.png {
             println!("picture: {}", out.display());
         }

@@ -1,0 +1,808 @@
+//! The host end of the link: open a device (`--remote qemu`, `--remote tcp:HOST:PORT`,
+//! `--remote /dev/ttyUSB0`), send requests, collect replies.
+//!
+//! The wire format and the messages are `twil_core::link`'s; this module only moves bytes.
+//! [`Remote::request`] sends one request and waits for the reply with the same sequence number,
+//! skipping telemetry and stale replies. `--remote qemu` starts `qemu-system-arm` with the QEMU
+//! build of the firmware ([`Qemu`]); the process is killed when the [`Remote`] is dropped, on
+//! success and on error alike.
+
+use std::io::{Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::str::FromStr;
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, bail, Context, Result};
+use twil_core::geom::PointM;
+use twil_core::link::frame::{self, FrameDecoder, FrameFault, MAX_FRAME_BYTES};
+use twil_core::link::{
+    DeviceFrame, DeviceInfo, MapParams, PlanSummary, Reply, Request, RequestFrame, Telemetry,
+    MAP_CHUNK_WORDS, OBSTACLE_CHUNK_VERTICES, PROTOCOL_VERSION,
+};
+use twil_core::plan::PlannerKind;
+use twil_core::world::Obstacles;
+
+/// Where the firmware is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RemoteSpec {
+    /// Start QEMU with the QEMU build of the firmware.
+    Qemu,
+    /// A TCP socket (`tcp:HOST:PORT`), e.g. `cargo xtask qemu`'s.
+    Tcp(String),
+    /// A serial port at 115200 8N1 (any other text: `/dev/ttyUSB0`, `COM3`).
+    Serial(String),
+}
+
+impl FromStr for RemoteSpec {
+    type Err = anyhow::Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        if s == "qemu" {
+            Ok(RemoteSpec::Qemu)
+        } else if let Some(addr) = s.strip_prefix("tcp:") {
+            if !addr.contains(':') {
+                bail!("`--remote {s}`: expected tcp:HOST:PORT");
+            }
+            Ok(RemoteSpec::Tcp(addr.to_string()))
+        } else if s.is_empty() {
+            bail!("`--remote` needs `qemu`, `tcp:HOST:PORT` or a serial port path")
+        } else {
+            Ok(RemoteSpec::Serial(s.to_string()))
+        }
+    }
+}
+
+/// How long to wait for a reply (QEMU plans in milliseconds; a board at 115200 baud moves a
+/// frame in at most 45 ms).
+pub const REPLY_TIMEOUT: Duration = Duration::from_secs(20);
+
+trait Io: Read + Write + Send {}
+impl<T: Read + Write + Send> Io for T {}
+
+/// A path planned by the device.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RemotePlan {
+    /// The device's report (status, cost, instructions…).
+    pub summary: PlanSummary,
+    /// The path, metres.
+    pub path: Vec<PointM>,
+}
+
+/// An open link to a device.
+pub struct Remote {
+    io: Box<dyn Io>,
+    decoder: FrameDecoder,
+    backlog: Vec<u8>,
+    seq: u16,
+    timeout: Duration,
+    /// Telemetry received while waiting for replies.
+    pub telemetry: Vec<Telemetry>,
+    /// Error replies to damaged frames (no sequence number) seen while waiting.
+    pub unmatched_errors: Vec<Reply>,
+    /// Kept last so that the socket closes before QEMU is killed.
+    qemu: Option<Qemu>,
+}
+
+impl Remote {
+    /// Open the link and do the version handshake.
+    pub fn connect(spec: &RemoteSpec) -> Result<(Self, DeviceInfo)> {
+        let mut remote = Self::open(spec)?;
+        let info = remote.hello()?;
+        Ok((remote, info))
+    }
+
+    /// Open the link without any exchange.
+    pub fn open(spec: &RemoteSpec) -> Result<Self> {
+        let (io, qemu): (Box<dyn Io>, Option<Qemu>) = match spec {
+            RemoteSpec::Qemu => {
+                let (qemu, stream) = Qemu::start(&Qemu::elf_path()?)?;
+                stream.set_read_timeout(Some(Duration::from_millis(200)))?;
+                stream.set_nodelay(true)?;
+                (Box::new(stream), Some(qemu))
+            }
+            RemoteSpec::Tcp(addr) => {
+                let stream = connect_tcp(addr, Duration::from_secs(5))?;
+                stream.set_read_timeout(Some(Duration::from_millis(200)))?;
+                stream.set_nodelay(true)?;
+                (Box::new(stream), None)
+            }
+            RemoteSpec::Serial(path) => {
+                let port = serialport::new(path, 115_200)
+                    .data_bits(serialport::DataBits::Eight)
+                    .parity(serialport::Parity::None)
+                    .stop_bits(serialport::StopBits::One)
+                    .timeout(Duration::from_millis(200))
+                    .open()
+                    .with_context(|| format!("cannot open serial port {path}"))?;
+                (Box::new(port), None)
+            }
+        };
+        let started_qemu = qemu.is_some();
+        let mut remote = Self::with_io(io, qemu);
+        if started_qemu {
+            // QEMU's USART drops bytes until the firmware has enabled it: wait for the boot
+            // report before sending anything.
+            remote.wait_for_boot(Duration::from_secs(15))?;
+        }
+        Ok(remote)
+    }
+
+    /// Wait for [`Telemetry::Boot`] (sent once by the firmware after reset).
+    pub fn wait_for_boot(&mut self, patience: Duration) -> Result<()> {
+        let deadline = Instant::now() + patience;
+        loop {
+            match self.next_frame(deadline) {
+                Ok(Ok(DeviceFrame::Telemetry(t))) => {
+                    let boot = matches!(t, Telemetry::Boot { .. });
+                    self.telemetry.push(t);
+                    if boot {
+                        return Ok(());
+                    }
+                }
+                Ok(_) => {}
+                Err(e) => {
+                    return Err(e).context("the firmware did not report its boot");
+                }
+            }
+        }
+    }
+
+    /// A link over any byte stream (e.g. an in-process device in tests). Reads should time out
+    /// (`WouldBlock` / `TimedOut`) rather than block forever.
+    pub fn over(io: impl Read + Write + Send + 'static) -> Self {
+        Self::with_io(Box::new(io), None)
+    }
+
+    fn with_io(io: Box<dyn Io>, qemu: Option<Qemu>) -> Self {
+        Self {
+            io,
+            decoder: FrameDecoder::new(),
+            backlog: Vec::new(),
+            seq: 0,
+            timeout: REPLY_TIMEOUT,
+            telemetry: Vec::new(),
+            unmatched_errors: Vec::new(),
+            qemu,
+        }
+    }
+
+    /// How long [`Remote::request`] waits for a reply (default [`REPLY_TIMEOUT`]).
+    pub fn set_timeout(&mut self, timeout: Duration) {
+        self.timeout = timeout;
+    }
+
+    /// The QEMU process behind this link, if `--remote qemu`.
+    pub fn qemu(&self) -> Option<&Qemu> {
+        self.qemu.as_ref()
+    }
+
+    /// Version handshake: the device's description, or an error if the versions differ. Sent
+    /// up to 3 times, 2 s apart (a board may still be starting when the port opens).
+    pub fn hello(&mut self) -> Result<DeviceInfo> {
+        let timeout = std::mem::replace(&mut self.timeout, Duration::from_secs(2));
+        let mut result = Err(anyhow!("no attempt"));
+        for _ in 0..3 {
+            result = self.call(Request::Hello {
+                protocol_version: PROTOCOL_VERSION,
+            });
+            if let Err(e) = &result {
+                if e.to_string().starts_with("no reply") {
+                    continue;
+                }
+            }
+            break;
+        }
+        self.timeout = timeout;
+        match result.context("version handshake")? {
+            Reply::Hello(info) => Ok(info),
+            other => bail!("unexpected reply to Hello: {other:?}"),
+        }
+    }
+
+    /// Round trip of one ping.
+    pub fn ping(&mut self, nonce: u32) -> Result<Duration> {
+        let start = Instant::now();
+        match self.call(Request::Ping { nonce })? {
+            Reply::Pong { nonce: n } if n == nonce => Ok(start.elapsed()),
+            other => bail!("unexpected reply to Ping: {other:?}"),
+        }
+    }
+
+    /// Send raw bytes (tests use this to send damaged frames).
+    pub fn send_raw(&mut self, bytes: &[u8]) -> Result<()> {
+        self.io.write_all(bytes).context("writing to the device")?;
+        self.io.flush().context("writing to the device")?;
+        Ok(())
+    }
+
+    /// Send one request and return the device's reply to it (an error reply is returned as
+    /// `Reply::Error`, not as `Err`). `Err` means the link failed (timeout, closed).
+    pub fn request(&mut self, request: Request) -> Result<Reply> {
+        self.seq = self.seq.wrapping_add(1);
+        let seq = self.seq;
+        let mut out = [0u8; MAX_FRAME_BYTES];
+        let bytes = frame::encode(&RequestFrame { seq, request }, &mut out)
+            .map_err(|e| anyhow!("request does not fit a frame: {e:?}"))?;
+        // A leading 0x00 ends whatever partial frame the device may hold.
+        let mut wire = Vec::with_capacity(bytes.len() + 1);
+        wire.push(0);
+        wire.extend_from_slice(bytes);
+        if std::env::var_os("TWIL_LINK_DEBUG").is_some() {
+            eprintln!("twil: link: -> seq {seq} ({} bytes)", wire.len());
+        }
+        self.send_raw(&wire)?;
+        let deadline = Instant::now() + self.timeout;
+        // The leading 0x00 can end at most one stale partial frame, answered by one error without
+        // a sequence number; a second such error is the answer to this request's frame.
+        let mut unnumbered_errors = 0;
+        loop {
+            let frame = match self.next_frame(deadline) {
+                Ok(frame) => frame,
+                Err(e) => match self.unmatched_errors.last() {
+                    Some(Reply::Error(last)) if unnumbered_errors > 0 => {
+                        return Err(e.context(format!("the device last reported: {last}")))
+                    }
+                    _ => return Err(e),
+                },
+            };
+            match frame {
+                Ok(DeviceFrame::Reply {
+                    seq: Some(s),
+                    reply,
+                }) if s == seq => return Ok(reply),
+                Ok(DeviceFrame::Reply { seq: None, reply }) => {
+                    unnumbered_errors += 1;
+                    if unnumbered_errors >= 2 {
+                        if let Reply::Error(e) = &reply {
+                            bail!("the device could not read request {seq}: {e}");
+                        }
+                    }
+                    self.unmatched_errors.push(reply);
+                }
+                Ok(DeviceFrame::Reply { .. }) => {} // a stale reply to an earlier request
+                Ok(DeviceFrame::Telemetry(t)) => self.telemetry.push(t),
+                Err(fault) => eprintln!("twil: dropped a damaged frame from the device: {fault:?}"),
+            }
+        }
+    }
+
+    /// Like [`Remote::request`], but an error reply becomes `Err` with the device's message.
+    pub fn call(&mut self, request: Request) -> Result<Reply> {
+        match self.request(request)? {
+            Reply::Error(e) => Err(anyhow!("{e}")),
+            reply => Ok(reply),
+        }
+    }
+
+    /// The next frame from the device (a decoded frame or a fault), waiting until `deadline`.
+    pub fn next_frame(&mut self, deadline: Instant) -> Result<Result<DeviceFrame, FrameFault>> {
+        let mut buf = [0u8; 512];
+        loop {
+            if !self.backlog.is_empty() {
+                let backlog = std::mem::take(&mut self.backlog);
+                let (got, rest) = self.decoder.feed::<DeviceFrame>(&backlog);
+                self.backlog = rest.to_vec();
+                if let Some(got) = got {
+                    return Ok(got);
+                }
+            }
+            if Instant::now() > deadline {
+                bail!(
+                    "no reply from the device within {} s",
+                    self.timeout.as_secs_f32()
+                );
+            }
+            match self.io.read(&mut buf) {
+                Ok(0) => bail!("the device closed the link"),
+                Ok(n) => {
+                    if std::env::var_os("TWIL_LINK_DEBUG").is_some() {
+                        eprintln!("twil: link: <- {n} bytes");
+                    }
+                    self.backlog.extend_from_slice(&buf[..n])
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock
+                            | std::io::ErrorKind::TimedOut
+                            | std::io::ErrorKind::Interrupted
+                    ) => {}
+                Err(e) => return Err(e).context("reading from the device"),
+            }
+        }
+    }
+
+    /// Set the map and radius, forget old obstacles, upload `obstacles` in chunks.
+    pub fn upload_world(&mut self, params: MapParams, obstacles: &Obstacles) -> Result<()> {
+        self.call(Request::ClearMap)?;
+        self.call(Request::SetParams(params))?;
+        for (i, polygon) in obstacles.iter().enumerate() {
+            self.upload_polygon(polygon)
+                .with_context(|| format!("uploading obstacle {}", i + 1))?;
+        }
+        Ok(())
+    }
+
+    /// Upload one polygon in chunks of [`OBSTACLE_CHUNK_VERTICES`].
+    pub fn upload_polygon(&mut self, polygon: &[PointM]) -> Result<()> {
+        let chunks = polygon.chunks(OBSTACLE_CHUNK_VERTICES);
+        let n = chunks.len();
+        for (i, chunk) in chunks.enumerate() {
+            let request = Request::ObstacleChunk {
+                first_vertex: (i * OBSTACLE_CHUNK_VERTICES) as u16,
+                vertices: heapless::Vec::from_slice(chunk)
+                    .map_err(|_| anyhow!("chunk larger than its capacity"))?,
+                last: i + 1 == n,
+            };
+            self.call(request)?;
+        }
+        Ok(())
+    }
+
+    /// Overwrite the whole map with packed words (row-major, 32 cells per word).
+    pub fn write_map(&mut self, words: &[u32]) -> Result<()> {
+        for (i, chunk) in words.chunks(MAP_CHUNK_WORDS).enumerate() {
+            self.call(Request::WriteMap {
+                offset_words: (i * MAP_CHUNK_WORDS) as u32,
+                words: heapless::Vec::from_slice(chunk)
+                    .map_err(|_| anyhow!("chunk larger than its capacity"))?,
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Read the whole map: (width, height, packed words).
+    pub fn read_map(&mut self) -> Result<(u16, u16, Vec<u32>)> {
+        let mut words = Vec::new();
+        loop {
+            match self.call(Request::ReadMap {
+                offset_words: words.len() as u32,
+            })? {
+                Reply::MapChunk {
+                    total_words,
+                    width_cells,
+                    height_cells,
+                    words: chunk,
+                    ..
+                } => {
+                    words.extend_from_slice(&chunk);
+                    if words.len() >= total_words as usize || chunk.is_empty() {
+                        return Ok((width_cells, height_cells, words));
+                    }
+                }
+                other => bail!("unexpected reply to ReadMap: {other:?}"),
+            }
+        }
+    }
+
+    /// Plan on the device and read the whole path back.
+    pub fn plan(&mut self, kind: PlannerKind, start: PointM, goal: PointM) -> Result<RemotePlan> {
+        let summary = match self.call(Request::Plan { kind, start, goal })? {
+            Reply::Plan(summary) => summary,
+            other => bail!("unexpected reply to Plan: {other:?}"),
+        };
+        let mut path = Vec::with_capacity(summary.points as usize);
+        while path.len() < summary.points as usize {
+            match self.call(Request::ReadPath {
+                offset: path.len() as u16,
+            })? {
+                Reply::PathChunk { points, .. } if !points.is_empty() => {
+                    path.extend_from_slice(&points)
+                }
+                other => bail!("unexpected reply to ReadPath: {other:?}"),
+            }
+        }
+        Ok(RemotePlan { summary, path })
+    }
+}
+
+fn connect_tcp(addr: &str, patience: Duration) -> Result<TcpStream> {
+    let deadline = Instant::now() + patience;
+    loop {
+        match TcpStream::connect(addr) {
+            Ok(s) => return Ok(s),
+            Err(e) if Instant::now() < deadline => {
+                let _ = e;
+                std::thread::sleep(Duration::from_millis(100));
+            }
+            Err(e) => return Err(e).with_context(|| format!("cannot connect to {addr}")),
+        }
+    }
+}
+
+/// A `qemu-system-arm` process running the firmware (`netduinoplus2`, USART1 on a TCP socket,
+/// `-icount shift=0` so that one instruction is 1 ns of virtual time). Killed on drop.
+pub struct Qemu {
+    child: Child,
+    /// The TCP port QEMU's USART1 is connected through.
+    pub port: u16,
+}
+
+/// File name of the QEMU build of the firmware (next to the hardware ELF).
+pub const QEMU_ELF_NAME: &str = "twil-firmware-qemu";
+
+impl Qemu {
+    /// The QEMU arguments for `elf` with USART1 on `serial` (a QEMU chardev spec).
+    pub fn args(elf: &Path, serial: &str) -> Vec<String> {
+        [
+            "-machine",
+            "netduinoplus2",
+            "-display",
+            "none",
+            "-monitor",
+            "none",
+            "-serial",
+            serial,
+            "-semihosting-config",
+            "enable=on,target=native",
+            "-icount",
+            "shift=0,sleep=off",
+            "-kernel",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .chain([elf.display().to_string()])
+        .collect()
+    }
+
+    /// Where the QEMU ELF is: `$TWIL_QEMU_ELF`, else
+    /// `<target dir>/thumbv7em-none-eabihf/firmware/twil-firmware-qemu` (built by
+    /// `cargo xtask firmware`).
+    pub fn elf_path() -> Result<PathBuf> {
+        if let Some(p) = std::env::var_os("TWIL_QEMU_ELF") {
+            let p = PathBuf::from(p);
+            if p.is_file() {
+                return Ok(p);
+            }
+            bail!("TWIL_QEMU_ELF={} does not exist", p.display());
+        }
+        let mut target_dirs = Vec::new();
+        if let Some(d) = std::env::var_os("CARGO_TARGET_DIR") {
+            target_dirs.push(PathBuf::from(d));
+        }
+        // The running binary is target/<profile>/twil or target/<profile>/deps/test-….
+        if let Ok(exe) = std::env::current_exe() {
+            target_dirs.extend(exe.ancestors().skip(2).take(2).map(Path::to_path_buf));
+        }
+        target_dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("../target"));
+        let candidates: Vec<PathBuf> = target_dirs
+            .iter()
+            .map(|d| {
+                d.join("thumbv7em-none-eabihf")
+                    .join("firmware")
+                    .join(QEMU_ELF_NAME)
+            })
+            .collect();
+        candidates
+            .iter()
+            .find(|p| p.is_file())
+            .cloned()
+            .ok_or_else(|| {
+                anyhow!(
+                "the QEMU firmware is not built (looked for {}): run `cargo xtask firmware` first",
+                candidates
+                    .first()
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_default()
+            )
+            })
+    }
+
+    /// Start QEMU on `elf` and return it with the stream to its USART1. QEMU connects to a port
+    /// this process listens on (port 0: the OS picks a free one, so parallel runs never clash).
+    pub fn start(elf: &Path) -> Result<(Qemu, TcpStream)> {
+        let listener =
+            TcpListener::bind("127.0.0.1:0").context("cannot listen on a local TCP port")?;
+        let port = listener.local_addr()?.port();
+        let log = match std::env::var_os("TWIL_QEMU_LOG") {
+            Some(path) => Stdio::from(
+                std::fs::File::create(&path)
+                    .with_context(|| format!("cannot create {}", Path::new(&path).display()))?,
+            ),
+            None => Stdio::null(),
+        };
+        let child = Command::new("qemu-system-arm")
+            .args(Self::args(elf, &format!("tcp:127.0.0.1:{port},nodelay=on")))
+            .stdin(Stdio::null())
+            .stdout(log)
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| {
+                if e.kind() == std::io::ErrorKind::NotFound {
+                    anyhow!("qemu-system-arm is not installed (apt-get install qemu-system-arm, or run `cargo xtask test`, which installs it)")
+                } else {
+                    anyhow!("cannot start qemu-system-arm: {e}")
+                }
+            })?;
+        let mut qemu = Qemu { child, port };
+        listener.set_nonblocking(true)?;
+        let deadline = Instant::now() + Duration::from_secs(15);
+        let stream = loop {
+            match listener.accept() {
+                Ok((stream, _)) => break stream,
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+                Err(e) => return Err(e).context("waiting for QEMU to connect"),
+            }
+            if let Some(status) = qemu.child.try_wait()? {
+                let mut err = String::new();
+                if let Some(mut s) = qemu.child.stderr.take() {
+                    let _ = s.read_to_string(&mut err);
+                }
+                bail!(
+                    "qemu-system-arm exited ({status}) before connecting: {}",
+                    err.trim()
+                );
+            }
+            if Instant::now() > deadline {
+                bail!("qemu-system-arm did not connect to port {port} within 15 s");
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        stream.set_nonblocking(false)?;
+        Ok((qemu, stream))
+    }
+}
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// `twil plan --remote DEVICE`: upload `world` to the device, let it plan the same request as
+/// `local` (the host's outcome), and return the device's outcome. `extra` receives the JSON
+/// fields `mcu_instructions`, `static_ram_bytes` and `matches_host`: the device's report
+/// (status, expanded cells, cost, length) and path equal those of the same planner type run on
+/// the host ([`twil_core::link::mcu::McuPlanner`]: the firmware's capacities; A*'s expanded
+/// count depends on the open-list capacity, so the host tool's own larger planner may expand a
+/// few cells more or less, for the same cost).
+pub fn plan_on_device(
+    device: &RemoteSpec,
+    world: &crate::cmd::plan::World,
+    local: &crate::cmd::plan::Outcome,
+    extra: &mut serde_json::Map<String, serde_json::Value>,
+) -> Result<crate::cmd::plan::Outcome> {
+    let (mut remote, info) = Remote::connect(device)?;
+    let geometry = *world.grid.geometry();
+    if geometry.cell_count() as u64 > info.grid_capacity_cells as u64 {
+        bail!(
+            "the map has {}x{} cells but the device's grid holds {} cells",
+            geometry.width(),
+            geometry.height(),
+            info.grid_capacity_cells
+        );
+    }
+    let params = MapParams {
+        width_cells: geometry.width(),
+        height_cells: geometry.height(),
+        resolution_m: geometry.resolution_m(),
+        robot_radius_m: world.params.robot_radius_m,
+    };
+    remote
+        .upload_world(params, &world.obstacles)
+        .context("uploading the world to the device")?;
+    if world.saved.is_some() {
+        // A saved map has no polygons: send the host's map as it is.
+        remote
+            .write_map(world.grid.words())
+            .context("uploading the saved map to the device")?;
+    }
+    let started = Instant::now();
+    let planned = remote.plan(local.kind, world.params.start, world.params.goal)?;
+    let elapsed_us = started.elapsed().as_micros() as u64;
+    let s = planned.summary;
+    let outcome = crate::cmd::plan::Outcome {
+        kind: local.kind,
+        report: twil_core::plan::PlanReport {
+            status: s.status,
+            expanded: s.expanded,
+            cost: s.cost,
+            length_m: s.length_m,
+        },
+        path: planned.path,
+        elapsed_us,
+    };
+    let reference = plan_like_the_mcu(world, local.kind)?;
+    let matches = outcome.report == reference.report && outcome.path == reference.path;
+    extra.insert("mcu_instructions".into(), s.mcu_instructions.into());
+    extra.insert("static_ram_bytes".into(), info.static_ram_bytes.into());
+    extra.insert("matches_host".into(), matches.into());
+    Ok(outcome)
+}
+
+/// Run the firmware's planner type ([`twil_core::link::mcu::McuPlanner`]) on the host, on
+/// `world`'s map: what the device must answer.
+pub fn plan_like_the_mcu(
+    world: &crate::cmd::plan::World,
+    kind: PlannerKind,
+) -> Result<crate::cmd::plan::Outcome> {
+    let grid = &*world.grid;
+    let (start, goal) = (world.params.start, world.params.goal);
+    std::thread::scope(|scope| {
+        std::thread::Builder::new()
+            .name("mcu-planner".into())
+            .stack_size(16 * 1024 * 1024)
+            .spawn_scoped(scope, move || {
+                let mut planner = Box::new(twil_core::link::mcu::McuPlanner::new());
+                let mut path = twil_core::plan::PathM::new();
+                let started = Instant::now();
+                let report = planner
+                    .plan(kind, grid, start, goal, &mut path)
+                    .map_err(|e| anyhow!("the firmware's planner on the host: {e:?}"))?;
+                Ok(crate::cmd::plan::Outcome {
+                    kind,
+                    report,
+                    path: path.to_vec(),
+                    elapsed_us: started.elapsed().as_micros() as u64,
+                })
+            })
+            .context("cannot start the planner thread")?
+            .join()
+            .map_err(|_| anyhow!("the planner thread failed"))?
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn remote_specs_parse() {
+        assert_eq!("qemu".parse::<RemoteSpec>().unwrap(), RemoteSpec::Qemu);
+        assert_eq!(
+            "tcp:127.0.0.1:4000".parse::<RemoteSpec>().unwrap(),
+            RemoteSpec::Tcp("127.0.0.1:4000".into())
+        );
+        assert_eq!(
+            "/dev/ttyUSB0".parse::<RemoteSpec>().unwrap(),
+            RemoteSpec::Serial("/dev/ttyUSB0".into())
+        );
+        assert!("tcp:nohost".parse::<RemoteSpec>().is_err());
+        assert!("".parse::<RemoteSpec>().is_err());
+    }
+
+    /// The firmware's device and planner in this process, behind a byte-stream interface.
+    struct Loopback {
+        device: Box<twil_core::link::mcu::McuDevice>,
+        planner: Box<twil_core::link::mcu::McuPlanner>,
+        out: std::collections::VecDeque<u8>,
+        /// Flip a bit in the next write (a line error).
+        corrupt_next: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    }
+
+    impl Loopback {
+        fn new() -> Self {
+            Self {
+                device: Box::new(twil_core::link::mcu::McuDevice::new(DeviceInfo::default())),
+                planner: Box::new(twil_core::link::mcu::McuPlanner::new()),
+                out: Default::default(),
+                corrupt_next: Default::default(),
+            }
+        }
+    }
+
+    impl Write for Loopback {
+        fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+            let mut bytes = bytes.to_vec();
+            if self
+                .corrupt_next
+                .swap(false, std::sync::atomic::Ordering::Relaxed)
+            {
+                let last = bytes.len() - 2;
+                bytes[last] ^= 0x08;
+            }
+            let out = &mut self.out;
+            self.device
+                .receive(&bytes, &mut *self.planner, &mut || 0, &mut |b: &[u8]| {
+                    out.extend(b)
+                });
+            Ok(bytes.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    impl Read for Loopback {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            if self.out.is_empty() {
+                return Err(std::io::ErrorKind::WouldBlock.into());
+            }
+            let n = buf.len().min(self.out.len());
+            for (b, o) in buf.iter_mut().zip(self.out.drain(..n)) {
+                *b = o;
+            }
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn remote_over_an_in_process_device_uploads_plans_and_reads_back() {
+        let mut remote = Remote::over(Loopback::new());
+        let info = remote.hello().unwrap();
+        assert_eq!(
+            info.grid_capacity_cells as usize,
+            twil_core::link::mcu::GRID_WORDS * 32
+        );
+        assert!(remote.ping(9).is_ok());
+
+        let mut obstacles = Obstacles::new();
+        // A wall with a 40-vertex outline (two chunks).
+        let wall: Vec<PointM> = (0..40)
+            .map(|i| PointM::new(3.0 + i as f32 * 0.2, if i % 2 == 0 { 7.0 } else { 7.2 }))
+            .collect();
+        obstacles.push(&wall).unwrap();
+        let params = MapParams {
+            robot_radius_m: 0.3,
+            ..MapParams::default()
+        };
+        remote.upload_world(params, &obstacles).unwrap();
+
+        let mut grid =
+            twil_core::grid::Grid300::new(twil_core::grid::GridGeometry::seed_default()).unwrap();
+        let half = grid.geometry().expansion_cells(0.3);
+        twil_core::raster::mark_polygon(&mut grid, &wall, half);
+        let (w, h, words) = remote.read_map().unwrap();
+        assert_eq!((w, h), (300, 300));
+        assert_eq!(&words[..], grid.words());
+
+        let (start, goal) = (PointM::new(7.0, 2.0), PointM::new(7.5, 13.0));
+        let planned = remote.plan(PlannerKind::AStar, start, goal).unwrap();
+        let mut planner = Box::new(twil_core::link::mcu::McuPlanner::new());
+        let mut path = twil_core::plan::PathM::new();
+        let report = planner
+            .plan(PlannerKind::AStar, &grid, start, goal, &mut path)
+            .unwrap();
+        assert_eq!(planned.summary.expanded, report.expanded);
+        assert_eq!(planned.path, path.to_vec());
+
+        // Writing the map back replaces it.
+        remote.write_map(&vec![0u32; words.len()]).unwrap();
+        assert!(remote.read_map().unwrap().2.iter().all(|&w| w == 0));
+
+        // Device errors become readable `Err`s; the link keeps working.
+        let e = remote.call(Request::ReadPath { offset: 5000 }).unwrap_err();
+        assert!(e.to_string().starts_with("read from 5000"), "{e}");
+        assert!(remote.ping(10).is_ok());
+    }
+
+    #[test]
+    fn a_request_damaged_on_the_line_is_reported() {
+        let loopback = Loopback::new();
+        let corrupt = loopback.corrupt_next.clone();
+        let mut remote = Remote::over(loopback);
+        remote.set_timeout(Duration::from_millis(300));
+        // Damaged alone: the device's unnumbered error is named when the wait times out.
+        corrupt.store(true, std::sync::atomic::Ordering::Relaxed);
+        let e = remote.request(Request::Ping { nonce: 1 }).unwrap_err();
+        assert!(
+            format!("{e:#}")
+                .contains("the device last reported: the device received a frame with a bad CRC"),
+            "{e:#}"
+        );
+        // After a stale partial frame: two unnumbered errors, the second is ours: no waiting.
+        remote.send_raw(&[0x05, 0x01, 0x02]).unwrap();
+        corrupt.store(true, std::sync::atomic::Ordering::Relaxed);
+        let e = remote.request(Request::Ping { nonce: 2 }).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("the device could not read request"),
+            "{e:#}"
+        );
+        assert!(remote.ping(3).is_ok());
+    }
+
+    #[test]
+    fn a_missing_serial_port_is_a_clear_error() {
+        let e = Remote::open(&RemoteSpec::Serial("/dev/twil-no-such-port".into()))
+            .err()
+            .expect("no such port");
+        assert!(
+            format!("{e:#}").contains("cannot open serial port /dev/twil-no-such-port"),
+            "{e:#}"
+        );
+    }
+}

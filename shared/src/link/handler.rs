@@ -1,0 +1,1178 @@
+//! The device side of the link: the state a request acts on, and one reply per request.
+//!
+//! [`Handler`] owns everything in fixed-size fields: the grid (`GRID_WORDS` words), the stored
+//! obstacles ([`Obstacles`]), the polygon being uploaded (at most [`MAX_PENDING_VERTICES`]) and
+//! the last path. [`Handler::new`] is a `const fn`, so the firmware places the whole handler in a
+//! `static` at compile time. The planner (its scratch and queue, the largest block of memory) is
+//! passed to each call instead of owned, so that the firmware can place it in another memory
+//! region than the rest (the STM32F405 has 112 + 16 KiB of SRAM and a separate 64 KiB CCM).
+//!
+//! [`Device`] puts a [`FrameDecoder`] in front: [`Device::receive`] takes bytes as they arrive
+//! and emits one encoded reply frame per request frame (and one error frame per undecodable
+//! frame).
+//!
+//! Time is not read here: the caller passes a clock (`FnMut() -> u64`, in instructions) that the
+//! handler reads just before and just after the planner runs. The firmware reads SysTick; the
+//! host passes `|| 0`.
+
+use heapless::Vec;
+
+use super::frame::{encode, FrameDecoder, FrameFault, MAX_FRAME_BYTES};
+use super::message::*;
+use crate::geom::PointM;
+use crate::grid::{words_for_cells, Grid, GridError, GridGeometry, DEFAULT_RESOLUTION_M};
+use crate::plan::{PathM, PlanError, Planner};
+use crate::raster::mark_polygon;
+use crate::world::{Obstacles, PolygonSetError, MAX_POLYGONS, MAX_VERTICES};
+
+/// Vertices of one polygon being uploaded (a larger polygon is refused with
+/// [`ErrorCode::TooManyVertices`]).
+pub const MAX_PENDING_VERTICES: usize = 256;
+
+/// Largest robot radius accepted by `SetParams`, metres (as the `.par` reader).
+pub const MAX_ROBOT_RADIUS_M: f32 = 10.0;
+
+/// The request handler and all the state it acts on.
+pub struct Handler<const GRID_WORDS: usize> {
+    info: DeviceInfo,
+    params: MapParams,
+    grid: Grid<GRID_WORDS>,
+    obstacles: Obstacles,
+    pending: Vec<PointM, MAX_PENDING_VERTICES>,
+    path: PathM,
+    requests: u32,
+    frame_errors: u32,
+    rx_dropped_bytes: u32,
+    last_plan: LastPlan,
+}
+
+/// What the status reports about the last plan.
+#[derive(Clone, Copy, Default)]
+struct LastPlan {
+    instructions: u64,
+    expanded: u32,
+    queue_peak: u32,
+}
+
+impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
+    /// Compile-time check: the grid holds at least one cell.
+    const GRID_NOT_EMPTY: () = assert!(GRID_WORDS > 0, "the grid needs at least one word");
+
+    /// A handler with an empty map: the seed's 300 x 300 cells of 0.05 m when the grid holds
+    /// them, else one cell of 0.05 m (send `SetParams`). The capacities in `info` are filled in
+    /// here; the caller sets `build` and `static_ram_bytes`.
+    pub const fn new(info: DeviceInfo) -> Self {
+        #[allow(clippy::let_unit_value)]
+        let () = Self::GRID_NOT_EMPTY;
+        let (grid, params) = match Grid::new_const(GridGeometry::seed_default()) {
+            Ok(grid) => (
+                grid,
+                MapParams {
+                    width_cells: crate::grid::DEFAULT_SIDE_CELLS,
+                    height_cells: crate::grid::DEFAULT_SIDE_CELLS,
+                    resolution_m: DEFAULT_RESOLUTION_M,
+                    robot_radius_m: 0.0,
+                },
+            ),
+            Err(_) => {
+                let one = match GridGeometry::new(1, 1, DEFAULT_RESOLUTION_M) {
+                    Ok(g) => g,
+                    Err(_) => panic!("a 1 x 1 geometry is valid"),
+                };
+                match Grid::new_const(one) {
+                    Ok(grid) => (
+                        grid,
+                        MapParams {
+                            width_cells: 1,
+                            height_cells: 1,
+                            resolution_m: DEFAULT_RESOLUTION_M,
+                            robot_radius_m: 0.0,
+                        },
+                    ),
+                    Err(_) => panic!("GRID_WORDS > 0 holds one cell"),
+                }
+            }
+        };
+        let mut info = info;
+        info.protocol_version = PROTOCOL_VERSION;
+        info.grid_capacity_cells = Grid::<GRID_WORDS>::CAPACITY_CELLS as u32;
+        info.max_polygons = MAX_POLYGONS as u16;
+        info.max_vertices = MAX_VERTICES as u16;
+        info.max_frame_bytes = MAX_FRAME_BYTES as u16;
+        Self {
+            info,
+            params,
+            grid,
+            obstacles: Obstacles::new(),
+            pending: Vec::new(),
+            path: Vec::new(),
+            requests: 0,
+            frame_errors: 0,
+            rx_dropped_bytes: 0,
+            last_plan: LastPlan {
+                instructions: 0,
+                expanded: 0,
+                queue_peak: 0,
+            },
+        }
+    }
+
+    /// What [`Request::Hello`] answers.
+    pub fn info(&self) -> &DeviceInfo {
+        &self.info
+    }
+
+    /// Set the statically allocated RAM reported by [`Request::Hello`] (firmware only).
+    pub fn set_static_ram_bytes(&mut self, bytes: u32) {
+        self.info.static_ram_bytes = bytes;
+    }
+
+    /// Set which program this is.
+    pub fn set_build(&mut self, build: Build) {
+        self.info.build = build;
+    }
+
+    /// The map.
+    pub fn grid(&self) -> &Grid<GRID_WORDS> {
+        &self.grid
+    }
+
+    /// The stored obstacles.
+    pub fn obstacles(&self) -> &Obstacles {
+        &self.obstacles
+    }
+
+    /// The last path planned (empty unless the last plan found one).
+    pub fn path(&self) -> &PathM {
+        &self.path
+    }
+
+    /// Count bytes the receiver had to drop (reported by [`Request::Status`]).
+    pub fn note_rx_dropped(&mut self, bytes: u32) {
+        self.rx_dropped_bytes = self.rx_dropped_bytes.saturating_add(bytes);
+    }
+
+    /// Answer a frame that could not be decoded (counted in the status).
+    pub fn fault_reply(&mut self, fault: FrameFault) -> (Option<u16>, Reply) {
+        self.frame_errors = self.frame_errors.saturating_add(1);
+        self.requests = self.requests.saturating_add(1);
+        let max = MAX_FRAME_BYTES as u32;
+        let (seq, error) = match fault {
+            FrameFault::BadFrame => (None, ErrorReply::new(ErrorCode::BadFrame, 0, 0)),
+            FrameFault::BadCrc => (None, ErrorReply::new(ErrorCode::BadCrc, 0, 0)),
+            FrameFault::TooLong => (None, ErrorReply::new(ErrorCode::FrameTooLong, max, max)),
+            FrameFault::BadMessage { seq } => (seq, ErrorReply::new(ErrorCode::BadMessage, 0, 0)),
+        };
+        (seq, Reply::Error(error))
+    }
+
+    /// Answer one request. `clock` returns a count of instructions (or cycles); it is read just
+    /// before and after the planner runs. A request that fails answers [`Reply::Error`] and
+    /// changes nothing.
+    pub fn handle<const SCRATCH_WORDS: usize, const QUEUE: usize>(
+        &mut self,
+        request: &Request,
+        planner: &mut Planner<SCRATCH_WORDS, QUEUE>,
+        clock: &mut impl FnMut() -> u64,
+    ) -> Reply {
+        self.requests = self.requests.saturating_add(1);
+        self.info.planner_capacity_cells = Planner::<SCRATCH_WORDS, QUEUE>::CAPACITY_CELLS as u32;
+        match self.try_handle(request, planner, clock) {
+            Ok(reply) => reply,
+            Err(error) => Reply::Error(error),
+        }
+    }
+
+    fn try_handle<const SCRATCH_WORDS: usize, const QUEUE: usize>(
+        &mut self,
+        request: &Request,
+        planner: &mut Planner<SCRATCH_WORDS, QUEUE>,
+        clock: &mut impl FnMut() -> u64,
+    ) -> Result<Reply, ErrorReply> {
+        match request {
+            Request::Hello { protocol_version } => {
+                if *protocol_version != PROTOCOL_VERSION {
+                    return Err(ErrorReply::new(
+                        ErrorCode::VersionMismatch,
+                        *protocol_version as u32,
+                        PROTOCOL_VERSION as u32,
+                    ));
+                }
+                Ok(Reply::Hello(self.info))
+            }
+            Request::Ping { nonce } => Ok(Reply::Pong { nonce: *nonce }),
+            Request::SetParams(params) => self.set_params(*params).map(|()| Reply::Ack),
+            Request::ClearMap => {
+                self.obstacles.clear();
+                self.pending.clear();
+                self.path.clear();
+                self.grid.clear();
+                Ok(Reply::Ack)
+            }
+            Request::ObstacleChunk {
+                first_vertex,
+                vertices,
+                last,
+            } => self.obstacle_chunk(*first_vertex, vertices, *last),
+            Request::WriteMap {
+                offset_words,
+                words,
+            } => {
+                let used = words_for_cells(self.grid.geometry().cell_count());
+                self.grid
+                    .write_words(*offset_words as usize, words)
+                    .map_err(|_| {
+                        ErrorReply::new(
+                            ErrorCode::OutOfRange,
+                            offset_words.saturating_add(words.len() as u32),
+                            used as u32,
+                        )
+                    })?;
+                self.path.clear();
+                Ok(Reply::Ack)
+            }
+            Request::Plan { kind, start, goal } => {
+                let before = clock();
+                let result = planner.plan(*kind, &self.grid, *start, *goal, &mut self.path);
+                let after = clock();
+                self.last_plan = LastPlan {
+                    instructions: after.saturating_sub(before),
+                    expanded: planner.last_report().map(|r| r.expanded).unwrap_or(0),
+                    queue_peak: planner.queue_peak(),
+                };
+                let report = result.map_err(|e| {
+                    self.path.clear();
+                    plan_error(e)
+                })?;
+                Ok(Reply::Plan(PlanSummary {
+                    status: report.status,
+                    expanded: report.expanded,
+                    cost: report.cost,
+                    length_m: report.length_m,
+                    points: self.path.len() as u16,
+                    mcu_instructions: after.saturating_sub(before),
+                }))
+            }
+            Request::ReadPath { offset } => {
+                let total = self.path.len();
+                let start = *offset as usize;
+                let chunk = self
+                    .path
+                    .get(start..)
+                    .ok_or(ErrorReply::new(
+                        ErrorCode::OutOfRange,
+                        start as u32,
+                        total as u32,
+                    ))?
+                    .iter()
+                    .take(PATH_CHUNK_POINTS);
+                let mut points = Vec::new();
+                for p in chunk {
+                    let _ = points.push(*p); // at most PATH_CHUNK_POINTS: cannot fail
+                }
+                Ok(Reply::PathChunk {
+                    offset: *offset,
+                    total: total as u16,
+                    points,
+                })
+            }
+            Request::ReadMap { offset_words } => {
+                let all = self.grid.words();
+                let start = *offset_words as usize;
+                let chunk = all
+                    .get(start..)
+                    .ok_or(ErrorReply::new(
+                        ErrorCode::OutOfRange,
+                        start as u32,
+                        all.len() as u32,
+                    ))?
+                    .iter()
+                    .take(MAP_CHUNK_WORDS);
+                let mut words = Vec::new();
+                for w in chunk {
+                    let _ = words.push(*w); // at most MAP_CHUNK_WORDS: cannot fail
+                }
+                let g = self.grid.geometry();
+                Ok(Reply::MapChunk {
+                    offset_words: *offset_words,
+                    total_words: all.len() as u32,
+                    width_cells: g.width(),
+                    height_cells: g.height(),
+                    words,
+                })
+            }
+            Request::Status => Ok(Reply::Status(self.status())),
+        }
+    }
+
+    /// The device state counters.
+    pub fn status(&self) -> DeviceStatus {
+        DeviceStatus {
+            params: self.params,
+            polygons: self.obstacles.len() as u16,
+            vertices: self.obstacles.vertex_count() as u16,
+            pending_vertices: self.pending.len() as u16,
+            occupied_cells: self.grid.count_occupied() as u32,
+            requests: self.requests,
+            frame_errors: self.frame_errors,
+            rx_dropped_bytes: self.rx_dropped_bytes,
+            last_plan_instructions: self.last_plan.instructions,
+            last_plan_expanded: self.last_plan.expanded,
+            last_plan_queue_peak: self.last_plan.queue_peak,
+        }
+    }
+
+    fn set_params(&mut self, params: MapParams) -> Result<(), ErrorReply> {
+        let r = params.robot_radius_m;
+        if !(r.is_finite() && (0.0..=MAX_ROBOT_RADIUS_M).contains(&r)) {
+            return Err(ErrorReply::new(ErrorCode::BadArgument, 3, 0));
+        }
+        let geometry = GridGeometry::new(
+            params.width_cells as u32,
+            params.height_cells as u32,
+            params.resolution_m,
+        )
+        .map_err(|e| match e {
+            GridError::BadResolution { .. } => ErrorReply::new(ErrorCode::BadArgument, 2, 0),
+            _ => ErrorReply::new(
+                ErrorCode::BadGeometry,
+                params.width_cells as u32,
+                params.height_cells as u32,
+            ),
+        })?;
+        self.grid.reset(geometry).map_err(|e| match e {
+            GridError::CapacityExceeded { cells, capacity } => {
+                ErrorReply::new(ErrorCode::GridCapacity, cells, capacity)
+            }
+            _ => ErrorReply::new(
+                ErrorCode::BadGeometry,
+                params.width_cells as u32,
+                params.height_cells as u32,
+            ),
+        })?;
+        self.params = params;
+        self.path.clear();
+        self.mark_all();
+        Ok(())
+    }
+
+    /// Mark every stored obstacle on the (cleared) map with the current radius.
+    fn mark_all(&mut self) {
+        let half = self
+            .grid
+            .geometry()
+            .expansion_cells(self.params.robot_radius_m);
+        for polygon in self.obstacles.iter() {
+            mark_polygon(&mut self.grid, polygon, half);
+        }
+    }
+
+    fn obstacle_chunk(
+        &mut self,
+        first_vertex: u16,
+        vertices: &[PointM],
+        last: bool,
+    ) -> Result<Reply, ErrorReply> {
+        let already = if first_vertex == 0 {
+            0
+        } else {
+            self.pending.len()
+        };
+        if first_vertex as usize != already {
+            return Err(ErrorReply::new(
+                ErrorCode::ChunkOutOfOrder,
+                first_vertex as u32,
+                already as u32,
+            ));
+        }
+        if let Some(i) = vertices.iter().position(|v| !v.is_finite()) {
+            return Err(ErrorReply::new(
+                ErrorCode::BadArgument,
+                first_vertex as u32 + i as u32,
+                0,
+            ));
+        }
+        let needed = already + vertices.len();
+        let left = (MAX_VERTICES - self.obstacles.vertex_count()).min(MAX_PENDING_VERTICES);
+        if needed > left {
+            return Err(ErrorReply::new(
+                ErrorCode::TooManyVertices,
+                needed as u32,
+                left as u32,
+            ));
+        }
+        if self.obstacles.len() >= MAX_POLYGONS {
+            return Err(ErrorReply::new(
+                ErrorCode::TooManyPolygons,
+                self.obstacles.len() as u32 + 1,
+                MAX_POLYGONS as u32,
+            ));
+        }
+        if last && needed == 0 {
+            return Err(ErrorReply::new(ErrorCode::EmptyPolygon, 0, 0));
+        }
+        // All checks passed: from here nothing can fail.
+        if first_vertex == 0 {
+            self.pending.clear();
+        }
+        let _ = self.pending.extend_from_slice(vertices);
+        if last {
+            match self.obstacles.push(&self.pending) {
+                Ok(()) => {}
+                Err(PolygonSetError::TooManyPolygons { capacity }) => {
+                    return Err(ErrorReply::new(
+                        ErrorCode::TooManyPolygons,
+                        capacity as u32 + 1,
+                        capacity as u32,
+                    ))
+                }
+                Err(PolygonSetError::TooManyVertices { capacity_left }) => {
+                    return Err(ErrorReply::new(
+                        ErrorCode::TooManyVertices,
+                        self.pending.len() as u32,
+                        capacity_left as u32,
+                    ))
+                }
+                Err(PolygonSetError::Empty) => {
+                    return Err(ErrorReply::new(ErrorCode::EmptyPolygon, 0, 0))
+                }
+            }
+            let half = self
+                .grid
+                .geometry()
+                .expansion_cells(self.params.robot_radius_m);
+            mark_polygon(&mut self.grid, &self.pending, half);
+            self.pending.clear();
+            self.path.clear();
+        }
+        Ok(Reply::Obstacles {
+            polygons: self.obstacles.len() as u16,
+            vertices: self.obstacles.vertex_count() as u16,
+            pending_vertices: self.pending.len() as u16,
+        })
+    }
+}
+
+fn plan_error(e: PlanError) -> ErrorReply {
+    let (value, limit, detail) = match e {
+        PlanError::ScratchTooSmall { cells, capacity } => (cells, capacity, 0),
+        PlanError::QueueFull { capacity } => (capacity.saturating_add(1), capacity, 1),
+        PlanError::PathFull { capacity } => (capacity.saturating_add(1), capacity, 2),
+    };
+    ErrorReply {
+        code: ErrorCode::PlannerCapacity,
+        value,
+        limit,
+        detail,
+    }
+}
+
+/// A [`Handler`] behind a [`FrameDecoder`]: bytes in, reply frames out.
+pub struct Device<const GRID_WORDS: usize> {
+    decoder: FrameDecoder,
+    /// The handler (public so the firmware can set its build and RAM figures).
+    pub handler: Handler<GRID_WORDS>,
+}
+
+impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
+    /// A device with an empty map (see [`Handler::new`]).
+    pub const fn new(info: DeviceInfo) -> Self {
+        Self {
+            decoder: FrameDecoder::new(),
+            handler: Handler::new(info),
+        }
+    }
+
+    /// Feed received bytes; for every complete frame, call `send` once with the encoded reply
+    /// frame (terminator included). `planner` and `clock` are passed to [`Handler::handle`].
+    pub fn receive<const SCRATCH_WORDS: usize, const QUEUE: usize>(
+        &mut self,
+        bytes: &[u8],
+        planner: &mut Planner<SCRATCH_WORDS, QUEUE>,
+        clock: &mut impl FnMut() -> u64,
+        send: &mut impl FnMut(&[u8]),
+    ) {
+        let mut rest = bytes;
+        while !rest.is_empty() {
+            let (got, r) = self.decoder.feed::<RequestFrame>(rest);
+            rest = r;
+            let (seq, reply) = match got {
+                None => continue,
+                Some(Ok(frame)) => (
+                    Some(frame.seq),
+                    self.handler.handle(&frame.request, planner, clock),
+                ),
+                Some(Err(fault)) => self.handler.fault_reply(fault),
+            };
+            self.send_frame(&DeviceFrame::Reply { seq, reply }, send);
+        }
+    }
+
+    /// Encode and send a frame (a reply or telemetry).
+    pub fn send_frame(&mut self, frame: &DeviceFrame, send: &mut impl FnMut(&[u8])) {
+        let mut out = [0u8; MAX_FRAME_BYTES];
+        match encode(frame, &mut out) {
+            Ok(bytes) => send(bytes),
+            Err(_) => {
+                // Cannot happen: every message fits (tested). Say so rather than stay silent.
+                let error = DeviceFrame::Reply {
+                    seq: None,
+                    reply: Reply::Error(ErrorReply::new(
+                        ErrorCode::FrameTooLong,
+                        MAX_FRAME_BYTES as u32 + 1,
+                        MAX_FRAME_BYTES as u32,
+                    )),
+                };
+                if let Ok(bytes) = encode(&error, &mut out) {
+                    send(bytes);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::grid::Grid300;
+    use crate::plan::{PlanStatus, PlannerKind};
+    use crate::raster::mark_polygon;
+    use std::vec::Vec as StdVec;
+
+    /// A 300 x 300 grid; a small planner (512 cells) unless a test brings its own.
+    type TestDevice = Device<{ words_for_cells(300 * 300) }>;
+    type SmallPlanner = Planner<64, 64>;
+
+    fn device() -> std::boxed::Box<TestDevice> {
+        std::boxed::Box::new(Device::new(DeviceInfo::default()))
+    }
+
+    /// Send requests as frames through the device; decode every frame it sends back.
+    fn exchange(device: &mut TestDevice, stream: &[u8]) -> StdVec<DeviceFrame> {
+        let mut out = StdVec::new();
+        let mut planner = SmallPlanner::new();
+        device.receive(stream, &mut planner, &mut || 0, &mut |b: &[u8]| {
+            out.extend_from_slice(b)
+        });
+        let mut decoder = FrameDecoder::new();
+        let mut frames = StdVec::new();
+        let mut rest = &out[..];
+        while !rest.is_empty() {
+            let (got, r) = decoder.feed::<DeviceFrame>(rest);
+            rest = r;
+            if let Some(got) = got {
+                frames.push(got.expect("the device sends valid frames"));
+            }
+        }
+        frames
+    }
+
+    fn frame(seq: u16, request: Request) -> StdVec<u8> {
+        let mut out = [0u8; MAX_FRAME_BYTES];
+        encode(&RequestFrame { seq, request }, &mut out)
+            .unwrap()
+            .to_vec()
+    }
+
+    fn call(device: &mut TestDevice, seq: u16, request: Request) -> Reply {
+        let frames = exchange(device, &frame(seq, request));
+        assert_eq!(frames.len(), 1, "exactly one reply per request");
+        match frames.into_iter().next() {
+            Some(DeviceFrame::Reply { seq: s, reply }) => {
+                assert_eq!(s, Some(seq));
+                reply
+            }
+            other => panic!("not a reply: {other:?}"),
+        }
+    }
+
+    fn error_code(reply: &Reply) -> Option<ErrorCode> {
+        match reply {
+            Reply::Error(e) => Some(e.code),
+            _ => None,
+        }
+    }
+
+    fn chunk(first_vertex: u16, vertices: &[PointM], last: bool) -> Request {
+        Request::ObstacleChunk {
+            first_vertex,
+            vertices: Vec::from_slice(vertices).unwrap(),
+            last,
+        }
+    }
+
+    #[test]
+    fn handshake_ping_and_version_mismatch() {
+        let mut d = device();
+        match call(
+            &mut d,
+            1,
+            Request::Hello {
+                protocol_version: PROTOCOL_VERSION,
+            },
+        ) {
+            Reply::Hello(info) => {
+                assert_eq!(info.protocol_version, PROTOCOL_VERSION);
+                assert_eq!(info.grid_capacity_cells as usize, Grid300::CAPACITY_CELLS);
+                assert_eq!(info.max_frame_bytes as usize, MAX_FRAME_BYTES);
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(
+            call(&mut d, 2, Request::Ping { nonce: 0xdead_beef }),
+            Reply::Pong { nonce: 0xdead_beef }
+        );
+        assert_eq!(
+            call(
+                &mut d,
+                3,
+                Request::Hello {
+                    protocol_version: 99
+                }
+            ),
+            Reply::Error(ErrorReply::new(
+                ErrorCode::VersionMismatch,
+                99,
+                PROTOCOL_VERSION as u32
+            ))
+        );
+    }
+
+    #[test]
+    fn uploaded_obstacles_mark_the_map_like_the_rasterizer() {
+        let mut d = device();
+        let params = MapParams {
+            robot_radius_m: 0.4,
+            ..MapParams::default()
+        };
+        assert_eq!(call(&mut d, 1, Request::SetParams(params)), Reply::Ack);
+        // A 40-vertex polygon goes in two chunks.
+        let polygon: StdVec<PointM> = (0..40)
+            .map(|i| {
+                let a = i as f32 * 0.157;
+                PointM::new(
+                    7.0 + 3.0 * crate::math::cos(a),
+                    7.0 + 3.0 * crate::math::sin(a),
+                )
+            })
+            .collect();
+        let r = call(&mut d, 2, chunk(0, &polygon[..32], false));
+        assert_eq!(
+            r,
+            Reply::Obstacles {
+                polygons: 0,
+                vertices: 0,
+                pending_vertices: 32
+            }
+        );
+        let r = call(&mut d, 3, chunk(32, &polygon[32..], true));
+        assert_eq!(
+            r,
+            Reply::Obstacles {
+                polygons: 1,
+                vertices: 40,
+                pending_vertices: 0
+            }
+        );
+        let mut expected = Grid300::new(GridGeometry::seed_default()).unwrap();
+        mark_polygon(&mut expected, &polygon, 8);
+        assert_eq!(d.handler.grid(), &expected);
+
+        // The map read back in chunks equals the grid.
+        let mut words = StdVec::new();
+        loop {
+            match call(
+                &mut d,
+                4,
+                Request::ReadMap {
+                    offset_words: words.len() as u32,
+                },
+            ) {
+                Reply::MapChunk {
+                    offset_words,
+                    total_words,
+                    width_cells,
+                    words: w,
+                    ..
+                } => {
+                    assert_eq!(offset_words as usize, words.len());
+                    assert_eq!(width_cells, 300);
+                    words.extend_from_slice(&w);
+                    if words.len() == total_words as usize {
+                        break;
+                    }
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+        assert_eq!(&words[..], expected.words());
+
+        // A new radius marks the stored obstacles again.
+        let params = MapParams {
+            robot_radius_m: 0.1,
+            ..params
+        };
+        assert_eq!(call(&mut d, 5, Request::SetParams(params)), Reply::Ack);
+        let mut thin = Grid300::new(GridGeometry::seed_default()).unwrap();
+        mark_polygon(&mut thin, &polygon, 2);
+        assert_eq!(d.handler.grid(), &thin);
+
+        assert_eq!(call(&mut d, 6, Request::ClearMap), Reply::Ack);
+        assert_eq!(d.handler.grid().count_occupied(), 0);
+        assert!(d.handler.obstacles().is_empty());
+    }
+
+    #[test]
+    fn failed_requests_change_nothing() {
+        let mut d = device();
+        call(
+            &mut d,
+            1,
+            chunk(0, &[PointM::new(1.0, 1.0), PointM::new(2.0, 1.0)], true),
+        );
+        let before = d.handler.grid().clone();
+        let status_before = d.handler.status();
+
+        // Out of order, not finite, too large a map, bad radius, read beyond the end.
+        let r = call(&mut d, 2, chunk(5, &[PointM::new(1.0, 1.0)], true));
+        assert_eq!(
+            r,
+            Reply::Error(ErrorReply::new(ErrorCode::ChunkOutOfOrder, 5, 0))
+        );
+        let r = call(&mut d, 3, chunk(0, &[PointM::new(f32::NAN, 1.0)], true));
+        assert_eq!(error_code(&r), Some(ErrorCode::BadArgument));
+        let big = MapParams {
+            width_cells: 400,
+            height_cells: 400,
+            ..MapParams::default()
+        };
+        let r = call(&mut d, 4, Request::SetParams(big));
+        assert_eq!(
+            r,
+            Reply::Error(ErrorReply::new(
+                ErrorCode::GridCapacity,
+                160_000,
+                Grid300::CAPACITY_CELLS as u32
+            ))
+        );
+        let r = call(
+            &mut d,
+            5,
+            Request::SetParams(MapParams {
+                robot_radius_m: f32::INFINITY,
+                ..MapParams::default()
+            }),
+        );
+        assert_eq!(error_code(&r), Some(ErrorCode::BadArgument));
+        let r = call(
+            &mut d,
+            6,
+            Request::SetParams(MapParams {
+                width_cells: 0,
+                ..MapParams::default()
+            }),
+        );
+        assert_eq!(error_code(&r), Some(ErrorCode::BadGeometry));
+        let r = call(
+            &mut d,
+            7,
+            Request::ReadMap {
+                offset_words: 100_000,
+            },
+        );
+        assert_eq!(error_code(&r), Some(ErrorCode::OutOfRange));
+        let r = call(&mut d, 8, Request::ReadPath { offset: 1 });
+        assert_eq!(error_code(&r), Some(ErrorCode::OutOfRange));
+        let r = call(
+            &mut d,
+            9,
+            Request::WriteMap {
+                offset_words: 2813,
+                words: Vec::from_slice(&[1]).unwrap(),
+            },
+        );
+        assert_eq!(error_code(&r), Some(ErrorCode::OutOfRange));
+        let r = call(&mut d, 10, chunk(0, &[], true));
+        assert_eq!(error_code(&r), Some(ErrorCode::EmptyPolygon));
+
+        assert_eq!(d.handler.grid(), &before);
+        let after = d.handler.status();
+        assert_eq!(
+            (after.polygons, after.vertices, after.params),
+            (
+                status_before.polygons,
+                status_before.vertices,
+                status_before.params
+            )
+        );
+    }
+
+    #[test]
+    fn uploads_beyond_capacity_get_a_clear_error_and_keep_what_was_stored() {
+        let mut d = device();
+        let square = [
+            PointM::new(1.0, 1.0),
+            PointM::new(2.0, 1.0),
+            PointM::new(2.0, 2.0),
+            PointM::new(1.0, 2.0),
+        ];
+        let mut seq = 0;
+        for _ in 0..MAX_POLYGONS {
+            seq += 1;
+            let r = call(&mut d, seq, chunk(0, &square, true));
+            assert!(matches!(r, Reply::Obstacles { .. }), "{r:?}");
+        }
+        let r = call(&mut d, 999, chunk(0, &square, true));
+        assert_eq!(
+            r,
+            Reply::Error(ErrorReply::new(
+                ErrorCode::TooManyPolygons,
+                MAX_POLYGONS as u32 + 1,
+                MAX_POLYGONS as u32
+            ))
+        );
+        assert_eq!(d.handler.obstacles().len(), MAX_POLYGONS);
+
+        // One polygon larger than the pending buffer.
+        let mut d = device();
+        let many = [PointM::new(3.0, 3.0); OBSTACLE_CHUNK_VERTICES];
+        let mut first = 0u16;
+        let r = loop {
+            let r = call(&mut d, 1, chunk(first, &many, false));
+            if matches!(r, Reply::Error(_)) {
+                break r;
+            }
+            first += OBSTACLE_CHUNK_VERTICES as u16;
+        };
+        assert_eq!(
+            r,
+            Reply::Error(ErrorReply::new(
+                ErrorCode::TooManyVertices,
+                (MAX_PENDING_VERTICES + OBSTACLE_CHUNK_VERTICES) as u32,
+                MAX_PENDING_VERTICES as u32
+            ))
+        );
+        let message = std::format!("{}", ErrorReply::new(ErrorCode::TooManyVertices, 288, 256));
+        assert_eq!(
+            message,
+            "too many obstacle vertices: 288 needed but only 256 left on the device"
+        );
+    }
+
+    #[test]
+    fn damaged_frames_get_one_error_each_and_the_link_keeps_working() {
+        let mut d = device();
+        let good = frame(40, Request::Ping { nonce: 1 });
+        let mut stream = StdVec::new();
+        // Garbage, a truncated frame, a corrupted frame, an oversized one, then a good one.
+        stream.extend_from_slice(&[0x11, 0x22, 0x33, 0x00]);
+        stream.extend_from_slice(&good[..good.len() / 2]);
+        stream.push(0);
+        let mut corrupt = good.clone();
+        corrupt[2] ^= 0x01;
+        stream.extend_from_slice(&corrupt);
+        stream.extend(core::iter::repeat_n(0x42, 3 * MAX_FRAME_BYTES));
+        stream.push(0);
+        stream.extend_from_slice(&good);
+        let frames = exchange(&mut d, &stream);
+        let codes: StdVec<_> = frames
+            .iter()
+            .map(|f| match f {
+                DeviceFrame::Reply { seq, reply } => (*seq, error_code(reply)),
+                DeviceFrame::Telemetry(_) => panic!("no telemetry expected"),
+            })
+            .collect();
+        assert_eq!(codes.len(), 5, "{codes:?}");
+        assert!(codes[..4]
+            .iter()
+            .all(|(seq, code)| seq.is_none() && code.is_some()));
+        assert_eq!(codes[3].1, Some(ErrorCode::FrameTooLong));
+        assert_eq!(codes[4], (Some(40), None));
+        assert_eq!(d.handler.status().frame_errors, 4);
+    }
+
+    #[test]
+    fn a_well_formed_unknown_request_keeps_its_sequence_number() {
+        let mut d = device();
+        let mut out = [0u8; MAX_FRAME_BYTES];
+        // seq 77, variant index 200 (no such request).
+        let bytes = encode(&(77u16, 200u8), &mut out).unwrap().to_vec();
+        let frames = exchange(&mut d, &bytes);
+        assert_eq!(
+            frames,
+            std::vec![DeviceFrame::Reply {
+                seq: Some(77),
+                reply: Reply::Error(ErrorReply::new(ErrorCode::BadMessage, 0, 0))
+            }]
+        );
+    }
+
+    #[test]
+    fn the_largest_messages_fit_a_frame() {
+        let mut out = [0u8; MAX_FRAME_BYTES];
+        let big_point = PointM::new(f32::MAX, f32::MIN);
+        let largest_requests = [
+            Request::ObstacleChunk {
+                first_vertex: u16::MAX,
+                vertices: Vec::from_slice(&[big_point; OBSTACLE_CHUNK_VERTICES]).unwrap(),
+                last: true,
+            },
+            Request::WriteMap {
+                offset_words: u32::MAX,
+                words: Vec::from_slice(&[u32::MAX; MAP_CHUNK_WORDS]).unwrap(),
+            },
+        ];
+        for request in largest_requests {
+            let f = RequestFrame {
+                seq: u16::MAX,
+                request,
+            };
+            assert!(encode(&f, &mut out).is_ok(), "{f:?}");
+        }
+        let largest_replies = [
+            Reply::MapChunk {
+                offset_words: u32::MAX,
+                total_words: u32::MAX,
+                width_cells: u16::MAX,
+                height_cells: u16::MAX,
+                words: Vec::from_slice(&[u32::MAX; MAP_CHUNK_WORDS]).unwrap(),
+            },
+            Reply::PathChunk {
+                offset: u16::MAX,
+                total: u16::MAX,
+                points: Vec::from_slice(&[big_point; PATH_CHUNK_POINTS]).unwrap(),
+            },
+            Reply::Plan(PlanSummary {
+                status: PlanStatus::Found,
+                expanded: u32::MAX,
+                cost: u32::MAX,
+                length_m: 1.0,
+                points: u16::MAX,
+                mcu_instructions: u64::MAX,
+            }),
+        ];
+        for reply in largest_replies {
+            let f = DeviceFrame::Reply {
+                seq: Some(u16::MAX),
+                reply,
+            };
+            assert!(encode(&f, &mut out).is_ok(), "{f:?}");
+        }
+    }
+
+    #[test]
+    fn plan_errors_and_results_are_replies() {
+        // The planner of this test device covers 512 cells: the 300 x 300 map is refused with
+        // the planner's capacity, and nothing is left in the path.
+        let mut d = device();
+        let r = call(
+            &mut d,
+            1,
+            Request::Plan {
+                kind: PlannerKind::AStar,
+                start: PointM::new(1.0, 1.0),
+                goal: PointM::new(2.0, 2.0),
+            },
+        );
+        assert_eq!(error_code(&r), Some(ErrorCode::PlannerCapacity), "{r:?}");
+        assert!(d.handler.path().is_empty());
+        assert_eq!(d.handler.status().last_plan_expanded, 0);
+    }
+
+    #[test]
+    fn a_plan_over_the_link_equals_the_planner_on_the_same_grid() {
+        use crate::plan::SCRATCH_WORDS_300;
+        let mut d = device();
+        let params = MapParams {
+            robot_radius_m: 0.3,
+            ..MapParams::default()
+        };
+        call(&mut d, 1, Request::SetParams(params));
+        let wall = [PointM::new(2.0, 7.0), PointM::new(12.0, 7.5)];
+        call(&mut d, 2, chunk(0, &wall, true));
+        let (start, goal) = (PointM::new(7.0, 2.0), PointM::new(7.0, 13.0));
+        let mut planner = std::boxed::Box::new(Planner::<SCRATCH_WORDS_300, 4096>::new());
+        for kind in [PlannerKind::Bfs, PlannerKind::AStar, PlannerKind::AnyAngle] {
+            let mut out = StdVec::new();
+            let mut t = 0u64;
+            let request = frame(10, Request::Plan { kind, start, goal });
+            d.receive(
+                &request,
+                &mut *planner,
+                &mut || {
+                    t += 1000;
+                    t
+                },
+                &mut |b: &[u8]| out.extend_from_slice(b),
+            );
+            let mut decoder = FrameDecoder::new();
+            let (got, _) = decoder.feed::<DeviceFrame>(&out);
+            let summary = match got {
+                Some(Ok(DeviceFrame::Reply {
+                    reply: Reply::Plan(s),
+                    ..
+                })) => s,
+                other => panic!("{other:?}"),
+            };
+            assert_eq!(
+                summary.mcu_instructions, 1000,
+                "the clock is read around the planner"
+            );
+            // The reference: the same planner type on a grid built directly.
+            let mut grid = Grid300::new(GridGeometry::seed_default()).unwrap();
+            mark_polygon(
+                &mut grid,
+                &wall,
+                GridGeometry::seed_default().expansion_cells(0.3),
+            );
+            let mut path = PathM::new();
+            let mut reference = std::boxed::Box::new(Planner::<SCRATCH_WORDS_300, 4096>::new());
+            let report = reference.plan(kind, &grid, start, goal, &mut path).unwrap();
+            assert_eq!(summary.status, PlanStatus::Found);
+            assert_eq!(
+                (
+                    summary.status,
+                    summary.expanded,
+                    summary.cost,
+                    summary.length_m
+                ),
+                (report.status, report.expanded, report.cost, report.length_m)
+            );
+            // Read the path in chunks.
+            let mut points = StdVec::new();
+            while points.len() < summary.points as usize {
+                let offset = points.len() as u16;
+                match call(&mut d, 11, Request::ReadPath { offset }) {
+                    Reply::PathChunk {
+                        points: p, total, ..
+                    } => {
+                        assert_eq!(total, summary.points);
+                        points.extend_from_slice(&p);
+                    }
+                    other => panic!("{other:?}"),
+                }
+            }
+            assert_eq!(&points[..], &path[..]);
+        }
+    }
+
+    fn any_request() -> impl proptest::strategy::Strategy<Value = Request> {
+        use proptest::prelude::*;
+        let point = (-1.0f32..16.0, -1.0f32..16.0).prop_map(|(x, y)| PointM::new(x, y));
+        prop_oneof![
+            any::<u32>().prop_map(|nonce| Request::Ping { nonce }),
+            any::<u16>().prop_map(|v| Request::Hello {
+                protocol_version: v
+            }),
+            Just(Request::Status),
+            Just(Request::ClearMap),
+            (1u16..400, 1u16..400, 0.01f32..1.0, -1.0f32..2.0).prop_map(|(w, h, r, radius)| {
+                Request::SetParams(MapParams {
+                    width_cells: w,
+                    height_cells: h,
+                    resolution_m: r,
+                    robot_radius_m: radius,
+                })
+            }),
+            (
+                0u16..80,
+                proptest::collection::vec(point.clone(), 0..OBSTACLE_CHUNK_VERTICES),
+                any::<bool>()
+            )
+                .prop_map(|(first_vertex, v, last)| Request::ObstacleChunk {
+                    first_vertex,
+                    vertices: Vec::from_slice(&v).unwrap(),
+                    last,
+                }),
+            (
+                0u32..3000,
+                proptest::collection::vec(any::<u32>(), 0..MAP_CHUNK_WORDS)
+            )
+                .prop_map(|(offset_words, w)| Request::WriteMap {
+                    offset_words,
+                    words: Vec::from_slice(&w).unwrap(),
+                }),
+            (0u32..3000).prop_map(|offset_words| Request::ReadMap { offset_words }),
+            (0u16..50).prop_map(|offset| Request::ReadPath { offset }),
+            (point.clone(), point).prop_map(|(start, goal)| Request::Plan {
+                kind: PlannerKind::Bfs,
+                start,
+                goal,
+            }),
+        ]
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        /// Whatever the requests, each gets exactly one reply with its sequence number, the
+        /// map never has bits set past its last cell, and the state stays within capacity.
+        #[test]
+        fn every_request_gets_exactly_one_reply(
+            requests in proptest::collection::vec(any_request(), 1..40)
+        ) {
+            let mut d = device();
+            for (i, request) in requests.into_iter().enumerate() {
+                let seq = i as u16;
+                let frames = exchange(&mut d, &frame(seq, request));
+                proptest::prop_assert_eq!(frames.len(), 1);
+                let is_reply_to_seq =
+                    matches!(frames[0], DeviceFrame::Reply { seq: Some(s), .. } if s == seq);
+                proptest::prop_assert!(is_reply_to_seq);
+                let g = *d.handler.grid().geometry();
+                proptest::prop_assert!(d.handler.grid().count_occupied() <= g.cell_count());
+                proptest::prop_assert!(d.handler.obstacles().len() <= MAX_POLYGONS);
+            }
+        }
+
+        /// Random bytes never panic the device and get at most one reply per frame terminator.
+        #[test]
+        fn random_bytes_get_at_most_one_reply_per_frame(
+            bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..3000)
+        ) {
+            let mut d = device();
+            let frames = exchange(&mut d, &bytes);
+            let zeros = bytes.iter().filter(|&&b| b == 0).count();
+            proptest::prop_assert!(frames.len() <= zeros);
+            // The link still works: a leading 0x00 (as the host sends) ends any partial frame,
+            // which gets its own error reply; then the ping is answered.
+            let mut resync = std::vec![0u8];
+            resync.extend(frame(1, Request::Ping { nonce: 3 }));
+            let frames = exchange(&mut d, &resync);
+            proptest::prop_assert!(!frames.is_empty() && frames.len() <= 2, "{:?}", frames);
+            if frames.len() == 2 {
+                let is_error = matches!(
+                    frames[0],
+                    DeviceFrame::Reply { seq: None, reply: Reply::Error(_) }
+                );
+                proptest::prop_assert!(is_error, "{:?}", frames);
+            }
+            proptest::prop_assert_eq!(
+                frames.last(),
+                Some(&DeviceFrame::Reply { seq: Some(1), reply: Reply::Pong { nonce: 3 } })
+            );
+        }
+    }
+
+    /// Print the example frame of docs/protocol.md (`cargo test -p twil-core example_frame --
+    /// --nocapture`) and pin it so the document cannot go stale silently.
+    #[test]
+    fn example_frame_for_the_docs() {
+        let mut out = [0u8; MAX_FRAME_BYTES];
+        let f = RequestFrame {
+            seq: 1,
+            request: Request::Ping { nonce: 0x1234 },
+        };
+        let bytes = encode(&f, &mut out).unwrap();
+        let hex: StdVec<std::string::String> =
+            bytes.iter().map(|b| std::format!("{b:02x}")).collect();
+        let hex = hex.join(" ");
+        std::println!("Ping {{ nonce: 0x1234 }}, seq 1: {hex}");
+        let docs = include_str!("../../../docs/protocol.md");
+        assert!(
+            docs.contains(&hex),
+            "docs/protocol.md lacks the frame {hex}"
+        );
+    }
+}

@@ -1,0 +1,419 @@
+//! The messages of the link: what the host asks ([`Request`]), what the device answers
+//! ([`Reply`]) and what it reports unasked ([`Telemetry`]).
+//!
+//! Every type here is plain data with serde derives; postcard encodes enums as a varint variant
+//! index followed by the fields, integers as varints and `f32` as 4 little-endian bytes
+//! (`docs/protocol.md` lists the indices). Collections are heapless vectors whose capacity is a
+//! named constant, so the largest message has a known size (checked against
+//! [`MAX_FRAME_BYTES`](super::frame::MAX_FRAME_BYTES) by a test).
+
+use heapless::Vec;
+use serde::{Deserialize, Serialize};
+
+use crate::geom::PointM;
+use crate::plan::{PlanStatus, PlannerKind};
+
+/// Version of this protocol. A host and a device only talk when their versions are equal
+/// ([`Request::Hello`]).
+pub const PROTOCOL_VERSION: u16 = 1;
+
+/// Vertices carried by one [`Request::ObstacleChunk`].
+pub const OBSTACLE_CHUNK_VERTICES: usize = 32;
+/// Path points carried by one [`Reply::PathChunk`].
+pub const PATH_CHUNK_POINTS: usize = 32;
+/// Grid words (32 cells each) carried by one [`Reply::MapChunk`] or [`Request::WriteMap`].
+pub const MAP_CHUNK_WORDS: usize = 64;
+
+/// A request as it travels: the host's sequence number and the request.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RequestFrame {
+    /// Chosen by the host (usually incremented per request); echoed in the reply.
+    pub seq: u16,
+    /// What is asked.
+    pub request: Request,
+}
+
+/// What the device sends.
+// Replies are the big variant and the common one; there is no heap to box them into.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum DeviceFrame {
+    /// The one answer to a request.
+    Reply {
+        /// The request's sequence number; `None` when the request frame was too damaged to read
+        /// it (bad COBS, bad CRC, too long).
+        seq: Option<u16>,
+        /// The answer.
+        reply: Reply,
+    },
+    /// A report the host did not ask for.
+    Telemetry(Telemetry),
+}
+
+/// Map size and robot radius (`SetParams`). Obstacles are grown by the radius when marked.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct MapParams {
+    /// Width, cells.
+    pub width_cells: u16,
+    /// Height, cells.
+    pub height_cells: u16,
+    /// Side of a cell, metres.
+    pub resolution_m: f32,
+    /// Planning radius of the robot, metres (0 to 10).
+    pub robot_radius_m: f32,
+}
+
+impl Default for MapParams {
+    /// The seed's map (300 x 300 cells of 0.05 m) and a point robot.
+    fn default() -> Self {
+        Self {
+            width_cells: crate::grid::DEFAULT_SIDE_CELLS,
+            height_cells: crate::grid::DEFAULT_SIDE_CELLS,
+            resolution_m: crate::grid::DEFAULT_RESOLUTION_M,
+            robot_radius_m: 0.0,
+        }
+    }
+}
+
+/// What the host can ask.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Request {
+    /// Version handshake: answered by [`Reply::Hello`] when the versions match, by
+    /// [`ErrorCode::VersionMismatch`] otherwise.
+    Hello {
+        /// The host's [`PROTOCOL_VERSION`].
+        protocol_version: u16,
+    },
+    /// Answered by [`Reply::Pong`] with the same nonce.
+    Ping {
+        /// Any value.
+        nonce: u32,
+    },
+    /// Set the map size and the robot radius: clears the map, keeps the obstacles and marks them
+    /// again with the new radius. Answered by [`Reply::Ack`].
+    SetParams(MapParams),
+    /// Forget every obstacle and the last path; clear the map. Answered by [`Reply::Ack`].
+    ClearMap,
+    /// Part of an obstacle polygon. A polygon is sent in chunks of at most
+    /// [`OBSTACLE_CHUNK_VERTICES`]; `first_vertex` is the index of the chunk's first vertex in
+    /// the polygon (0 starts a new polygon, dropping an unfinished one); the chunk with `last`
+    /// set closes the polygon, which is then stored and marked on the map. Answered by
+    /// [`Reply::Obstacles`].
+    ObstacleChunk {
+        /// Index of `vertices[0]` within the polygon.
+        first_vertex: u16,
+        /// The vertices, metres.
+        vertices: Vec<PointM, OBSTACLE_CHUNK_VERTICES>,
+        /// This chunk ends the polygon.
+        last: bool,
+    },
+    /// Overwrite packed map words from `offset_words` (cell `i` is bit `i % 32` of word
+    /// `i / 32`, rows first). Answered by [`Reply::Ack`].
+    WriteMap {
+        /// Index of `words[0]`.
+        offset_words: u32,
+        /// The words.
+        words: Vec<u32, MAP_CHUNK_WORDS>,
+    },
+    /// Plan on the current map. Answered by [`Reply::Plan`]; the path is then read with
+    /// [`Request::ReadPath`].
+    Plan {
+        /// Which planner.
+        kind: PlannerKind,
+        /// Start, metres.
+        start: PointM,
+        /// Goal, metres.
+        goal: PointM,
+    },
+    /// Read the last path from point `offset`. Answered by [`Reply::PathChunk`].
+    ReadPath {
+        /// First point wanted.
+        offset: u16,
+    },
+    /// Read the packed map from word `offset_words`. Answered by [`Reply::MapChunk`].
+    ReadMap {
+        /// First word wanted.
+        offset_words: u32,
+    },
+    /// Answered by [`Reply::Status`].
+    Status,
+}
+
+/// Which program answers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Build {
+    /// The firmware on a board.
+    Hardware,
+    /// The firmware under QEMU (`netduinoplus2`, instruction counting).
+    Qemu,
+    /// The handler running on the host (tests, loopback).
+    Host,
+}
+
+/// Who the device is and what it can hold ([`Reply::Hello`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DeviceInfo {
+    /// The device's [`PROTOCOL_VERSION`].
+    pub protocol_version: u16,
+    /// Which program this is.
+    pub build: Build,
+    /// Cells the grid can hold.
+    pub grid_capacity_cells: u32,
+    /// Cells the planner's scratch memory covers.
+    pub planner_capacity_cells: u32,
+    /// Obstacle polygons the device can store.
+    pub max_polygons: u16,
+    /// Obstacle vertices the device can store, all polygons together.
+    pub max_vertices: u16,
+    /// Largest frame, bytes on the wire.
+    pub max_frame_bytes: u16,
+    /// Statically allocated RAM of the firmware (`.data` + `.bss` + `.uninit`), bytes; 0 on the
+    /// host.
+    pub static_ram_bytes: u32,
+}
+
+impl Default for DeviceInfo {
+    /// A host-side device: version [`PROTOCOL_VERSION`], capacities filled in by the handler.
+    fn default() -> Self {
+        Self {
+            protocol_version: PROTOCOL_VERSION,
+            build: Build::Host,
+            grid_capacity_cells: 0,
+            planner_capacity_cells: 0,
+            max_polygons: 0,
+            max_vertices: 0,
+            max_frame_bytes: 0,
+            static_ram_bytes: 0,
+        }
+    }
+}
+
+/// The outcome of [`Request::Plan`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanSummary {
+    /// How planning ended.
+    pub status: PlanStatus,
+    /// Cells expanded.
+    pub expanded: u32,
+    /// BFS steps or A* cost (see [`crate::plan::PlanReport`]).
+    pub cost: u32,
+    /// Length of the path, metres.
+    pub length_m: f32,
+    /// Points in the path (read them with [`Request::ReadPath`]).
+    pub points: u16,
+    /// Instructions the device spent in the planner (firmware: measured with SysTick; under
+    /// QEMU with `-icount shift=0` exactly the instructions executed; 0 on the host).
+    pub mcu_instructions: u64,
+}
+
+/// State counters of the device ([`Reply::Status`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DeviceStatus {
+    /// Map size and robot radius in use.
+    pub params: MapParams,
+    /// Obstacle polygons stored.
+    pub polygons: u16,
+    /// Obstacle vertices stored.
+    pub vertices: u16,
+    /// Vertices of the polygon being uploaded (not yet closed).
+    pub pending_vertices: u16,
+    /// Occupied cells of the map.
+    pub occupied_cells: u32,
+    /// Requests answered (errors included).
+    pub requests: u32,
+    /// Frames that could not be decoded.
+    pub frame_errors: u32,
+    /// Bytes the receiver had to drop (its queue was full); always 0 unless the firmware's
+    /// interrupt could not keep up.
+    pub rx_dropped_bytes: u32,
+    /// Instructions spent by the last `Plan` request, also when it failed (e.g. a path longer
+    /// than the planner's buffer).
+    pub last_plan_instructions: u64,
+    /// Cells the last search expanded, also when the plan failed afterwards (0 if unknown).
+    pub last_plan_expanded: u32,
+    /// Largest number of open-list entries the last search used.
+    pub last_plan_queue_peak: u32,
+}
+
+/// What the device answers.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Reply {
+    /// Handshake accepted.
+    Hello(DeviceInfo),
+    /// Answer to [`Request::Ping`].
+    Pong {
+        /// The request's nonce.
+        nonce: u32,
+    },
+    /// Done.
+    Ack,
+    /// Obstacle upload state after a chunk.
+    Obstacles {
+        /// Polygons stored.
+        polygons: u16,
+        /// Vertices stored.
+        vertices: u16,
+        /// Vertices of the unfinished polygon.
+        pending_vertices: u16,
+    },
+    /// Planning finished.
+    Plan(PlanSummary),
+    /// Part of the last path.
+    PathChunk {
+        /// Index of `points[0]`.
+        offset: u16,
+        /// Points in the whole path.
+        total: u16,
+        /// The points, metres.
+        points: Vec<PointM, PATH_CHUNK_POINTS>,
+    },
+    /// Part of the packed map.
+    MapChunk {
+        /// Index of `words[0]`.
+        offset_words: u32,
+        /// Words in the whole map.
+        total_words: u32,
+        /// Map width, cells (to unpack the words).
+        width_cells: u16,
+        /// Map height, cells.
+        height_cells: u16,
+        /// The words.
+        words: Vec<u32, MAP_CHUNK_WORDS>,
+    },
+    /// Device state.
+    Status(DeviceStatus),
+    /// The request failed and changed nothing.
+    Error(ErrorReply),
+}
+
+/// Why a request failed. The variant index is the code on the wire (postcard varint).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ErrorCode {
+    /// 0: the frame is not valid COBS or not a length-prefixed byte string.
+    BadFrame,
+    /// 1: the frame's CRC does not match its contents.
+    BadCrc,
+    /// 2: the frame was longer than `value` = `limit` = [`MAX_FRAME_BYTES`](super::MAX_FRAME_BYTES).
+    FrameTooLong,
+    /// 3: the CRC is good but the contents are not a request (unknown variant, short fields).
+    BadMessage,
+    /// 4: protocol versions differ: `value` = the host's, `limit` = the device's.
+    VersionMismatch,
+    /// 5: the map size or resolution is refused (`value` = width, `limit` = height, cells).
+    BadGeometry,
+    /// 6: the map needs `value` cells but the grid holds `limit`.
+    GridCapacity,
+    /// 7: no room for another polygon (`limit` = polygons the device stores).
+    TooManyPolygons,
+    /// 8: no room for the vertices: `value` = vertices needed, `limit` = vertices left.
+    TooManyVertices,
+    /// 9: an obstacle chunk starts at vertex `value` but `limit` were received so far.
+    ChunkOutOfOrder,
+    /// 10: a number is not finite or out of range (`value` = index of the offending field or
+    /// vertex).
+    BadArgument,
+    /// 11: the planner ran out of memory: `value` = what it needed (cells), `limit` = its
+    /// capacity (`detail` tells which: 0 scratch, 1 queue, 2 path).
+    PlannerCapacity,
+    /// 12: a read starts at `value`, beyond the `limit` items there are.
+    OutOfRange,
+    /// 13: an obstacle chunk closes a polygon that has no vertex.
+    EmptyPolygon,
+}
+
+/// An error answer: a code and up to three numbers whose meaning the code documents.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ErrorReply {
+    /// What went wrong.
+    pub code: ErrorCode,
+    /// The offending value (see [`ErrorCode`]).
+    pub value: u32,
+    /// The limit it broke (see [`ErrorCode`]).
+    pub limit: u32,
+    /// Extra detail (see [`ErrorCode`]).
+    pub detail: u32,
+}
+
+impl ErrorReply {
+    /// An error with a code and two numbers (`detail` = 0).
+    pub const fn new(code: ErrorCode, value: u32, limit: u32) -> Self {
+        Self {
+            code,
+            value,
+            limit,
+            detail: 0,
+        }
+    }
+}
+
+impl core::fmt::Display for ErrorReply {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let (v, l) = (self.value, self.limit);
+        match self.code {
+            ErrorCode::BadFrame => write!(f, "the device received a damaged frame (bad COBS)"),
+            ErrorCode::BadCrc => write!(f, "the device received a frame with a bad CRC"),
+            ErrorCode::FrameTooLong => {
+                write!(f, "the device received a frame longer than {l} bytes")
+            }
+            ErrorCode::BadMessage => write!(f, "the device could not read the request"),
+            ErrorCode::VersionMismatch => write!(
+                f,
+                "protocol version mismatch: host speaks {v}, device speaks {l}"
+            ),
+            ErrorCode::BadGeometry => write!(f, "map size {v}x{l} cells is refused"),
+            ErrorCode::GridCapacity => write!(
+                f,
+                "the map needs {v} cells but the device's grid holds {l} cells"
+            ),
+            ErrorCode::TooManyPolygons => {
+                write!(
+                    f,
+                    "too many obstacles: the device stores at most {l} polygons"
+                )
+            }
+            ErrorCode::TooManyVertices => write!(
+                f,
+                "too many obstacle vertices: {v} needed but only {l} left on the device"
+            ),
+            ErrorCode::ChunkOutOfOrder => write!(
+                f,
+                "obstacle chunk out of order: starts at vertex {v}, expected {l}"
+            ),
+            ErrorCode::BadArgument => write!(f, "argument {v} is not a valid number"),
+            ErrorCode::PlannerCapacity => {
+                let what = match self.detail {
+                    0 => "scratch cells",
+                    1 => "queue entries",
+                    _ => "path points",
+                };
+                write!(f, "the planner ran out of {what}: needs {v}, holds {l}")
+            }
+            ErrorCode::OutOfRange => write!(f, "read from {v} but there are only {l} items"),
+            ErrorCode::EmptyPolygon => write!(f, "an obstacle polygon needs at least one vertex"),
+        }
+    }
+}
+
+/// Reports the device sends unasked.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Telemetry {
+    /// The firmware has started (sent once after reset).
+    Boot {
+        /// Its [`PROTOCOL_VERSION`].
+        protocol_version: u16,
+    },
+    /// The robot's pose estimate (mission firmware).
+    Pose {
+        /// Position, metres.
+        position: PointM,
+        /// Heading, radians counter-clockwise from +x.
+        heading_rad: f32,
+    },
+    /// The device state changed.
+    Status(DeviceStatus),
+}
