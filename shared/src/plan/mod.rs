@@ -344,6 +344,22 @@ fn set_nibble(scratch: &mut [u32], index: usize, code: u32) {
     }
 }
 
+/// The step code (1..=8) of the unit step `(dx, dy)`; 0 for `(0, 0)` or a non-unit step.
+#[inline(always)]
+const fn step_code(dx: i32, dy: i32) -> u32 {
+    match (dx, dy) {
+        (1, 0) => E,
+        (0, 1) => N,
+        (-1, 0) => W,
+        (0, -1) => S,
+        (1, 1) => NE,
+        (-1, 1) => NW,
+        (-1, -1) => SW,
+        (1, -1) => SE,
+        _ => 0,
+    }
+}
+
 /// Octile distance in A* cost units.
 #[inline(always)]
 fn octile(dx: u32, dy: u32) -> u32 {
@@ -560,6 +576,208 @@ fn cells_distance(a: Cell, b: Cell) -> f32 {
     sqrt_precise(dx * dx + dy * dy)
 }
 
+/// The jump scans of [`Planner::jps`], on the grid's packed occupancy bits (1 = occupied):
+/// side scans along a row test 32 cells per step with a few word operations; scans along a
+/// column read 3 bits per row. Cells off the map count as occupied.
+struct JumpScan<'a> {
+    words: &'a [u32],
+    width: i32,
+    height: i32,
+    goal_x: i32,
+    goal_y: i32,
+}
+
+impl JumpScan<'_> {
+    /// Occupancy of the 32 cells `c0 .. c0 + 32` of row `y` (bit k = column `c0 + k`), cells off
+    /// the map set.
+    #[inline(always)]
+    fn row_bits(&self, y: i32, c0: i32) -> u32 {
+        if (y as u32) >= self.height as u32 || c0 >= self.width || c0 <= -32 {
+            return u32::MAX;
+        }
+        let from = c0.max(0);
+        let i = (y * self.width + from) as usize;
+        let lo = self.words.get(i >> 5).copied().unwrap_or(u32::MAX) as u64;
+        let hi = self.words.get((i >> 5) + 1).copied().unwrap_or(u32::MAX) as u64;
+        let mut bits = ((lo | (hi << 32)) >> (i & 31)) as u32;
+        let valid = self.width - from; // columns of the row from `from` on
+        if valid < 32 {
+            bits |= u32::MAX << valid;
+        }
+        if c0 < 0 {
+            let s = (-c0) as u32;
+            bits = (bits << s) | ((1u32 << s) - 1);
+        }
+        bits
+    }
+
+    #[inline(always)]
+    fn free(&self, x: i32, y: i32) -> bool {
+        (x as u32) < self.width as u32
+            && (y as u32) < self.height as u32
+            && self.row_bits(y, x) & 1 == 0
+    }
+
+    /// Scan from `(x, y)` in the side direction `(dx, dy)` (one of them 0). Returns the first
+    /// jump point `(x, y, steps)`: the goal, or a cell with a forced neighbour (a side cell
+    /// that is free while the cell behind it, next to the previous cell of the scan, is
+    /// occupied). `None` when the scan runs into an obstacle or off the map first.
+    #[inline]
+    fn straight(&self, x: i32, y: i32, dx: i32, dy: i32) -> Option<(i32, i32, u32)> {
+        if dy == 0 {
+            self.along_row(x, y, dx)
+        } else {
+            self.along_column(x, y, dy)
+        }
+    }
+
+    fn along_row(&self, x: i32, y: i32, dx: i32) -> Option<(i32, i32, u32)> {
+        let goal_in_row = self.goal_y == y;
+        if dx > 0 {
+            let mut c0 = x + 1;
+            loop {
+                let cur = self.row_bits(y, c0);
+                let up = self.row_bits(y + 1, c0);
+                let up_back = self.row_bits(y + 1, c0 - 1);
+                let down = self.row_bits(y - 1, c0);
+                let down_back = self.row_bits(y - 1, c0 - 1);
+                let mut hit = (!up & up_back) | (!down & down_back);
+                if goal_in_row && self.goal_x >= c0 && self.goal_x < c0 + 32 {
+                    hit |= 1 << (self.goal_x - c0);
+                }
+                if cur | hit != 0 {
+                    let stop = cur.trailing_zeros();
+                    let jump = hit.trailing_zeros();
+                    if jump < stop {
+                        let jx = c0 + jump as i32;
+                        return Some((jx, y, (jx - x) as u32));
+                    }
+                    return None;
+                }
+                c0 += 32;
+            }
+        } else {
+            // Columns c0 .. c0 + 32 with the scan going down from c0 + 31.
+            let mut c0 = x - 32;
+            loop {
+                let cur = self.row_bits(y, c0);
+                let up = self.row_bits(y + 1, c0);
+                let up_back = self.row_bits(y + 1, c0 + 1);
+                let down = self.row_bits(y - 1, c0);
+                let down_back = self.row_bits(y - 1, c0 + 1);
+                let mut hit = (!up & up_back) | (!down & down_back);
+                if goal_in_row && self.goal_x >= c0 && self.goal_x < c0 + 32 {
+                    hit |= 1 << (self.goal_x - c0);
+                }
+                if cur | hit != 0 {
+                    let stop = cur.leading_zeros();
+                    let jump = hit.leading_zeros();
+                    if jump < stop {
+                        let jx = c0 + 31 - jump as i32;
+                        return Some((jx, y, (x - jx) as u32));
+                    }
+                    return None;
+                }
+                c0 -= 32;
+            }
+        }
+    }
+
+    fn along_column(&self, x: i32, mut y: i32, dy: i32) -> Option<(i32, i32, u32)> {
+        // Bits 0, 1, 2 = columns x - 1, x, x + 1.
+        let mut behind = self.row_bits(y, x - 1) & 7;
+        let mut steps = 0u32;
+        loop {
+            y += dy;
+            let here = self.row_bits(y, x - 1) & 7;
+            if here & 2 != 0 {
+                return None;
+            }
+            steps += 1;
+            if (!here & behind) & 5 != 0 || (x == self.goal_x && y == self.goal_y) {
+                return Some((x, y, steps));
+            }
+            behind = here;
+        }
+    }
+
+    /// Scan from `(x, y)` in the diagonal direction `(dx, dy)`, each step only between two
+    /// free side cells (no corner cutting). Returns the first diagonal cell that is the goal or
+    /// from which a side scan along `dx` or `dy` finds a jump point; `None` when blocked first.
+    #[inline]
+    fn diagonal(&self, mut x: i32, mut y: i32, dx: i32, dy: i32) -> Option<(i32, i32, u32)> {
+        let mut steps = 0u32;
+        loop {
+            if !(self.free(x + dx, y) && self.free(x, y + dy) && self.free(x + dx, y + dy)) {
+                return None;
+            }
+            x += dx;
+            y += dy;
+            steps += 1;
+            if (x == self.goal_x && y == self.goal_y)
+                || self.along_row(x, y, dx).is_some()
+                || self.along_column(x, y, dy).is_some()
+            {
+                return Some((x, y, steps));
+            }
+        }
+    }
+}
+
+/// Jump point search gives up (and A* runs cell by cell) when more than one cell in this many
+/// (at least 1024 cells) became a jump point: on cluttered maps such as 20 % random obstacles
+/// nearly every free cell is one, and scanning costs more than the cell-by-cell search.
+const JPS_MAX_EXPANSIONS_PER_CELLS: usize = 64;
+
+/// Binary min-heap over a fixed slice of entries, ordered by `f`.
+#[inline(always)]
+fn heap_before(a: &OpenEntry, b: &OpenEntry) -> bool {
+    a.f < b.f
+}
+
+fn heap_sift_up(heap: &mut [OpenEntry], mut i: usize) {
+    let Some(&item) = heap.get(i) else {
+        return;
+    };
+    while i > 0 {
+        let parent = (i - 1) / 2;
+        match heap.get(parent) {
+            Some(p) if heap_before(&item, p) => {
+                heap[i] = *p;
+                i = parent;
+            }
+            _ => break,
+        }
+    }
+    heap[i] = item;
+}
+
+fn heap_sift_down(heap: &mut [OpenEntry], mut i: usize) {
+    let len = heap.len();
+    let Some(&item) = heap.get(i) else {
+        return;
+    };
+    loop {
+        let left = 2 * i + 1;
+        if left >= len {
+            break;
+        }
+        let right = left + 1;
+        let child = if right < len && heap_before(&heap[right], &heap[left]) {
+            right
+        } else {
+            left
+        };
+        if heap_before(&heap[child], &item) {
+            heap[i] = heap[child];
+            i = child;
+        } else {
+            break;
+        }
+    }
+    heap[i] = item;
+}
+
 /// Outcome of the search phase, before the path is rebuilt.
 struct Search {
     found: bool,
@@ -673,13 +891,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         // Scratch starts as a copy of the map: occupied cells BLOCKED, free cells 0. The search
         // then reads one nibble per neighbour for both "free?" and "reached?".
-        let used_words = scratch_words_for_cells(geometry.cell_count());
-        let used = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
-        for (quad, &bits) in used.chunks_mut(4).zip(grid.words()) {
-            for (k, word) in quad.iter_mut().enumerate() {
-                *word = spread_bits_to_nibbles(bits >> (8 * k)) * BLOCKED;
-            }
-        }
+        self.copy_map(grid);
         let start_index = geometry.index(start);
         let goal_index = geometry.index(goal);
         let search = if start_index == goal_index {
@@ -693,7 +905,20 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             match kind {
                 PlannerKind::Bfs => self.bfs(grid, start_index, goal_index)?,
                 PlannerKind::AStar | PlannerKind::AnyAngle => {
-                    self.astar(grid, start_index, goal, goal_index)?
+                    match self.jps(grid, start_index, goal, goal_index) {
+                        Ok(search) => search,
+                        Err(jps_expanded) => {
+                            // Cluttered map (JPS scans more than it saves) or the queue ran
+                            // out of entries for jump points and their records: cell-by-cell
+                            // A*, which also reclaims stale entries more finely.
+                            self.copy_map(grid);
+                            let plain = self.astar(grid, start_index, goal, goal_index)?;
+                            Search {
+                                expanded: plain.expanded.saturating_add(jps_expanded),
+                                ..plain
+                            }
+                        }
+                    }
                 }
             }
         };
@@ -757,6 +982,17 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             });
         }
         Ok(())
+    }
+
+    /// Copy the map into the scratch: occupied cells [`BLOCKED`], free cells 0.
+    fn copy_map<const GW: usize>(&mut self, grid: &Grid<GW>) {
+        let used_words = scratch_words_for_cells(grid.geometry().cell_count());
+        let used = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
+        for (quad, &bits) in used.chunks_mut(4).zip(grid.words()) {
+            for (k, word) in quad.iter_mut().enumerate() {
+                *word = spread_bits_to_nibbles(bits >> (8 * k)) * BLOCKED;
+            }
+        }
     }
 
     /// Breadth-first search from `start` until `goal` is discovered.
@@ -1011,6 +1247,220 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             expanded,
             cost: 0,
         })
+    }
+
+    /// A* by Jump Point Search (no corner cutting) with the octile heuristic and a
+    /// lazy-deletion binary heap of jump points. Optimal octile cost, same as plain A*.
+    ///
+    /// The queue's entries are shared by the heap (from the front) and the records of the
+    /// closed jump points (from the back: the cell, its step code and the record of the jump
+    /// point it was reached from), so that on success the path is rebuilt exactly, segment by
+    /// segment, by [`Planner::write_jump_chain`]. `Err(expanded)` when the entries run out or
+    /// more than [`JPS_MAX_EXPANSIONS_PER_CELLS`]-th of the cells (at least 1024) became jump
+    /// points: the caller then falls back to cell-by-cell A*.
+    fn jps<const GW: usize>(
+        &mut self,
+        grid: &Grid<GW>,
+        start: usize,
+        goal_cell: Cell,
+        goal: usize,
+    ) -> Result<Search, u32> {
+        let geometry = grid.geometry();
+        let width = geometry.width() as i32;
+        let height = geometry.height() as i32;
+        let (gx, gy) = (goal_cell.x as i32, goal_cell.y as i32);
+        let h = |x: i32, y: i32| octile(x.abs_diff(gx), y.abs_diff(gy));
+        let pack = |x: i32, y: i32, code: u32| ((y as u32) << 16) | ((x as u32) << 4) | code;
+        let pool = &mut self.queue[..];
+        let capacity = pool.len();
+        let (sx, sy) = (start as i32 % width, start as i32 / width);
+        let mut len = match pool.first_mut() {
+            Some(slot) => {
+                *slot = OpenEntry {
+                    f: h(sx, sy),
+                    node: pack(sx, sy, CODE_START),
+                    next: NIL,
+                };
+                1usize
+            }
+            None => return Err(0),
+        };
+        let max_expanded = (geometry.cell_count() / JPS_MAX_EXPANSIONS_PER_CELLS).max(1024) as u32;
+        // Closed jump points: record r lives at `pool[capacity - 1 - r]`.
+        let mut records = 0usize;
+        let mut peak = len;
+        let mut expanded = 0u32;
+
+        while len > 0 {
+            let top = pool[0];
+            len -= 1;
+            pool[0] = pool[len];
+            heap_sift_down(&mut pool[..len], 0);
+
+            let x = ((top.node >> 4) & 0xFFF) as i32;
+            let y = (top.node >> 16) as i32;
+            let index = (y * width + x) as usize;
+            if nibble(&self.scratch, index) != 0 {
+                continue; // already closed by a cheaper entry
+            }
+            let code = top.node & 0xF;
+            set_nibble(&mut self.scratch, index, code);
+            expanded += 1;
+            if expanded > max_expanded {
+                self.queue_peak = peak as u32;
+                return Err(expanded);
+            }
+            // The popped entry freed a slot, so the record always fits.
+            let record = records as u32;
+            pool[capacity - 1 - records] = OpenEntry {
+                f: 0,
+                node: top.node,
+                next: top.next,
+            };
+            records += 1;
+            let g = top.f.wrapping_sub(h(x, y));
+            if index == goal {
+                self.queue_peak = peak as u32;
+                self.write_jump_chain(width, record as usize);
+                return Ok(Search {
+                    found: true,
+                    expanded,
+                    cost: g,
+                });
+            }
+            let scan = JumpScan {
+                words: grid.words(),
+                width,
+                height,
+                goal_x: gx,
+                goal_y: gy,
+            };
+            // Directions to scan, by the step that reached this jump point: from the start all
+            // 8; after a diagonal step its two sides and itself; after a side step itself, both
+            // perpendiculars and the two forward diagonals (a superset of the forced ones).
+            let mut dirs = [0u32; 8];
+            let n = match code {
+                E | N | W | S => {
+                    let (dx, dy) = STEPS[(code - 1) as usize];
+                    dirs[..5].copy_from_slice(&[
+                        code,
+                        step_code(dy, dx),
+                        step_code(-dy, -dx),
+                        step_code(dx + dy, dy + dx),
+                        step_code(dx - dy, dy - dx),
+                    ]);
+                    5
+                }
+                NE | NW | SW | SE => {
+                    let (dx, dy) = STEPS[(code - 1) as usize];
+                    dirs[..3].copy_from_slice(&[code, step_code(dx, 0), step_code(0, dy)]);
+                    3
+                }
+                _ => {
+                    dirs = [E, N, W, S, NE, NW, SW, SE];
+                    8
+                }
+            };
+            for &d in &dirs[..n] {
+                let Some(&(dx, dy)) = STEPS.get((d as usize).wrapping_sub(1)) else {
+                    continue;
+                };
+                let found = if dx == 0 || dy == 0 {
+                    scan.straight(x, y, dx, dy)
+                        .map(|(jx, jy, k)| (jx, jy, k * STRAIGHT_COST))
+                } else {
+                    scan.diagonal(x, y, dx, dy)
+                        .map(|(jx, jy, k)| (jx, jy, k * DIAGONAL_COST))
+                };
+                let Some((jx, jy, cost)) = found else {
+                    continue;
+                };
+                if nibble(&self.scratch, (jy * width + jx) as usize) != 0 {
+                    continue; // closed already
+                }
+                let entry = OpenEntry {
+                    f: g.saturating_add(cost).saturating_add(h(jx, jy)),
+                    node: pack(jx, jy, d),
+                    next: record,
+                };
+                if len + records == capacity {
+                    // Full: drop the entries of cells closed meanwhile, unless that frees too
+                    // little to be worth it (no thrashing).
+                    let before = len;
+                    let mut kept = 0usize;
+                    for i in 0..len {
+                        let e = pool[i];
+                        let cell = (e.node >> 16) as i32 * width + ((e.node >> 4) & 0xFFF) as i32;
+                        if nibble(&self.scratch, cell as usize) == 0 {
+                            pool[kept] = e;
+                            kept += 1;
+                        }
+                    }
+                    len = kept;
+                    for i in (0..len / 2).rev() {
+                        heap_sift_down(&mut pool[..len], i);
+                    }
+                    if before - len < (capacity / 16).max(1) {
+                        self.queue_peak = peak as u32;
+                        return Err(expanded);
+                    }
+                }
+                pool[len] = entry;
+                len += 1;
+                heap_sift_up(&mut pool[..len], len - 1);
+                peak = peak.max(len + records);
+            }
+        }
+        self.queue_peak = peak as u32;
+        Ok(Search {
+            found: false,
+            expanded,
+            cost: 0,
+        })
+    }
+
+    /// Write the step codes along the chain of jump point records that ends at `record` (the
+    /// goal's), so that the path can be rebuilt cell by cell from the goal. Each segment between
+    /// two jump points is a straight or 45° scan, so every cell strictly between them gets the
+    /// segment's step code (the path is a shortest one, so it crosses no cell twice).
+    fn write_jump_chain(&mut self, width: i32, mut record: usize) {
+        let capacity = self.queue.len();
+        // Each record's parent was closed before it, so indices fall; the bound is a guard.
+        for _ in 0..capacity {
+            let Some(&child) = self.queue.get(capacity.wrapping_sub(1 + record)) else {
+                return;
+            };
+            let Some(&parent) = self
+                .queue
+                .get(capacity.wrapping_sub(1 + child.next as usize))
+            else {
+                return; // the start
+            };
+            if child.next as usize >= record {
+                return;
+            }
+            let code = child.node & 0xF;
+            let Some(&(dx, dy)) = STEPS.get((code as usize).wrapping_sub(1)) else {
+                return;
+            };
+            let (mut x, mut y) = (
+                ((child.node >> 4) & 0xFFF) as i32,
+                (child.node >> 16) as i32,
+            );
+            let (px, py) = (
+                ((parent.node >> 4) & 0xFFF) as i32,
+                (parent.node >> 16) as i32,
+            );
+            for _ in 0..4096 {
+                x -= dx;
+                y -= dy;
+                if (x, y) == (px, py) || x < 0 || y < 0 {
+                    break;
+                }
+                set_nibble(&mut self.scratch, (y * width + x) as usize, code);
+            }
+            record = child.next as usize;
+        }
     }
 
     /// The parent of `cell` by its nibble, or `None` at the start (or on a corrupt code).
