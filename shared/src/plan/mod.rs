@@ -855,8 +855,12 @@ impl JumpScan<'_> {
 
 /// Jump point search gives up (and A* runs cell by cell) when more than one cell in this many
 /// (at least 1024 cells) became a jump point: on cluttered maps such as 20 % random obstacles
-/// nearly every free cell is one, and scanning costs more than the cell-by-cell search.
+/// nearly every free cell is one, and scanning costs more than the cell-by-cell search ...
 const JPS_MAX_EXPANSIONS_PER_CELLS: usize = 64;
+/// ... but only while the open list holds more than one entry per this many jump points
+/// expanded (a wide frontier: 269 open entries after 1 024 jump points on 20 % random
+/// obstacles, 2 in a maze of 1-cell corridors, where jump point search stays 3x ahead).
+const JPS_WIDE_FRONTIER: usize = 16;
 
 /// Binary min-heap over a fixed slice of entries, ordered by `f`.
 #[inline(always)]
@@ -1385,8 +1389,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     /// closed jump points (from the back: the cell, its step code and the record of the jump
     /// point it was reached from), so that on success the path is rebuilt exactly, segment by
     /// segment, by [`Planner::write_jump_chain`]. `Err(expanded)` when the entries run out or
-    /// more than [`JPS_MAX_EXPANSIONS_PER_CELLS`]-th of the cells (at least 1024) became jump
-    /// points: the caller then falls back to cell-by-cell A*.
+    /// the map is cluttered (see [`JPS_MAX_EXPANSIONS_PER_CELLS`] and [`JPS_WIDE_FRONTIER`]):
+    /// the caller then falls back to cell-by-cell A*.
     fn jps<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
@@ -1435,7 +1439,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             let code = top.node & 0xF;
             set_nibble(&mut self.scratch, index, code);
             expanded += 1;
-            if expanded > max_expanded {
+            if expanded > max_expanded && len * JPS_WIDE_FRONTIER > expanded as usize {
                 self.queue_peak = peak as u32;
                 return Err(expanded);
             }
