@@ -1022,9 +1022,19 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             self.last = Some(report);
             return Ok(report);
         }
-        // Scratch starts as a copy of the map: occupied cells BLOCKED, free cells 0. The search
-        // then reads one nibble per neighbour for both "free?" and "reached?".
-        self.copy_map(grid);
+        // BFS starts from a copy of the map in the scratch (occupied cells BLOCKED, free cells
+        // 0), so it reads one nibble per neighbour for both "free?" and "reached?". Jump point
+        // search reads the map's own bits and needs cleared nibbles only (its cell-by-cell
+        // fallback copies the map then).
+        let used_words = scratch_words_for_cells(geometry.cell_count());
+        match kind {
+            PlannerKind::Bfs => self.copy_map(grid),
+            _ => self
+                .scratch
+                .get_mut(..used_words)
+                .unwrap_or(&mut [])
+                .fill(0),
+        }
         let start_index = geometry.index(start);
         let goal_index = geometry.index(goal);
         let search = if start_index == goal_index {
