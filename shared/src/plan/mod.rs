@@ -760,7 +760,8 @@ impl JumpScan<'_> {
     /// (from `(x + dx·i, y + dy·i)` along `dy`) finds a jump point; all diagonal cells up to
     /// `last` are free.
     fn diagonal_columns(&self, x: i32, y: i32, dx: i32, dy: i32, last: u32) -> Option<u32> {
-        const MAX_WORDS: usize = 128; // 4 096 columns, the widest grid a queue entry can name
+        // Up to 512 columns (the 300 and 400 cell grids); wider grids scan column by column.
+        const MAX_WORDS: usize = 16;
         if last == 0 {
             return None;
         }
@@ -771,6 +772,10 @@ impl JumpScan<'_> {
             });
         }
         let mut alive = [0u32; MAX_WORDS];
+        // Occupancy words of the current row and the row behind it, at index `word + 1` (so
+        // the words just outside the columns in play fit), valid over `cached`.
+        let mut rows = [[u32::MAX; MAX_WORDS + 2]; 2];
+        let mut cached: Option<(i32, i32)> = None;
         let mut best = last + 1; // steps at or beyond `best` no longer matter
         let mut any_alive = false;
         let mut k = 1u32;
@@ -788,20 +793,45 @@ impl JumpScan<'_> {
                 } else {
                     (x - span, x - 1)
                 };
+                let (wlo, whi) = ((lo >> 5) - 1, (hi >> 5) + 1);
+                let (cur_rows, behind_rows) = rows.split_at_mut(1);
+                let (cur, back) = (&mut cur_rows[0], &mut behind_rows[0]);
+                // `back` holds the previous row over `cached`; fill the rest of the range.
+                for w in wlo..=whi {
+                    let fresh = match cached {
+                        Some((a, b)) => w < a || w > b,
+                        None => true,
+                    };
+                    if fresh {
+                        if let Some(slot) = back.get_mut((w + 1) as usize) {
+                            *slot = self.row_bits(behind, w * 32);
+                        }
+                    }
+                    if let Some(slot) = cur.get_mut((w + 1) as usize) {
+                        *slot = self.row_bits(row, w * 32);
+                    }
+                }
+                let at = |v: &[u32; MAX_WORDS + 2], w: i32| -> u32 {
+                    v.get((w + 1) as usize).copied().unwrap_or(u32::MAX)
+                };
                 let mut any = false;
                 let mut hit_step = None::<u32>;
-                for w in (lo >> 5) as usize..=(hi >> 5) as usize {
-                    let Some(a) = alive.get_mut(w) else {
+                for w in wlo + 1..whi {
+                    let Some(a) = alive.get_mut(w as usize) else {
                         break;
                     };
                     if *a == 0 {
                         continue;
                     }
-                    let c0 = (w * 32) as i32;
-                    *a &= !self.row_bits(row, c0);
-                    let mut hit = *a
-                        & ((!self.row_bits(row, c0 + 1) & self.row_bits(behind, c0 + 1))
-                            | (!self.row_bits(row, c0 - 1) & self.row_bits(behind, c0 - 1)));
+                    let c0 = w * 32;
+                    let (c_prev, c_here, c_next) = (at(cur, w - 1), at(cur, w), at(cur, w + 1));
+                    let (b_prev, b_here, b_next) = (at(back, w - 1), at(back, w), at(back, w + 1));
+                    *a &= !c_here;
+                    let right_c = (c_here >> 1) | (c_next << 31);
+                    let right_b = (b_here >> 1) | (b_next << 31);
+                    let left_c = (c_here << 1) | (c_prev >> 31);
+                    let left_b = (b_here << 1) | (b_prev >> 31);
+                    let mut hit = *a & ((!right_c & right_b) | (!left_c & left_b));
                     if row == self.goal_y && self.goal_x >= c0 && self.goal_x < c0 + 32 {
                         hit |= *a & (1 << (self.goal_x - c0));
                     }
@@ -817,6 +847,8 @@ impl JumpScan<'_> {
                     }
                     any |= *a != 0;
                 }
+                rows.swap(0, 1);
+                cached = Some((wlo, whi));
                 if let Some(i) = hit_step {
                     best = best.min(i);
                     // Drop the columns of steps at or beyond `best`.
@@ -836,6 +868,8 @@ impl JumpScan<'_> {
                     }
                 }
                 any_alive = any;
+            } else {
+                cached = None; // rows were skipped: the cached row is not the one behind
             }
             // The column of step k starts scanning from its diagonal cell.
             if k <= last && k < best {

@@ -806,3 +806,86 @@ fn planner300_runs_every_bundled_world() {
         }
     }
 }
+
+#[test]
+fn wide_grids_scan_columns_one_by_one_with_the_same_cost() {
+    // More than 512 columns: the diagonal scans test their columns one at a time instead of
+    // as a bit set. Same optimal cost as pathfinding on random obstacles and on a bare floor.
+    const CELLS: usize = 700 * 24;
+    let geometry = GridGeometry::new(700, 24, 0.05).unwrap();
+    for density in [0u64, 12, 25] {
+        let mut g = Grid::<{ words_for_cells(CELLS) }>::new(geometry).unwrap();
+        let mut state = 0x2545_F491_4F6C_DD1Du64 ^ density;
+        for y in 0..24 {
+            for x in 0..700 {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                if state % 100 < density {
+                    g.set_xy(x, y, true);
+                }
+            }
+        }
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 8192>::new());
+        for (s, t) in [
+            ((0, 0), (699, 23)),
+            ((650, 3), (20, 20)),
+            ((5, 23), (400, 0)),
+        ] {
+            let (s, t) = (Cell::new(s.0, s.1), Cell::new(t.0, t.1));
+            g.set(s, false);
+            g.set(t, false);
+            let r = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+            let expected = oracle_astar(&g, s, t);
+            assert_eq!(r.status == PlanStatus::Found, expected.is_some());
+            if let Some(cost) = expected {
+                assert_eq!(r.cost, cost, "density {density} {s:?} -> {t:?}");
+                assert_eq!(steps_and_cost(p.path_cells()).1, cost);
+                assert_collision_free(&g, p.path_cells());
+            }
+        }
+    }
+}
+
+#[test]
+fn sparse_obstacles_on_many_words_match_pathfinding() {
+    // Rows of several words (the diagonal scans' column bit sets span up to 7 words here),
+    // sparse obstacles so that jump point search does not fall back: same optimal cost.
+    const CELLS: usize = 210 * 90;
+    let geometry = GridGeometry::new(210, 90, 0.05).unwrap();
+    let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 8192>::new());
+    for density in [0u64, 2, 5, 9] {
+        let mut g = Grid::<{ words_for_cells(CELLS) }>::new(geometry).unwrap();
+        let mut state = 0x9E37_79B9_7F4A_7C15u64 ^ (density << 7);
+        for y in 0..90 {
+            for x in 0..210 {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                if state % 100 < density {
+                    g.set_xy(x, y, true);
+                }
+            }
+        }
+        let pairs = [
+            ((0, 0), (209, 89)),
+            ((209, 0), (0, 89)),
+            ((100, 45), (3, 2)),
+            ((31, 88), (180, 1)),
+            ((64, 10), (96, 80)),
+        ];
+        for (s, t) in pairs {
+            let (s, t) = (Cell::new(s.0, s.1), Cell::new(t.0, t.1));
+            g.set(s, false);
+            g.set(t, false);
+            let r = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+            let expected = oracle_astar(&g, s, t);
+            assert_eq!(r.status == PlanStatus::Found, expected.is_some());
+            if let Some(cost) = expected {
+                assert_eq!(r.cost, cost, "density {density} {s:?} -> {t:?}");
+                assert_eq!(steps_and_cost(p.path_cells()).1, cost);
+                assert_collision_free(&g, p.path_cells());
+            }
+        }
+    }
+}
