@@ -17,54 +17,91 @@
 //! ## Memory layout
 //!
 //! The scratch memory is one nibble (4 bits) per cell, 8 cells per `u32` word, row-major like
-//! the grid. Each search starts by copying the map into it (occupied → 15, free → 0, 8 cells per
-//! word with a few shifts), so one nibble read answers both "free?" and "reached?":
+//! the grid:
 //!
 //! | code      | meaning                                                        |
 //! |-----------|----------------------------------------------------------------|
-//! | 0         | free, not reached yet                                          |
+//! | 0         | free, not reached / not closed yet                             |
 //! | 1 ..= 8   | reached, final; the code names the step *from* the parent      |
 //! | 9         | the start cell (no parent)                                     |
 //! | 10 ..= 14 | unused                                                         |
-//! | 15        | occupied                                                       |
+//! | 15        | occupied (BFS and the cell-by-cell A* only)                    |
+//!
+//! BFS (and the cell-by-cell A* fallback) first copy the map into it (occupied → 15, 8 cells
+//! per word with a few shifts), so one nibble read answers both "free?" and "reached?". The jump
+//! point search reads the map's own bits and only clears the nibbles.
 //!
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
 //! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
-//! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (4 096 bytes), plus about 2.2 KB of
-//! bucket heads on the stack during an A* search. Nothing else is allocated; the grid itself is
-//! only read. [`Planner::queue_peak`] tells how much of the queue a search used. Measured on the
-//! 300 × 300 benchmark grids and the bundled worlds: BFS needs at most 600 entries; A* peaks at
-//! 2 100 (pillars) to 14 800 (corridor) entries, mostly stale ones, and thanks to reclaiming
-//! (below) every one of them, 20 % random obstacles included, runs in 2 560.
+//! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (4 096 bytes), plus a few hundred bytes
+//! of bit sets on the stack during a jump point search (about 2.2 KB of bucket heads in the
+//! cell-by-cell fallback). Nothing else is allocated; the grid itself is only read.
+//! [`Planner::queue_peak`] tells how much of the queue a search used. Measured on the 300 × 300
+//! benchmark grids and the bundled worlds: BFS needs at most 600 entries; A* (jump points: open
+//! list plus records) 3 (open floor), 10 (corridor), 27 (office), 43 (pillars), 5 835 (a maze
+//! of 1-cell corridors, where `Planner300` therefore falls back to cell-by-cell A*).
 //!
-//! ## Why A* needs no g-table
+//! ## A*: jump point search without a g-table
 //!
-//! A textbook A* keeps the best known cost `g` of every cell so that it can decrease a key in the
-//! open list. Here the open list holds `(f, cell, step)` entries with *lazy deletion*: a cell may
-//! be pushed several times (once per neighbour that reaches it), and only its first pop counts.
-//! Because the octile heuristic is consistent for these integer costs (it is the exact cost on an
-//! empty grid, a metric), the first time a cell leaves the open list at the minimum `f` its `g`
-//! is optimal, so the pop writes the parent step into the cell's nibble and later entries of the
-//! same cell are skipped. Cells already closed are never pushed again. `g` itself is not stored:
-//! it is `f - h(cell)`.
+//! [`PlannerKind::AStar`] is *jump point search* (JPS) for the no-corner-cutting neighbour rule:
+//! A* over *jump points* only, each reached by a straight or 45° scan, with the same optimal
+//! octile cost as cell-by-cell A* (checked against the `pathfinding` crate by the property
+//! tests). Scans, from a jump point, in the directions its arrival step leaves open (all 8 from
+//! the start; after a diagonal step that diagonal and its two sides; after a side step that
+//! side, both perpendiculars and the two forward diagonals):
 //!
-//! The open list is a *two-level bucket queue* (see `BucketQueue` in the source). With a
-//! consistent heuristic a pushed `f` is never below the last popped `f` and never more than
-//! `2 · DIAGONAL_COST` above it, so 512 circular coarse buckets of 32 key values, plus 32 exact
-//! buckets for the current coarse one, order all keys without comparisons: a push links the
-//! entry at the head of a list (O(1)); a pop takes the head of the lowest exact bucket, or
+//! - a *side* scan stops with a jump point at the goal or at a cell with a *forced neighbour*:
+//!   a cell beside the scan line that is free while the cell behind it, beside the previous
+//!   cell of the scan, is occupied (the only way to reach it optimally is through this cell);
+//!   it stops without one at an obstacle or the map edge. Along a row this tests 32 cells per
+//!   step with a few word operations on the grid's bits (trailing / leading zeros); along a
+//!   column it reads 3 bits per row.
+//! - a *diagonal* scan moves only between two free side cells; a diagonal cell is a jump point
+//!   when it is the goal or when its row or column scan finds one. (Without corner cutting a
+//!   diagonal step has no forced neighbours.) The column scans of all the steps of one diagonal
+//!   run together, row by row, over a bit set of the columns still scanning, so an open floor
+//!   costs a few word operations per row instead of one read per cell.
+//!
+//! The open list is a binary heap of `(f, cell + step, parent record)` entries with *lazy
+//! deletion*: a jump point may be pushed once per scan that finds it, and only its first pop
+//! counts: the consistent octile heuristic makes that pop's cost the best over the jump point
+//! graph, so the pop writes the arrival step into the nibble and later entries are skipped.
+//! `g` is not stored: it is `f − h(cell)`. (Jump steps are longer than 2 cells, so the bucket
+//! queue of the cell-by-cell search, which relies on keys within `2 · DIAGONAL_COST` of the
+//! last pop, does not apply; the heap holds few entries.)
+//!
+//! Every closed jump point also takes a *record* from the back of the queue: its cell and step
+//! and the record of the jump point it was reached from. When the goal is closed, the records
+//! of its chain give the jump points of the path exactly, and the cells between them get the
+//! segment's step code, so the path is rebuilt cell by cell as for BFS. (Walking back along the
+//! step code to the next closed cell is *not* exact: a cell on the segment may be a jump point
+//! that another branch closed with a worse cost; the property tests found such cases.)
+//!
+//! *Fallback.* On cluttered maps nearly every free cell becomes a jump point and scanning costs
+//! more than it saves. When more than one cell in 64 (at least 1 024) has been expanded as a jump
+//! point *and* the open list holds more than one entry per 16 of them (a wide frontier: 269
+//! entries after 1 024 jump points on 20 % random obstacles, 2 in a maze), or when the queue
+//! runs out of entries for the heap and the records, the search restarts as cell-by-cell A*
+//! below; `expanded` then counts the jump points and the cells.
+//!
+//! ## Cell-by-cell A* (the fallback)
+//!
+//! The open list holds `(f, cell, step)` entries with lazy deletion: a cell may be pushed once
+//! per neighbour that reaches it, and only its first pop counts (with a consistent heuristic,
+//! its `g` is then optimal). It is a *two-level bucket queue* (see `BucketQueue` in the source):
+//! with a consistent heuristic a pushed `f` is never below the last popped `f` and never more
+//! than `2 · DIAGONAL_COST` above it, so 512 circular coarse buckets of 32 key values, plus 32
+//! exact buckets for the current coarse one, order all keys without comparisons: a push links
+//! the entry at the head of a list (O(1)); a pop takes the head of the lowest exact bucket, or
 //! spreads the next non-empty coarse bucket into the exact ones, dropping entries whose cell was
-//! closed meanwhile. Every entry moves at most once. (It replaced a binary heap and then a radix
-//! heap: on the 20 % random benchmark grid they took 12 ms and 1.5 ms, this takes 1.3 ms.) Ties on `f` pop the last pushed entry first: the children of the
-//! cell just expanded, i.e. the deeper entries, which on open floors walks straight to the goal
-//! instead of flooding the diamond of equal-`f` cells (294 cells expanded corner to corner on an
-//! empty 300 × 300 grid).
+//! closed meanwhile. Every entry moves at most once. Ties on `f` pop the last pushed entry
+//! first (the deeper entries).
 //!
 //! When the pool of entries is full, the queue first *reclaims* the entries of cells closed
 //! since they were pushed (one pass over all lists) and carries on; only when that frees less
 //! than 1/16 of the pool does the search end with [`PlanError::QueueFull`]. Entries are then
 //! dropped in a different order, so an equal-cost path may differ from the one a larger queue
-//! finds; the cost does not.
+//! finds; the cost does not. (The jump point heap reclaims the same way before it gives up.)
 //!
 //! BFS marks a cell (with its parent step) when it is first *discovered*: in a FIFO queue the
 //! first discovery is by a fewest-steps parent, so every cell enters the ring buffer at most once.
@@ -74,12 +111,13 @@
 //!
 //! ## Complexity
 //!
-//! BFS: `O(n)` time for `n` free cells, about 190 x86-64 instructions per cell. A*: at most 8
-//! pushes per expanded cell, each O(1), pops O(1) amortized (each entry moves once, plus a scan
-//! of a 512-bit map per 32 key values); about 650 instructions per expanded cell on room maps,
-//! mostly spent on the duplicate entries that a g-table would have avoided. Copying the map into
-//! the scratch costs `n / 8` word writes. Rebuilding the path walks the parent steps from the
-//! goal back to the start: `O(path cells)`, plus, for the any-angle planner, one line-of-sight
+//! BFS: `O(n)` time for `n` free cells, about 180 x86-64 instructions per cell. Jump point
+//! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
+//! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
+//! seed's room maps a whole plan takes 1.3–2.4 M instructions for 9–20 jump points. The
+//! cell-by-cell fallback: at most 8 pushes per expanded cell, each O(1), pops O(1) amortized;
+//! about 550 instructions per expanded cell. Rebuilding the path walks the records and the
+//! steps back from the goal: `O(path cells)`, plus, for the any-angle planner, one line-of-sight
 //! test per straight run and a bisection in the runs where a shortcut ends
 //! (`O(runs × log(run) × segment length)`).
 //!
@@ -151,8 +189,9 @@ pub const SCRATCH_WORDS_300: usize = scratch_words_for_cells(300 * 300);
 pub const SCRATCH_WORDS_400: usize = scratch_words_for_cells(400 * 400);
 
 /// The usual planner for the seed's 300 × 300 grid: 45 000 bytes of scratch, 3 072 queue
-/// entries (36 864 bytes; A* on every bundled world and on 20 % random obstacles needs 2 560
-/// thanks to reclaiming) and the 4 096-byte vertex buffer: about 86 KB in all.
+/// entries (36 864 bytes; jump point search uses at most 43 of them on the bundled worlds, and
+/// the cell-by-cell fallback finishes 20 % random obstacles in 2 560 thanks to reclaiming) and
+/// the 4 096-byte vertex buffer: about 86 KB in all.
 pub type Planner300 = Planner<SCRATCH_WORDS_300, 3072>;
 
 /// Which planner to run.
