@@ -1552,20 +1552,23 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 goal_y: gy,
             };
             // Directions to scan, by the step that reached this jump point: from the start all
-            // 8; after a diagonal step its two sides and itself; after a side step itself, both
-            // perpendiculars and the two forward diagonals (a superset of the forced ones).
+            // 8; after a diagonal step its two sides and itself; after a side step itself and,
+            // for each forced side cell, that side and the forward diagonal next to it.
             let mut dirs = [0u32; 8];
             let n = match code {
                 E | N | W | S => {
                     let (dx, dy) = STEPS[(code - 1) as usize];
-                    dirs[..5].copy_from_slice(&[
-                        code,
-                        step_code(dy, dx),
-                        step_code(-dy, -dx),
-                        step_code(dx + dy, dy + dx),
-                        step_code(dx - dy, dy - dx),
-                    ]);
-                    5
+                    dirs[0] = code;
+                    let mut n = 1;
+                    for (px, py) in [(dy, dx), (-dy, -dx)] {
+                        // Forced: the side cell is free, the one behind it occupied.
+                        if scan.free(x + px, y + py) && !scan.free(x + px - dx, y + py - dy) {
+                            dirs[n] = step_code(px, py);
+                            dirs[n + 1] = step_code(dx + px, dy + py);
+                            n += 2;
+                        }
+                    }
+                    n
                 }
                 NE | NW | SW | SE => {
                     let (dx, dy) = STEPS[(code - 1) as usize];
