@@ -672,14 +672,18 @@ impl JumpScan<'_> {
 
     fn along_row(&self, x: i32, y: i32, dx: i32) -> Option<(i32, i32, u32)> {
         let goal_in_row = self.goal_y == y;
+        // The cells behind each side cell (one column back) come from shifting the side rows'
+        // words, with the bit carried over from the previous word.
+        let mut up_carry = self.row_bits(y + 1, x) & 1;
+        let mut down_carry = self.row_bits(y - 1, x) & 1;
         if dx > 0 {
             let mut c0 = x + 1;
             loop {
                 let cur = self.row_bits(y, c0);
                 let up = self.row_bits(y + 1, c0);
-                let up_back = self.row_bits(y + 1, c0 - 1);
                 let down = self.row_bits(y - 1, c0);
-                let down_back = self.row_bits(y - 1, c0 - 1);
+                let up_back = (up << 1) | up_carry;
+                let down_back = (down << 1) | down_carry;
                 let mut hit = (!up & up_back) | (!down & down_back);
                 if goal_in_row && self.goal_x >= c0 && self.goal_x < c0 + 32 {
                     hit |= 1 << (self.goal_x - c0);
@@ -693,6 +697,8 @@ impl JumpScan<'_> {
                     }
                     return None;
                 }
+                up_carry = up >> 31;
+                down_carry = down >> 31;
                 c0 += 32;
             }
         } else {
@@ -701,9 +707,9 @@ impl JumpScan<'_> {
             loop {
                 let cur = self.row_bits(y, c0);
                 let up = self.row_bits(y + 1, c0);
-                let up_back = self.row_bits(y + 1, c0 + 1);
                 let down = self.row_bits(y - 1, c0);
-                let down_back = self.row_bits(y - 1, c0 + 1);
+                let up_back = (up >> 1) | (up_carry << 31);
+                let down_back = (down >> 1) | (down_carry << 31);
                 let mut hit = (!up & up_back) | (!down & down_back);
                 if goal_in_row && self.goal_x >= c0 && self.goal_x < c0 + 32 {
                     hit |= 1 << (self.goal_x - c0);
@@ -717,6 +723,8 @@ impl JumpScan<'_> {
                     }
                     return None;
                 }
+                up_carry = up & 1;
+                down_carry = down & 1;
                 c0 -= 32;
             }
         }
