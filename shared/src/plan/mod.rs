@@ -78,7 +78,7 @@
 //! that another branch closed with a worse cost; the property tests found such cases.)
 //!
 //! *Fallback.* On cluttered maps nearly every free cell becomes a jump point and scanning costs
-//! more than it saves. When more than one cell in 64 (at least 1 024) has been expanded as a jump
+//! more than it saves. When more than one cell in 256 (at least 256) has been expanded as a jump
 //! point *and* the open list holds more than one entry per 16 of them (a wide frontier: 269
 //! entries after 1 024 jump points on 20 % random obstacles, 2 in a maze), or when the queue
 //! runs out of entries for the heap and the records, the search restarts as cell-by-cell A*
@@ -935,9 +935,9 @@ impl JumpScan<'_> {
 }
 
 /// Jump point search gives up (and A* runs cell by cell) when more than one cell in this many
-/// (at least 1024 cells) became a jump point: on cluttered maps such as 20 % random obstacles
+/// (at least 256 cells) became a jump point: on cluttered maps such as 20 % random obstacles
 /// nearly every free cell is one, and scanning costs more than the cell-by-cell search ...
-const JPS_MAX_EXPANSIONS_PER_CELLS: usize = 64;
+const JPS_MAX_EXPANSIONS_PER_CELLS: usize = 256;
 /// ... but only while the open list holds more than one entry per this many jump points
 /// expanded (a wide frontier: 269 open entries after 1 024 jump points on 20 % random
 /// obstacles, 2 in a maze of 1-cell corridors, where jump point search stays 3x ahead).
@@ -1509,7 +1509,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             }
             None => return Err(0),
         };
-        let max_expanded = (geometry.cell_count() / JPS_MAX_EXPANSIONS_PER_CELLS).max(1024) as u32;
+        let max_expanded = (geometry.cell_count() / JPS_MAX_EXPANSIONS_PER_CELLS).max(256) as u32;
         // Closed jump points: record r lives at `pool[capacity - 1 - r]`.
         let mut records = 0usize;
         let mut peak = len;

@@ -729,7 +729,7 @@ fn jump_point_search_needs_few_entries_on_room_maps() {
 #[test]
 fn cluttered_maps_fall_back_to_cell_by_cell_astar_with_the_same_cost() {
     // 20 % random obstacles on 300 x 300 cells: nearly every free cell is a jump point, so the
-    // search gives up after 1 406 of them and runs cell-by-cell A* (with reclaiming when a
+    // search gives up after 352 of them and runs cell-by-cell A* (with reclaiming when a
     // small queue fills). Same optimal cost either way.
     let mut g = crate::grid::Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
     let mut state = 0x9E37_79B9_7F4A_7C15u64;
@@ -764,7 +764,8 @@ fn cluttered_maps_fall_back_to_cell_by_cell_astar_with_the_same_cost() {
         assert_eq!(r.status == PlanStatus::Found, expected.is_some());
         if let Some(cost) = expected {
             assert_eq!(r.cost, cost);
-            assert!(r.expanded > 1406, "expanded {}", r.expanded);
+            // 352 jump points, then about 29 000 cells.
+            assert!(r.expanded > 20_000, "expanded {}", r.expanded);
         }
     }
 }
