@@ -114,7 +114,7 @@
 //! BFS: `O(n)` time for `n` free cells, about 180 x86-64 instructions per cell. Jump point
 //! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
-//! seed's room maps a whole plan takes 1.3–2.4 M instructions for 9–20 jump points. The
+//! seed's room maps a whole plan takes 0.8–2.0 M instructions for 9–22 jump points. The
 //! cell-by-cell fallback: at most 8 pushes per expanded cell, each O(1), pops O(1) amortized;
 //! about 550 instructions per expanded cell. Rebuilding the path walks the records and the
 //! steps back from the goal: `O(path cells)`, plus, for the any-angle planner, one line-of-sight
