@@ -295,7 +295,8 @@ impl core::fmt::Display for PlanError {
 pub struct PlanReport {
     /// How it ended.
     pub status: PlanStatus,
-    /// Cells taken off the queue and expanded.
+    /// Nodes taken off the queue and expanded: cells for BFS; jump points for A* and
+    /// any-angle (plus the cells of the cell-by-cell search when it fell back to it).
     pub expanded: u32,
     /// BFS: steps; A* and any-angle: the A* cost in [`STRAIGHT_COST`] units. 0 unless found.
     pub cost: u32,
