@@ -11,7 +11,7 @@ mod common;
 use std::time::{Duration, Instant};
 
 use twil_core::geom::{Cell, PointM};
-use twil_core::grid::{Grid300, GridGeometry};
+use twil_core::grid::Grid300;
 use twil_core::link::{
     DeviceFrame, ErrorCode, MapParams, Reply, Request, MAX_FRAME_BYTES, OBSTACLE_CHUNK_VERTICES,
 };
@@ -328,27 +328,10 @@ fn uploads_beyond_capacity_get_clear_errors_and_keep_what_was_stored() {
 // ---- mcu_bench: instructions per plan on 300 x 300 grids (`cargo xtask mcu-bench`) ----------
 // The grids are those of shared/benches/planners.rs (same generators and seeds).
 
-/// Deterministic xorshift64 generator.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-}
+#[path = "../shared/benches/grids/mod.rs"]
+mod grids;
 
-const SIDE: u16 = 300;
-
-fn empty() -> Grid300 {
-    Grid300::new(GridGeometry::new(SIDE as u32, SIDE as u32, 0.05).expect("geometry"))
-        .expect("grid")
-}
-
-fn open_case() -> (Grid300, Cell, Cell) {
-    (empty(), Cell::new(3, 5), Cell::new(296, 291))
-}
+use grids::{maze_case, open_case};
 
 fn random_case() -> (Grid300, Cell, Cell) {
     // The host planner (400 x 400 cells, one queue entry per cell) needs a large stack.
@@ -361,69 +344,13 @@ fn random_case() -> (Grid300, Cell, Cell) {
 }
 
 fn random_case_on_a_large_stack() -> (Grid300, Cell, Cell) {
-    let (s, t) = (Cell::new(2, 2), Cell::new(297, 297));
     let mut planner = Box::new(host_plan::HostPlanner::new());
-    for seed in 1u64.. {
-        let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed);
-        let mut g = empty();
-        for y in 0..SIDE as i32 {
-            for x in 0..SIDE as i32 {
-                if rng.next() % 100 < 20 {
-                    g.set_xy(x, y, true);
-                }
-            }
-        }
-        g.set(s, false);
-        g.set(t, false);
+    grids::random_case(|g, s, t| {
         let r = planner
-            .plan_cells(PlannerKind::Bfs, &g, s, t)
+            .plan_cells(PlannerKind::Bfs, g, s, t)
             .expect("capacity");
-        if r.status == PlanStatus::Found {
-            return (g, s, t);
-        }
-    }
-    unreachable!()
-}
-
-fn maze_case() -> (Grid300, Cell, Cell) {
-    let mut g = empty();
-    for y in 0..SIDE as i32 {
-        g.fill_row(y, 0, SIDE as i32 - 1);
-    }
-    let rooms = (SIDE as i32 - 1) / 2;
-    let mut visited = vec![false; (rooms * rooms) as usize];
-    let mut stack = vec![(0i32, 0i32)];
-    visited[0] = true;
-    g.set_xy(1, 1, false);
-    let mut rng = Rng(0xDEAD_BEEF_CAFE_F00D);
-    while let Some(&(rx, ry)) = stack.last() {
-        let mut options = [(0i32, 0i32); 4];
-        let mut n = 0;
-        for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
-            let (nx, ny) = (rx + dx, ry + dy);
-            if nx >= 0
-                && ny >= 0
-                && nx < rooms
-                && ny < rooms
-                && !visited[(ny * rooms + nx) as usize]
-            {
-                options[n] = (dx, dy);
-                n += 1;
-            }
-        }
-        if n == 0 {
-            stack.pop();
-            continue;
-        }
-        let (dx, dy) = options[(rng.next() % n as u64) as usize];
-        let (nx, ny) = (rx + dx, ry + dy);
-        visited[(ny * rooms + nx) as usize] = true;
-        g.set_xy(2 * rx + 1 + dx, 2 * ry + 1 + dy, false);
-        g.set_xy(2 * nx + 1, 2 * ny + 1, false);
-        stack.push((nx, ny));
-    }
-    let far = (2 * (rooms - 1) + 1) as u16;
-    (g, Cell::new(1, 1), Cell::new(far, far))
+        r.status == PlanStatus::Found
+    })
 }
 
 /// Measure every planner on the three 300 x 300 grids, print a Markdown table, then check the

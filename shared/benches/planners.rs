@@ -11,7 +11,7 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use twil_core::geom::Cell;
-use twil_core::grid::{Grid300, GridGeometry};
+use twil_core::grid::Grid300;
 use twil_core::plan::{
     PlanError, PlanReport, PlanStatus, Planner, PlannerKind, DIAGONAL_COST, SCRATCH_WORDS_300,
     STRAIGHT_COST,
@@ -19,97 +19,20 @@ use twil_core::plan::{
 use twil_core::raster::mark_polygon;
 use twil_core::world::{parse_da, parse_par, Obstacles};
 
-const SIDE: u16 = 300;
+mod grids;
+
+use grids::{empty, maze_case, open_case};
 const QUEUE: usize = 32 * 1024;
 type Bench300 = Planner<SCRATCH_WORDS_300, QUEUE>;
 
-/// Deterministic xorshift64 generator (the bench must not depend on a `rand` crate).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-}
-
-fn empty() -> Grid300 {
-    Grid300::new(GridGeometry::new(SIDE as u32, SIDE as u32, 0.05).expect("geometry"))
-        .expect("grid")
-}
-
-fn open_case() -> (Grid300, Cell, Cell) {
-    (empty(), Cell::new(3, 5), Cell::new(296, 291))
-}
-
-/// 20 % of the cells occupied at random (seeded); the seed is advanced until start and goal are
-/// connected, so the case always has a path.
+/// 20 % random obstacles, connected according to our BFS.
 fn random_case(planner: &mut Bench300) -> (Grid300, Cell, Cell) {
-    let (s, t) = (Cell::new(2, 2), Cell::new(297, 297));
-    for seed in 1u64.. {
-        let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed);
-        let mut g = empty();
-        for y in 0..SIDE as i32 {
-            for x in 0..SIDE as i32 {
-                if rng.next() % 100 < 20 {
-                    g.set_xy(x, y, true);
-                }
-            }
-        }
-        g.set(s, false);
-        g.set(t, false);
+    grids::random_case(|g, s, t| {
         let r = planner
-            .plan_cells(PlannerKind::Bfs, &g, s, t)
+            .plan_cells(PlannerKind::Bfs, g, s, t)
             .expect("capacity");
-        if r.status == PlanStatus::Found {
-            return (g, s, t);
-        }
-    }
-    unreachable!()
-}
-
-/// A perfect maze (recursive backtracker, seeded) with 1-cell corridors: rooms on odd
-/// coordinates, walls elsewhere. Start and goal are opposite corners.
-fn maze_case() -> (Grid300, Cell, Cell) {
-    let mut g = empty();
-    for y in 0..SIDE as i32 {
-        g.fill_row(y, 0, SIDE as i32 - 1);
-    }
-    let rooms = (SIDE as i32 - 1) / 2; // 149 x 149 rooms
-    let mut visited = vec![false; (rooms * rooms) as usize];
-    let mut stack = vec![(0i32, 0i32)];
-    visited[0] = true;
-    g.set_xy(1, 1, false);
-    let mut rng = Rng(0xDEAD_BEEF_CAFE_F00D);
-    while let Some(&(rx, ry)) = stack.last() {
-        let mut options = [(0i32, 0i32); 4];
-        let mut n = 0;
-        for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
-            let (nx, ny) = (rx + dx, ry + dy);
-            if nx >= 0
-                && ny >= 0
-                && nx < rooms
-                && ny < rooms
-                && !visited[(ny * rooms + nx) as usize]
-            {
-                options[n] = (dx, dy);
-                n += 1;
-            }
-        }
-        if n == 0 {
-            stack.pop();
-            continue;
-        }
-        let (dx, dy) = options[(rng.next() % n as u64) as usize];
-        let (nx, ny) = (rx + dx, ry + dy);
-        visited[(ny * rooms + nx) as usize] = true;
-        g.set_xy(2 * rx + 1 + dx, 2 * ry + 1 + dy, false);
-        g.set_xy(2 * nx + 1, 2 * ny + 1, false);
-        stack.push((nx, ny));
-    }
-    let far = (2 * (rooms - 1) + 1) as u16;
-    (g, Cell::new(1, 1), Cell::new(far, far))
+        r.status == PlanStatus::Found
+    })
 }
 
 /// A bundled seed world (`worlds/NAME.da` + `.par`), obstacles grown by the robot radius as
