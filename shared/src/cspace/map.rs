@@ -433,31 +433,7 @@ impl ConfigMap {
     /// the input file name of the header and the map.
     pub fn parse_map(text: &str, wraps: [bool; 2]) -> Result<(Name, ConfigMap), FileError> {
         let mut l = Lexer::new(text);
-        let Some((name, _)) = l.next_line_text() else {
-            return Err(l.error("input file name", Place::Top, ParseErrorKind::Missing));
-        };
-        let min = [
-            l.f32("minimum of joint 1", Place::Top)?,
-            l.f32("minimum of joint 2", Place::Top)?,
-        ];
-        let mut inc = [0.0; 2];
-        for (k, field) in ["increment of joint 1", "increment of joint 2"]
-            .into_iter()
-            .enumerate()
-        {
-            let v = l.f32(field, Place::Top)?;
-            if v <= 0.0 {
-                return Err(l.error(
-                    field,
-                    Place::Top,
-                    ParseErrorKind::OutOfRange {
-                        value: clip_fmt(format_args!("{v}")),
-                        expected: "a number above 0",
-                    },
-                ));
-            }
-            inc[k] = v;
-        }
+        let (name, min, inc) = l.grid_header()?;
         let nc = l.count(
             "values of joint 1",
             Place::Top,

@@ -294,6 +294,37 @@ impl<'a> Lexer<'a> {
     }
 
     /// Fail if any token is left.
+    /// The header shared by `.MAP` and `.TRA` files: the input file name (line 1), the minima
+    /// of both joints and their increments (each above 0).
+    pub(crate) fn grid_header(&mut self) -> Result<(&'a str, [f32; 2], [f32; 2]), FileError> {
+        let Some((name, _)) = self.next_line_text() else {
+            return Err(self.error("input file name", Place::Top, ParseErrorKind::Missing));
+        };
+        let min = [
+            self.f32("minimum of joint 1", Place::Top)?,
+            self.f32("minimum of joint 2", Place::Top)?,
+        ];
+        let mut increments = [0.0; 2];
+        for (k, field) in ["increment of joint 1", "increment of joint 2"]
+            .into_iter()
+            .enumerate()
+        {
+            let v = self.f32(field, Place::Top)?;
+            if v <= 0.0 {
+                return Err(self.error(
+                    field,
+                    Place::Top,
+                    ParseErrorKind::OutOfRange {
+                        value: clip_fmt(format_args!("{v}")),
+                        expected: "a number above 0",
+                    },
+                ));
+            }
+            increments[k] = v;
+        }
+        Ok((name, min, increments))
+    }
+
     pub(crate) fn finish(&mut self, field: &'static str) -> Result<(), FileError> {
         match self.next_token() {
             None => Ok(()),

@@ -25,7 +25,7 @@ use heapless::Vec;
 
 use super::map::{name_of, Name};
 use super::search::MAX_PATH_POINTS;
-use super::text::{clip_fmt, FileError, Lexer, Place};
+use super::text::{FileError, Lexer, Place};
 use crate::world::ParseErrorKind;
 
 /// A path in map indices with the header that gives them meaning.
@@ -81,31 +81,7 @@ impl Trajectory {
     /// Read a `.TRA` text. At least one point is required.
     pub fn parse(text: &str) -> Result<Self, FileError> {
         let mut l = Lexer::new(text);
-        let Some((name, _)) = l.next_line_text() else {
-            return Err(l.error("input file name", Place::Top, ParseErrorKind::Missing));
-        };
-        let min = [
-            l.f32("minimum of joint 1", Place::Top)?,
-            l.f32("minimum of joint 2", Place::Top)?,
-        ];
-        let mut increments = [0.0; 2];
-        for (k, field) in ["increment of joint 1", "increment of joint 2"]
-            .into_iter()
-            .enumerate()
-        {
-            let v = l.f32(field, Place::Top)?;
-            if v <= 0.0 {
-                return Err(l.error(
-                    field,
-                    Place::Top,
-                    ParseErrorKind::OutOfRange {
-                        value: clip_fmt(format_args!("{v}")),
-                        expected: "a number above 0",
-                    },
-                ));
-            }
-            increments[k] = v;
-        }
+        let (name, min, increments) = l.grid_header()?;
         let mut points = Vec::new();
         loop {
             let place = Place::PathPoint(points.len() as u32 + 1);
