@@ -339,6 +339,31 @@ const CODE_START: u32 = 9;
 /// Nibble code of an occupied cell (copied from the map before a search).
 const BLOCKED: u32 = 0xF;
 
+/// For each 12-bit window of three nibbles (a row of a 3 × 3 neighbourhood, BFS): bit `k`
+/// (k = 0, 1, 2) set when nibble `k` is 0 (free, not reached), bit `3 + k` when it is not
+/// [`BLOCKED`]. 4 KB, built at compile time.
+static WINDOW_MASKS: [u8; 4096] = {
+    let mut table = [0u8; 4096];
+    let mut v = 0;
+    while v < 4096 {
+        let mut m = 0u8;
+        let mut k = 0;
+        while k < 3 {
+            let code = (v >> (4 * k)) & 0xF;
+            if code == 0 {
+                m |= 1 << k;
+            }
+            if code != BLOCKED as usize {
+                m |= 8 << k;
+            }
+            k += 1;
+        }
+        table[v] = m;
+        v += 1;
+    }
+    table
+};
+
 /// Spread the 8 bits of `byte` to the low bit of 8 nibbles (bit k -> bit 4k).
 #[inline(always)]
 fn spread_bits_to_nibbles(byte: u32) -> u32 {
@@ -1221,6 +1246,15 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     }
 
     /// Breadth-first search from `start` until `goal` is discovered.
+    ///
+    /// Hot loop: a popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
+    /// nibbles of a row, from one pair of scratch words), so the side cells read for the side
+    /// moves also decide the diagonal moves. A few word operations turn the windows into a mask
+    /// of the targets (nibble 0, and for a diagonal both side cells not [`BLOCKED`]); each set
+    /// bit names a neighbour through small tables of index offsets, x steps and step codes.
+    /// Cells on the map border take a slower path that reads off-map cells as `BLOCKED`. Queue
+    /// entries carry the index and x, so nothing divides; a new cell's nibble is 0, so marking
+    /// it is a single OR.
     fn bfs<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
@@ -1230,7 +1264,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let geometry = grid.geometry();
         let width = geometry.width() as usize;
         let height = geometry.height() as usize;
-        let scratch = &mut self.scratch[..];
+        let used_words = scratch_words_for_cells(geometry.cell_count());
+        let scratch = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
         let queue = &mut self.queue[..];
         let capacity = queue.len();
         let full = PlanError::QueueFull {
@@ -1240,109 +1275,122 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let mut peak = 1usize;
         let mut expanded = 0u32;
 
+        // Target bit `p` of the mask: row `p / 3` (0 below, 1 same row, 2 above), column
+        // `p % 3` (x - 1, x, x + 1). Tables of 16 entries so `p & 15` needs no bounds check.
+        let mut offset = [0usize; 16];
+        let mut dx = [0usize; 16];
+        let mut code = [0u32; 16];
+        for (&(sx, sy), c) in STEPS.iter().zip(1u32..) {
+            let p = ((sy + 1) * 3 + (sx + 1)) as usize;
+            if let (Some(o), Some(d), Some(k)) = (offset.get_mut(p), dx.get_mut(p), code.get_mut(p))
+            {
+                *o = (sy as isize * width as isize + sx as isize) as usize;
+                *d = sx as isize as usize;
+                *k = c;
+            }
+        }
+        // Interior cells: x in 1..width-1 and index in width..cells-width.
+        let inner_x = width.saturating_sub(2);
+        let inner_span = geometry.cell_count().saturating_sub(2 * width);
+
         set_nibble(scratch, start, CODE_START);
-        // Entries carry the index (`node`) and the packed coordinates (`f` = y << 16 | x) so
-        // the loop never divides.
         match queue.get_mut(tail) {
             Some(slot) => {
                 slot.node = start as u32;
-                slot.f = (((start / width) as u32) << 16) | (start % width) as u32;
+                slot.f = (start % width) as u32;
             }
             None => return Err(full),
         }
         tail = if tail + 1 == capacity { 0 } else { tail + 1 };
         count += 1;
 
+        // Nibbles `j`, `j + 1`, `j + 2` in bits 0..12 (beyond the scratch: BLOCKED).
+        #[inline(always)]
+        fn window(scratch: &[u32], j: usize) -> u32 {
+            let w = j >> 3;
+            match scratch.get(w..w.wrapping_add(2)) {
+                Some(&[lo, hi]) => {
+                    let pair = (u64::from(hi) << 32) | u64::from(lo);
+                    (pair >> ((j & 7) * 4)) as u32 & 0xFFF
+                }
+                // The window's second word is past the scratch: read nibble by nibble.
+                _ => nibble(scratch, j) | nibble(scratch, j + 1) << 4 | nibble(scratch, j + 2) << 8,
+            }
+        }
+        // Nibble of (x + sx, y + sy), BLOCKED off the map (border path).
+        let slow = |scratch: &[u32], index: usize, x: usize, sx: isize, sy: isize| -> u32 {
+            let nx = x as isize + sx;
+            let ny = (index / width) as isize + sy;
+            if nx < 0 || ny < 0 || nx >= width as isize || ny >= height as isize {
+                BLOCKED
+            } else {
+                nibble(scratch, (ny as usize) * width + nx as usize)
+            }
+        };
+
         while count > 0 {
-            peak = peak.max(count);
-            let (index, x, y) = match queue.get(head) {
-                Some(e) => (
-                    e.node as usize,
-                    (e.f & 0xFFFF) as usize,
-                    (e.f >> 16) as usize,
-                ),
+            let (index, x) = match queue.get(head) {
+                Some(e) => (e.node as usize, e.f as usize),
                 None => break,
             };
             head = if head + 1 == capacity { 0 } else { head + 1 };
             count -= 1;
             expanded += 1;
 
-            // Side neighbours' nibbles (off the map counts as BLOCKED).
-            let c_e = if x + 1 < width {
-                nibble(scratch, index + 1)
-            } else {
-                BLOCKED
-            };
-            let c_w = if x > 0 {
-                nibble(scratch, index - 1)
-            } else {
-                BLOCKED
-            };
-            let c_n = if y + 1 < height {
-                nibble(scratch, index + width)
-            } else {
-                BLOCKED
-            };
-            let c_s = if y > 0 {
-                nibble(scratch, index - width)
-            } else {
-                BLOCKED
-            };
-            let (free_e, free_w) = (c_e != BLOCKED, c_w != BLOCKED);
-            let (free_n, free_s) = (c_n != BLOCKED, c_s != BLOCKED);
+            let (above, cur, below) =
+                if x.wrapping_sub(1) < inner_x && index.wrapping_sub(width) < inner_span {
+                    (
+                        window(scratch, index + width - 1),
+                        window(scratch, index - 1),
+                        window(scratch, index - width - 1),
+                    )
+                } else {
+                    let row = |sy: isize| {
+                        slow(scratch, index, x, -1, sy)
+                            | slow(scratch, index, x, 0, sy) << 4
+                            | slow(scratch, index, x, 1, sy) << 8
+                    };
+                    (row(1), row(0), row(-1))
+                };
+            // Per row: bit `col` of the targets when that cell is 0 (free, not reached); a
+            // diagonal also needs the side cell of its row (the middle one) and the side cell
+            // of its column in the current row open.
+            let m_cur = u32::from(WINDOW_MASKS[(cur & 0xFFF) as usize]);
+            let open_cur = (m_cur >> 3) & 5;
+            let row_targets = |m: u32| m & (2 | (open_cur & ((m >> 4) & 1).wrapping_neg()));
+            let mut targets = row_targets(u32::from(WINDOW_MASKS[(below & 0xFFF) as usize]))
+                | (m_cur & 5) << 3
+                | row_targets(u32::from(WINDOW_MASKS[(above & 0xFFF) as usize])) << 6;
 
-            macro_rules! visit {
-                ($n:expr, $nx:expr, $ny:expr, $code:expr) => {{
-                    // Reached for the first time: mark with the step, then queue it.
-                    let n = $n;
-                    set_nibble(scratch, n, $code);
-                    if n == goal {
-                        self.queue_peak = peak.max(count) as u32;
-                        return Ok(Search {
-                            found: true,
-                            expanded,
-                            cost: 0,
-                        });
-                    }
-                    if count == capacity {
-                        self.queue_peak = peak.max(count) as u32;
-                        return Err(full);
-                    }
-                    if let Some(slot) = queue.get_mut(tail) {
-                        slot.node = n as u32;
-                        slot.f = (($ny as u32) << 16) | $nx as u32;
-                    }
-                    tail = if tail + 1 == capacity { 0 } else { tail + 1 };
-                    count += 1;
-                }};
-            }
-
-            if c_e == 0 {
-                visit!(index + 1, x + 1, y, E);
-            }
-            if c_n == 0 {
-                visit!(index + width, x, y + 1, N);
-            }
-            if c_w == 0 {
-                visit!(index - 1, x - 1, y, W);
-            }
-            if c_s == 0 {
-                visit!(index - width, x, y - 1, S);
-            }
-            if free_n && free_e && nibble(scratch, index + width + 1) == 0 {
-                visit!(index + width + 1, x + 1, y + 1, NE);
-            }
-            if free_n && free_w && nibble(scratch, index + width - 1) == 0 {
-                visit!(index + width - 1, x - 1, y + 1, NW);
-            }
-            if free_s && free_w && nibble(scratch, index - width - 1) == 0 {
-                visit!(index - width - 1, x - 1, y - 1, SW);
-            }
-            if free_s && free_e && nibble(scratch, index - width + 1) == 0 {
-                visit!(index - width + 1, x + 1, y - 1, SE);
+            while targets != 0 {
+                let p = (targets.trailing_zeros() & 15) as usize;
+                targets &= targets - 1;
+                let n = index.wrapping_add(offset[p]);
+                if let Some(w) = scratch.get_mut(n >> 3) {
+                    *w |= code[p] << ((n & 7) * 4);
+                }
+                if n == goal {
+                    self.queue_peak = peak as u32;
+                    return Ok(Search {
+                        found: true,
+                        expanded,
+                        cost: 0,
+                    });
+                }
+                if count == capacity {
+                    self.queue_peak = peak as u32;
+                    return Err(full);
+                }
+                if let Some(slot) = queue.get_mut(tail) {
+                    slot.node = n as u32;
+                    slot.f = x.wrapping_add(dx[p]) as u32;
+                }
+                tail = if tail + 1 == capacity { 0 } else { tail + 1 };
+                count += 1;
+                peak = peak.max(count);
             }
         }
-        self.queue_peak = peak.max(count) as u32;
+        self.queue_peak = peak as u32;
         Ok(Search {
             found: false,
             expanded,
