@@ -1275,20 +1275,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let mut peak = 1usize;
         let mut expanded = 0u32;
 
-        // Target bit `p` of the mask: row `p / 3` (0 below, 1 same row, 2 above), column
-        // `p % 3` (x - 1, x, x + 1). Tables of 16 entries so `p & 15` needs no bounds check.
-        let mut offset = [0usize; 16];
-        let mut dx = [0usize; 16];
-        let mut code = [0u32; 16];
-        for (&(sx, sy), c) in STEPS.iter().zip(1u32..) {
-            let p = ((sy + 1) * 3 + (sx + 1)) as usize;
-            if let (Some(o), Some(d), Some(k)) = (offset.get_mut(p), dx.get_mut(p), code.get_mut(p))
-            {
-                *o = (sy as isize * width as isize + sx as isize) as usize;
-                *d = sx as isize as usize;
-                *k = c;
-            }
-        }
         // Interior cells: x in 1..width-1 and index in width..cells-width.
         let inner_x = width.saturating_sub(2);
         let inner_span = geometry.cell_count().saturating_sub(2 * width);
@@ -1310,8 +1296,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             let w = j >> 3;
             match scratch.get(w..w.wrapping_add(2)) {
                 Some(&[lo, hi]) => {
-                    let pair = (u64::from(hi) << 32) | u64::from(lo);
-                    (pair >> ((j & 7) * 4)) as u32 & 0xFFF
+                    // Two 32-bit reads, not one 64-bit read: a wide load right after the
+                    // 32-bit store that marked a neighbour would miss store forwarding.
+                    let shift = ((j & 7) * 4) as u32;
+                    ((lo >> shift) | ((hi << 1) << (31 - shift))) & 0xFFF
                 }
                 // The window's second word is past the scratch: read nibble by nibble.
                 _ => nibble(scratch, j) | nibble(scratch, j + 1) << 4 | nibble(scratch, j + 2) << 8,
@@ -1358,37 +1346,53 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             let m_cur = u32::from(WINDOW_MASKS[(cur & 0xFFF) as usize]);
             let open_cur = (m_cur >> 3) & 5;
             let row_targets = |m: u32| m & (2 | (open_cur & ((m >> 4) & 1).wrapping_neg()));
-            let mut targets = row_targets(u32::from(WINDOW_MASKS[(below & 0xFFF) as usize]))
+            let targets = row_targets(u32::from(WINDOW_MASKS[(below & 0xFFF) as usize]))
                 | (m_cur & 5) << 3
                 | row_targets(u32::from(WINDOW_MASKS[(above & 0xFFF) as usize])) << 6;
-
-            while targets != 0 {
-                let p = (targets.trailing_zeros() & 15) as usize;
-                targets &= targets - 1;
-                let n = index.wrapping_add(offset[p]);
-                if let Some(w) = scratch.get_mut(n >> 3) {
-                    *w |= code[p] << ((n & 7) * 4);
-                }
-                if n == goal {
-                    self.queue_peak = peak as u32;
-                    return Ok(Search {
-                        found: true,
-                        expanded,
-                        cost: 0,
-                    });
-                }
-                if count == capacity {
-                    self.queue_peak = peak as u32;
-                    return Err(full);
-                }
-                if let Some(slot) = queue.get_mut(tail) {
-                    slot.node = n as u32;
-                    slot.f = x.wrapping_add(dx[p]) as u32;
-                }
-                tail = if tail + 1 == capacity { 0 } else { tail + 1 };
-                count += 1;
-                peak = peak.max(count);
+            if targets == 0 {
+                continue;
             }
+
+            macro_rules! visit {
+                ($bit:expr, $n:expr, $nx:expr, $code:expr) => {{
+                    if targets & (1 << $bit) != 0 {
+                        // Reached for the first time (nibble 0): mark with the step, queue it.
+                        let n = $n;
+                        if let Some(w) = scratch.get_mut(n >> 3) {
+                            *w |= $code << ((n & 7) * 4);
+                        }
+                        if n == goal {
+                            self.queue_peak = peak as u32;
+                            return Ok(Search {
+                                found: true,
+                                expanded,
+                                cost: 0,
+                            });
+                        }
+                        if count == capacity {
+                            self.queue_peak = peak as u32;
+                            return Err(full);
+                        }
+                        if let Some(slot) = queue.get_mut(tail) {
+                            slot.node = n as u32;
+                            slot.f = $nx as u32;
+                        }
+                        tail = if tail + 1 == capacity { 0 } else { tail + 1 };
+                        count += 1;
+                    }
+                }};
+            }
+            // Bit `row * 3 + col` (rows below, same, above; columns x - 1, x, x + 1), in the
+            // order E, N, W, S, NE, NW, SW, SE. Target cells are on the map, so no wrapping.
+            visit!(5, index + 1, x + 1, E);
+            visit!(7, index + width, x, N);
+            visit!(3, index - 1, x - 1, W);
+            visit!(1, index - width, x, S);
+            visit!(8, index + width + 1, x + 1, NE);
+            visit!(6, index + width - 1, x - 1, NW);
+            visit!(0, index - width - 1, x - 1, SW);
+            visit!(2, index - width + 1, x + 1, SE);
+            peak = peak.max(count);
         }
         self.queue_peak = peak as u32;
         Ok(Search {
