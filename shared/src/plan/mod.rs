@@ -1271,24 +1271,26 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let full = PlanError::QueueFull {
             capacity: capacity as u32,
         };
-        let (mut head, mut tail, mut count) = (0usize, 0usize, 0usize);
+        // Entries ever pushed / popped: the ring slot is the count modulo the capacity (a
+        // constant), the fill is their difference, and `popped` is the number expanded. Two
+        // counters instead of head, tail, fill and expanded keep the loop in registers.
+        let slot_of = |n: usize| n.checked_rem(capacity).unwrap_or(0);
+        let (mut pushed, mut popped) = (0usize, 0usize);
         let mut peak = 1usize;
-        let mut expanded = 0u32;
 
         // Interior cells: x in 1..width-1 and index in width..cells-width.
         let inner_x = width.saturating_sub(2);
         let inner_span = geometry.cell_count().saturating_sub(2 * width);
 
         set_nibble(scratch, start, CODE_START);
-        match queue.get_mut(tail) {
+        match queue.get_mut(0) {
             Some(slot) => {
                 slot.node = start as u32;
                 slot.f = (start % width) as u32;
             }
             None => return Err(full),
         }
-        tail = if tail + 1 == capacity { 0 } else { tail + 1 };
-        count += 1;
+        pushed += 1;
 
         // Nibbles `j`, `j + 1`, `j + 2` in bits 0..12 (beyond the scratch: BLOCKED).
         #[inline(always)]
@@ -1316,14 +1318,12 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             }
         };
 
-        while count > 0 {
-            let (index, x) = match queue.get(head) {
+        while popped != pushed {
+            let (index, x) = match queue.get(slot_of(popped)) {
                 Some(e) => (e.node as usize, e.f as usize),
                 None => break,
             };
-            head = if head + 1 == capacity { 0 } else { head + 1 };
-            count -= 1;
-            expanded += 1;
+            popped += 1;
 
             let (above, cur, below) =
                 if x.wrapping_sub(1) < inner_x && index.wrapping_sub(width) < inner_span {
@@ -1362,23 +1362,22 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                             *w |= $code << ((n & 7) * 4);
                         }
                         if n == goal {
-                            self.queue_peak = peak as u32;
+                            self.queue_peak = peak.max(pushed - popped) as u32;
                             return Ok(Search {
                                 found: true,
-                                expanded,
+                                expanded: popped as u32,
                                 cost: 0,
                             });
                         }
-                        if count == capacity {
-                            self.queue_peak = peak as u32;
+                        if pushed - popped == capacity {
+                            self.queue_peak = capacity as u32;
                             return Err(full);
                         }
-                        if let Some(slot) = queue.get_mut(tail) {
+                        if let Some(slot) = queue.get_mut(slot_of(pushed)) {
                             slot.node = n as u32;
                             slot.f = $nx as u32;
                         }
-                        tail = if tail + 1 == capacity { 0 } else { tail + 1 };
-                        count += 1;
+                        pushed += 1;
                     }
                 }};
             }
@@ -1392,12 +1391,12 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             visit!(6, index + width - 1, x - 1, NW);
             visit!(0, index - width - 1, x - 1, SW);
             visit!(2, index - width + 1, x + 1, SE);
-            peak = peak.max(count);
+            peak = peak.max(pushed - popped);
         }
         self.queue_peak = peak as u32;
         Ok(Search {
             found: false,
-            expanded,
+            expanded: popped as u32,
             cost: 0,
         })
     }
