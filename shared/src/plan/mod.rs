@@ -1261,12 +1261,12 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     ///
     /// Hot loop: a popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
     /// nibbles of a row, from one pair of scratch words), so the side cells read for the side
-    /// moves also decide the diagonal moves. A few word operations turn the windows into a mask
-    /// of the targets (nibble 0, and for a diagonal both side cells not [`BLOCKED`]); each set
-    /// bit names a neighbour through small tables of index offsets, x steps and step codes.
-    /// Cells on the map border take a slower path that reads off-map cells as `BLOCKED`. Queue
-    /// entries carry the index and x, so nothing divides; a new cell's nibble is 0, so marking
-    /// it is a single OR.
+    /// moves also decide the diagonal moves. [`WINDOW_MASKS`] and a few operations turn the
+    /// windows into a mask of the targets (nibble 0, and for a diagonal both side cells not
+    /// [`BLOCKED`]), tested in the fixed order E, N, W, S, NE, NW, SW, SE with constant index
+    /// offsets. Cells on the map border take a slower path that reads off-map cells as
+    /// `BLOCKED` (and divides for y). Queue entries carry the index and x, so interior cells
+    /// never divide; a new cell's nibble is 0, so marking it is a single OR.
     fn bfs<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
