@@ -357,8 +357,10 @@ pub fn summary(world: &World, outcome: &Outcome) -> String {
         ));
     }
     s.push_str(&format!(
-        "\n{} cells expanded in {} us",
-        outcome.report.expanded, outcome.elapsed_us
+        "\n{} {} expanded in {} us",
+        outcome.report.expanded,
+        expanded_unit(outcome.kind),
+        outcome.elapsed_us
     ));
     s
 }
@@ -418,8 +420,9 @@ pub fn render_png(
         result.push_str(&format!(", {:.2} m", outcome.report.length_m));
     }
     result.push_str(&format!(
-        ", {} cells expanded, {}x{} cells of {} m",
+        ", {} {} expanded, {}x{} cells of {} m",
         outcome.report.expanded,
+        expanded_unit(outcome.kind),
         g.width(),
         g.height(),
         g.resolution_m()
@@ -526,5 +529,13 @@ mod tests {
         assert!(serde_json::to_string(&json)
             .unwrap()
             .ends_with(r#""elapsed_us":3,"static_ram_bytes":42}"#));
+    }
+}
+
+/// What `expanded` counts: BFS expands cells, A* (and so any-angle) expands jump points.
+fn expanded_unit(planner: PlannerKind) -> &'static str {
+    match planner {
+        PlannerKind::Bfs => "cells",
+        PlannerKind::AStar | PlannerKind::AnyAngle => "jump points",
     }
 }
