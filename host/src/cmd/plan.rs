@@ -464,6 +464,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// What `expanded` counts: BFS expands cells, A* (and so any-angle) expands jump points.
+fn expanded_unit(planner: PlannerKind) -> &'static str {
+    match planner {
+        PlannerKind::Bfs => "cells",
+        PlannerKind::AStar | PlannerKind::AnyAngle => "jump points",
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -529,13 +537,5 @@ mod tests {
         assert!(serde_json::to_string(&json)
             .unwrap()
             .ends_with(r#""elapsed_us":3,"static_ram_bytes":42}"#));
-    }
-}
-
-/// What `expanded` counts: BFS expands cells, A* (and so any-angle) expands jump points.
-fn expanded_unit(planner: PlannerKind) -> &'static str {
-    match planner {
-        PlannerKind::Bfs => "cells",
-        PlannerKind::AStar | PlannerKind::AnyAngle => "jump points",
     }
 }
