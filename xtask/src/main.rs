@@ -6,7 +6,7 @@ use std::process::Command;
 use anyhow::{bail, Context, Result};
 
 const USAGE: &str = "usage: cargo xtask <command>
-  test        install qemu-system-arm if missing, build the firmware, run every test
+  test        install qemu-system-arm if missing, build the firmware, check fmt + clippy, run every test
   firmware    build both firmware ELFs (hardware, and QEMU: twil-firmware-qemu) and print their sizes
   size        print flash / static RAM / CCM of the built ELFs
   qemu [PORT] run the QEMU firmware with USART1 on tcp:127.0.0.1:PORT (default: a free port)
@@ -296,6 +296,8 @@ fn mcu_bench() -> Result<()> {
 fn test() -> Result<()> {
     ensure_qemu()?;
     firmware()?;
+    lint()?;
+    // Last, so that the run ends with cargo test's own summary.
     let mut c = cargo();
     c.args([
         "test",
@@ -305,4 +307,32 @@ fn test() -> Result<()> {
         "twil-firmware",
     ]);
     run(c)
+}
+
+/// The style gates: formatting, and clippy with warnings as errors on the host crates and on
+/// both firmware builds.
+fn lint() -> Result<()> {
+    let mut c = cargo();
+    c.args(["fmt", "--all", "--", "--check"]);
+    run(c)?;
+    let mut c = cargo();
+    c.args(["clippy", "--all-targets", "--", "-D", "warnings"]);
+    run(c)?;
+    for features in [
+        &["--features", "hardware"][..],
+        &["--no-default-features", "--features", "qemu"][..],
+    ] {
+        let mut c = cargo();
+        c.args([
+            "clippy",
+            "--package",
+            "twil-firmware",
+            "--target",
+            "thumbv7em-none-eabihf",
+        ])
+        .args(features)
+        .args(["--", "-D", "warnings"]);
+        run(c)?;
+    }
+    Ok(())
 }
