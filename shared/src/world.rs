@@ -120,10 +120,13 @@ impl<'a> Tokens<'a> {
 
     /// The next token and its line.
     pub fn next_token(&mut self) -> Option<(&'a str, u32)> {
+        // Newlines count only when a token follows them, so that "the file ends here" errors
+        // name the last line of the file, not the empty one after its final newline.
+        let mut newlines = 0;
         loop {
             let c = self.rest.chars().next()?;
             if c == '\n' {
-                self.line += 1;
+                newlines += 1;
             }
             if c.is_whitespace() {
                 self.rest = &self.rest[c.len_utf8()..];
@@ -131,6 +134,7 @@ impl<'a> Tokens<'a> {
                 break;
             }
         }
+        self.line += newlines;
         let end = self
             .rest
             .find(char::is_whitespace)
@@ -466,6 +470,12 @@ mod tests {
         assert_eq!(
             (e.field, e.kind.clone()),
             ("goal y", ParseErrorKind::Missing)
+        );
+        let e = parse_par("0.4 0.2 0\n1 1\n2\n").unwrap_err();
+        assert_eq!(
+            (e.line, e.field),
+            (3, "goal y"),
+            "the last line, not the one after it"
         );
         let e = parse_par("-0.4 0.2 0 1 1 2 2").unwrap_err();
         assert!(e.to_string().contains("robot radius"), "{e}");
