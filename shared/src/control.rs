@@ -581,16 +581,6 @@ mod tests {
     use crate::plant::Plant;
     use std::vec::Vec;
 
-    /// Exact distances for measurements (`PointM::distance_m` uses micromath's rough sqrt).
-    trait Dist {
-        fn dist(self, other: PointM) -> f32;
-    }
-    impl Dist for PointM {
-        fn dist(self, other: PointM) -> f32 {
-            crate::math::hypot_precise(other.x_m - self.x_m, other.y_m - self.y_m)
-        }
-    }
-
     /// Closed loop: the controller drives the plant for `duration_s`; returns per step the
     /// time, the true pose, the true control point and the controller's output.
     pub(crate) fn run(
@@ -635,7 +625,7 @@ mod tests {
             let (ex, ey) = (b.x_m - a.x_m, b.y_m - a.y_m);
             let len2 = ex * ex + ey * ey;
             let t = (((p.x_m - a.x_m) * ex + (p.y_m - a.y_m) * ey) / len2).clamp(0.0, 1.0);
-            let d = PointM::new(a.x_m + t * ex, a.y_m + t * ey).dist(p);
+            let d = PointM::new(a.x_m + t * ex, a.y_m + t * ey).distance_m(p);
             best = best.min(d);
         }
         best
@@ -645,7 +635,7 @@ mod tests {
     fn along(points: &[PointM], s_m: f32) -> PointM {
         let mut left = s_m.max(0.0);
         for w in points.windows(2) {
-            let len = w[0].dist(w[1]);
+            let len = w[0].distance_m(w[1]);
             if left <= len {
                 let f = left / len;
                 return PointM::new(
@@ -665,7 +655,7 @@ mod tests {
     /// moving, final error to the end point, saturated steps).
     fn follow(path: &[PointM], start: Pose) -> (f32, f32, f32, usize) {
         let c = RobotConfig::default();
-        let length: f32 = path.windows(2).map(|w| w[0].dist(w[1])).sum();
+        let length: f32 = path.windows(2).map(|w| w[0].distance_m(w[1])).sum();
         let t_end = length / SPEED_M_S;
         let duration = t_end + settle_time_s(&c) + 1.0;
         let log = run(&c, start, duration, |t| along(path, SPEED_M_S * t));
@@ -678,10 +668,10 @@ mod tests {
         let tracking = log
             .windows(2)
             .filter(|w| w[0].0 < t_end)
-            .map(|w| w[0].2.dist(w[1].3.reference_model))
+            .map(|w| w[0].2.distance_m(w[1].3.reference_model))
             .fold(0.0f32, f32::max);
         let end = *path.last().unwrap();
-        let final_error = log.last().unwrap().2.dist(end);
+        let final_error = log.last().unwrap().2.distance_m(end);
         let saturated = log.iter().filter(|l| l.3.saturated || l.3.overrun).count();
         (cross, tracking, final_error, saturated)
     }
@@ -726,7 +716,7 @@ mod tests {
         let target = PointM::new(1.0, 2.0);
         let log = run(&c, start, 15.0, |_| target);
         let last = log.last().unwrap();
-        assert!(last.2.dist(target) < 0.01, "{:?}", last.2);
+        assert!(last.2.distance_m(target) < 0.01, "{:?}", last.2);
         // The control point moves straight to the target: the robot reverses, no U-turn.
         assert!(last.1.heading_rad.abs() < 0.05, "{:?}", last.1);
     }
@@ -868,7 +858,7 @@ mod tests {
         let held = held.unwrap();
         assert!(ctl.is_holding());
         let cp = plant.pose().point_ahead(c.point_offset_m);
-        assert!(cp.dist(held) < 0.01, "{cp:?} vs {held:?}");
+        assert!(cp.distance_m(held) < 0.01, "{cp:?} vs {held:?}");
         assert!(plant.speed_m_s().abs() < 0.01);
         ctl.reset_reference(cp);
         assert!(!ctl.is_holding());
@@ -926,9 +916,9 @@ mod tests {
         }
         let first = first.unwrap();
         // No jump: the model starts at the control point.
-        assert!(first.reference_model.dist(first.control_point) < 0.01);
+        assert!(first.reference_model.distance_m(first.control_point) < 0.01);
         let end = plant.pose().point_ahead(c.point_offset_m);
-        assert!(end.dist(goal) < 0.01, "{end:?}");
+        assert!(end.distance_m(goal) < 0.01, "{end:?}");
         assert!((plant.pose().heading_rad - target).abs() < 0.05);
     }
 

@@ -7,14 +7,7 @@
 
 use micromath::F32Ext;
 
-/// Square root to full `f32` precision: see [`sqrt_precise`] (micromath's own square root is a
-/// fast estimate up to 6 % off, too coarse for path lengths and odometry).
-#[inline]
-pub fn sqrt(x: f32) -> f32 {
-    sqrt_precise(x)
-}
-
-/// micromath's fast square-root estimate: the starting point of [`sqrt_precise`].
+/// micromath's fast square-root estimate: the starting point of [`sqrt`].
 #[inline]
 fn sqrt_estimate(x: f32) -> f32 {
     F32Ext::sqrt(x)
@@ -142,7 +135,7 @@ pub fn ln(x: f32) -> f32 {
 /// Square root to full `f32` precision (within an ulp): micromath's square root is a fast estimate
 /// that can be 6 % off (`sqrt(2.25)` gives 1.5625), refined here by three Newton steps, which
 /// are plain arithmetic and so identical on every target. `NaN` for negative or `NaN` input.
-pub fn sqrt_precise(x: f32) -> f32 {
+pub fn sqrt(x: f32) -> f32 {
     if x.is_nan() || x < 0.0 {
         return f32::NAN;
     }
@@ -163,11 +156,6 @@ pub fn sqrt_precise(x: f32) -> f32 {
         y = 0.5 * (y + v / y);
     }
     y * unscale
-}
-
-/// `sqrt(x² + y²)` with [`sqrt_precise`].
-pub fn hypot_precise(x: f32, y: f32) -> f32 {
-    sqrt_precise(x * x + y * y)
 }
 
 #[cfg(test)]
@@ -199,17 +187,17 @@ mod tests {
     }
 
     #[test]
-    fn sqrt_precise_is_precise() {
+    fn sqrt_is_precise() {
         for i in 0..100_000 {
             let x = i as f32 * 0.013 + 1.0e-3;
-            let r = super::sqrt_precise(x) as f64;
+            let r = super::sqrt(x) as f64;
             let exact = (x as f64).sqrt();
             assert!(((r - exact) / exact).abs() < 2e-7, "sqrt({x}) = {r}");
         }
-        assert_eq!(super::sqrt_precise(2.25), 1.5);
-        assert!((super::sqrt_precise(1.0e-40) as f64 - 1.0e-20).abs() < 1e-25);
-        assert!(super::sqrt_precise(-1.0).is_nan());
-        assert_eq!(super::sqrt_precise(f32::INFINITY), f32::INFINITY);
-        assert_eq!(super::hypot_precise(3.0, 4.0), 5.0);
+        assert_eq!(super::sqrt(2.25), 1.5);
+        assert!((super::sqrt(1.0e-40) as f64 - 1.0e-20).abs() < 1e-25);
+        assert!(super::sqrt(-1.0).is_nan());
+        assert_eq!(super::sqrt(f32::INFINITY), f32::INFINITY);
+        assert_eq!(super::hypot(3.0, 4.0), 5.0);
     }
 }

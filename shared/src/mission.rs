@@ -90,7 +90,7 @@ use heapless::Vec;
 use crate::control::{ControlInput, Controller, Pose};
 use crate::geom::{Cell, PointM};
 use crate::grid::{words_for_cells, Grid, GridError, GridGeometry};
-use crate::math::{cos, hypot_precise, sin};
+use crate::math::{cos, hypot, sin};
 use crate::plan::{
     needs_full_sweep, prune_visible_prefix, PathM, PlanError, PlanStatus, Planner, PlannerKind,
     SCRATCH_WORDS_300, SCRATCH_WORDS_400,
@@ -743,7 +743,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         if control.saturated {
             self.stats.saturated_periods += 1;
         }
-        let moved = hypot_precise(
+        let moved = hypot(
             self.pose_odom.x_m - before.x_m,
             self.pose_odom.y_m - before.y_m,
         );
@@ -789,7 +789,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
     }
 
     fn at_goal(&self) -> bool {
-        hypot_precise(
+        hypot(
             self.position_world().x_m - self.config.goal.x_m,
             self.position_world().y_m - self.config.goal.y_m,
         ) <= self.config.goal_tolerance_m
@@ -1010,7 +1010,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         for pair in path.windows(2) {
             let (a, b) = (pair[0], pair[1]);
             let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
-            let segment_m = hypot_precise(dx, dy);
+            let segment_m = hypot(dx, dy);
             if segment_m.is_nan() || segment_m <= 0.0 {
                 continue;
             }
@@ -1123,7 +1123,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         // Stall detection.
         match self.last_plan_origin {
             Some(prev)
-                if hypot_precise(origin.x_m - prev.x_m, origin.y_m - prev.y_m)
+                if hypot(origin.x_m - prev.x_m, origin.y_m - prev.y_m)
                     < self.config.stall_distance_m =>
             {
                 self.stalled_plans = self.stalled_plans.saturating_add(1)
@@ -1204,7 +1204,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         // from each later vertex within 3 cells in turn.
         let res_m = g.resolution_m();
         let first = self.path.first().copied().unwrap_or(start_point);
-        let from_first = |p: &PointM| hypot_precise(p.x_m - first.x_m, p.y_m - first.y_m);
+        let from_first = |p: &PointM| hypot(p.x_m - first.x_m, p.y_m - first.y_m);
         let skip = self
             .path
             .iter()
@@ -1243,7 +1243,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         let near_m = g.resolution_m();
         let mut leaving = true;
         for p in kept.iter() {
-            if leaving && hypot_precise(p.x_m - origin.x_m, p.y_m - origin.y_m) < near_m {
+            if leaving && hypot(p.x_m - origin.x_m, p.y_m - origin.y_m) < near_m {
                 continue;
             }
             leaving = false;
@@ -1268,7 +1268,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         let near = self
             .prefix
             .iter()
-            .take_while(|p| hypot_precise(p.x_m - pose.x_m, p.y_m - pose.y_m) <= range_m)
+            .take_while(|p| hypot(p.x_m - pose.x_m, p.y_m - pose.y_m) <= range_m)
             .count()
             .max(1);
         if !self.last_sweep_full
@@ -1331,7 +1331,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         let Some(&next) = self.prefix.get(1) else {
             return;
         };
-        let d = hypot_precise(next.x_m - origin.x_m, next.y_m - origin.y_m);
+        let d = hypot(next.x_m - origin.x_m, next.y_m - origin.y_m);
         let step_m = self.grid.geometry().resolution_m().min(d);
         self.prefix.truncate(1);
         if d > 0.0 {
@@ -1503,7 +1503,7 @@ mod tests {
             assert!(clearance > 0.0, "{mode:?}: clearance {clearance}");
             let p = plant.pose();
             assert!(
-                hypot_precise(p.x_m - goal.x_m, p.y_m - goal.y_m) < 0.25,
+                hypot(p.x_m - goal.x_m, p.y_m - goal.y_m) < 0.25,
                 "{mode:?}: ended at {p:?}"
             );
             let s = mission.stats();

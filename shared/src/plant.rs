@@ -38,7 +38,7 @@
 
 use crate::control::Pose;
 use crate::geom::PointM;
-use crate::math::{abs, cos, exp, floor, hypot_precise, sin, wrap_angle_rad};
+use crate::math::{abs, cos, exp, floor, hypot, sin, wrap_angle_rad};
 use crate::robot::{RobotConfig, MAX_CONE_RAYS};
 use crate::sonar::{Reading, SweepBuffer, SweepPlan};
 use crate::world::PolygonSet;
@@ -430,15 +430,15 @@ fn segment_distance_m(a: PointM, b: PointM, p: PointM) -> f32 {
     } else {
         0.0
     };
-    hypot_precise(a.x_m + t * ex - p.x_m, a.y_m + t * ey - p.y_m)
+    hypot(a.x_m + t * ex - p.x_m, a.y_m + t * ey - p.y_m)
 }
 
 /// Distance from `p` to the outline of a polygon (a lone vertex counts as a point).
 fn polygon_distance_m(poly: &[PointM], p: PointM) -> f32 {
     if poly.len() == 1 {
-        return poly.first().map_or(f32::INFINITY, |v| {
-            hypot_precise(v.x_m - p.x_m, v.y_m - p.y_m)
-        });
+        return poly
+            .first()
+            .map_or(f32::INFINITY, |v| hypot(v.x_m - p.x_m, v.y_m - p.y_m));
     }
     let mut nearest = f32::INFINITY;
     for (a, b) in edges(poly) {
@@ -653,7 +653,7 @@ mod tests {
                 .unwrap();
             sum2 += (v - truth) * (v - truth);
         }
-        let std = crate::math::sqrt_precise(sum2 / 50.0);
+        let std = crate::math::sqrt(sum2 / 50.0);
         assert!(std > 0.01 && std < 0.03, "{std}");
     }
 

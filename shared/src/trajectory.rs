@@ -53,7 +53,7 @@
 use heapless::Vec;
 
 use crate::geom::PointM;
-use crate::math::{abs, atan2, cos, hypot_precise, sin, wrap_angle_rad};
+use crate::math::{abs, atan2, cos, hypot, sin, wrap_angle_rad};
 use crate::plan::MAX_PATH_POINTS;
 
 /// Largest number of points a supplied trajectory can hold (the planner's path capacity).
@@ -501,10 +501,10 @@ impl TrajectorySupplier {
     }
 }
 
-/// Euclidean distance with [`hypot_precise`] (segment lengths must be exact enough for the
+/// Euclidean distance with [`hypot`] (segment lengths must be exact enough for the
 /// constant-speed profile; `PointM::distance_m` uses the fast estimate).
 fn distance_m(a: PointM, b: PointM) -> f32 {
-    hypot_precise(b.x_m - a.x_m, b.y_m - a.y_m)
+    hypot(b.x_m - a.x_m, b.y_m - a.y_m)
 }
 
 #[cfg(test)]
@@ -696,7 +696,7 @@ mod tests {
             } else {
                 0.0
             };
-            hypot_precise(p.x_m - a.x_m - t * dx, p.y_m - a.y_m - t * dy)
+            hypot(p.x_m - a.x_m - t * dx, p.y_m - a.y_m - t * dy)
         }
 
         proptest! {

@@ -329,7 +329,7 @@ impl Search {
         let n = self.count;
         let (inc_x, inc_y) = (ax.increment, ay.increment);
         let (nx, ny) = (ax.cells as i32, ay.cells as i32);
-        let cost = |d: [i32; 2]| math::hypot_precise(d[0] as f32 * inc_x, d[1] as f32 * inc_y);
+        let cost = |d: [i32; 2]| math::hypot(d[0] as f32 * inc_x, d[1] as f32 * inc_y);
         // Index differences to try from a to b: direct, and the other way round a wrapping axis.
         let options = |from: i32, to: i32, wraps: bool, cells: i32| -> ([i32; 2], usize) {
             let d = to - from;
@@ -438,7 +438,7 @@ pub fn path_length(points: &[[i32; 2]], increments: [f32; 2]) -> f32 {
     points
         .windows(2)
         .map(|w| {
-            math::hypot_precise(
+            math::hypot(
                 (w[1][0] - w[0][0]) as f32 * increments[0],
                 (w[1][1] - w[0][1]) as f32 * increments[1],
             )

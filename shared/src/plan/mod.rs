@@ -628,29 +628,12 @@ impl<'a> BucketQueue<'a> {
     }
 }
 
-/// Precise square root for lengths: micromath's estimate (±5 %) refined by three Newton steps.
-/// Only `+ - * /`, so host and MCU agree bit for bit.
-#[inline]
-pub(crate) fn sqrt_precise(x: f32) -> f32 {
-    if x.is_nan() || x <= 0.0 {
-        return 0.0;
-    }
-    if x == f32::INFINITY {
-        return x;
-    }
-    let mut y = crate::math::sqrt(x);
-    for _ in 0..3 {
-        y = 0.5 * (y + x / y);
-    }
-    y
-}
-
 /// Euclidean length of the segment between two cells, in cells.
 #[inline]
 fn cells_distance(a: Cell, b: Cell) -> f32 {
     let dx = a.x as f32 - b.x as f32;
     let dy = a.y as f32 - b.y as f32;
-    sqrt_precise(dx * dx + dy * dy)
+    crate::math::hypot(dx, dy)
 }
 
 /// The jump scans of [`Planner::jps`], on the grid's packed occupancy bits (1 = occupied):

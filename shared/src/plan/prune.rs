@@ -14,9 +14,10 @@
 //!   the first point's cell; the prefix stops at the last visible sample, so it may end in the
 //!   middle of a segment.
 
-use super::{line_of_sight, sqrt_precise, PathM};
+use super::{line_of_sight, PathM};
 use crate::geom::PointM;
 use crate::grid::Grid;
+use crate::math::hypot;
 
 /// The seed's normal sonar sweep: ±95° around the heading (`AMPLITUDE_LEITURA_NORMAL_SONAR`).
 pub const NORMAL_HALF_BAND_RAD: f32 = 95.0 * core::f32::consts::PI / 180.0;
@@ -100,7 +101,7 @@ pub fn prune_visible_prefix<const W: usize>(
             return done(length_m, PruneEnd::Hidden);
         }
         let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
-        let segment_m = sqrt_precise(dx * dx + dy * dy);
+        let segment_m = hypot(dx, dy);
         if segment_m.is_nan() || segment_m <= 0.0 {
             continue;
         }
