@@ -79,16 +79,7 @@ static mut RX_QUEUE: Queue<u8, RX_QUEUE_BYTES> = Queue::new();
 
 /// The device in the CCM. Never read before [`init_ccm`] has copied its initial value.
 #[link_section = ".ccmram.device"]
-static mut DEVICE: TwilDevice = TwilDevice::new(DeviceInfo {
-    protocol_version: PROTOCOL_VERSION,
-    build: Build::Hardware,
-    grid_capacity_cells: 0,
-    planner_capacity_cells: 0,
-    max_polygons: 0,
-    max_vertices: 0,
-    max_frame_bytes: 0,
-    static_ram_bytes: 0,
-});
+static mut DEVICE: TwilDevice = TwilDevice::new(DeviceInfo::for_build(Build::Hardware));
 
 /// Copy the initial values of `.ccmram` from flash (the start-up code only does this for
 /// `.data`) and hand out the device and the receive queue. Called once, from `init`.

@@ -175,12 +175,13 @@ pub struct DeviceInfo {
     pub static_ram_bytes: u32,
 }
 
-impl Default for DeviceInfo {
-    /// A host-side device: version [`PROTOCOL_VERSION`], capacities filled in by the handler.
-    fn default() -> Self {
+impl DeviceInfo {
+    /// The information of a `build` before the handler fills in its capacities: version
+    /// [`PROTOCOL_VERSION`], every capacity 0. `const`, so the firmware can put it in a static.
+    pub const fn for_build(build: Build) -> Self {
         Self {
             protocol_version: PROTOCOL_VERSION,
-            build: Build::Host,
+            build,
             grid_capacity_cells: 0,
             planner_capacity_cells: 0,
             max_polygons: 0,
@@ -188,6 +189,13 @@ impl Default for DeviceInfo {
             max_frame_bytes: 0,
             static_ram_bytes: 0,
         }
+    }
+}
+
+impl Default for DeviceInfo {
+    /// A host-side device: [`DeviceInfo::for_build`] of [`Build::Host`].
+    fn default() -> Self {
+        Self::for_build(Build::Host)
     }
 }
 
