@@ -3,6 +3,7 @@
 
 pub mod cmd;
 pub mod cspace;
+pub mod qemu_cmd;
 pub mod remote;
 pub mod render;
 pub mod sim;

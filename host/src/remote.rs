@@ -420,33 +420,9 @@ pub struct Qemu {
     pub port: u16,
 }
 
-/// File name of the QEMU build of the firmware (next to the hardware ELF).
-pub const QEMU_ELF_NAME: &str = "twil-firmware-qemu";
+pub use crate::qemu_cmd::QEMU_ELF_NAME;
 
 impl Qemu {
-    /// The QEMU arguments for `elf` with USART1 on `serial` (a QEMU chardev spec).
-    pub fn args(elf: &Path, serial: &str) -> Vec<String> {
-        [
-            "-machine",
-            "netduinoplus2",
-            "-display",
-            "none",
-            "-monitor",
-            "none",
-            "-serial",
-            serial,
-            "-semihosting-config",
-            "enable=on,target=native",
-            "-icount",
-            "shift=0,sleep=off",
-            "-kernel",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .chain([elf.display().to_string()])
-        .collect()
-    }
-
     /// Where the QEMU ELF is: `$TWIL_QEMU_ELF`, else
     /// `<target dir>/thumbv7em-none-eabihf/firmware/twil-firmware-qemu` (built by
     /// `cargo xtask firmware`).
@@ -504,7 +480,10 @@ impl Qemu {
             None => Stdio::null(),
         };
         let child = Command::new("qemu-system-arm")
-            .args(Self::args(elf, &format!("tcp:127.0.0.1:{port},nodelay=on")))
+            .args(crate::qemu_cmd::qemu_args(
+                elf,
+                &format!("tcp:127.0.0.1:{port},nodelay=on"),
+            ))
             .stdin(Stdio::null())
             .stdout(log)
             .stderr(Stdio::piped())

@@ -5,6 +5,10 @@ use std::process::Command;
 
 use anyhow::{bail, Context, Result};
 
+/// The QEMU command line, shared with `twil --remote qemu`.
+#[path = "../../host/src/qemu_cmd.rs"]
+mod qemu_cmd;
+
 const USAGE: &str = "usage: cargo xtask <command>
   test        install qemu-system-arm if missing, build the firmware, check fmt + clippy, run every test
   firmware    build both firmware ELFs (hardware, and QEMU: twil-firmware-qemu) and print their sizes
@@ -61,7 +65,7 @@ fn target_dir() -> PathBuf {
 /// The two ELFs: (hardware, QEMU).
 fn elf_paths() -> (PathBuf, PathBuf) {
     let dir = target_dir().join(THUMB).join("firmware");
-    (dir.join("twil-firmware"), dir.join("twil-firmware-qemu"))
+    (dir.join("twil-firmware"), dir.join(qemu_cmd::QEMU_ELF_NAME))
 }
 
 fn run(mut c: Command) -> Result<()> {
@@ -252,22 +256,10 @@ fn qemu(port: Option<&str>) -> Result<()> {
     println!("xtask: try `cargo run --release -p twil-host -- ping --remote tcp:127.0.0.1:{port}`");
     println!("xtask: semihosting output follows; Ctrl-C stops QEMU");
     let mut c = Command::new("qemu-system-arm");
-    c.args([
-        "-machine",
-        "netduinoplus2",
-        "-display",
-        "none",
-        "-monitor",
-        "none",
-        "-serial",
-        &format!("tcp:127.0.0.1:{port},server=on,wait=on,nodelay=on"),
-        "-semihosting-config",
-        "enable=on,target=native",
-        "-icount",
-        "shift=0,sleep=off",
-        "-kernel",
-    ])
-    .arg(&elf);
+    c.args(qemu_cmd::qemu_args(
+        &elf,
+        &qemu_cmd::tcp_server_serial(port),
+    ));
     run(c)
 }
 
