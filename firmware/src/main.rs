@@ -30,8 +30,8 @@
 //!
 //! - default (`hardware`): PLL at 168 MHz from the HSI, defmt over RTT, `panic-probe`.
 //! - `--no-default-features --features qemu`: for QEMU's `netduinoplus2`; QEMU does not emulate
-//!   the RCC, so the clock stays on the HSI and nothing waits on a ready flag; logs and panics
-//!   go out over semihosting.
+//!   the RCC, so the clock stays on the HSI and nothing waits on a ready flag; defmt logs go
+//!   out over semihosting (decoded by `cargo xtask qemu`), panics as text over semihosting.
 #![no_std]
 #![no_main]
 
@@ -42,6 +42,8 @@ compile_error!("choose a build: feature `hardware` (default) or `qemu`");
 
 #[cfg(feature = "hardware")]
 use defmt_rtt as _;
+#[cfg(feature = "qemu")]
+use defmt_semihosting as _;
 #[cfg(feature = "hardware")]
 use panic_probe as _;
 #[cfg(feature = "qemu")]
@@ -52,14 +54,11 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use heapless::spsc::Queue;
 use twil_core::link::{Build, DeviceInfo, PROTOCOL_VERSION};
 
-/// Log a line: defmt over RTT on a board, semihosting under QEMU. Arguments must implement
-/// both `defmt::Format` and `Display` (integers, `&str`).
+/// Log a line with defmt: over RTT on a board (probe-rs prints it), over semihosting under QEMU
+/// (`cargo xtask qemu` decodes it with the ELF's defmt table).
 macro_rules! log {
     ($($arg:tt)*) => {{
-        #[cfg(feature = "hardware")]
         defmt::info!($($arg)*);
-        #[cfg(feature = "qemu")]
-        cortex_m_semihosting::hprintln!($($arg)*);
     }};
 }
 

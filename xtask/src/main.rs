@@ -5,6 +5,8 @@ use std::process::Command;
 
 use anyhow::{bail, Context, Result};
 
+mod defmt_log;
+
 /// The QEMU command line, shared with `twil --remote qemu`.
 #[path = "../../host/src/qemu_cmd.rs"]
 mod qemu_cmd;
@@ -14,7 +16,8 @@ const USAGE: &str = "usage: cargo xtask <command>
   firmware    build both firmware ELFs (hardware, and QEMU: twil-firmware-qemu) and print their sizes
   size        print flash / static RAM / CCM of the built ELFs
   qemu [PORT] run the QEMU firmware with USART1 on tcp:127.0.0.1:PORT (default: a free port)
-  mcu-bench   instructions per plan on 300x300 grids (open, 20% random, maze) under QEMU";
+  mcu-bench   instructions per plan on 300x300 grids (open, 20% random, maze) under QEMU
+  defmt-log FILE  decode a saved QEMU log (TWIL_QEMU_LOG=FILE twil … --remote qemu)";
 
 /// Target of the firmware.
 const THUMB: &str = "thumbv7em-none-eabihf";
@@ -36,6 +39,13 @@ fn main() -> Result<()> {
         Some("size") => size(),
         Some("qemu") => qemu(args.get(1).map(String::as_str)),
         Some("mcu-bench") => mcu_bench(),
+        Some("defmt-log") => match args.get(1) {
+            Some(file) => defmt_log_file(Path::new(file)),
+            None => {
+                eprintln!("{USAGE}");
+                std::process::exit(2);
+            }
+        },
         _ => {
             eprintln!("{USAGE}");
             std::process::exit(2);
@@ -254,13 +264,38 @@ fn qemu(port: Option<&str>) -> Result<()> {
     println!("xtask: QEMU netduinoplus2 running {}", elf.display());
     println!("xtask: USART1 on tcp:127.0.0.1:{port} (QEMU waits for a client)");
     println!("xtask: try `cargo run --release -p twil-host -- ping --remote tcp:127.0.0.1:{port}`");
-    println!("xtask: semihosting output follows; Ctrl-C stops QEMU");
-    let mut c = Command::new("qemu-system-arm");
-    c.args(qemu_cmd::qemu_args(
-        &elf,
-        &qemu_cmd::tcp_server_serial(port),
-    ));
-    run(c)
+    println!("xtask: the firmware's defmt log follows (decoded); Ctrl-C stops QEMU");
+    let table = defmt_log::table(&elf)?;
+    let mut child = Command::new("qemu-system-arm")
+        .args(qemu_cmd::qemu_args(
+            &elf,
+            &qemu_cmd::tcp_server_serial(port),
+        ))
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .context("cannot start qemu-system-arm")?;
+    let stdout = child.stdout.take().context("QEMU's stdout")?;
+    defmt_log::decode(&table, stdout, |line| {
+        println!("{line}");
+        true
+    })?;
+    let status = child.wait()?;
+    if !status.success() {
+        bail!("qemu-system-arm exited with {status}");
+    }
+    Ok(())
+}
+
+/// Decode a saved QEMU log (the firmware's defmt frames) with the QEMU ELF's table.
+fn defmt_log_file(file: &Path) -> Result<()> {
+    let (_, elf) = elf_paths();
+    let table = defmt_log::table(&elf)?;
+    let input =
+        std::fs::File::open(file).with_context(|| format!("cannot open {}", file.display()))?;
+    defmt_log::decode(&table, input, |line| {
+        println!("{line}");
+        true
+    })
 }
 
 /// Measure instructions per plan under QEMU (the `mcu_bench` test of tests/firmware_qemu.rs,
@@ -327,4 +362,54 @@ fn lint() -> Result<()> {
         run(c)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The QEMU firmware's defmt log (semihosting) decodes into its boot lines, and the
+    /// instruction-count calibration it logs is within 0.1 % of the truth. Needs the QEMU ELF
+    /// and `qemu-system-arm`, which `cargo xtask test` provides before running the tests.
+    #[test]
+    fn qemu_firmware_defmt_log_decodes() {
+        let (_, elf) = elf_paths();
+        assert!(
+            elf.is_file(),
+            "{} is missing: run `cargo xtask firmware` (or `cargo xtask test`)",
+            elf.display()
+        );
+        let table = defmt_log::table(&elf).expect("defmt table");
+        let mut child = Command::new("qemu-system-arm")
+            .args(qemu_cmd::qemu_args(&elf, "null"))
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("qemu-system-arm");
+        let stdout = child.stdout.take().expect("stdout");
+        // A firmware that never logs would block the read: stop QEMU after 60 s whatever.
+        let pid = child.id().to_string();
+        std::thread::spawn(move || {
+            std::thread::sleep(std::time::Duration::from_secs(60));
+            let _ = Command::new("kill").args(["-9", &pid]).status();
+        });
+        let mut lines = Vec::new();
+        let result = defmt_log::decode(&table, stdout, |line| {
+            lines.push(line);
+            lines.len() < 2
+        });
+        let _ = child.kill();
+        let _ = child.wait();
+        result.expect("decode");
+        assert_eq!(lines.len(), 2, "QEMU ended before two log lines: {lines:?}");
+        assert!(
+            lines[0].starts_with("INFO twil firmware up: static RAM "),
+            "{lines:?}"
+        );
+        let measured: u64 = lines[1]
+            .strip_prefix("INFO calibration: 1000002 instructions measured as ")
+            .and_then(|n| n.trim().parse().ok())
+            .unwrap_or_else(|| panic!("{lines:?}"));
+        assert!(measured.abs_diff(1_000_002) < 1_000, "{measured}");
+    }
 }
