@@ -446,6 +446,182 @@ fn octile(dx: u32, dy: u32) -> u32 {
         .saturating_add(STRAIGHT_COST.saturating_mul(hi - lo))
 }
 
+/// Nibbles `j`, `j + 1`, `j + 2` of the scratch in bits 0..12 (beyond it: [`BLOCKED`]).
+#[inline(always)]
+fn nibble_window(scratch: &[u32], j: usize) -> u32 {
+    let w = j >> 3;
+    match scratch.get(w..w.wrapping_add(2)) {
+        Some(&[lo, hi]) => {
+            let shift = ((j & 7) * 4) as u32;
+            ((lo >> shift) | ((hi << 1) << (31 - shift))) & 0xFFF
+        }
+        _ => nibble(scratch, j) | nibble(scratch, j + 1) << 4 | nibble(scratch, j + 2) << 8,
+    }
+}
+
+/// For each 12-bit window of three nibbles (a row of a 3 × 3 neighbourhood, cell-by-cell A*):
+/// bit `k` (k = 0, 1, 2) set when nibble `k` is 0 (free, not closed), bit `3 + k` when it is
+/// not [`BLOCKED`]. 4 KB of read-only data, built at compile time.
+static ASTAR_WINDOWS: [u8; 4096] = {
+    let mut table = [0u8; 4096];
+    let mut v = 0;
+    while v < 4096 {
+        let mut m = 0u8;
+        let mut k = 0;
+        while k < 3 {
+            let code = (v >> (4 * k)) & 0xF;
+            if code == 0 {
+                m |= 1 << k;
+            }
+            if code != BLOCKED as usize {
+                m |= 8 << k;
+            }
+            k += 1;
+        }
+        table[v] = m;
+        v += 1;
+    }
+    table
+};
+
+// The 18-bit neighbourhood mask of the cell-by-cell A*: three rows of [`ASTAR_WINDOWS`]
+// entries (below, same, above; 6 bits each). `Z_*`: the neighbour's nibble is 0 (a possible
+// target); `O_*`: the neighbour is not blocked (a side cell a diagonal step may pass).
+const Z_SW: u32 = 0;
+const Z_S: u32 = 1;
+const Z_SE: u32 = 2;
+const Z_W: u32 = 6;
+const Z_E: u32 = 8;
+const Z_NW: u32 = 12;
+const Z_N: u32 = 13;
+const Z_NE: u32 = 14;
+const O_SW: u32 = 3;
+const O_S: u32 = 4;
+const O_SE: u32 = 5;
+const O_W: u32 = 9;
+const O_E: u32 = 11;
+const O_NW: u32 = 15;
+const O_N: u32 = 16;
+const O_NE: u32 = 17;
+
+/// Bit `from` of `m` moved to bit `to` (other bits moved alike; callers mask).
+#[inline(always)]
+const fn moved(m: u32, from: u32, to: u32) -> u32 {
+    if from >= to {
+        m >> (from - to)
+    } else {
+        m << (to - from)
+    }
+}
+
+/// Bit `z` when the diagonal target `z` may be entered: both side cells `o1`, `o2` open.
+#[inline(always)]
+const fn diagonal_ok(m: u32, z: u32, o1: u32, o2: u32) -> u32 {
+    moved(m, o1, z) & moved(m, o2, z) & (1 << z)
+}
+
+/// Bit `z` when the side target `z` is *forced*: the cell `o_back` beside the parent, through
+/// which the parent would have reached `z` diagonally, is blocked.
+#[inline(always)]
+const fn forced(m: u32, z: u32, o_back: u32) -> u32 {
+    !moved(m, o_back, z) & (1 << z)
+}
+
+/// The candidate targets (bits `Z_*`) of a cell reached by the step `code`, before the
+/// "nibble 0" test: the neighbours that the parent did not already cover with a key no larger
+/// (arrival pruning, see the module docs). The start (and any other code) tries all eight.
+#[inline(always)]
+fn arrival_targets(m: u32, code: u32) -> u32 {
+    match code {
+        E => {
+            (1 << Z_E)
+                | diagonal_ok(m, Z_NE, O_N, O_E)
+                | diagonal_ok(m, Z_SE, O_S, O_E)
+                | forced(m, Z_N, O_NW)
+                | forced(m, Z_S, O_SW)
+        }
+        W => {
+            (1 << Z_W)
+                | diagonal_ok(m, Z_NW, O_N, O_W)
+                | diagonal_ok(m, Z_SW, O_S, O_W)
+                | forced(m, Z_N, O_NE)
+                | forced(m, Z_S, O_SE)
+        }
+        N => {
+            (1 << Z_N)
+                | diagonal_ok(m, Z_NE, O_N, O_E)
+                | diagonal_ok(m, Z_NW, O_N, O_W)
+                | forced(m, Z_E, O_SE)
+                | forced(m, Z_W, O_SW)
+        }
+        S => {
+            (1 << Z_S)
+                | diagonal_ok(m, Z_SE, O_S, O_E)
+                | diagonal_ok(m, Z_SW, O_S, O_W)
+                | forced(m, Z_E, O_NE)
+                | forced(m, Z_W, O_NW)
+        }
+        NE => (1 << Z_E) | (1 << Z_N) | diagonal_ok(m, Z_NE, O_N, O_E),
+        NW => (1 << Z_W) | (1 << Z_N) | diagonal_ok(m, Z_NW, O_N, O_W),
+        SW => (1 << Z_W) | (1 << Z_S) | diagonal_ok(m, Z_SW, O_S, O_W),
+        SE => (1 << Z_E) | (1 << Z_S) | diagonal_ok(m, Z_SE, O_S, O_E),
+        _ => {
+            (1 << Z_E)
+                | (1 << Z_N)
+                | (1 << Z_W)
+                | (1 << Z_S)
+                | diagonal_ok(m, Z_NE, O_N, O_E)
+                | diagonal_ok(m, Z_NW, O_N, O_W)
+                | diagonal_ok(m, Z_SW, O_S, O_W)
+                | diagonal_ok(m, Z_SE, O_S, O_E)
+        }
+    }
+}
+
+/// A move of the cell-by-cell A*, by target bit `Z_*`.
+#[derive(Clone, Copy)]
+struct TargetStep {
+    dx: i32,
+    dy: i32,
+    cost: u32,
+    /// Added to the cell's entry without its code: `dy << 16 + dx << 4 + code` (wrapping).
+    node_delta: u32,
+}
+
+const fn target_step(code: u32) -> TargetStep {
+    let (dx, dy) = STEPS[(code - 1) as usize];
+    TargetStep {
+        dx,
+        dy,
+        cost: if code >= NE {
+            DIAGONAL_COST
+        } else {
+            STRAIGHT_COST
+        },
+        node_delta: ((dy << 16) + (dx << 4)) as u32 + code,
+    }
+}
+
+/// [`TargetStep`] of each target bit (bits that are not targets: a zero step, never used).
+static TARGET_STEPS: [TargetStep; 15] = {
+    let none = TargetStep {
+        dx: 0,
+        dy: 0,
+        cost: 0,
+        node_delta: 0,
+    };
+    let mut t = [none; 15];
+    t[Z_SW as usize] = target_step(SW);
+    t[Z_S as usize] = target_step(S);
+    t[Z_SE as usize] = target_step(SE);
+    t[Z_W as usize] = target_step(W);
+    t[Z_E as usize] = target_step(E);
+    t[Z_NW as usize] = target_step(NW);
+    t[Z_N as usize] = target_step(N);
+    t[Z_NE as usize] = target_step(NE);
+    t
+};
+
 /// End of a bucket list.
 const NIL: u32 = u32::MAX;
 /// Exact-key buckets per coarse bucket (`f & 31`).
@@ -964,6 +1140,44 @@ const JPS_MAX_EXPANSIONS_PER_CELLS: usize = 256;
 /// obstacles, 2 in a maze of 1-cell corridors, where jump point search stays 3x ahead).
 const JPS_WIDE_FRONTIER: usize = 16;
 
+/// A* runs cell by cell straight away (no jump point search) when the rows between start and
+/// goal (plus [`CLUTTER_MARGIN_ROWS`] on each side) hold more than one obstacle run per this
+/// many cells: 20 % random obstacles have about 1 in 6, a maze of 1-cell corridors 1 in 4, the
+/// bundled room worlds fewer than 1 in 100.
+const CLUTTER_CELLS_PER_RUN: usize = 32;
+/// Rows beyond the start and goal rows that [`cluttered`] also counts.
+const CLUTTER_MARGIN_ROWS: u32 = 16;
+
+/// `true` when the map around start and goal is cluttered (see [`CLUTTER_CELLS_PER_RUN`]): it
+/// counts the runs of occupied cells (a set bit after a clear one) in the grid's words of the
+/// rows from the lower of the two rows to the higher, widened by [`CLUTTER_MARGIN_ROWS`]. One
+/// pass over those words; empty words cost a test.
+fn cluttered(words: &[u32], geometry: &GridGeometry, start: Cell, goal: Cell) -> bool {
+    let width = geometry.width() as usize;
+    let (lo, hi) = if start.y < goal.y {
+        (start.y, goal.y)
+    } else {
+        (goal.y, start.y)
+    };
+    let first_row = (lo as u32).saturating_sub(CLUTTER_MARGIN_ROWS) as usize;
+    let last_row =
+        ((hi as u32) + CLUTTER_MARGIN_ROWS).min((geometry.height() as u32).saturating_sub(1));
+    let (first_word, end_word) = (
+        first_row * width / 32,
+        ((last_row as usize + 1) * width).div_ceil(32),
+    );
+    let cells = (end_word - first_word) * 32;
+    let mut runs = 0usize;
+    let mut previous = 0u32;
+    for &w in words.get(first_word..end_word).unwrap_or(&[]) {
+        if w != 0 {
+            runs += (w & !((w << 1) | (previous >> 31))).count_ones() as usize;
+        }
+        previous = w;
+    }
+    runs * CLUTTER_CELLS_PER_RUN > cells
+}
+
 /// Binary min-heap over a fixed slice of entries, ordered by `f`.
 #[inline(always)]
 fn heap_before(a: &OpenEntry, b: &OpenEntry) -> bool {
@@ -1129,8 +1343,13 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         // search reads the map's own bits and needs cleared nibbles only (its cell-by-cell
         // fallback copies the map then).
         let used_words = scratch_words_for_cells(geometry.cell_count());
+        // A* on a cluttered map runs cell by cell at once (nearly every free cell would be a
+        // jump point), also from a copy of the map.
+        let cell_by_cell =
+            kind != PlannerKind::Bfs && cluttered(grid.words(), &geometry, start, goal);
         match kind {
             PlannerKind::Bfs => self.copy_map(grid),
+            _ if cell_by_cell => self.copy_map(grid),
             _ => self
                 .scratch
                 .get_mut(..used_words)
@@ -1149,6 +1368,9 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         } else {
             match kind {
                 PlannerKind::Bfs => self.bfs(grid, start_index, goal_index)?,
+                PlannerKind::AStar | PlannerKind::AnyAngle if cell_by_cell => {
+                    self.astar(grid, start_index, goal, goal_index)?
+                }
                 PlannerKind::AStar | PlannerKind::AnyAngle => {
                     match self.jps(grid, start_index, goal, goal_index) {
                         Ok(search) => search,
@@ -1396,7 +1618,16 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         })
     }
 
-    /// A* with the octile heuristic and a lazy-deletion open list.
+    /// Cell-by-cell A* with the octile heuristic, a lazy-deletion bucket queue and the
+    /// *arrival pruning* of successors (see the module docs): a closed cell pushes only the
+    /// neighbours its parent did not already cover with a key no larger. The scratch must hold
+    /// the map ([`Planner::copy_map`]).
+    ///
+    /// Hot loop: the popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
+    /// nibbles of a row from two scratch words) and turned by [`ASTAR_WINDOWS`] into an 18-bit
+    /// mask ("nibble 0" and "not blocked" per cell); the arrival step picks the candidate
+    /// targets from it with a few shifts, and the loop over the target bits pushes them with a
+    /// constant per-direction table. Cells on the map border read their neighbours one by one.
     fn astar<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
@@ -1407,10 +1638,16 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let geometry = grid.geometry();
         let width = geometry.width() as usize;
         let height = geometry.height() as usize;
-        let (gx, gy) = (goal_cell.x as usize, goal_cell.y as usize);
-        let scratch = &mut self.scratch[..];
-        let h = |x: usize, y: usize| octile(x.abs_diff(gx) as u32, y.abs_diff(gy) as u32);
-        let (sx, sy) = (start % width, start / width);
+        let (gx, gy) = (goal_cell.x as u32, goal_cell.y as u32);
+        let used_words = scratch_words_for_cells(geometry.cell_count());
+        let scratch = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
+        // Octile distance to the goal; sides are at most 4096 cells, so no overflow.
+        let h = |x: u32, y: u32| {
+            let (dx, dy) = (x.abs_diff(gx), y.abs_diff(gy));
+            let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
+            DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
+        };
+        let (sx, sy) = ((start % width) as u32, (start / width) as u32);
         let mut open = BucketQueue::new(&mut self.queue[..], h(sx, sy));
         let full = PlanError::QueueFull {
             capacity: open.pool.len() as u32,
@@ -1418,11 +1655,13 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let mut expanded = 0u32;
 
         // Entries carry `y << 16 | x << 4 | step code` (sides are at most 4096 cells), so the
-        // loop never divides.
-        let pack = |x: usize, y: usize, code: u32| ((y as u32) << 16) | ((x as u32) << 4) | code;
-        if !open.push(h(sx, sy), pack(sx, sy, CODE_START)) {
+        // loop never divides, and a neighbour's entry is the cell's plus a constant.
+        if !open.push(h(sx, sy), (sy << 16) | (sx << 4) | CODE_START) {
             return Err(full);
         }
+        // Interior cells: x in 1..width-1 and index in width..cells-width.
+        let inner_x = width.saturating_sub(2);
+        let inner_span = geometry.cell_count().saturating_sub(2 * width);
 
         let unpack_index =
             |node: u32| (node >> 16) as usize * width + ((node >> 4) & 0xFFF) as usize;
@@ -1430,14 +1669,18 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             let x = ((node >> 4) & 0xFFF) as usize;
             let y = (node >> 16) as usize;
             let index = y * width + x;
-            if nibble(scratch, index) != 0 {
+            let Some(word) = scratch.get_mut(index >> 3) else {
+                continue;
+            };
+            let shift = (index & 7) * 4;
+            if (*word >> shift) & 0xF != 0 {
                 continue; // already closed by a cheaper entry
             }
-            set_nibble(scratch, index, node & 0xF);
+            let code = node & 0xF;
+            *word |= code << shift;
             expanded += 1;
-            // The entry does not store g: f = g + h exactly (costs stay far below u32::MAX on
-            // grids that fit a planner's scratch).
-            let g = f.wrapping_sub(h(x, y));
+            // The entry does not store g: f = g + h exactly.
+            let g = f.wrapping_sub(h(x as u32, y as u32));
             if index == goal {
                 self.queue_peak = open.bump;
                 return Ok(Search {
@@ -1447,69 +1690,50 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 });
             }
 
-            // Side neighbours' nibbles (off the map counts as BLOCKED).
-            let c_e = if x + 1 < width {
-                nibble(scratch, index + 1)
-            } else {
-                BLOCKED
-            };
-            let c_w = if x > 0 {
-                nibble(scratch, index - 1)
-            } else {
-                BLOCKED
-            };
-            let c_n = if y + 1 < height {
-                nibble(scratch, index + width)
-            } else {
-                BLOCKED
-            };
-            let c_s = if y > 0 {
-                nibble(scratch, index - width)
-            } else {
-                BLOCKED
-            };
-            let (free_e, free_w) = (c_e != BLOCKED, c_w != BLOCKED);
-            let (free_n, free_s) = (c_n != BLOCKED, c_s != BLOCKED);
-
-            macro_rules! visit {
-                ($nx:expr, $ny:expr, $cost:expr, $code:expr) => {{
-                    let f = g.saturating_add($cost).saturating_add(h($nx, $ny));
-                    let node = pack($nx, $ny, $code);
-                    if !open.push(f, node) {
-                        // Full: drop the entries of cells closed meanwhile and retry, unless
-                        // that frees too little to be worth it (no thrashing).
-                        let freed = open.collect(|node| nibble(scratch, unpack_index(node)) != 0);
-                        if freed < (open.pool.len() / 16).max(1) || !open.push(f, node) {
-                            self.queue_peak = open.bump;
-                            return Err(full);
+            let (above, cur, below) =
+                if x.wrapping_sub(1) < inner_x && index.wrapping_sub(width) < inner_span {
+                    (
+                        nibble_window(scratch, index + width - 1),
+                        nibble_window(scratch, index - 1),
+                        nibble_window(scratch, index - width - 1),
+                    )
+                } else {
+                    // Border: nibble of (x + sx, y + sy), BLOCKED off the map.
+                    let at = |sx: usize, sy: usize| -> u32 {
+                        let (nx, ny) = ((x + sx).wrapping_sub(1), (y + sy).wrapping_sub(1));
+                        if nx < width && ny < height {
+                            nibble(scratch, ny * width + nx)
+                        } else {
+                            BLOCKED
                         }
+                    };
+                    let row = |sy: usize| at(0, sy) | at(1, sy) << 4 | at(2, sy) << 8;
+                    (row(2), row(1), row(0))
+                };
+            let window = |w: u32| u32::from(ASTAR_WINDOWS[(w & 0xFFF) as usize]);
+            let m = window(below) | window(cur) << 6 | window(above) << 12;
+            let mut targets = m & arrival_targets(m, code);
+            while targets != 0 {
+                let bit = targets.trailing_zeros();
+                targets &= targets - 1;
+                let Some(step) = TARGET_STEPS.get(bit as usize) else {
+                    break;
+                };
+                let (nx, ny) = (
+                    (x as u32).wrapping_add(step.dx as u32),
+                    (y as u32).wrapping_add(step.dy as u32),
+                );
+                let f = g.saturating_add(step.cost + h(nx, ny));
+                let node = (node & !0xF).wrapping_add(step.node_delta);
+                if !open.push(f, node) {
+                    // Full: drop the entries of cells closed meanwhile and retry, unless that
+                    // frees too little to be worth it (no thrashing).
+                    let freed = open.collect(|node| nibble(scratch, unpack_index(node)) != 0);
+                    if freed < (open.pool.len() / 16).max(1) || !open.push(f, node) {
+                        self.queue_peak = open.bump;
+                        return Err(full);
                     }
-                }};
-            }
-
-            if c_e == 0 {
-                visit!(x + 1, y, STRAIGHT_COST, E);
-            }
-            if c_n == 0 {
-                visit!(x, y + 1, STRAIGHT_COST, N);
-            }
-            if c_w == 0 {
-                visit!(x - 1, y, STRAIGHT_COST, W);
-            }
-            if c_s == 0 {
-                visit!(x, y - 1, STRAIGHT_COST, S);
-            }
-            if free_n && free_e && nibble(scratch, index + width + 1) == 0 {
-                visit!(x + 1, y + 1, DIAGONAL_COST, NE);
-            }
-            if free_n && free_w && nibble(scratch, index + width - 1) == 0 {
-                visit!(x - 1, y + 1, DIAGONAL_COST, NW);
-            }
-            if free_s && free_w && nibble(scratch, index - width - 1) == 0 {
-                visit!(x - 1, y - 1, DIAGONAL_COST, SW);
-            }
-            if free_s && free_e && nibble(scratch, index - width + 1) == 0 {
-                visit!(x + 1, y - 1, DIAGONAL_COST, SE);
+                }
             }
         }
         self.queue_peak = open.bump;
