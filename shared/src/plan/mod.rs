@@ -520,46 +520,35 @@ const fn diagonal_ok(m: u32, z: u32, o1: u32, o2: u32) -> u32 {
     moved(m, o1, z) & moved(m, o2, z) & (1 << z)
 }
 
-/// Bit `z` when the side target `z` is *forced*: the cell `o_back` beside the parent, through
-/// which the parent would have reached `z` diagonally, is blocked.
+/// Bits `side` and `diagonal` when the cell `o_back` beside the parent is blocked: the side
+/// neighbour is then *forced* (the parent could not reach it diagonally), and so is the
+/// diagonal beyond it (which otherwise the side neighbour covers as cheaply). The diagonal
+/// still needs both its side cells open.
 #[inline(always)]
-const fn forced(m: u32, z: u32, o_back: u32) -> u32 {
-    !moved(m, o_back, z) & (1 << z)
+const fn forced(m: u32, side: u32, diagonal: u32, o_back: u32, o_side: u32, o_ahead: u32) -> u32 {
+    let blocked_back = !moved(m, o_back, side) & (1 << side);
+    blocked_back | (moved(blocked_back, side, diagonal) & diagonal_ok(m, diagonal, o_side, o_ahead))
 }
 
 /// The candidate targets (bits `Z_*`) of a cell reached by the step `code`, before the
-/// "nibble 0" test: the neighbours that the parent did not already cover with a key no larger
-/// (arrival pruning, see the module docs). The start (and any other code) tries all eight.
+/// "nibble 0" test: the neighbours that no other cell covers with a key no larger (arrival
+/// pruning, see the module docs). After a side step: straight on, plus the forced side and
+/// diagonal neighbours; after a diagonal step: its two sides and itself. The start (and any
+/// other code) tries all eight.
 #[inline(always)]
 fn arrival_targets(m: u32, code: u32) -> u32 {
     match code {
         E => {
-            (1 << Z_E)
-                | diagonal_ok(m, Z_NE, O_N, O_E)
-                | diagonal_ok(m, Z_SE, O_S, O_E)
-                | forced(m, Z_N, O_NW)
-                | forced(m, Z_S, O_SW)
+            (1 << Z_E) | forced(m, Z_N, Z_NE, O_NW, O_N, O_E) | forced(m, Z_S, Z_SE, O_SW, O_S, O_E)
         }
         W => {
-            (1 << Z_W)
-                | diagonal_ok(m, Z_NW, O_N, O_W)
-                | diagonal_ok(m, Z_SW, O_S, O_W)
-                | forced(m, Z_N, O_NE)
-                | forced(m, Z_S, O_SE)
+            (1 << Z_W) | forced(m, Z_N, Z_NW, O_NE, O_N, O_W) | forced(m, Z_S, Z_SW, O_SE, O_S, O_W)
         }
         N => {
-            (1 << Z_N)
-                | diagonal_ok(m, Z_NE, O_N, O_E)
-                | diagonal_ok(m, Z_NW, O_N, O_W)
-                | forced(m, Z_E, O_SE)
-                | forced(m, Z_W, O_SW)
+            (1 << Z_N) | forced(m, Z_E, Z_NE, O_SE, O_E, O_N) | forced(m, Z_W, Z_NW, O_SW, O_W, O_N)
         }
         S => {
-            (1 << Z_S)
-                | diagonal_ok(m, Z_SE, O_S, O_E)
-                | diagonal_ok(m, Z_SW, O_S, O_W)
-                | forced(m, Z_E, O_NE)
-                | forced(m, Z_W, O_NW)
+            (1 << Z_S) | forced(m, Z_E, Z_SE, O_NE, O_E, O_S) | forced(m, Z_W, Z_SW, O_NW, O_W, O_S)
         }
         NE => (1 << Z_E) | (1 << Z_N) | diagonal_ok(m, Z_NE, O_N, O_E),
         NW => (1 << Z_W) | (1 << Z_N) | diagonal_ok(m, Z_NW, O_N, O_W),
@@ -624,183 +613,187 @@ static TARGET_STEPS: [TargetStep; 15] = {
 
 /// End of a bucket list.
 const NIL: u32 = u32::MAX;
-/// Exact-key buckets per coarse bucket (`f & 31`).
-const FINE_BUCKETS: usize = 32;
-/// Coarse buckets (`(f >> 5) % 512`): they span 16 384 key values, more than the 16 238 by
-/// which a pushed `f` can exceed the last popped one (see [`BucketQueue`]).
-const COARSE_BUCKETS: usize = 512;
+/// Buckets of the open list (`(f >> 5) % 512`): they span 16 384 key values, more than the
+/// 16 238 by which a pushed `f` can exceed the last popped one (see [`BucketQueue`]).
+const BUCKETS: usize = 512;
 
-/// The open list of A*: a two-level bucket queue over a fixed pool of entries.
+/// The scalar state of a [`BucketQueue`], kept apart from its arrays so that the search loop
+/// holds it in registers (it is passed by value to the queue's out-of-line parts).
+#[derive(Clone, Copy)]
+struct QueueState {
+    /// Bit `w` set when word `w` of the bucket map is not 0.
+    summary: u32,
+    /// The last key popped (every key in the queue is at least this).
+    last: u32,
+    /// Entries of the pool ever used (the queue peak).
+    bump: u32,
+    /// Head of the list of freed entries.
+    free: u32,
+}
+
+/// The open list of A*: a bucket queue over a fixed pool of entries.
 ///
 /// With a consistent heuristic, a child's `f` exceeds its parent's by at most twice the step
 /// cost (`0 ≤ Δf = cost + Δh ≤ 2 · DIAGONAL_COST = 16 238`), and the parent's `f` is the last
 /// key popped. So every key in the queue lies in the window `[last, last + 16 238]`, and a
-/// circular array of 512 coarse buckets of 32 key values each orders them without comparisons:
-/// keys of the current coarse bucket sit in 32 exact buckets (`f & 31`), the others in their
-/// coarse bucket. A push links an entry at the head of one list, O(1); a pop takes the head of
-/// the lowest non-empty exact bucket, or, when they are all empty, finds the next non-empty
-/// coarse bucket in a 512-bit map and spreads it into the exact buckets (dropping entries whose
-/// cell was closed meanwhile). Every entry is thus moved at most once.
+/// circular array of 512 buckets of 32 key values each (`(f >> 5) % 512`) holds each key value
+/// in one bucket only. A push links an entry at the head of its bucket's list, O(1). A pop
+/// takes the first entry of smallest `f` in the bucket of the last popped key, or, when that is
+/// empty, in the next non-empty bucket, found in a 512-bit map with a 16-bit summary (two
+/// trailing-zero counts). Octile keys are sparse (steps cost thousands), so a bucket rarely
+/// holds more than a few entries; an entry whose `f` equals the last popped key ends the scan at
+/// once (nothing can be smaller), which keeps runs of equal keys O(1) per pop.
 ///
 /// Ties (equal `f`) pop the last pushed entry first: the children of the cell just expanded,
 /// i.e. the deeper entries (larger `g`), which on open floors keeps the search on one straight
-/// line instead of flooding every cell of equal `f`.
+/// line instead of flooding every cell of equal `f`. Entries of cells closed meanwhile stay in
+/// the lists (lazy deletion) until popped, or until [`BucketQueue::collect`] reclaims them when
+/// the pool is full.
 struct BucketQueue<'a> {
     pool: &'a mut [OpenEntry],
-    coarse: [u32; COARSE_BUCKETS],
-    coarse_map: [u32; COARSE_BUCKETS / 32],
-    fine: [u32; FINE_BUCKETS],
-    fine_map: u32,
-    /// Absolute coarse index (`f >> 5`) of the keys held in `fine`.
-    current: u32,
-    bump: u32,
-    free: u32,
+    heads: [u32; BUCKETS],
+    map: [u32; BUCKETS / 32],
 }
 
 impl<'a> BucketQueue<'a> {
-    fn new(pool: &'a mut [OpenEntry], first_key: u32) -> Self {
-        Self {
-            pool,
-            coarse: [NIL; COARSE_BUCKETS],
-            coarse_map: [0; COARSE_BUCKETS / 32],
-            fine: [NIL; FINE_BUCKETS],
-            fine_map: 0,
-            current: first_key >> 5,
-            bump: 0,
-            free: NIL,
-        }
+    fn new(pool: &'a mut [OpenEntry], first_key: u32) -> (Self, QueueState) {
+        (
+            Self {
+                pool,
+                heads: [NIL; BUCKETS],
+                map: [0; BUCKETS / 32],
+            },
+            QueueState {
+                summary: 0,
+                last: first_key,
+                bump: 0,
+                free: NIL,
+            },
+        )
     }
 
-    /// Insert; `false` when the pool is full. `key` must not be below the last key popped.
+    /// Insert; `false` when the pool is full. `key` must not be below `s.last`.
     #[inline(always)]
-    fn push(&mut self, key: u32, node: u32) -> bool {
-        let slot = if self.free != NIL {
-            let slot = self.free;
-            self.free = self.pool[slot as usize].next;
-            slot
-        } else if (self.bump as usize) < self.pool.len() {
-            self.bump += 1;
-            self.bump - 1
-        } else {
+    fn push(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
+        let slot = if s.free != NIL { s.free } else { s.bump };
+        let Some(entry) = self.pool.get_mut(slot as usize) else {
             return false;
         };
-        let head = if key >> 5 == self.current {
-            let b = (key & 31) as usize;
-            self.fine_map |= 1 << b;
-            &mut self.fine[b]
+        if s.free != NIL {
+            s.free = entry.next;
         } else {
-            let b = (key >> 5) as usize % COARSE_BUCKETS;
-            self.coarse_map[b / 32] |= 1 << (b % 32);
-            &mut self.coarse[b]
-        };
-        self.pool[slot as usize] = OpenEntry {
+            s.bump += 1;
+        }
+        let b = (key >> 5) as usize % BUCKETS;
+        self.map[b / 32] |= 1 << (b % 32);
+        s.summary |= 1 << (b / 32);
+        *entry = OpenEntry {
             f: key,
             node,
-            next: *head,
+            next: self.heads[b],
         };
-        *head = slot;
+        self.heads[b] = slot;
         true
     }
 
-    /// The first non-empty coarse bucket at or after `from`, circularly.
-    #[inline]
-    fn next_coarse(&self, from: usize) -> Option<usize> {
-        let words = COARSE_BUCKETS / 32;
-        let first = from / 32;
-        let masked = self.coarse_map[first] & (u32::MAX << (from % 32));
+    /// The first non-empty bucket at or after `from`, circularly: one word of the map and the
+    /// summary of the words.
+    #[inline(never)]
+    fn next_bucket(&self, summary: u32, from: usize) -> Option<usize> {
+        let first = (from / 32) % (BUCKETS / 32);
+        let masked = self.map[first] & (u32::MAX << (from % 32));
         if masked != 0 {
             return Some(first * 32 + masked.trailing_zeros() as usize);
         }
-        for k in 1..=words {
-            let w = (first + k) % words;
-            if self.coarse_map[w] != 0 {
-                return Some(w * 32 + self.coarse_map[w].trailing_zeros() as usize);
-            }
-        }
-        None
+        // Later words, else wrap around (which may come back to the low bits of `first`).
+        let later = summary & (u32::MAX << 1 << first);
+        let w = if later != 0 {
+            later.trailing_zeros() as usize
+        } else if summary != 0 {
+            summary.trailing_zeros() as usize
+        } else {
+            return None;
+        };
+        let bits = *self.map.get(w)?;
+        Some(w * 32 + bits.trailing_zeros() as usize)
     }
 
-    /// Remove an entry of the smallest key: `(key, node)`. `stale(node)` tells which entries
-    /// may be dropped unseen when a coarse bucket is spread.
+    /// Remove an entry of the smallest key: `(key, node)`.
     #[inline(always)]
-    fn pop(&mut self, stale: impl Fn(u32) -> bool) -> Option<(u32, u32)> {
-        while self.fine_map == 0 {
-            let from = (self.current as usize + 1) % COARSE_BUCKETS;
-            let b = self.next_coarse(from)?;
-            let ahead = (b + COARSE_BUCKETS - from) % COARSE_BUCKETS;
-            self.current = self.current.wrapping_add(1 + ahead as u32);
-            let mut slot = self.coarse[b];
-            self.coarse[b] = NIL;
-            self.coarse_map[b / 32] &= !(1 << (b % 32));
-            while slot != NIL {
-                let e = &mut self.pool[slot as usize];
+    fn pop(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
+        let mut b = (s.last >> 5) as usize % BUCKETS;
+        let mut head = self.heads[b];
+        if head == NIL {
+            b = self.next_bucket(s.summary, b)? % BUCKETS;
+            head = self.heads[b];
+        }
+        let first = *self.pool.get(head as usize)?;
+        let (mut best, mut best_f, mut best_next) = (head, first.f, first.next);
+        let mut before_best = NIL;
+        if best_f != s.last {
+            // Scan the bucket for the first entry of the smallest key.
+            let (mut prev, mut slot) = (head, first.next);
+            while let Some(e) = self.pool.get(slot as usize) {
+                if e.f < best_f {
+                    (best, best_f, best_next, before_best) = (slot, e.f, e.next, prev);
+                }
+                prev = slot;
+                slot = e.next;
+            }
+        }
+        let node = match self.pool.get_mut(best as usize) {
+            Some(e) => {
+                e.next = s.free;
+                e.node
+            }
+            None => return None,
+        };
+        s.free = best;
+        s.last = best_f;
+        match self.pool.get_mut(before_best as usize) {
+            Some(e) => e.next = best_next,
+            None => {
+                self.heads[b] = best_next;
+                if best_next == NIL {
+                    self.map[b / 32] &= !(1 << (b % 32));
+                    if self.map[b / 32] == 0 {
+                        s.summary &= !(1 << (b / 32));
+                    }
+                }
+            }
+        }
+        Some((best_f, node))
+    }
+
+    /// Drop every entry for which `stale(node)` holds from every bucket. Returns the new state
+    /// and how many slots were freed. O(entries); used only when the pool is full.
+    #[cold]
+    #[inline(never)]
+    fn collect(&mut self, mut s: QueueState, stale: impl Fn(u32) -> bool) -> (QueueState, usize) {
+        let mut freed = 0;
+        for b in 0..BUCKETS {
+            let (mut head, mut slot) = (NIL, self.heads[b]);
+            while let Some(e) = self.pool.get_mut(slot as usize) {
                 let next = e.next;
                 if stale(e.node) {
-                    e.next = self.free;
-                    self.free = slot;
+                    e.next = s.free;
+                    s.free = slot;
+                    freed += 1;
                 } else {
-                    let fb = (e.f & 31) as usize;
-                    e.next = self.fine[fb];
-                    self.fine[fb] = slot;
-                    self.fine_map |= 1 << fb;
+                    e.next = head;
+                    head = slot;
                 }
                 slot = next;
             }
-        }
-        let b = self.fine_map.trailing_zeros() as usize;
-        let slot = self.fine[b];
-        let e = self.pool[slot as usize];
-        self.fine[b] = e.next;
-        if e.next == NIL {
-            self.fine_map &= !(1 << b);
-        }
-        self.pool[slot as usize].next = self.free;
-        self.free = slot;
-        Some((e.f, e.node))
-    }
-
-    /// Unlink the stale entries (`stale(node)`) of one list into the free list; returns the
-    /// new head and how many were freed.
-    fn sweep(&mut self, mut slot: u32, stale: &impl Fn(u32) -> bool) -> (u32, usize) {
-        let (mut head, mut freed) = (NIL, 0);
-        while slot != NIL {
-            let e = &mut self.pool[slot as usize];
-            let next = e.next;
-            if stale(e.node) {
-                e.next = self.free;
-                self.free = slot;
-                freed += 1;
-            } else {
-                e.next = head;
-                head = slot;
-            }
-            slot = next;
-        }
-        (head, freed)
-    }
-
-    /// Drop every stale entry from every bucket. Returns how many slots were freed.
-    /// O(entries); used only when the pool is full.
-    #[cold]
-    fn collect(&mut self, stale: impl Fn(u32) -> bool) -> usize {
-        let mut freed = 0;
-        for b in 0..FINE_BUCKETS {
-            let (head, n) = self.sweep(self.fine[b], &stale);
-            self.fine[b] = head;
-            freed += n;
+            self.heads[b] = head;
             if head == NIL {
-                self.fine_map &= !(1 << b);
+                self.map[b / 32] &= !(1 << (b % 32));
+                if self.map[b / 32] == 0 {
+                    s.summary &= !(1 << (b / 32));
+                }
             }
         }
-        for b in 0..COARSE_BUCKETS {
-            let (head, n) = self.sweep(self.coarse[b], &stale);
-            self.coarse[b] = head;
-            freed += n;
-            if head == NIL {
-                self.coarse_map[b / 32] &= !(1 << (b % 32));
-            }
-        }
-        freed
+        (s, freed)
     }
 }
 
@@ -1648,7 +1641,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
         };
         let (sx, sy) = ((start % width) as u32, (start / width) as u32);
-        let mut open = BucketQueue::new(&mut self.queue[..], h(sx, sy));
+        let (mut open, mut state) = BucketQueue::new(&mut self.queue[..], h(sx, sy));
         let full = PlanError::QueueFull {
             capacity: open.pool.len() as u32,
         };
@@ -1656,16 +1649,28 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
 
         // Entries carry `y << 16 | x << 4 | step code` (sides are at most 4096 cells), so the
         // loop never divides, and a neighbour's entry is the cell's plus a constant.
-        if !open.push(h(sx, sy), (sy << 16) | (sx << 4) | CODE_START) {
+        if !open.push(&mut state, h(sx, sy), (sy << 16) | (sx << 4) | CODE_START) {
             return Err(full);
         }
         // Interior cells: x in 1..width-1 and index in width..cells-width.
         let inner_x = width.saturating_sub(2);
         let inner_span = geometry.cell_count().saturating_sub(2 * width);
 
-        let unpack_index =
-            |node: u32| (node >> 16) as usize * width + ((node >> 4) & 0xFFF) as usize;
-        while let Some((f, node)) = open.pop(|node| nibble(scratch, unpack_index(node)) != 0) {
+        // A target whose key equals the key just popped is the next pop anyway (nothing in the
+        // queue is below it): one such target skips the queue and is expanded next
+        // (`next_node`, NIL when none).
+        let (mut next_key, mut next_node) = (0u32, NIL);
+        loop {
+            let (f, node) = if next_node != NIL {
+                let taken = (next_key, next_node);
+                next_node = NIL;
+                taken
+            } else {
+                match open.pop(&mut state) {
+                    Some(entry) => entry,
+                    None => break,
+                }
+            };
             let x = ((node >> 4) & 0xFFF) as usize;
             let y = (node >> 16) as usize;
             let index = y * width + x;
@@ -1682,7 +1687,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             // The entry does not store g: f = g + h exactly.
             let g = f.wrapping_sub(h(x as u32, y as u32));
             if index == goal {
-                self.queue_peak = open.bump;
+                self.queue_peak = state.bump;
                 return Ok(Search {
                     found: true,
                     expanded,
@@ -1698,7 +1703,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                         nibble_window(scratch, index - width - 1),
                     )
                 } else {
-                    // Border: nibble of (x + sx, y + sy), BLOCKED off the map.
+                    // Border: nibble of (x + sx - 1, y + sy - 1), BLOCKED off the map.
                     let at = |sx: usize, sy: usize| -> u32 {
                         let (nx, ny) = ((x + sx).wrapping_sub(1), (y + sy).wrapping_sub(1));
                         if nx < width && ny < height {
@@ -1723,20 +1728,30 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     (x as u32).wrapping_add(step.dx as u32),
                     (y as u32).wrapping_add(step.dy as u32),
                 );
-                let f = g.saturating_add(step.cost + h(nx, ny));
-                let node = (node & !0xF).wrapping_add(step.node_delta);
-                if !open.push(f, node) {
+                let key = g.saturating_add(step.cost + h(nx, ny));
+                let child = (node & !0xF).wrapping_add(step.node_delta);
+                if key == f && next_node == NIL {
+                    (next_key, next_node) = (key, child);
+                    continue;
+                }
+                if !open.push(&mut state, key, child) {
                     // Full: drop the entries of cells closed meanwhile and retry, unless that
                     // frees too little to be worth it (no thrashing).
-                    let freed = open.collect(|node| nibble(scratch, unpack_index(node)) != 0);
-                    if freed < (open.pool.len() / 16).max(1) || !open.push(f, node) {
-                        self.queue_peak = open.bump;
+                    let (after, freed) = open.collect(state, |n| {
+                        nibble(
+                            scratch,
+                            (n >> 16) as usize * width + ((n >> 4) & 0xFFF) as usize,
+                        ) != 0
+                    });
+                    state = after;
+                    if freed < (open.pool.len() / 16).max(1) || !open.push(&mut state, key, child) {
+                        self.queue_peak = state.bump;
                         return Err(full);
                     }
                 }
             }
         }
-        self.queue_peak = open.bump;
+        self.queue_peak = state.bump;
         Ok(Search {
             found: false,
             expanded,

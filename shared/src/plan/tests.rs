@@ -890,3 +890,32 @@ fn sparse_obstacles_on_many_words_match_pathfinding() {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2048))]
+
+    /// The cell-by-cell A* on its own (whatever the clutter test would choose), with its arrival
+    /// pruning and the queue's immediate expansion: the optimal cost, a path of that cost.
+    #[test]
+    fn cell_by_cell_astar_matches_pathfinding((mut g, s, t) in arb_grid()) {
+        let mut p = Box::new(SmallPlanner::new());
+        g.set(s, false);
+        g.set(t, false);
+        if s == t {
+            return Ok(());
+        }
+        p.copy_map(&g);
+        let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
+        let search = p.astar(&g, si, t, ti).unwrap();
+        let expected = oracle_astar(&g, s, t);
+        prop_assert_eq!(search.found, expected.is_some());
+        if let Some(cost) = expected {
+            prop_assert_eq!(search.cost, cost);
+            let (_, _, fits) = p.rebuild_merged(g.geometry(), t);
+            prop_assert!(fits);
+            prop_assert_eq!(steps_and_cost(p.path_cells()).1, cost);
+            assert_collision_free(&g, p.path_cells());
+            prop_assert_eq!(p.path_cells().first(), Some(&s));
+        }
+    }
+}
