@@ -385,6 +385,24 @@ fn spread_bits_to_nibbles(byte: u32) -> u32 {
     (x | (x << 3)) & 0x1111_1111
 }
 
+/// [`BLOCKED`] in the nibble of each set bit of a byte (bit k -> nibble k): one table read
+/// per 8 cells when [`Planner::copy_map`] copies the map. 1 KB of read-only data.
+static BLOCKED_NIBBLES: [u32; 256] = {
+    let mut table = [0u32; 256];
+    let mut b = 0;
+    while b < 256 {
+        let mut k = 0;
+        while k < 8 {
+            if b & (1 << k) != 0 {
+                table[b] |= BLOCKED << (4 * k);
+            }
+            k += 1;
+        }
+        b += 1;
+    }
+    table
+};
+
 /// Step of each code 1..=8 (index = code - 1): E, N, W, S, NE, NW, SW, SE.
 const STEPS: [(i32, i32); 8] = [
     (1, 0),
@@ -567,47 +585,30 @@ fn arrival_targets(m: u32, code: u32) -> u32 {
     }
 }
 
-/// A move of the cell-by-cell A*, by target bit `Z_*`.
-#[derive(Clone, Copy)]
-struct TargetStep {
-    dx: i32,
-    dy: i32,
-    cost: u32,
-    /// Added to the cell's entry without its code: `dy << 16 + dx << 4 + code` (wrapping).
-    node_delta: u32,
-}
+/// The target bits `Z_*` of the diagonal moves.
+const DIAGONAL_TARGETS: u32 = (1 << Z_SW) | (1 << Z_SE) | (1 << Z_NW) | (1 << Z_NE);
 
-const fn target_step(code: u32) -> TargetStep {
-    let (dx, dy) = STEPS[(code - 1) as usize];
-    TargetStep {
-        dx,
-        dy,
-        cost: if code >= NE {
-            DIAGONAL_COST
-        } else {
-            STRAIGHT_COST
-        },
-        node_delta: ((dy << 16) + (dx << 4)) as u32 + code,
+/// What to add to a cell's queue entry without its code (`y << 16 | x << 4`) to get the entry
+/// of its neighbour by target bit `Z_*`, step code included (wrapping; unused bits: 0).
+static TARGET_NODE_DELTAS: [u32; 15] = {
+    let mut t = [0u32; 15];
+    let targets = [
+        (Z_SW, SW),
+        (Z_S, S),
+        (Z_SE, SE),
+        (Z_W, W),
+        (Z_E, E),
+        (Z_NW, NW),
+        (Z_N, N),
+        (Z_NE, NE),
+    ];
+    let mut k = 0;
+    while k < targets.len() {
+        let (bit, code) = targets[k];
+        let (dx, dy) = STEPS[(code - 1) as usize];
+        t[bit as usize] = ((dy << 16) + (dx << 4)) as u32 + code;
+        k += 1;
     }
-}
-
-/// [`TargetStep`] of each target bit (bits that are not targets: a zero step, never used).
-static TARGET_STEPS: [TargetStep; 15] = {
-    let none = TargetStep {
-        dx: 0,
-        dy: 0,
-        cost: 0,
-        node_delta: 0,
-    };
-    let mut t = [none; 15];
-    t[Z_SW as usize] = target_step(SW);
-    t[Z_S as usize] = target_step(S);
-    t[Z_SE as usize] = target_step(SE);
-    t[Z_W as usize] = target_step(W);
-    t[Z_E as usize] = target_step(E);
-    t[Z_NW as usize] = target_step(NW);
-    t[Z_N as usize] = target_step(N);
-    t[Z_NE as usize] = target_step(NE);
     t
 };
 
@@ -1138,13 +1139,15 @@ const JPS_WIDE_FRONTIER: usize = 16;
 /// many cells: 20 % random obstacles have about 1 in 6, a maze of 1-cell corridors 1 in 4, the
 /// bundled room worlds fewer than 1 in 100.
 const CLUTTER_CELLS_PER_RUN: usize = 32;
+/// [`cluttered`] reads one word in this many (of 32 cells each).
+const CLUTTER_SAMPLE_STRIDE: usize = 4;
 /// Rows beyond the start and goal rows that [`cluttered`] also counts.
 const CLUTTER_MARGIN_ROWS: u32 = 16;
 
 /// `true` when the map around start and goal is cluttered (see [`CLUTTER_CELLS_PER_RUN`]): it
-/// counts the runs of occupied cells (a set bit after a clear one) in the grid's words of the
-/// rows from the lower of the two rows to the higher, widened by [`CLUTTER_MARGIN_ROWS`]. One
-/// pass over those words; empty words cost a test.
+/// counts the runs of occupied cells (a set bit after a clear one) in a sample of the grid's
+/// words (one in [`CLUTTER_SAMPLE_STRIDE`]) over the rows from the lower of the two rows to the
+/// higher, widened by [`CLUTTER_MARGIN_ROWS`]: about 700 word reads on a 300 × 300 grid.
 fn cluttered(words: &[u32], geometry: &GridGeometry, start: Cell, goal: Cell) -> bool {
     let width = geometry.width() as usize;
     let (lo, hi) = if start.y < goal.y {
@@ -1159,15 +1162,22 @@ fn cluttered(words: &[u32], geometry: &GridGeometry, start: Cell, goal: Cell) ->
         first_row * width / 32,
         ((last_row as usize + 1) * width).div_ceil(32),
     );
-    let cells = (end_word - first_word) * 32;
+    // Every `CLUTTER_SAMPLE_STRIDE`-th word; a run that enters a sampled word counts as starting
+    // there.
     let mut runs = 0usize;
-    let mut previous = 0u32;
-    for &w in words.get(first_word..end_word).unwrap_or(&[]) {
+    let mut sampled = 0usize;
+    for &w in words
+        .get(first_word..end_word)
+        .unwrap_or(&[])
+        .iter()
+        .step_by(CLUTTER_SAMPLE_STRIDE)
+    {
         if w != 0 {
-            runs += (w & !((w << 1) | (previous >> 31))).count_ones() as usize;
+            runs += (w & !(w << 1)).count_ones() as usize;
         }
-        previous = w;
+        sampled += 1;
     }
+    let cells = sampled * 32;
     runs * CLUTTER_CELLS_PER_RUN > cells
 }
 
@@ -1448,9 +1458,20 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     fn copy_map<const GW: usize>(&mut self, grid: &Grid<GW>) {
         let used_words = scratch_words_for_cells(grid.geometry().cell_count());
         let used = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
-        for (quad, &bits) in used.chunks_mut(4).zip(grid.words()) {
-            for (k, word) in quad.iter_mut().enumerate() {
-                *word = spread_bits_to_nibbles(bits >> (8 * k)) * BLOCKED;
+        let mut quads = used.chunks_exact_mut(4);
+        let mut bits = grid.words().iter();
+        for (quad, &b) in (&mut quads).zip(&mut bits) {
+            if let [w0, w1, w2, w3] = quad {
+                *w0 = BLOCKED_NIBBLES[(b & 0xFF) as usize];
+                *w1 = BLOCKED_NIBBLES[((b >> 8) & 0xFF) as usize];
+                *w2 = BLOCKED_NIBBLES[((b >> 16) & 0xFF) as usize];
+                *w3 = BLOCKED_NIBBLES[(b >> 24) as usize];
+            }
+        }
+        // The last grid word may cover fewer than four scratch words.
+        if let Some(&b) = bits.next() {
+            for (k, word) in quads.into_remainder().iter_mut().enumerate() {
+                *word = spread_bits_to_nibbles(b >> (8 * k)) * BLOCKED;
             }
         }
     }
@@ -1659,15 +1680,19 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         // A target whose key equals the key just popped is the next pop anyway (nothing in the
         // queue is below it): one such target skips the queue and is expanded next
         // (`next_node`, NIL when none).
-        let (mut next_key, mut next_node) = (0u32, NIL);
+        // (`next_node`, NIL when none; its key is the current `f`, its `g` is `next_g`).
+        let (mut f, mut next_g, mut next_node) = (0u32, 0u32, NIL);
         loop {
-            let (f, node) = if next_node != NIL {
-                let taken = (next_key, next_node);
+            let (node, known_g) = if next_node != NIL {
+                let taken = (next_node, Some(next_g));
                 next_node = NIL;
                 taken
             } else {
                 match open.pop(&mut state) {
-                    Some(entry) => entry,
+                    Some((key, node)) => {
+                        f = key;
+                        (node, None)
+                    }
                     None => break,
                 }
             };
@@ -1684,8 +1709,11 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             let code = node & 0xF;
             *word |= code << shift;
             expanded += 1;
-            // The entry does not store g: f = g + h exactly.
-            let g = f.wrapping_sub(h(x as u32, y as u32));
+            // Queue entries do not store g: f = g + h exactly.
+            let g = match known_g {
+                Some(g) => g,
+                None => f.wrapping_sub(h(x as u32, y as u32)),
+            };
             if index == goal {
                 self.queue_peak = state.bump;
                 return Ok(Search {
@@ -1721,17 +1749,19 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             while targets != 0 {
                 let bit = targets.trailing_zeros();
                 targets &= targets - 1;
-                let Some(step) = TARGET_STEPS.get(bit as usize) else {
+                let Some(&delta) = TARGET_NODE_DELTAS.get(bit as usize) else {
                     break;
                 };
-                let (nx, ny) = (
-                    (x as u32).wrapping_add(step.dx as u32),
-                    (y as u32).wrapping_add(step.dy as u32),
-                );
-                let key = g.saturating_add(step.cost + h(nx, ny));
-                let child = (node & !0xF).wrapping_add(step.node_delta);
+                let child = (node & !0xF).wrapping_add(delta);
+                let cost = if (1 << bit) & DIAGONAL_TARGETS != 0 {
+                    DIAGONAL_COST
+                } else {
+                    STRAIGHT_COST
+                };
+                let child_g = g.saturating_add(cost);
+                let key = child_g.saturating_add(h((child >> 4) & 0xFFF, child >> 16));
                 if key == f && next_node == NIL {
-                    (next_key, next_node) = (key, child);
+                    (next_g, next_node) = (child_g, child);
                     continue;
                 }
                 if !open.push(&mut state, key, child) {
@@ -2049,7 +2079,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 end = p;
                 run += 1;
             }
-            if line_of_sight(grid, anchor, end) {
+            // From the anchor itself the run is an A* move sequence: visible without a test.
+            if cur == anchor || line_of_sight(grid, anchor, end) {
                 cur = end;
                 steps += run;
                 continue;

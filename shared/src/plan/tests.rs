@@ -919,3 +919,40 @@ proptest! {
         }
     }
 }
+
+/// The line of sight walked with [`crate::raster::BresenhamLine`] and the grid's checked
+/// accessors, cell by cell: the reference for the index-stepping [`line_of_sight`].
+fn line_of_sight_reference<const W: usize>(grid: &Grid<W>, a: Cell, b: Cell) -> bool {
+    let (from, to) = if (a.y, a.x) <= (b.y, b.x) {
+        (a, b)
+    } else {
+        (b, a)
+    };
+    let (mut px, mut py) = (from.x as i32, from.y as i32);
+    for (x, y) in crate::raster::BresenhamLine::new((px, py), (to.x as i32, to.y as i32)) {
+        if grid.is_occupied_xy(x, y) {
+            return false;
+        }
+        if x != px && y != py && (grid.is_occupied_xy(x, py) || grid.is_occupied_xy(px, y)) {
+            return false;
+        }
+        px = x;
+        py = y;
+    }
+    true
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(1024))]
+
+    #[test]
+    fn line_of_sight_equals_the_cell_by_cell_walk(
+        (g, s, t) in arb_grid(),
+        off in 0u16..3,
+    ) {
+        // `off` moves the far end off the map now and then.
+        let t = Cell::new(t.x + off * 20, t.y);
+        prop_assert_eq!(line_of_sight(&g, s, t), line_of_sight_reference(&g, s, t));
+        prop_assert_eq!(line_of_sight(&g, t, s), line_of_sight_reference(&g, s, t));
+    }
+}
