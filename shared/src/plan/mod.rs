@@ -1683,37 +1683,35 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         // (`next_node`, NIL when none; its key is the current `f`, its `g` is `next_g`).
         let (mut f, mut next_g, mut next_node) = (0u32, 0u32, NIL);
         loop {
-            let (node, known_g) = if next_node != NIL {
-                let taken = (next_node, Some(next_g));
+            let (node, x, y, index, g) = if next_node != NIL {
+                // A target of the cell just expanded: not closed (its nibble was 0 then).
+                let node = next_node;
                 next_node = NIL;
-                taken
+                let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
+                (node, x, y, y * width + x, next_g)
             } else {
-                match open.pop(&mut state) {
-                    Some((key, node)) => {
+                let mut found = None;
+                while let Some((key, node)) = open.pop(&mut state) {
+                    let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
+                    let index = y * width + x;
+                    if nibble(scratch, index) == 0 {
+                        // Queue entries do not store g: f = g + h exactly.
                         f = key;
-                        (node, None)
+                        found = Some((node, x, y, index, key.wrapping_sub(h(x as u32, y as u32))));
+                        break;
                     }
+                    // Otherwise already closed by a cheaper entry.
+                }
+                match found {
+                    Some(entry) => entry,
                     None => break,
                 }
             };
-            let x = ((node >> 4) & 0xFFF) as usize;
-            let y = (node >> 16) as usize;
-            let index = y * width + x;
-            let Some(word) = scratch.get_mut(index >> 3) else {
-                continue;
-            };
-            let shift = (index & 7) * 4;
-            if (*word >> shift) & 0xF != 0 {
-                continue; // already closed by a cheaper entry
-            }
             let code = node & 0xF;
-            *word |= code << shift;
+            if let Some(word) = scratch.get_mut(index >> 3) {
+                *word |= code << ((index & 7) * 4); // the nibble is 0
+            }
             expanded += 1;
-            // Queue entries do not store g: f = g + h exactly.
-            let g = match known_g {
-                Some(g) => g,
-                None => f.wrapping_sub(h(x as u32, y as u32)),
-            };
             if index == goal {
                 self.queue_peak = state.bump;
                 return Ok(Search {
