@@ -728,9 +728,9 @@ fn jump_point_search_needs_few_entries_on_room_maps() {
 
 #[test]
 fn cluttered_maps_fall_back_to_cell_by_cell_astar_with_the_same_cost() {
-    // 20 % random obstacles on 300 x 300 cells: nearly every free cell is a jump point, so the
-    // search gives up after 352 of them and runs cell-by-cell A* (with reclaiming when a
-    // small queue fills). Same optimal cost either way.
+    // 20 % random obstacles on 300 x 300 cells: nearly every free cell would be a jump point, so
+    // the clutter count sends A* cell by cell at once (with reclaiming when a small queue
+    // fills). Same optimal cost either way; the MCU's 2 300 entries, and even 1 024, suffice.
     let mut g = crate::grid::Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
     let mut state = 0x9E37_79B9_7F4A_7C15u64;
     for y in 0..300 {
@@ -747,8 +747,15 @@ fn cluttered_maps_fall_back_to_cell_by_cell_astar_with_the_same_cost() {
     g.set(s, false);
     g.set(t, false);
     let expected = oracle_astar(&g, s, t);
-    for queue in [0usize, 1] {
-        let r = if queue == 0 {
+    assert!(cluttered(g.words(), g.geometry(), s, t));
+    for queue in [0usize, 1, 2] {
+        let r = if queue == 2 {
+            let mut p = Box::new(Planner::<SCRATCH_WORDS_300, 1024>::new());
+            let r = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+            assert_eq!(steps_and_cost(p.path_cells()).1, r.cost);
+            assert!(p.queue_peak() <= 1024);
+            r
+        } else if queue == 0 {
             let mut big = Box::new(Planner::<SCRATCH_WORDS_300, 32768>::new());
             let r = big.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
             assert_eq!(steps_and_cost(big.path_cells()).1, r.cost);
@@ -764,7 +771,7 @@ fn cluttered_maps_fall_back_to_cell_by_cell_astar_with_the_same_cost() {
         assert_eq!(r.status == PlanStatus::Found, expected.is_some());
         if let Some(cost) = expected {
             assert_eq!(r.cost, cost);
-            // 352 jump points, then about 29 000 cells.
+            // About 28 800 cells, no jump points.
             assert!(r.expanded > 20_000, "expanded {}", r.expanded);
         }
     }
@@ -843,6 +850,11 @@ fn wide_grids_scan_columns_one_by_one_with_the_same_cost() {
                 assert_eq!(r.cost, cost, "density {density} {s:?} -> {t:?}");
                 assert_eq!(steps_and_cost(p.path_cells()).1, cost);
                 assert_collision_free(&g, p.path_cells());
+            }
+            // The planner runs the cluttered cases cell by cell: jump point search (its
+            // column-by-column diagonal scans) on its own, too, up to where it gives up.
+            if let Some(found) = jump_point_search_alone(&mut *p, &g, s, t) {
+                assert_eq!(found, expected, "density {density} {s:?} -> {t:?}");
             }
         }
     }
@@ -954,5 +966,85 @@ proptest! {
         let t = Cell::new(t.x + off * 20, t.y);
         prop_assert_eq!(line_of_sight(&g, s, t), line_of_sight_reference(&g, s, t));
         prop_assert_eq!(line_of_sight(&g, t, s), line_of_sight_reference(&g, s, t));
+    }
+}
+
+#[test]
+fn the_clutter_count_keeps_jump_points_on_room_maps_and_open_floors() {
+    // The seed's room worlds and an empty floor keep jump point search (a few dozen jump points
+    // at most); a maze of 1-cell corridors is cluttered.
+    for name in ["office", "corridor", "pillars"] {
+        let (g, params) = world(name);
+        let cell = |p| g.geometry().cell_of(p).unwrap();
+        let (s, t) = (cell(params.start), cell(params.goal));
+        assert!(!cluttered(g.words(), g.geometry(), s, t), "{name}");
+        let mut p = Box::new(Planner300::new());
+        let r = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+        assert!(r.expanded < 100, "{name}: expanded {}", r.expanded);
+    }
+    let open = crate::grid::Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
+    assert!(!cluttered(
+        open.words(),
+        open.geometry(),
+        Cell::new(3, 5),
+        Cell::new(296, 291)
+    ));
+    // Walls on even rows and columns, a gap in every wall: rooms of one cell.
+    let mut maze = crate::grid::Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
+    for y in 0..300 {
+        for x in 0..300 {
+            if (x % 2 == 0 || y % 2 == 0) && (x + 3 * y) % 7 != 0 {
+                maze.set_xy(x, y, true);
+            }
+        }
+    }
+    assert!(cluttered(
+        maze.words(),
+        maze.geometry(),
+        Cell::new(1, 1),
+        Cell::new(297, 297)
+    ));
+}
+
+/// Jump point search alone (whatever the clutter count would choose), on cleared scratch:
+/// `None` when it gave up (cluttered or out of entries), else the cost found (`None` inside when
+/// unreachable) after checking the rebuilt path's cost and collisions.
+fn jump_point_search_alone<const W: usize, const S: usize, const Q: usize>(
+    p: &mut Planner<S, Q>,
+    g: &Grid<W>,
+    s: Cell,
+    t: Cell,
+) -> Option<Option<u32>> {
+    let geometry = *g.geometry();
+    p.scratch.fill(0);
+    p.cells.clear();
+    let search = p.jps(g, geometry.index(s), t, geometry.index(t)).ok()?;
+    if !search.found {
+        return Some(None);
+    }
+    let (_, _, fits) = p.rebuild_merged(&geometry, t);
+    assert!(fits);
+    assert_eq!(steps_and_cost(p.path_cells()).1, search.cost);
+    assert_collision_free(g, p.path_cells());
+    assert_eq!(p.path_cells().first(), Some(&s));
+    Some(Some(search.cost))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(1024))]
+
+    /// Jump point search on its own at every density (the planner only runs it on uncluttered
+    /// maps): when it does not give up, the optimal cost and a path of that cost.
+    #[test]
+    fn jump_point_search_alone_matches_pathfinding((mut g, s, t) in arb_grid()) {
+        g.set(s, false);
+        g.set(t, false);
+        if s == t {
+            return Ok(());
+        }
+        let mut p = Box::new(SmallPlanner::new());
+        if let Some(found) = jump_point_search_alone(&mut *p, &g, s, t) {
+            prop_assert_eq!(found, oracle_astar(&g, s, t));
+        }
     }
 }
