@@ -27,20 +27,22 @@
 //! | 10 ..= 14 | unused                                                         |
 //! | 15        | occupied (BFS and the cell-by-cell A* only)                    |
 //!
-//! BFS (and the cell-by-cell A* fallback) first copy the map into it (occupied → 15, 8 cells
-//! per word with a few shifts), so one nibble read answers both "free?" and "reached?". The jump
-//! point search reads the map's own bits and only clears the nibbles.
+//! BFS and the cell-by-cell A* first copy the map into it (occupied → 15, 8 cells per word from
+//! a 1 KB table), so one nibble read answers both "free?" and "reached?". The jump point search
+//! reads the map's own bits and only clears the nibbles.
 //!
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
 //! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
 //! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (4 096 bytes), plus a few hundred bytes
-//! of bit sets on the stack during a jump point search (about 2.2 KB of bucket heads in the
-//! cell-by-cell fallback). Nothing else is allocated; the grid itself is only read. BFS also
-//! reads a constant 4 KB table (read-only data: flash on the MCU).
+//! of bit sets on the stack during a jump point search (about 2.1 KB of bucket heads in the
+//! cell-by-cell A*). Nothing else is allocated; the grid itself is only read. BFS and the
+//! cell-by-cell A* each read a constant 4 KB table, `copy_map` a 1 KB one (read-only data: flash
+//! on the MCU).
 //! [`Planner::queue_peak`] tells how much of the queue a search used. Measured on the 300 × 300
-//! benchmark grids and the bundled worlds: BFS needs at most 600 entries; A* (jump points: open
-//! list plus records) 3 (open floor), 10 (corridor), 27 (office), 43 (pillars), 5 835 (a maze
-//! of 1-cell corridors, where `Planner300` therefore falls back to cell-by-cell A*).
+//! benchmark grids and the bundled worlds: BFS needs at most 600 entries; A* by jump points
+//! (open list plus records) 3 (open floor), 9 (corridor), 18 (office), 40 (pillars); cell by
+//! cell (20 % random obstacles, a maze of 1-cell corridors) 782 and 13. So 1 024 entries cover
+//! every benchmark case.
 //!
 //! ## A*: jump point search without a g-table
 //!
@@ -78,25 +80,62 @@
 //! step code to the next closed cell is *not* exact: a cell on the segment may be a jump point
 //! that another branch closed with a worse cost; the property tests found such cases.)
 //!
-//! *Fallback.* On cluttered maps nearly every free cell becomes a jump point and scanning costs
-//! more than it saves. When more than one cell in 256 (at least 256) has been expanded as a jump
-//! point *and* the open list holds more than one entry per 16 of them (a wide frontier: 269
-//! entries after 1 024 jump points on 20 % random obstacles, 2 in a maze), or when the queue
-//! runs out of entries for the heap and the records, the search restarts as cell-by-cell A*
-//! below; `expanded` then counts the jump points and the cells.
+//! *Choice.* On cluttered maps nearly every free cell becomes a jump point and scanning costs
+//! more than it saves. Before searching, a clutter count (`cluttered`) reads one grid word in
+//! four over the rows between start and goal (16 rows of margin) and counts the runs of
+//! occupied cells (a set bit after a clear one, `count_ones`): more than one run per 32 cells
+//! (20 % random obstacles: about 1 per 6; a maze of 1-cell corridors: 1 per 4; the bundled
+//! room worlds: fewer than 1 per 100) sends A* cell by cell at once. About 700 word reads
+//! (≈ 5 000 instructions) on a 300 × 300 grid.
 //!
-//! ## Cell-by-cell A* (the fallback)
+//! *Fallback.* When jump point search runs anyway and more than one cell in 256 (at least 256)
+//! has been expanded as a jump point *and* the open list holds more than one entry per 16 of
+//! them (a wide frontier), or when the queue runs out of entries for the heap and the records,
+//! the search restarts as cell-by-cell A* below; `expanded` then counts the jump points and
+//! the cells.
 //!
-//! The open list holds `(f, cell, step)` entries with lazy deletion: a cell may be pushed once
-//! per neighbour that reaches it, and only its first pop counts (with a consistent heuristic,
-//! its `g` is then optimal). It is a *two-level bucket queue* (see `BucketQueue` in the source):
-//! with a consistent heuristic a pushed `f` is never below the last popped `f` and never more
-//! than `2 · DIAGONAL_COST` above it, so 512 circular coarse buckets of 32 key values, plus 32
-//! exact buckets for the current coarse one, order all keys without comparisons: a push links
-//! the entry at the head of a list (O(1)); a pop takes the head of the lowest exact bucket, or
-//! spreads the next non-empty coarse bucket into the exact ones, dropping entries whose cell was
-//! closed meanwhile. Every entry moves at most once. Ties on `f` pop the last pushed entry
-//! first (the deeper entries).
+//! ## Cell-by-cell A*
+//!
+//! For cluttered maps (and as the fallback). The open list holds `(f, cell, step)` entries with
+//! lazy deletion: a cell may be pushed more than once, and only its first pop counts (with a
+//! consistent heuristic, its `g` is then optimal); `g` is not stored, it is `f − h(cell)`.
+//!
+//! *Arrival pruning.* A closed cell pushes only the neighbours that no other cell covers with a
+//! key as small (the neighbour rule of jump point search without corner cutting, applied one
+//! step at a time). After a side step, say east from parent `p`: the cell straight on (east);
+//! the north neighbour only when the cell north of `p` is blocked (else `p` reached it
+//! diagonally for `D < 2S`), and then also the north-east one (else the north neighbour covers
+//! it at the same cost); likewise south. After a diagonal step, say north-east: east, north and
+//! north-east (the west and south neighbours are `p`'s side neighbours, cheaper from `p`; the
+//! north-west and south-east ones are reached through them for `2S < 2D`). The start tries all
+//! eight. A neighbour is pushed only when its nibble is 0 (free, not closed), a diagonal only
+//! when both side cells are free. By induction on the keys every pruned push is covered by an
+//! entry of no larger key before the queue reaches it, so the first pop of every cell still
+//! has the optimal `g`; the property tests compare the cost with `pathfinding` on 2 048 random
+//! grids for the cell-by-cell search alone (and 200 000 in a one-off run). On 20 % random
+//! obstacles the queue sees 0.84 pushes per expanded cell (1.46 when only the parent's own
+//! moves were pruned, without the immediate expansion below).
+//!
+//! *Immediate expansion.* A target whose key equals the key just popped would be the next pop
+//! (nothing in the queue is smaller; ties pop the last pushed first): the first such target
+//! skips the queue and is expanded next, with its `g` carried over (no closed test, no `h`).
+//!
+//! *Hot loop.* The popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
+//! nibbles of a row, two 32-bit scratch reads each) and turned by a 4 KB table into an 18-bit
+//! mask ("nibble 0" and "not blocked" per cell); the arrival step picks the candidate targets
+//! with a few shifts and ANDs; a loop over the target bits pushes each with a constant entry
+//! delta (`y << 16 | x << 4 | code` entries: a neighbour's entry is the cell's plus a constant).
+//! Cells on the map border read their neighbours one by one.
+//!
+//! *Bucket queue* (see `BucketQueue` in the source): with a consistent heuristic a pushed `f` is
+//! never below the last popped `f` and never more than `2 · DIAGONAL_COST` above it, so 512
+//! circular buckets of 32 key values hold every key value in one bucket. A push links the entry
+//! at the head of its bucket, O(1). A pop scans the bucket of the last popped key, or the next
+//! non-empty one (a 512-bit map with a 16-bit summary: two trailing-zero counts), for its first
+//! entry of smallest `f`; octile keys are sparse (steps cost thousands), so buckets hold one or
+//! two entries, and an entry equal to the last popped key ends the scan at once. Ties on `f` pop
+//! the last pushed entry first (the deeper entries). The queue's scalar state is a separate
+//! `Copy` value so that the loop keeps it in registers.
 //!
 //! When the pool of entries is full, the queue first *reclaims* the entries of cells closed
 //! since they were pushed (one pass over all lists) and carries on; only when that frees less
@@ -126,12 +165,13 @@
 //! of 1-cell corridors). Jump point
 //! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
-//! seed's room maps a whole plan takes 0.8–2.0 M instructions for 9–22 jump points. The
-//! cell-by-cell fallback: at most 8 pushes per expanded cell, each O(1), pops O(1) amortized;
-//! about 550 instructions per expanded cell. Rebuilding the path walks the records and the
-//! steps back from the goal: `O(path cells)`, plus, for the any-angle planner, one line-of-sight
-//! test per straight run and a bisection in the runs where a shortcut ends
-//! (`O(runs × log(run) × segment length)`).
+//! seed's room maps a whole plan takes 0.9–2.9 M Cortex-M4 instructions for 9–22 jump points.
+//! Cell-by-cell A*: at most 8 pushes per expanded cell (typically fewer than one), each O(1),
+//! pops O(bucket size); about 300 Cortex-M4 instructions per expanded cell (8.6 M on 20 %
+//! random obstacles, 6.6 M in the maze, 300 × 300). Rebuilding the path walks the records and
+//! the steps back from the goal: `O(path cells)`, plus, for the any-angle planner, one
+//! line-of-sight test per straight run not starting at the anchor and a bisection in the runs
+//! where a shortcut ends (`O(runs × log(run) × segment length)`).
 //!
 //! ## Any-angle
 //!
@@ -139,8 +179,10 @@
 //! (maximal straight pieces), from the goal towards the start: if the far end of the next run
 //! is visible from the anchor by [`line_of_sight`], the whole run is skipped; otherwise the last
 //! visible cell of the run is found by bisection and becomes a vertex and the new anchor. Every
-//! segment therefore passes the same no-corner-cutting line-of-sight test, and by the triangle
-//! inequality the polyline is never longer than the A* path it shortcuts.
+//! segment therefore passes the same no-corner-cutting line-of-sight test (a run that starts
+//! at the anchor is made of A* moves and needs none), and by the triangle inequality the
+//! polyline is never longer than the A* path it shortcuts. [`line_of_sight`] steps a bit index
+//! along the Bresenham cells (no per-cell bounds arithmetic), about 12 instructions per cell.
 //!
 //! ```
 //! use twil_core::geom::PointM;
@@ -201,9 +243,9 @@ pub const SCRATCH_WORDS_300: usize = scratch_words_for_cells(300 * 300);
 pub const SCRATCH_WORDS_400: usize = scratch_words_for_cells(400 * 400);
 
 /// The usual planner for the seed's 300 × 300 grid: 45 000 bytes of scratch, 3 072 queue
-/// entries (36 864 bytes; jump point search uses at most 43 of them on the bundled worlds, and
-/// the cell-by-cell fallback finishes 20 % random obstacles in 2 560 thanks to reclaiming) and
-/// the 4 096-byte vertex buffer: about 86 KB in all.
+/// entries (36 864 bytes; jump point search uses at most 40 of them on the bundled worlds, the
+/// cell-by-cell A* 782 on 20 % random obstacles) and the 4 096-byte vertex buffer: about 86 KB
+/// in all.
 pub type Planner300 = Planner<SCRATCH_WORDS_300, 3072>;
 
 /// Which planner to run.
