@@ -82,11 +82,11 @@
 //!
 //! *Choice.* On cluttered maps nearly every free cell becomes a jump point and scanning costs
 //! more than it saves. Before searching, a clutter count (`cluttered`) reads one grid word in
-//! four over the rows between start and goal (16 rows of margin) and counts the runs of
+//! sixteen over the rows between start and goal (16 rows of margin) and counts the runs of
 //! occupied cells (a set bit after a clear one, `count_ones`): more than one run per 32 cells
 //! (20 % random obstacles: about 1 per 6; a maze of 1-cell corridors: 1 per 4; the bundled
-//! room worlds: fewer than 1 per 100) sends A* cell by cell at once. About 700 word reads
-//! (≈ 5 000 instructions) on a 300 × 300 grid.
+//! room worlds: fewer than 1 per 100) sends A* cell by cell at once. About 180 word reads
+//! (≈ 1 000 instructions on an open floor) on a 300 × 300 grid.
 //!
 //! *Fallback.* When jump point search runs anyway and more than one cell in 256 (at least 256)
 //! has been expanded as a jump point *and* the open list holds more than one entry per 16 of
@@ -1182,14 +1182,14 @@ const JPS_WIDE_FRONTIER: usize = 16;
 /// bundled room worlds fewer than 1 in 100.
 const CLUTTER_CELLS_PER_RUN: usize = 32;
 /// [`cluttered`] reads one word in this many (of 32 cells each).
-const CLUTTER_SAMPLE_STRIDE: usize = 4;
+const CLUTTER_SAMPLE_STRIDE: usize = 16;
 /// Rows beyond the start and goal rows that [`cluttered`] also counts.
 const CLUTTER_MARGIN_ROWS: u32 = 16;
 
 /// `true` when the map around start and goal is cluttered (see [`CLUTTER_CELLS_PER_RUN`]): it
 /// counts the runs of occupied cells (a set bit after a clear one) in a sample of the grid's
 /// words (one in [`CLUTTER_SAMPLE_STRIDE`]) over the rows from the lower of the two rows to the
-/// higher, widened by [`CLUTTER_MARGIN_ROWS`]: about 700 word reads on a 300 × 300 grid.
+/// higher, widened by [`CLUTTER_MARGIN_ROWS`]: about 180 word reads on a 300 × 300 grid.
 fn cluttered(words: &[u32], geometry: &GridGeometry, start: Cell, goal: Cell) -> bool {
     let width = geometry.width() as usize;
     let (lo, hi) = if start.y < goal.y {
