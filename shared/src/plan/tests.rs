@@ -1048,3 +1048,31 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn one_cell_wide_grids_match_pathfinding_cell_by_cell_and_by_jump_points() {
+    // Every cell of a 1-wide or 1-high grid is on the border (the slow neighbourhood path).
+    for (w, h) in [(1u32, 30u32), (30, 1), (2, 30), (30, 2)] {
+        let mut g = SmallGrid::new(GridGeometry::new(w, h, 0.1).unwrap()).unwrap();
+        for k in [5i32, 11, 17] {
+            // A few blocked cells that leave a way round on 2-wide grids only.
+            let (x, y) = if w <= 2 { (0, k) } else { (k, 0) };
+            g.set_xy(x, y, true);
+        }
+        let (s, t) = (Cell::new(0, 0), Cell::new(w as u16 - 1, h as u16 - 1));
+        let expected = oracle_astar(&g, s, t);
+        let mut p = Box::new(SmallPlanner::new());
+        let r = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+        assert_eq!(r.status == PlanStatus::Found, expected.is_some(), "{w}x{h}");
+        if let Some(cost) = expected {
+            assert_eq!(r.cost, cost, "{w}x{h}");
+        }
+        p.copy_map(&g);
+        let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
+        let search = p.astar(&g, si, t, ti).unwrap();
+        assert_eq!(search.found.then_some(search.cost), expected, "{w}x{h}");
+        if let Some(found) = jump_point_search_alone(&mut *p, &g, s, t) {
+            assert_eq!(found, expected, "{w}x{h}");
+        }
+    }
+}
