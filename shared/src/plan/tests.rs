@@ -753,7 +753,8 @@ fn cluttered_maps_fall_back_to_cell_by_cell_astar_with_the_same_cost() {
             let mut p = Box::new(Planner::<SCRATCH_WORDS_300, 1024>::new());
             let r = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
             assert_eq!(steps_and_cost(p.path_cells()).1, r.cost);
-            assert!(p.queue_peak() <= 1024);
+            // 804 entries at most in use on this grid (no reclaiming needed).
+            assert!(p.queue_peak() <= 900, "queue peak {}", p.queue_peak());
             r
         } else if queue == 0 {
             let mut big = Box::new(Planner::<SCRATCH_WORDS_300, 32768>::new());
