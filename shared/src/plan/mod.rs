@@ -564,96 +564,6 @@ const O_NW: u32 = 15;
 const O_N: u32 = 16;
 const O_NE: u32 = 17;
 
-/// Bit `from` of `m` moved to bit `to` (other bits moved alike; callers mask).
-#[inline(always)]
-const fn moved(m: u32, from: u32, to: u32) -> u32 {
-    if from >= to {
-        m >> (from - to)
-    } else {
-        m << (to - from)
-    }
-}
-
-/// Bit `z` when the diagonal target `z` may be entered: both side cells `o1`, `o2` open.
-#[inline(always)]
-const fn diagonal_ok(m: u32, z: u32, o1: u32, o2: u32) -> u32 {
-    moved(m, o1, z) & moved(m, o2, z) & (1 << z)
-}
-
-/// Bits `side` and `diagonal` when the cell `o_back` beside the parent is blocked: the side
-/// neighbour is then *forced* (the parent could not reach it diagonally), and so is the
-/// diagonal beyond it (which otherwise the side neighbour covers as cheaply). The diagonal
-/// still needs both its side cells open.
-#[inline(always)]
-const fn forced(m: u32, side: u32, diagonal: u32, o_back: u32, o_side: u32, o_ahead: u32) -> u32 {
-    let blocked_back = !moved(m, o_back, side) & (1 << side);
-    blocked_back | (moved(blocked_back, side, diagonal) & diagonal_ok(m, diagonal, o_side, o_ahead))
-}
-
-/// The candidate targets (bits `Z_*`) of a cell reached by the step `code`, before the
-/// "nibble 0" test: the neighbours that no other cell covers with a key no larger (arrival
-/// pruning, see the module docs). After a side step: straight on, plus the forced side and
-/// diagonal neighbours; after a diagonal step: its two sides and itself. The start (and any
-/// other code) tries all eight.
-#[inline(always)]
-fn arrival_targets(m: u32, code: u32) -> u32 {
-    match code {
-        E => {
-            (1 << Z_E) | forced(m, Z_N, Z_NE, O_NW, O_N, O_E) | forced(m, Z_S, Z_SE, O_SW, O_S, O_E)
-        }
-        W => {
-            (1 << Z_W) | forced(m, Z_N, Z_NW, O_NE, O_N, O_W) | forced(m, Z_S, Z_SW, O_SE, O_S, O_W)
-        }
-        N => {
-            (1 << Z_N) | forced(m, Z_E, Z_NE, O_SE, O_E, O_N) | forced(m, Z_W, Z_NW, O_SW, O_W, O_N)
-        }
-        S => {
-            (1 << Z_S) | forced(m, Z_E, Z_SE, O_NE, O_E, O_S) | forced(m, Z_W, Z_SW, O_NW, O_W, O_S)
-        }
-        NE => (1 << Z_E) | (1 << Z_N) | diagonal_ok(m, Z_NE, O_N, O_E),
-        NW => (1 << Z_W) | (1 << Z_N) | diagonal_ok(m, Z_NW, O_N, O_W),
-        SW => (1 << Z_W) | (1 << Z_S) | diagonal_ok(m, Z_SW, O_S, O_W),
-        SE => (1 << Z_E) | (1 << Z_S) | diagonal_ok(m, Z_SE, O_S, O_E),
-        _ => {
-            (1 << Z_E)
-                | (1 << Z_N)
-                | (1 << Z_W)
-                | (1 << Z_S)
-                | diagonal_ok(m, Z_NE, O_N, O_E)
-                | diagonal_ok(m, Z_NW, O_N, O_W)
-                | diagonal_ok(m, Z_SW, O_S, O_W)
-                | diagonal_ok(m, Z_SE, O_S, O_E)
-        }
-    }
-}
-
-/// The target bits `Z_*` of the diagonal moves.
-const DIAGONAL_TARGETS: u32 = (1 << Z_SW) | (1 << Z_SE) | (1 << Z_NW) | (1 << Z_NE);
-
-/// What to add to a cell's queue entry without its code (`y << 16 | x << 4`) to get the entry
-/// of its neighbour by target bit `Z_*`, step code included (wrapping; unused bits: 0).
-static TARGET_NODE_DELTAS: [u32; 15] = {
-    let mut t = [0u32; 15];
-    let targets = [
-        (Z_SW, SW),
-        (Z_S, S),
-        (Z_SE, SE),
-        (Z_W, W),
-        (Z_E, E),
-        (Z_NW, NW),
-        (Z_N, N),
-        (Z_NE, NE),
-    ];
-    let mut k = 0;
-    while k < targets.len() {
-        let (bit, code) = targets[k];
-        let (dx, dy) = STEPS[(code - 1) as usize];
-        t[bit as usize] = ((dy << 16) + (dx << 4)) as u32 + code;
-        k += 1;
-    }
-    t
-};
-
 /// End of a bucket list.
 const NIL: u32 = u32::MAX;
 /// Buckets of the open list (`(f >> 5) % 512`): they span 16 384 key values, more than the
@@ -806,6 +716,28 @@ impl<'a> BucketQueue<'a> {
             }
         }
         Some((best_f, node))
+    }
+
+    /// The pool is full: drop the entries of cells closed meanwhile (nibble not 0 in
+    /// `scratch`, row width `width`) and push `(key, node)`; `None` (queue full) when that
+    /// frees less than 1/16 of the pool (no thrashing) or the push still fails.
+    #[cold]
+    #[inline(never)]
+    fn reclaim_and_push(
+        &mut self,
+        s: QueueState,
+        scratch: &[u32],
+        width: usize,
+        key: u32,
+        node: u32,
+    ) -> Option<QueueState> {
+        let (mut s, freed) = self.collect(s, |n| {
+            nibble(
+                scratch,
+                (n >> 16) as usize * width + ((n >> 4) & 0xFFF) as usize,
+            ) != 0
+        });
+        (freed >= (self.pool.len() / 16).max(1) && self.push(&mut s, key, node)).then_some(s)
     }
 
     /// Drop every entry for which `stale(node)` holds from every bucket. Returns the new state
@@ -1785,39 +1717,104 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 };
             let window = |w: u32| u32::from(ASTAR_WINDOWS[(w & 0xFFF) as usize]);
             let m = window(below) | window(cur) << 6 | window(above) << 12;
-            let mut targets = m & arrival_targets(m, code);
-            while targets != 0 {
-                let bit = targets.trailing_zeros();
-                targets &= targets - 1;
-                let Some(&delta) = TARGET_NODE_DELTAS.get(bit as usize) else {
-                    break;
-                };
-                let child = (node & !0xF).wrapping_add(delta);
-                let cost = if (1 << bit) & DIAGONAL_TARGETS != 0 {
-                    DIAGONAL_COST
-                } else {
-                    STRAIGHT_COST
-                };
-                let child_g = g.saturating_add(cost);
-                let key = child_g.saturating_add(h((child >> 4) & 0xFFF, child >> 16));
-                if key == f && next_node == NIL {
-                    (next_g, next_node) = (child_g, child);
-                    continue;
-                }
-                if !open.push(&mut state, key, child) {
-                    // Full: drop the entries of cells closed meanwhile and retry, unless that
-                    // frees too little to be worth it (no thrashing).
-                    let (after, freed) = open.collect(state, |n| {
-                        nibble(
-                            scratch,
-                            (n >> 16) as usize * width + ((n >> 4) & 0xFFF) as usize,
-                        ) != 0
-                    });
-                    state = after;
-                    if freed < (open.pool.len() / 16).max(1) || !open.push(&mut state, key, child) {
-                        self.queue_peak = state.bump;
-                        return Err(full);
+            // The targets by arrival step (arrival pruning, see the module docs), each tested
+            // and pushed with constant offsets: straight on, plus the forced side and diagonal
+            // neighbours after a side step; the two sides and the diagonal after a diagonal
+            // step; all eight from the start.
+            let base = node & !0xF;
+            macro_rules! visit {
+                ($z:expr, $code:expr) => {{
+                    if m & (1 << $z) != 0 {
+                        let (dx, dy) = STEPS[$code as usize - 1];
+                        let child = base.wrapping_add(((dy << 16) + (dx << 4)) as u32 + $code);
+                        let child_g = g.saturating_add(if $code >= NE {
+                            DIAGONAL_COST
+                        } else {
+                            STRAIGHT_COST
+                        });
+                        let key = child_g.saturating_add(h(
+                            (x as u32).wrapping_add(dx as u32),
+                            (y as u32).wrapping_add(dy as u32),
+                        ));
+                        if key == f && next_node == NIL {
+                            (next_g, next_node) = (child_g, child);
+                        } else if !open.push(&mut state, key, child) {
+                            match open.reclaim_and_push(state, scratch, width, key, child) {
+                                Some(after) => state = after,
+                                None => {
+                                    self.queue_peak = state.bump;
+                                    return Err(full);
+                                }
+                            }
+                        }
                     }
+                }};
+            }
+            macro_rules! diagonal {
+                ($z:expr, $code:expr, $o1:expr, $o2:expr) => {{
+                    if m & ((1 << $o1) | (1 << $o2)) == (1 << $o1) | (1 << $o2) {
+                        visit!($z, $code);
+                    }
+                }};
+            }
+            macro_rules! forced {
+                ($o_back:expr, $z:expr, $code:expr, $zd:expr, $dcode:expr, $o1:expr, $o2:expr) => {{
+                    if m & (1 << $o_back) == 0 {
+                        visit!($z, $code);
+                        diagonal!($zd, $dcode, $o1, $o2);
+                    }
+                }};
+            }
+            match code {
+                E => {
+                    visit!(Z_E, E);
+                    forced!(O_NW, Z_N, N, Z_NE, NE, O_N, O_E);
+                    forced!(O_SW, Z_S, S, Z_SE, SE, O_S, O_E);
+                }
+                W => {
+                    visit!(Z_W, W);
+                    forced!(O_NE, Z_N, N, Z_NW, NW, O_N, O_W);
+                    forced!(O_SE, Z_S, S, Z_SW, SW, O_S, O_W);
+                }
+                N => {
+                    visit!(Z_N, N);
+                    forced!(O_SE, Z_E, E, Z_NE, NE, O_E, O_N);
+                    forced!(O_SW, Z_W, W, Z_NW, NW, O_W, O_N);
+                }
+                S => {
+                    visit!(Z_S, S);
+                    forced!(O_NE, Z_E, E, Z_SE, SE, O_E, O_S);
+                    forced!(O_NW, Z_W, W, Z_SW, SW, O_W, O_S);
+                }
+                NE => {
+                    visit!(Z_E, E);
+                    visit!(Z_N, N);
+                    diagonal!(Z_NE, NE, O_N, O_E);
+                }
+                NW => {
+                    visit!(Z_W, W);
+                    visit!(Z_N, N);
+                    diagonal!(Z_NW, NW, O_N, O_W);
+                }
+                SW => {
+                    visit!(Z_W, W);
+                    visit!(Z_S, S);
+                    diagonal!(Z_SW, SW, O_S, O_W);
+                }
+                SE => {
+                    visit!(Z_E, E);
+                    visit!(Z_S, S);
+                    diagonal!(Z_SE, SE, O_S, O_E);
+                }
+                _ => {
+                    visit!(Z_E, E);
+                    visit!(Z_N, N);
+                    visit!(Z_W, W);
+                    visit!(Z_S, S);
+                    diagonal!(Z_NE, NE, O_N, O_E);
+                    diagonal!(Z_NW, NW, O_N, O_W);
+                    diagonal!(Z_SW, SW, O_S, O_W);
+                    diagonal!(Z_SE, SE, O_S, O_E);
                 }
             }
         }
