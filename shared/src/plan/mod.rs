@@ -122,9 +122,9 @@
 //!
 //! *Hot loop.* The popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
 //! nibbles of a row, two 32-bit scratch reads each) and turned by a 4 KB table into an 18-bit
-//! mask ("nibble 0" and "not blocked" per cell); the arrival step picks the candidate targets
-//! with a few shifts and ANDs; a loop over the target bits pushes each with a constant entry
-//! delta (`y << 16 | x << 4 | code` entries: a neighbour's entry is the cell's plus a constant).
+//! mask ("nibble 0" and "not blocked" per cell); one arm per arrival step tests its candidate
+//! targets in that mask and pushes each with constant offsets (`y << 16 | x << 4 | code`
+//! entries: a neighbour's entry is the cell's plus a constant).
 //! Cells on the map border read their neighbours one by one.
 //!
 //! *Bucket queue* (see `BucketQueue` in the source): with a consistent heuristic a pushed `f` is
@@ -166,9 +166,12 @@
 //! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
 //! seed's room maps a whole plan takes 0.9–2.9 M Cortex-M4 instructions for 9–22 jump points.
+//! Keys are `u32`: a path may cost at most `u32::MAX` (more than 529 000 diagonal steps, which
+//! only grids above about 727 × 727 cells can hold); beyond that the cell-by-cell search's keys
+//! wrap and its result is undefined (but it does not panic).
 //! Cell-by-cell A*: at most 8 pushes per expanded cell (typically fewer than one), each O(1),
-//! pops O(bucket size); about 300 Cortex-M4 instructions per expanded cell (8.6 M on 20 %
-//! random obstacles, 6.6 M in the maze, 300 × 300). Rebuilding the path walks the records and
+//! pops O(bucket size); about 270 Cortex-M4 instructions per expanded cell (7.7 M on 20 %
+//! random obstacles, 6.2 M in the maze, 300 × 300). Rebuilding the path walks the records and
 //! the steps back from the goal: `O(path cells)`, plus, for the any-angle planner, one
 //! line-of-sight test per straight run not starting at the anchor and a bisection in the runs
 //! where a shortcut ends (`O(runs × log(run) × segment length)`).
@@ -1727,12 +1730,13 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     if m & (1 << $z) != 0 {
                         let (dx, dy) = STEPS[$code as usize - 1];
                         let child = base.wrapping_add(((dy << 16) + (dx << 4)) as u32 + $code);
-                        let child_g = g.saturating_add(if $code >= NE {
+                        // Plain adds: keys are u32 (see "Complexity" in the module docs).
+                        let child_g = g.wrapping_add(if $code >= NE {
                             DIAGONAL_COST
                         } else {
                             STRAIGHT_COST
                         });
-                        let key = child_g.saturating_add(h(
+                        let key = child_g.wrapping_add(h(
                             (x as u32).wrapping_add(dx as u32),
                             (y as u32).wrapping_add(dy as u32),
                         ));
