@@ -1611,14 +1611,14 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
 
     /// Cell-by-cell A* with the octile heuristic, a lazy-deletion bucket queue and the
     /// *arrival pruning* of successors (see the module docs): a closed cell pushes only the
-    /// neighbours its parent did not already cover with a key no larger. The scratch must hold
-    /// the map ([`Planner::copy_map`]).
+    /// neighbours that no other cell covers with a key no larger. The scratch must hold the map
+    /// ([`Planner::copy_map`]).
     ///
     /// Hot loop: the popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
     /// nibbles of a row from two scratch words) and turned by [`ASTAR_WINDOWS`] into an 18-bit
-    /// mask ("nibble 0" and "not blocked" per cell); the arrival step picks the candidate
-    /// targets from it with a few shifts, and the loop over the target bits pushes them with a
-    /// constant per-direction table. Cells on the map border read their neighbours one by one.
+    /// mask ("nibble 0" and "not blocked" per cell); one arm per arrival step tests its
+    /// candidate targets in the mask and pushes them with constant offsets. Cells on the map
+    /// border read their neighbours one by one.
     fn astar<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
