@@ -1660,18 +1660,28 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         // (`next_node`, NIL when none; its key is the current `f`, its `g` is `next_g`).
         let (mut f, mut next_g, mut next_node) = (0u32, 0u32, NIL);
         loop {
+            // Close the cell: its nibble gets the arrival step (it was 0).
             let (node, x, y, index, g) = if next_node != NIL {
                 // A target of the cell just expanded: not closed (its nibble was 0 then).
                 let node = next_node;
                 next_node = NIL;
                 let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
-                (node, x, y, y * width + x, next_g)
+                let index = y * width + x;
+                if let Some(word) = scratch.get_mut(index >> 3) {
+                    *word |= (node & 0xF) << ((index & 7) * 4);
+                }
+                (node, x, y, index, next_g)
             } else {
                 let mut found = None;
                 while let Some((key, node)) = open.pop(&mut state) {
                     let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
                     let index = y * width + x;
-                    if nibble(scratch, index) == 0 {
+                    let Some(word) = scratch.get_mut(index >> 3) else {
+                        continue;
+                    };
+                    let shift = (index & 7) * 4;
+                    if (*word >> shift) & 0xF == 0 {
+                        *word |= (node & 0xF) << shift;
                         // Queue entries do not store g: f = g + h exactly.
                         f = key;
                         found = Some((node, x, y, index, key.wrapping_sub(h(x as u32, y as u32))));
@@ -1685,9 +1695,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 }
             };
             let code = node & 0xF;
-            if let Some(word) = scratch.get_mut(index >> 3) {
-                *word |= code << ((index & 7) * 4); // the nibble is 0
-            }
             expanded += 1;
             if index == goal {
                 self.queue_peak = state.bump;
