@@ -683,10 +683,26 @@ impl<'a> BucketQueue<'a> {
             b = self.next_bucket(s.summary, b)? % BUCKETS;
             head = self.heads[b];
         }
-        let first = *self.pool.get(head as usize)?;
+        let first = self.pool.get_mut(head as usize)?;
+        if first.next == NIL || first.f == s.last {
+            // The head is the smallest: alone in its bucket, or equal to the last key popped.
+            let (f, node, next) = (first.f, first.node, first.next);
+            first.next = s.free;
+            s.free = head;
+            s.last = f;
+            self.heads[b] = next;
+            if next == NIL {
+                self.map[b / 32] &= !(1 << (b % 32));
+                if self.map[b / 32] == 0 {
+                    s.summary &= !(1 << (b / 32));
+                }
+            }
+            return Some((f, node));
+        }
+        let first = *first;
         let (mut best, mut best_f, mut best_next) = (head, first.f, first.next);
         let mut before_best = NIL;
-        if best_f != s.last {
+        {
             // Scan the bucket for the first entry of the smallest key.
             let (mut prev, mut slot) = (head, first.next);
             while let Some(e) = self.pool.get(slot as usize) {
