@@ -170,8 +170,8 @@
 //! only grids above about 727 × 727 cells can hold); beyond that the cell-by-cell search's keys
 //! wrap and its result is undefined (but it does not panic).
 //! Cell-by-cell A*: at most 8 pushes per expanded cell (typically fewer than one), each O(1),
-//! pops O(bucket size); about 270 Cortex-M4 instructions per expanded cell (7.7 M on 20 %
-//! random obstacles, 6.2 M in the maze, 300 × 300). Rebuilding the path walks the records and
+//! pops O(bucket size); about 260 Cortex-M4 instructions per expanded cell (7.4 M on 20 %
+//! random obstacles, 6.0 M in the maze, 300 × 300). Rebuilding the path walks the records and
 //! the steps back from the goal: `O(path cells)`, plus, for the any-angle planner, one
 //! line-of-sight test per straight run not starting at the anchor and a bisection in the runs
 //! where a shortcut ends (`O(runs × log(run) × segment length)`).
