@@ -27,20 +27,22 @@
 //! | 10 ..= 14 | unused                                                         |
 //! | 15        | occupied (BFS and the cell-by-cell A* only)                    |
 //!
-//! BFS (and the cell-by-cell A* fallback) first copy the map into it (occupied → 15, 8 cells
-//! per word with a few shifts), so one nibble read answers both "free?" and "reached?". The jump
-//! point search reads the map's own bits and only clears the nibbles.
+//! BFS and the cell-by-cell A* first copy the map into it (occupied → 15, 8 cells per word from
+//! a 1 KB table), so one nibble read answers both "free?" and "reached?". The jump point search
+//! reads the map's own bits and only clears the nibbles.
 //!
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
 //! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
 //! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (4 096 bytes), plus a few hundred bytes
-//! of bit sets on the stack during a jump point search (about 2.2 KB of bucket heads in the
-//! cell-by-cell fallback). Nothing else is allocated; the grid itself is only read. BFS also
-//! reads a constant 4 KB table (read-only data: flash on the MCU).
+//! of bit sets on the stack during a jump point search (about 2.1 KB of bucket heads in the
+//! cell-by-cell A*). Nothing else is allocated; the grid itself is only read. BFS and the
+//! cell-by-cell A* each read a constant 4 KB table, `copy_map` a 1 KB one (read-only data: flash
+//! on the MCU).
 //! [`Planner::queue_peak`] tells how much of the queue a search used. Measured on the 300 × 300
-//! benchmark grids and the bundled worlds: BFS needs at most 600 entries; A* (jump points: open
-//! list plus records) 3 (open floor), 10 (corridor), 27 (office), 43 (pillars), 5 835 (a maze
-//! of 1-cell corridors, where `Planner300` therefore falls back to cell-by-cell A*).
+//! benchmark grids and the bundled worlds: BFS needs at most 600 entries; A* by jump points
+//! (open list plus records) 3 (open floor), 9 (corridor), 18 (office), 40 (pillars); cell by
+//! cell (20 % random obstacles, a maze of 1-cell corridors) 782 and 13. So 1 024 entries cover
+//! every benchmark case.
 //!
 //! ## A*: jump point search without a g-table
 //!
@@ -78,25 +80,62 @@
 //! step code to the next closed cell is *not* exact: a cell on the segment may be a jump point
 //! that another branch closed with a worse cost; the property tests found such cases.)
 //!
-//! *Fallback.* On cluttered maps nearly every free cell becomes a jump point and scanning costs
-//! more than it saves. When more than one cell in 256 (at least 256) has been expanded as a jump
-//! point *and* the open list holds more than one entry per 16 of them (a wide frontier: 269
-//! entries after 1 024 jump points on 20 % random obstacles, 2 in a maze), or when the queue
-//! runs out of entries for the heap and the records, the search restarts as cell-by-cell A*
-//! below; `expanded` then counts the jump points and the cells.
+//! *Choice.* On cluttered maps nearly every free cell becomes a jump point and scanning costs
+//! more than it saves. Before searching, a clutter count (`cluttered`) reads one grid word in
+//! sixteen over the rows between start and goal (16 rows of margin) and counts the runs of
+//! occupied cells (a set bit after a clear one, `count_ones`): more than one run per 32 cells
+//! (20 % random obstacles: about 1 per 6; a maze of 1-cell corridors: 1 per 4; the bundled
+//! room worlds: fewer than 1 per 100) sends A* cell by cell at once. About 180 word reads
+//! (≈ 1 000 instructions on an open floor) on a 300 × 300 grid.
 //!
-//! ## Cell-by-cell A* (the fallback)
+//! *Fallback.* When jump point search runs anyway and more than one cell in 256 (at least 256)
+//! has been expanded as a jump point *and* the open list holds more than one entry per 16 of
+//! them (a wide frontier), or when the queue runs out of entries for the heap and the records,
+//! the search restarts as cell-by-cell A* below; `expanded` then counts the jump points and
+//! the cells.
 //!
-//! The open list holds `(f, cell, step)` entries with lazy deletion: a cell may be pushed once
-//! per neighbour that reaches it, and only its first pop counts (with a consistent heuristic,
-//! its `g` is then optimal). It is a *two-level bucket queue* (see `BucketQueue` in the source):
-//! with a consistent heuristic a pushed `f` is never below the last popped `f` and never more
-//! than `2 · DIAGONAL_COST` above it, so 512 circular coarse buckets of 32 key values, plus 32
-//! exact buckets for the current coarse one, order all keys without comparisons: a push links
-//! the entry at the head of a list (O(1)); a pop takes the head of the lowest exact bucket, or
-//! spreads the next non-empty coarse bucket into the exact ones, dropping entries whose cell was
-//! closed meanwhile. Every entry moves at most once. Ties on `f` pop the last pushed entry
-//! first (the deeper entries).
+//! ## Cell-by-cell A*
+//!
+//! For cluttered maps (and as the fallback). The open list holds `(f, cell, step)` entries with
+//! lazy deletion: a cell may be pushed more than once, and only its first pop counts (with a
+//! consistent heuristic, its `g` is then optimal); `g` is not stored, it is `f − h(cell)`.
+//!
+//! *Arrival pruning.* A closed cell pushes only the neighbours that no other cell covers with a
+//! key as small (the neighbour rule of jump point search without corner cutting, applied one
+//! step at a time). After a side step, say east from parent `p`: the cell straight on (east);
+//! the north neighbour only when the cell north of `p` is blocked (else `p` reached it
+//! diagonally for `D < 2S`), and then also the north-east one (else the north neighbour covers
+//! it at the same cost); likewise south. After a diagonal step, say north-east: east, north and
+//! north-east (the west and south neighbours are `p`'s side neighbours, cheaper from `p`; the
+//! north-west and south-east ones are reached through them for `2S < 2D`). The start tries all
+//! eight. A neighbour is pushed only when its nibble is 0 (free, not closed), a diagonal only
+//! when both side cells are free. By induction on the keys every pruned push is covered by an
+//! entry of no larger key before the queue reaches it, so the first pop of every cell still
+//! has the optimal `g`; the property tests compare the cost with `pathfinding` on 2 048 random
+//! grids for the cell-by-cell search alone (and 200 000 in a one-off run). On 20 % random
+//! obstacles the queue sees 0.84 pushes per expanded cell (1.46 when only the parent's own
+//! moves were pruned, without the immediate expansion below).
+//!
+//! *Immediate expansion.* A target whose key equals the key just popped would be the next pop
+//! (nothing in the queue is smaller; ties pop the last pushed first): the first such target
+//! skips the queue and is expanded next, with its `g` carried over (no closed test, no `h`).
+//!
+//! *Hot loop.* The popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
+//! nibbles of a row, two 32-bit scratch reads each) and turned by a 4 KB table into an 18-bit
+//! mask ("nibble 0" and "not blocked" per cell); one arm per arrival step tests its candidate
+//! targets in that mask and pushes each with constant offsets (`y << 16 | x << 4 | code`
+//! entries: a neighbour's entry is the cell's plus a constant).
+//! Cells on the map border read their neighbours one by one.
+//!
+//! *Bucket queue* (see `BucketQueue` in the source): with a consistent heuristic a pushed `f` is
+//! never below the last popped `f` and never more than `2 · DIAGONAL_COST` above it, so 512
+//! circular buckets of 32 key values hold every key value in one bucket. A push links the entry
+//! at the head of its bucket, O(1). A pop scans the bucket of the last popped key, or the next
+//! non-empty one (a 512-bit map with a 16-bit summary: two trailing-zero counts), for its first
+//! entry of smallest `f`; octile keys are sparse (steps cost thousands), so buckets hold one or
+//! two entries, and an entry equal to the last popped key ends the scan at once. Ties on `f` pop
+//! the last pushed entry first (the deeper entries). The queue's scalar state is a separate
+//! `Copy` value so that the loop keeps it in registers.
 //!
 //! When the pool of entries is full, the queue first *reclaims* the entries of cells closed
 //! since they were pushed (one pass over all lists) and carries on; only when that frees less
@@ -126,12 +165,16 @@
 //! of 1-cell corridors). Jump point
 //! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
-//! seed's room maps a whole plan takes 0.8–2.0 M instructions for 9–22 jump points. The
-//! cell-by-cell fallback: at most 8 pushes per expanded cell, each O(1), pops O(1) amortized;
-//! about 550 instructions per expanded cell. Rebuilding the path walks the records and the
-//! steps back from the goal: `O(path cells)`, plus, for the any-angle planner, one line-of-sight
-//! test per straight run and a bisection in the runs where a shortcut ends
-//! (`O(runs × log(run) × segment length)`).
+//! seed's room maps a whole plan takes 0.9–2.9 M Cortex-M4 instructions for 9–22 jump points.
+//! Keys are `u32`: a path may cost at most `u32::MAX` (more than 529 000 diagonal steps, which
+//! only grids above about 727 × 727 cells can hold); beyond that the cell-by-cell search's keys
+//! wrap and its result is undefined (but it does not panic).
+//! Cell-by-cell A*: at most 8 pushes per expanded cell (typically fewer than one), each O(1),
+//! pops O(bucket size); about 260 Cortex-M4 instructions per expanded cell (7.4 M on 20 %
+//! random obstacles, 6.0 M in the maze, 300 × 300). Rebuilding the path walks the records and
+//! the steps back from the goal: `O(path cells)`, plus, for the any-angle planner, one
+//! line-of-sight test per straight run not starting at the anchor and a bisection in the runs
+//! where a shortcut ends (`O(runs × log(run) × segment length)`).
 //!
 //! ## Any-angle
 //!
@@ -139,8 +182,10 @@
 //! (maximal straight pieces), from the goal towards the start: if the far end of the next run
 //! is visible from the anchor by [`line_of_sight`], the whole run is skipped; otherwise the last
 //! visible cell of the run is found by bisection and becomes a vertex and the new anchor. Every
-//! segment therefore passes the same no-corner-cutting line-of-sight test, and by the triangle
-//! inequality the polyline is never longer than the A* path it shortcuts.
+//! segment therefore passes the same no-corner-cutting line-of-sight test (a run that starts
+//! at the anchor is made of A* moves and needs none), and by the triangle inequality the
+//! polyline is never longer than the A* path it shortcuts. [`line_of_sight`] steps a bit index
+//! along the Bresenham cells (no per-cell bounds arithmetic), about 12 instructions per cell.
 //!
 //! ```
 //! use twil_core::geom::PointM;
@@ -201,9 +246,9 @@ pub const SCRATCH_WORDS_300: usize = scratch_words_for_cells(300 * 300);
 pub const SCRATCH_WORDS_400: usize = scratch_words_for_cells(400 * 400);
 
 /// The usual planner for the seed's 300 × 300 grid: 45 000 bytes of scratch, 3 072 queue
-/// entries (36 864 bytes; jump point search uses at most 43 of them on the bundled worlds, and
-/// the cell-by-cell fallback finishes 20 % random obstacles in 2 560 thanks to reclaiming) and
-/// the 4 096-byte vertex buffer: about 86 KB in all.
+/// entries (36 864 bytes; jump point search uses at most 40 of them on the bundled worlds, the
+/// cell-by-cell A* 782 on 20 % random obstacles) and the 4 096-byte vertex buffer: about 86 KB
+/// in all.
 pub type Planner300 = Planner<SCRATCH_WORDS_300, 3072>;
 
 /// Which planner to run.
@@ -385,6 +430,24 @@ fn spread_bits_to_nibbles(byte: u32) -> u32 {
     (x | (x << 3)) & 0x1111_1111
 }
 
+/// [`BLOCKED`] in the nibble of each set bit of a byte (bit k -> nibble k): one table read
+/// per 8 cells when [`Planner::copy_map`] copies the map. 1 KB of read-only data.
+static BLOCKED_NIBBLES: [u32; 256] = {
+    let mut table = [0u32; 256];
+    let mut b = 0;
+    while b < 256 {
+        let mut k = 0;
+        while k < 8 {
+            if b & (1 << k) != 0 {
+                table[b] |= BLOCKED << (4 * k);
+            }
+            k += 1;
+        }
+        b += 1;
+    }
+    table
+};
+
 /// Step of each code 1..=8 (index = code - 1): E, N, W, S, NE, NW, SW, SE.
 const STEPS: [(i32, i32); 8] = [
     (1, 0),
@@ -446,185 +509,285 @@ fn octile(dx: u32, dy: u32) -> u32 {
         .saturating_add(STRAIGHT_COST.saturating_mul(hi - lo))
 }
 
+/// Nibbles `j`, `j + 1`, `j + 2` of the scratch in bits 0..12 (beyond it: [`BLOCKED`]).
+#[inline(always)]
+fn nibble_window(scratch: &[u32], j: usize) -> u32 {
+    let w = j >> 3;
+    match scratch.get(w..w.wrapping_add(2)) {
+        Some(&[lo, hi]) => {
+            let shift = ((j & 7) * 4) as u32;
+            ((lo >> shift) | ((hi << 1) << (31 - shift))) & 0xFFF
+        }
+        _ => nibble(scratch, j) | nibble(scratch, j + 1) << 4 | nibble(scratch, j + 2) << 8,
+    }
+}
+
+/// For each 12-bit window of three nibbles (a row of a 3 × 3 neighbourhood, cell-by-cell A*):
+/// bit `k` (k = 0, 1, 2) set when nibble `k` is 0 (free, not closed), bit `3 + k` when it is
+/// not [`BLOCKED`]. 4 KB of read-only data, built at compile time.
+static ASTAR_WINDOWS: [u8; 4096] = {
+    let mut table = [0u8; 4096];
+    let mut v = 0;
+    while v < 4096 {
+        let mut m = 0u8;
+        let mut k = 0;
+        while k < 3 {
+            let code = (v >> (4 * k)) & 0xF;
+            if code == 0 {
+                m |= 1 << k;
+            }
+            if code != BLOCKED as usize {
+                m |= 8 << k;
+            }
+            k += 1;
+        }
+        table[v] = m;
+        v += 1;
+    }
+    table
+};
+
+// The 18-bit neighbourhood mask of the cell-by-cell A*: three rows of [`ASTAR_WINDOWS`]
+// entries (below, same, above; 6 bits each). `Z_*`: the neighbour's nibble is 0 (a possible
+// target); `O_*`: the neighbour is not blocked (a side cell a diagonal step may pass).
+const Z_SW: u32 = 0;
+const Z_S: u32 = 1;
+const Z_SE: u32 = 2;
+const Z_W: u32 = 6;
+const Z_E: u32 = 8;
+const Z_NW: u32 = 12;
+const Z_N: u32 = 13;
+const Z_NE: u32 = 14;
+const O_SW: u32 = 3;
+const O_S: u32 = 4;
+const O_SE: u32 = 5;
+const O_W: u32 = 9;
+const O_E: u32 = 11;
+const O_NW: u32 = 15;
+const O_N: u32 = 16;
+const O_NE: u32 = 17;
+
 /// End of a bucket list.
 const NIL: u32 = u32::MAX;
-/// Exact-key buckets per coarse bucket (`f & 31`).
-const FINE_BUCKETS: usize = 32;
-/// Coarse buckets (`(f >> 5) % 512`): they span 16 384 key values, more than the 16 238 by
-/// which a pushed `f` can exceed the last popped one (see [`BucketQueue`]).
-const COARSE_BUCKETS: usize = 512;
+/// Buckets of the open list (`(f >> 5) % 512`): they span 16 384 key values, more than the
+/// 16 238 by which a pushed `f` can exceed the last popped one (see [`BucketQueue`]).
+const BUCKETS: usize = 512;
 
-/// The open list of A*: a two-level bucket queue over a fixed pool of entries.
+/// The scalar state of a [`BucketQueue`], kept apart from its arrays so that the search loop
+/// holds it in registers (it is passed by value to the queue's out-of-line parts).
+#[derive(Clone, Copy)]
+struct QueueState {
+    /// Bit `w` set when word `w` of the bucket map is not 0.
+    summary: u32,
+    /// The last key popped (every key in the queue is at least this).
+    last: u32,
+    /// Entries of the pool ever used (the queue peak).
+    bump: u32,
+    /// Head of the list of freed entries.
+    free: u32,
+}
+
+/// The open list of A*: a bucket queue over a fixed pool of entries.
 ///
 /// With a consistent heuristic, a child's `f` exceeds its parent's by at most twice the step
 /// cost (`0 ≤ Δf = cost + Δh ≤ 2 · DIAGONAL_COST = 16 238`), and the parent's `f` is the last
 /// key popped. So every key in the queue lies in the window `[last, last + 16 238]`, and a
-/// circular array of 512 coarse buckets of 32 key values each orders them without comparisons:
-/// keys of the current coarse bucket sit in 32 exact buckets (`f & 31`), the others in their
-/// coarse bucket. A push links an entry at the head of one list, O(1); a pop takes the head of
-/// the lowest non-empty exact bucket, or, when they are all empty, finds the next non-empty
-/// coarse bucket in a 512-bit map and spreads it into the exact buckets (dropping entries whose
-/// cell was closed meanwhile). Every entry is thus moved at most once.
+/// circular array of 512 buckets of 32 key values each (`(f >> 5) % 512`) holds each key value
+/// in one bucket only. A push links an entry at the head of its bucket's list, O(1). A pop
+/// takes the first entry of smallest `f` in the bucket of the last popped key, or, when that is
+/// empty, in the next non-empty bucket, found in a 512-bit map with a 16-bit summary (two
+/// trailing-zero counts). Octile keys are sparse (steps cost thousands), so a bucket rarely
+/// holds more than a few entries; an entry whose `f` equals the last popped key ends the scan at
+/// once (nothing can be smaller), which keeps runs of equal keys O(1) per pop.
 ///
 /// Ties (equal `f`) pop the last pushed entry first: the children of the cell just expanded,
 /// i.e. the deeper entries (larger `g`), which on open floors keeps the search on one straight
-/// line instead of flooding every cell of equal `f`.
+/// line instead of flooding every cell of equal `f`. Entries of cells closed meanwhile stay in
+/// the lists (lazy deletion) until popped, or until [`BucketQueue::collect`] reclaims them when
+/// the pool is full.
 struct BucketQueue<'a> {
     pool: &'a mut [OpenEntry],
-    coarse: [u32; COARSE_BUCKETS],
-    coarse_map: [u32; COARSE_BUCKETS / 32],
-    fine: [u32; FINE_BUCKETS],
-    fine_map: u32,
-    /// Absolute coarse index (`f >> 5`) of the keys held in `fine`.
-    current: u32,
-    bump: u32,
-    free: u32,
+    heads: [u32; BUCKETS],
+    map: [u32; BUCKETS / 32],
 }
 
 impl<'a> BucketQueue<'a> {
-    fn new(pool: &'a mut [OpenEntry], first_key: u32) -> Self {
-        Self {
-            pool,
-            coarse: [NIL; COARSE_BUCKETS],
-            coarse_map: [0; COARSE_BUCKETS / 32],
-            fine: [NIL; FINE_BUCKETS],
-            fine_map: 0,
-            current: first_key >> 5,
-            bump: 0,
-            free: NIL,
-        }
+    fn new(pool: &'a mut [OpenEntry], first_key: u32) -> (Self, QueueState) {
+        (
+            Self {
+                pool,
+                heads: [NIL; BUCKETS],
+                map: [0; BUCKETS / 32],
+            },
+            QueueState {
+                summary: 0,
+                last: first_key,
+                bump: 0,
+                free: NIL,
+            },
+        )
     }
 
-    /// Insert; `false` when the pool is full. `key` must not be below the last key popped.
+    /// Insert; `false` when the pool is full. `key` must not be below `s.last`.
     #[inline(always)]
-    fn push(&mut self, key: u32, node: u32) -> bool {
-        let slot = if self.free != NIL {
-            let slot = self.free;
-            self.free = self.pool[slot as usize].next;
-            slot
-        } else if (self.bump as usize) < self.pool.len() {
-            self.bump += 1;
-            self.bump - 1
-        } else {
+    fn push(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
+        let slot = if s.free != NIL { s.free } else { s.bump };
+        let Some(entry) = self.pool.get_mut(slot as usize) else {
             return false;
         };
-        let head = if key >> 5 == self.current {
-            let b = (key & 31) as usize;
-            self.fine_map |= 1 << b;
-            &mut self.fine[b]
+        if s.free != NIL {
+            s.free = entry.next;
         } else {
-            let b = (key >> 5) as usize % COARSE_BUCKETS;
-            self.coarse_map[b / 32] |= 1 << (b % 32);
-            &mut self.coarse[b]
-        };
-        self.pool[slot as usize] = OpenEntry {
+            s.bump += 1;
+        }
+        let b = (key >> 5) as usize % BUCKETS;
+        self.map[b / 32] |= 1 << (b % 32);
+        s.summary |= 1 << (b / 32);
+        *entry = OpenEntry {
             f: key,
             node,
-            next: *head,
+            next: self.heads[b],
         };
-        *head = slot;
+        self.heads[b] = slot;
         true
     }
 
-    /// The first non-empty coarse bucket at or after `from`, circularly.
-    #[inline]
-    fn next_coarse(&self, from: usize) -> Option<usize> {
-        let words = COARSE_BUCKETS / 32;
-        let first = from / 32;
-        let masked = self.coarse_map[first] & (u32::MAX << (from % 32));
+    /// The first non-empty bucket at or after `from`, circularly: one word of the map and the
+    /// summary of the words.
+    #[inline(never)]
+    fn next_bucket(&self, summary: u32, from: usize) -> Option<usize> {
+        let first = (from / 32) % (BUCKETS / 32);
+        let masked = self.map[first] & (u32::MAX << (from % 32));
         if masked != 0 {
             return Some(first * 32 + masked.trailing_zeros() as usize);
         }
-        for k in 1..=words {
-            let w = (first + k) % words;
-            if self.coarse_map[w] != 0 {
-                return Some(w * 32 + self.coarse_map[w].trailing_zeros() as usize);
-            }
-        }
-        None
+        // Later words, else wrap around (which may come back to the low bits of `first`).
+        let later = summary & (u32::MAX << 1 << first);
+        let w = if later != 0 {
+            later.trailing_zeros() as usize
+        } else if summary != 0 {
+            summary.trailing_zeros() as usize
+        } else {
+            return None;
+        };
+        let bits = *self.map.get(w)?;
+        Some(w * 32 + bits.trailing_zeros() as usize)
     }
 
-    /// Remove an entry of the smallest key: `(key, node)`. `stale(node)` tells which entries
-    /// may be dropped unseen when a coarse bucket is spread.
+    /// Remove an entry of the smallest key: `(key, node)`.
     #[inline(always)]
-    fn pop(&mut self, stale: impl Fn(u32) -> bool) -> Option<(u32, u32)> {
-        while self.fine_map == 0 {
-            let from = (self.current as usize + 1) % COARSE_BUCKETS;
-            let b = self.next_coarse(from)?;
-            let ahead = (b + COARSE_BUCKETS - from) % COARSE_BUCKETS;
-            self.current = self.current.wrapping_add(1 + ahead as u32);
-            let mut slot = self.coarse[b];
-            self.coarse[b] = NIL;
-            self.coarse_map[b / 32] &= !(1 << (b % 32));
-            while slot != NIL {
-                let e = &mut self.pool[slot as usize];
+    fn pop(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
+        let mut b = (s.last >> 5) as usize % BUCKETS;
+        let mut head = self.heads[b];
+        if head == NIL {
+            b = self.next_bucket(s.summary, b)? % BUCKETS;
+            head = self.heads[b];
+        }
+        let first = self.pool.get_mut(head as usize)?;
+        if first.next == NIL || first.f == s.last {
+            // The head is the smallest: alone in its bucket, or equal to the last key popped.
+            let (f, node, next) = (first.f, first.node, first.next);
+            first.next = s.free;
+            s.free = head;
+            s.last = f;
+            self.heads[b] = next;
+            if next == NIL {
+                self.map[b / 32] &= !(1 << (b % 32));
+                if self.map[b / 32] == 0 {
+                    s.summary &= !(1 << (b / 32));
+                }
+            }
+            return Some((f, node));
+        }
+        let first = *first;
+        let (mut best, mut best_f, mut best_next) = (head, first.f, first.next);
+        let mut before_best = NIL;
+        {
+            // Scan the bucket for the first entry of the smallest key.
+            let (mut prev, mut slot) = (head, first.next);
+            while let Some(e) = self.pool.get(slot as usize) {
+                if e.f < best_f {
+                    (best, best_f, best_next, before_best) = (slot, e.f, e.next, prev);
+                }
+                prev = slot;
+                slot = e.next;
+            }
+        }
+        let node = match self.pool.get_mut(best as usize) {
+            Some(e) => {
+                e.next = s.free;
+                e.node
+            }
+            None => return None,
+        };
+        s.free = best;
+        s.last = best_f;
+        match self.pool.get_mut(before_best as usize) {
+            Some(e) => e.next = best_next,
+            None => {
+                self.heads[b] = best_next;
+                if best_next == NIL {
+                    self.map[b / 32] &= !(1 << (b % 32));
+                    if self.map[b / 32] == 0 {
+                        s.summary &= !(1 << (b / 32));
+                    }
+                }
+            }
+        }
+        Some((best_f, node))
+    }
+
+    /// The pool is full: drop the entries of cells closed meanwhile (nibble not 0 in
+    /// `scratch`, row width `width`) and push `(key, node)`; `None` (queue full) when that
+    /// frees less than 1/16 of the pool (no thrashing) or the push still fails.
+    #[cold]
+    #[inline(never)]
+    fn reclaim_and_push(
+        &mut self,
+        s: QueueState,
+        scratch: &[u32],
+        width: usize,
+        key: u32,
+        node: u32,
+    ) -> Option<QueueState> {
+        let (mut s, freed) = self.collect(s, |n| {
+            nibble(
+                scratch,
+                (n >> 16) as usize * width + ((n >> 4) & 0xFFF) as usize,
+            ) != 0
+        });
+        (freed >= (self.pool.len() / 16).max(1) && self.push(&mut s, key, node)).then_some(s)
+    }
+
+    /// Drop every entry for which `stale(node)` holds from every bucket. Returns the new state
+    /// and how many slots were freed. O(entries); used only when the pool is full.
+    #[cold]
+    #[inline(never)]
+    fn collect(&mut self, mut s: QueueState, stale: impl Fn(u32) -> bool) -> (QueueState, usize) {
+        let mut freed = 0;
+        for b in 0..BUCKETS {
+            let (mut head, mut slot) = (NIL, self.heads[b]);
+            while let Some(e) = self.pool.get_mut(slot as usize) {
                 let next = e.next;
                 if stale(e.node) {
-                    e.next = self.free;
-                    self.free = slot;
+                    e.next = s.free;
+                    s.free = slot;
+                    freed += 1;
                 } else {
-                    let fb = (e.f & 31) as usize;
-                    e.next = self.fine[fb];
-                    self.fine[fb] = slot;
-                    self.fine_map |= 1 << fb;
+                    e.next = head;
+                    head = slot;
                 }
                 slot = next;
             }
-        }
-        let b = self.fine_map.trailing_zeros() as usize;
-        let slot = self.fine[b];
-        let e = self.pool[slot as usize];
-        self.fine[b] = e.next;
-        if e.next == NIL {
-            self.fine_map &= !(1 << b);
-        }
-        self.pool[slot as usize].next = self.free;
-        self.free = slot;
-        Some((e.f, e.node))
-    }
-
-    /// Unlink the stale entries (`stale(node)`) of one list into the free list; returns the
-    /// new head and how many were freed.
-    fn sweep(&mut self, mut slot: u32, stale: &impl Fn(u32) -> bool) -> (u32, usize) {
-        let (mut head, mut freed) = (NIL, 0);
-        while slot != NIL {
-            let e = &mut self.pool[slot as usize];
-            let next = e.next;
-            if stale(e.node) {
-                e.next = self.free;
-                self.free = slot;
-                freed += 1;
-            } else {
-                e.next = head;
-                head = slot;
-            }
-            slot = next;
-        }
-        (head, freed)
-    }
-
-    /// Drop every stale entry from every bucket. Returns how many slots were freed.
-    /// O(entries); used only when the pool is full.
-    #[cold]
-    fn collect(&mut self, stale: impl Fn(u32) -> bool) -> usize {
-        let mut freed = 0;
-        for b in 0..FINE_BUCKETS {
-            let (head, n) = self.sweep(self.fine[b], &stale);
-            self.fine[b] = head;
-            freed += n;
+            self.heads[b] = head;
             if head == NIL {
-                self.fine_map &= !(1 << b);
+                self.map[b / 32] &= !(1 << (b % 32));
+                if self.map[b / 32] == 0 {
+                    s.summary &= !(1 << (b / 32));
+                }
             }
         }
-        for b in 0..COARSE_BUCKETS {
-            let (head, n) = self.sweep(self.coarse[b], &stale);
-            self.coarse[b] = head;
-            freed += n;
-            if head == NIL {
-                self.coarse_map[b / 32] &= !(1 << (b % 32));
-            }
-        }
-        freed
+        (s, freed)
     }
 }
 
@@ -964,6 +1127,53 @@ const JPS_MAX_EXPANSIONS_PER_CELLS: usize = 256;
 /// obstacles, 2 in a maze of 1-cell corridors, where jump point search stays 3x ahead).
 const JPS_WIDE_FRONTIER: usize = 16;
 
+/// A* runs cell by cell straight away (no jump point search) when the rows between start and
+/// goal (plus [`CLUTTER_MARGIN_ROWS`] on each side) hold more than one obstacle run per this
+/// many cells: 20 % random obstacles have about 1 in 6, a maze of 1-cell corridors 1 in 4, the
+/// bundled room worlds fewer than 1 in 100.
+const CLUTTER_CELLS_PER_RUN: usize = 32;
+/// [`cluttered`] reads one word in this many (of 32 cells each).
+const CLUTTER_SAMPLE_STRIDE: usize = 16;
+/// Rows beyond the start and goal rows that [`cluttered`] also counts.
+const CLUTTER_MARGIN_ROWS: u32 = 16;
+
+/// `true` when the map around start and goal is cluttered (see [`CLUTTER_CELLS_PER_RUN`]): it
+/// counts the runs of occupied cells (a set bit after a clear one) in a sample of the grid's
+/// words (one in [`CLUTTER_SAMPLE_STRIDE`]) over the rows from the lower of the two rows to the
+/// higher, widened by [`CLUTTER_MARGIN_ROWS`]: about 180 word reads on a 300 × 300 grid.
+fn cluttered(words: &[u32], geometry: &GridGeometry, start: Cell, goal: Cell) -> bool {
+    let width = geometry.width() as usize;
+    let (lo, hi) = if start.y < goal.y {
+        (start.y, goal.y)
+    } else {
+        (goal.y, start.y)
+    };
+    let first_row = (lo as u32).saturating_sub(CLUTTER_MARGIN_ROWS) as usize;
+    let last_row =
+        ((hi as u32) + CLUTTER_MARGIN_ROWS).min((geometry.height() as u32).saturating_sub(1));
+    let (first_word, end_word) = (
+        first_row * width / 32,
+        ((last_row as usize + 1) * width).div_ceil(32),
+    );
+    // Every `CLUTTER_SAMPLE_STRIDE`-th word; a run that enters a sampled word counts as starting
+    // there.
+    let mut runs = 0usize;
+    let mut sampled = 0usize;
+    for &w in words
+        .get(first_word..end_word)
+        .unwrap_or(&[])
+        .iter()
+        .step_by(CLUTTER_SAMPLE_STRIDE)
+    {
+        if w != 0 {
+            runs += (w & !(w << 1)).count_ones() as usize;
+        }
+        sampled += 1;
+    }
+    let cells = sampled * 32;
+    runs * CLUTTER_CELLS_PER_RUN > cells
+}
+
 /// Binary min-heap over a fixed slice of entries, ordered by `f`.
 #[inline(always)]
 fn heap_before(a: &OpenEntry, b: &OpenEntry) -> bool {
@@ -1129,8 +1339,13 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         // search reads the map's own bits and needs cleared nibbles only (its cell-by-cell
         // fallback copies the map then).
         let used_words = scratch_words_for_cells(geometry.cell_count());
+        // A* on a cluttered map runs cell by cell at once (nearly every free cell would be a
+        // jump point), also from a copy of the map.
+        let cell_by_cell =
+            kind != PlannerKind::Bfs && cluttered(grid.words(), &geometry, start, goal);
         match kind {
             PlannerKind::Bfs => self.copy_map(grid),
+            _ if cell_by_cell => self.copy_map(grid),
             _ => self
                 .scratch
                 .get_mut(..used_words)
@@ -1149,6 +1364,9 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         } else {
             match kind {
                 PlannerKind::Bfs => self.bfs(grid, start_index, goal_index)?,
+                PlannerKind::AStar | PlannerKind::AnyAngle if cell_by_cell => {
+                    self.astar(grid, start_index, goal, goal_index)?
+                }
                 PlannerKind::AStar | PlannerKind::AnyAngle => {
                     match self.jps(grid, start_index, goal, goal_index) {
                         Ok(search) => search,
@@ -1233,9 +1451,20 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     fn copy_map<const GW: usize>(&mut self, grid: &Grid<GW>) {
         let used_words = scratch_words_for_cells(grid.geometry().cell_count());
         let used = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
-        for (quad, &bits) in used.chunks_mut(4).zip(grid.words()) {
-            for (k, word) in quad.iter_mut().enumerate() {
-                *word = spread_bits_to_nibbles(bits >> (8 * k)) * BLOCKED;
+        let mut quads = used.chunks_exact_mut(4);
+        let mut bits = grid.words().iter();
+        for (quad, &b) in (&mut quads).zip(&mut bits) {
+            if let [w0, w1, w2, w3] = quad {
+                *w0 = BLOCKED_NIBBLES[(b & 0xFF) as usize];
+                *w1 = BLOCKED_NIBBLES[((b >> 8) & 0xFF) as usize];
+                *w2 = BLOCKED_NIBBLES[((b >> 16) & 0xFF) as usize];
+                *w3 = BLOCKED_NIBBLES[(b >> 24) as usize];
+            }
+        }
+        // The last grid word may cover fewer than four scratch words.
+        if let Some(&b) = bits.next() {
+            for (k, word) in quads.into_remainder().iter_mut().enumerate() {
+                *word = spread_bits_to_nibbles(b >> (8 * k)) * BLOCKED;
             }
         }
     }
@@ -1396,7 +1625,16 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         })
     }
 
-    /// A* with the octile heuristic and a lazy-deletion open list.
+    /// Cell-by-cell A* with the octile heuristic, a lazy-deletion bucket queue and the
+    /// *arrival pruning* of successors (see the module docs): a closed cell pushes only the
+    /// neighbours that no other cell covers with a key no larger. The scratch must hold the map
+    /// ([`Planner::copy_map`]).
+    ///
+    /// Hot loop: the popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
+    /// nibbles of a row from two scratch words) and turned by [`ASTAR_WINDOWS`] into an 18-bit
+    /// mask ("nibble 0" and "not blocked" per cell); one arm per arrival step tests its
+    /// candidate targets in the mask and pushes them with constant offsets. Cells on the map
+    /// border read their neighbours one by one.
     fn astar<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
@@ -1407,39 +1645,75 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let geometry = grid.geometry();
         let width = geometry.width() as usize;
         let height = geometry.height() as usize;
-        let (gx, gy) = (goal_cell.x as usize, goal_cell.y as usize);
-        let scratch = &mut self.scratch[..];
-        let h = |x: usize, y: usize| octile(x.abs_diff(gx) as u32, y.abs_diff(gy) as u32);
-        let (sx, sy) = (start % width, start / width);
-        let mut open = BucketQueue::new(&mut self.queue[..], h(sx, sy));
+        let (gx, gy) = (goal_cell.x as u32, goal_cell.y as u32);
+        let used_words = scratch_words_for_cells(geometry.cell_count());
+        let scratch = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
+        // Octile distance to the goal; sides are at most 4096 cells, so no overflow.
+        let h = |x: u32, y: u32| {
+            let (dx, dy) = (x.abs_diff(gx), y.abs_diff(gy));
+            let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
+            DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
+        };
+        let (sx, sy) = ((start % width) as u32, (start / width) as u32);
+        let (mut open, mut state) = BucketQueue::new(&mut self.queue[..], h(sx, sy));
         let full = PlanError::QueueFull {
             capacity: open.pool.len() as u32,
         };
         let mut expanded = 0u32;
 
         // Entries carry `y << 16 | x << 4 | step code` (sides are at most 4096 cells), so the
-        // loop never divides.
-        let pack = |x: usize, y: usize, code: u32| ((y as u32) << 16) | ((x as u32) << 4) | code;
-        if !open.push(h(sx, sy), pack(sx, sy, CODE_START)) {
+        // loop never divides, and a neighbour's entry is the cell's plus a constant.
+        if !open.push(&mut state, h(sx, sy), (sy << 16) | (sx << 4) | CODE_START) {
             return Err(full);
         }
+        // Interior cells: x in 1..width-1 and index in width..cells-width.
+        let inner_x = width.saturating_sub(2);
+        let inner_span = geometry.cell_count().saturating_sub(2 * width);
 
-        let unpack_index =
-            |node: u32| (node >> 16) as usize * width + ((node >> 4) & 0xFFF) as usize;
-        while let Some((f, node)) = open.pop(|node| nibble(scratch, unpack_index(node)) != 0) {
-            let x = ((node >> 4) & 0xFFF) as usize;
-            let y = (node >> 16) as usize;
-            let index = y * width + x;
-            if nibble(scratch, index) != 0 {
-                continue; // already closed by a cheaper entry
-            }
-            set_nibble(scratch, index, node & 0xF);
+        // A target whose key equals the key just popped is the next pop anyway (nothing in the
+        // queue is below it): one such target skips the queue and is expanded next
+        // (`next_node`, NIL when none).
+        // (`next_node`, NIL when none; its key is the current `f`, its `g` is `next_g`).
+        let (mut f, mut next_g, mut next_node) = (0u32, 0u32, NIL);
+        loop {
+            // Close the cell: its nibble gets the arrival step (it was 0).
+            let (node, x, y, index, g) = if next_node != NIL {
+                // A target of the cell just expanded: not closed (its nibble was 0 then).
+                let node = next_node;
+                next_node = NIL;
+                let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
+                let index = y * width + x;
+                if let Some(word) = scratch.get_mut(index >> 3) {
+                    *word |= (node & 0xF) << ((index & 7) * 4);
+                }
+                (node, x, y, index, next_g)
+            } else {
+                let mut found = None;
+                while let Some((key, node)) = open.pop(&mut state) {
+                    let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
+                    let index = y * width + x;
+                    let Some(word) = scratch.get_mut(index >> 3) else {
+                        continue;
+                    };
+                    let shift = (index & 7) * 4;
+                    if (*word >> shift) & 0xF == 0 {
+                        *word |= (node & 0xF) << shift;
+                        // Queue entries do not store g: f = g + h exactly.
+                        f = key;
+                        found = Some((node, x, y, index, key.wrapping_sub(h(x as u32, y as u32))));
+                        break;
+                    }
+                    // Otherwise already closed by a cheaper entry.
+                }
+                match found {
+                    Some(entry) => entry,
+                    None => break,
+                }
+            };
+            let code = node & 0xF;
             expanded += 1;
-            // The entry does not store g: f = g + h exactly (costs stay far below u32::MAX on
-            // grids that fit a planner's scratch).
-            let g = f.wrapping_sub(h(x, y));
             if index == goal {
-                self.queue_peak = open.bump;
+                self.queue_peak = state.bump;
                 return Ok(Search {
                     found: true,
                     expanded,
@@ -1447,72 +1721,131 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 });
             }
 
-            // Side neighbours' nibbles (off the map counts as BLOCKED).
-            let c_e = if x + 1 < width {
-                nibble(scratch, index + 1)
-            } else {
-                BLOCKED
-            };
-            let c_w = if x > 0 {
-                nibble(scratch, index - 1)
-            } else {
-                BLOCKED
-            };
-            let c_n = if y + 1 < height {
-                nibble(scratch, index + width)
-            } else {
-                BLOCKED
-            };
-            let c_s = if y > 0 {
-                nibble(scratch, index - width)
-            } else {
-                BLOCKED
-            };
-            let (free_e, free_w) = (c_e != BLOCKED, c_w != BLOCKED);
-            let (free_n, free_s) = (c_n != BLOCKED, c_s != BLOCKED);
-
+            let (above, cur, below) =
+                if x.wrapping_sub(1) < inner_x && index.wrapping_sub(width) < inner_span {
+                    (
+                        nibble_window(scratch, index + width - 1),
+                        nibble_window(scratch, index - 1),
+                        nibble_window(scratch, index - width - 1),
+                    )
+                } else {
+                    // Border: nibble of (x + sx - 1, y + sy - 1), BLOCKED off the map.
+                    let at = |sx: usize, sy: usize| -> u32 {
+                        let (nx, ny) = ((x + sx).wrapping_sub(1), (y + sy).wrapping_sub(1));
+                        if nx < width && ny < height {
+                            nibble(scratch, ny * width + nx)
+                        } else {
+                            BLOCKED
+                        }
+                    };
+                    let row = |sy: usize| at(0, sy) | at(1, sy) << 4 | at(2, sy) << 8;
+                    (row(2), row(1), row(0))
+                };
+            let window = |w: u32| u32::from(ASTAR_WINDOWS[(w & 0xFFF) as usize]);
+            let m = window(below) | window(cur) << 6 | window(above) << 12;
+            // The targets by arrival step (arrival pruning, see the module docs), each tested
+            // and pushed with constant offsets: straight on, plus the forced side and diagonal
+            // neighbours after a side step; the two sides and the diagonal after a diagonal
+            // step; all eight from the start.
+            let base = node & !0xF;
             macro_rules! visit {
-                ($nx:expr, $ny:expr, $cost:expr, $code:expr) => {{
-                    let f = g.saturating_add($cost).saturating_add(h($nx, $ny));
-                    let node = pack($nx, $ny, $code);
-                    if !open.push(f, node) {
-                        // Full: drop the entries of cells closed meanwhile and retry, unless
-                        // that frees too little to be worth it (no thrashing).
-                        let freed = open.collect(|node| nibble(scratch, unpack_index(node)) != 0);
-                        if freed < (open.pool.len() / 16).max(1) || !open.push(f, node) {
-                            self.queue_peak = open.bump;
-                            return Err(full);
+                ($z:expr, $code:expr) => {{
+                    if m & (1 << $z) != 0 {
+                        let (dx, dy) = STEPS[$code as usize - 1];
+                        let child = base.wrapping_add(((dy << 16) + (dx << 4)) as u32 + $code);
+                        // Plain adds: keys are u32 (see "Complexity" in the module docs).
+                        let child_g = g.wrapping_add(if $code >= NE {
+                            DIAGONAL_COST
+                        } else {
+                            STRAIGHT_COST
+                        });
+                        let key = child_g.wrapping_add(h(
+                            (x as u32).wrapping_add(dx as u32),
+                            (y as u32).wrapping_add(dy as u32),
+                        ));
+                        if key == f && next_node == NIL {
+                            (next_g, next_node) = (child_g, child);
+                        } else if !open.push(&mut state, key, child) {
+                            match open.reclaim_and_push(state, scratch, width, key, child) {
+                                Some(after) => state = after,
+                                None => {
+                                    self.queue_peak = state.bump;
+                                    return Err(full);
+                                }
+                            }
                         }
                     }
                 }};
             }
-
-            if c_e == 0 {
-                visit!(x + 1, y, STRAIGHT_COST, E);
+            macro_rules! diagonal {
+                ($z:expr, $code:expr, $o1:expr, $o2:expr) => {{
+                    if m & ((1 << $o1) | (1 << $o2)) == (1 << $o1) | (1 << $o2) {
+                        visit!($z, $code);
+                    }
+                }};
             }
-            if c_n == 0 {
-                visit!(x, y + 1, STRAIGHT_COST, N);
+            macro_rules! forced {
+                ($o_back:expr, $z:expr, $code:expr, $zd:expr, $dcode:expr, $o1:expr, $o2:expr) => {{
+                    if m & (1 << $o_back) == 0 {
+                        visit!($z, $code);
+                        diagonal!($zd, $dcode, $o1, $o2);
+                    }
+                }};
             }
-            if c_w == 0 {
-                visit!(x - 1, y, STRAIGHT_COST, W);
-            }
-            if c_s == 0 {
-                visit!(x, y - 1, STRAIGHT_COST, S);
-            }
-            if free_n && free_e && nibble(scratch, index + width + 1) == 0 {
-                visit!(x + 1, y + 1, DIAGONAL_COST, NE);
-            }
-            if free_n && free_w && nibble(scratch, index + width - 1) == 0 {
-                visit!(x - 1, y + 1, DIAGONAL_COST, NW);
-            }
-            if free_s && free_w && nibble(scratch, index - width - 1) == 0 {
-                visit!(x - 1, y - 1, DIAGONAL_COST, SW);
-            }
-            if free_s && free_e && nibble(scratch, index - width + 1) == 0 {
-                visit!(x + 1, y - 1, DIAGONAL_COST, SE);
+            match code {
+                E => {
+                    visit!(Z_E, E);
+                    forced!(O_NW, Z_N, N, Z_NE, NE, O_N, O_E);
+                    forced!(O_SW, Z_S, S, Z_SE, SE, O_S, O_E);
+                }
+                W => {
+                    visit!(Z_W, W);
+                    forced!(O_NE, Z_N, N, Z_NW, NW, O_N, O_W);
+                    forced!(O_SE, Z_S, S, Z_SW, SW, O_S, O_W);
+                }
+                N => {
+                    visit!(Z_N, N);
+                    forced!(O_SE, Z_E, E, Z_NE, NE, O_E, O_N);
+                    forced!(O_SW, Z_W, W, Z_NW, NW, O_W, O_N);
+                }
+                S => {
+                    visit!(Z_S, S);
+                    forced!(O_NE, Z_E, E, Z_SE, SE, O_E, O_S);
+                    forced!(O_NW, Z_W, W, Z_SW, SW, O_W, O_S);
+                }
+                NE => {
+                    visit!(Z_E, E);
+                    visit!(Z_N, N);
+                    diagonal!(Z_NE, NE, O_N, O_E);
+                }
+                NW => {
+                    visit!(Z_W, W);
+                    visit!(Z_N, N);
+                    diagonal!(Z_NW, NW, O_N, O_W);
+                }
+                SW => {
+                    visit!(Z_W, W);
+                    visit!(Z_S, S);
+                    diagonal!(Z_SW, SW, O_S, O_W);
+                }
+                SE => {
+                    visit!(Z_E, E);
+                    visit!(Z_S, S);
+                    diagonal!(Z_SE, SE, O_S, O_E);
+                }
+                _ => {
+                    visit!(Z_E, E);
+                    visit!(Z_N, N);
+                    visit!(Z_W, W);
+                    visit!(Z_S, S);
+                    diagonal!(Z_NE, NE, O_N, O_E);
+                    diagonal!(Z_NW, NW, O_N, O_W);
+                    diagonal!(Z_SW, SW, O_S, O_W);
+                    diagonal!(Z_SE, SE, O_S, O_E);
+                }
             }
         }
-        self.queue_peak = open.bump;
+        self.queue_peak = state.bump;
         Ok(Search {
             found: false,
             expanded,
@@ -1810,7 +2143,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 end = p;
                 run += 1;
             }
-            if line_of_sight(grid, anchor, end) {
+            // From the anchor itself the run is an A* move sequence: visible without a test.
+            if cur == anchor || line_of_sight(grid, anchor, end) {
                 cur = end;
                 steps += run;
                 continue;

@@ -728,9 +728,9 @@ fn jump_point_search_needs_few_entries_on_room_maps() {
 
 #[test]
 fn cluttered_maps_fall_back_to_cell_by_cell_astar_with_the_same_cost() {
-    // 20 % random obstacles on 300 x 300 cells: nearly every free cell is a jump point, so the
-    // search gives up after 352 of them and runs cell-by-cell A* (with reclaiming when a
-    // small queue fills). Same optimal cost either way.
+    // 20 % random obstacles on 300 x 300 cells: nearly every free cell would be a jump point, so
+    // the clutter count sends A* cell by cell at once (with reclaiming when a small queue
+    // fills). Same optimal cost either way; the MCU's 2 300 entries, and even 1 024, suffice.
     let mut g = crate::grid::Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
     let mut state = 0x9E37_79B9_7F4A_7C15u64;
     for y in 0..300 {
@@ -747,8 +747,16 @@ fn cluttered_maps_fall_back_to_cell_by_cell_astar_with_the_same_cost() {
     g.set(s, false);
     g.set(t, false);
     let expected = oracle_astar(&g, s, t);
-    for queue in [0usize, 1] {
-        let r = if queue == 0 {
+    assert!(cluttered(g.words(), g.geometry(), s, t));
+    for queue in [0usize, 1, 2] {
+        let r = if queue == 2 {
+            let mut p = Box::new(Planner::<SCRATCH_WORDS_300, 1024>::new());
+            let r = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+            assert_eq!(steps_and_cost(p.path_cells()).1, r.cost);
+            // 804 entries at most in use on this grid (no reclaiming needed).
+            assert!(p.queue_peak() <= 900, "queue peak {}", p.queue_peak());
+            r
+        } else if queue == 0 {
             let mut big = Box::new(Planner::<SCRATCH_WORDS_300, 32768>::new());
             let r = big.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
             assert_eq!(steps_and_cost(big.path_cells()).1, r.cost);
@@ -764,7 +772,7 @@ fn cluttered_maps_fall_back_to_cell_by_cell_astar_with_the_same_cost() {
         assert_eq!(r.status == PlanStatus::Found, expected.is_some());
         if let Some(cost) = expected {
             assert_eq!(r.cost, cost);
-            // 352 jump points, then about 29 000 cells.
+            // About 28 800 cells, no jump points.
             assert!(r.expanded > 20_000, "expanded {}", r.expanded);
         }
     }
@@ -844,6 +852,11 @@ fn wide_grids_scan_columns_one_by_one_with_the_same_cost() {
                 assert_eq!(steps_and_cost(p.path_cells()).1, cost);
                 assert_collision_free(&g, p.path_cells());
             }
+            // The planner runs the cluttered cases cell by cell: jump point search (its
+            // column-by-column diagonal scans) on its own, too, up to where it gives up.
+            if let Some(found) = jump_point_search_alone(&mut *p, &g, s, t) {
+                assert_eq!(found, expected, "density {density} {s:?} -> {t:?}");
+            }
         }
     }
 }
@@ -887,6 +900,180 @@ fn sparse_obstacles_on_many_words_match_pathfinding() {
                 assert_eq!(steps_and_cost(p.path_cells()).1, cost);
                 assert_collision_free(&g, p.path_cells());
             }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2048))]
+
+    /// The cell-by-cell A* on its own (whatever the clutter test would choose), with its arrival
+    /// pruning and the queue's immediate expansion: the optimal cost, a path of that cost.
+    #[test]
+    fn cell_by_cell_astar_matches_pathfinding((mut g, s, t) in arb_grid()) {
+        let mut p = Box::new(SmallPlanner::new());
+        g.set(s, false);
+        g.set(t, false);
+        if s == t {
+            return Ok(());
+        }
+        p.copy_map(&g);
+        let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
+        let search = p.astar(&g, si, t, ti).unwrap();
+        let expected = oracle_astar(&g, s, t);
+        prop_assert_eq!(search.found, expected.is_some());
+        if let Some(cost) = expected {
+            prop_assert_eq!(search.cost, cost);
+            let (_, _, fits) = p.rebuild_merged(g.geometry(), t);
+            prop_assert!(fits);
+            prop_assert_eq!(steps_and_cost(p.path_cells()).1, cost);
+            assert_collision_free(&g, p.path_cells());
+            prop_assert_eq!(p.path_cells().first(), Some(&s));
+        }
+    }
+}
+
+/// The line of sight walked with [`crate::raster::BresenhamLine`] and the grid's checked
+/// accessors, cell by cell: the reference for the index-stepping [`line_of_sight`].
+fn line_of_sight_reference<const W: usize>(grid: &Grid<W>, a: Cell, b: Cell) -> bool {
+    let (from, to) = if (a.y, a.x) <= (b.y, b.x) {
+        (a, b)
+    } else {
+        (b, a)
+    };
+    let (mut px, mut py) = (from.x as i32, from.y as i32);
+    for (x, y) in crate::raster::BresenhamLine::new((px, py), (to.x as i32, to.y as i32)) {
+        if grid.is_occupied_xy(x, y) {
+            return false;
+        }
+        if x != px && y != py && (grid.is_occupied_xy(x, py) || grid.is_occupied_xy(px, y)) {
+            return false;
+        }
+        px = x;
+        py = y;
+    }
+    true
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(1024))]
+
+    #[test]
+    fn line_of_sight_equals_the_cell_by_cell_walk(
+        (g, s, t) in arb_grid(),
+        off in 0u16..3,
+    ) {
+        // `off` moves the far end off the map now and then.
+        let t = Cell::new(t.x + off * 20, t.y);
+        prop_assert_eq!(line_of_sight(&g, s, t), line_of_sight_reference(&g, s, t));
+        prop_assert_eq!(line_of_sight(&g, t, s), line_of_sight_reference(&g, s, t));
+    }
+}
+
+#[test]
+fn the_clutter_count_keeps_jump_points_on_room_maps_and_open_floors() {
+    // The seed's room worlds and an empty floor keep jump point search (a few dozen jump points
+    // at most); a maze of 1-cell corridors is cluttered.
+    for name in ["office", "corridor", "pillars"] {
+        let (g, params) = world(name);
+        let cell = |p| g.geometry().cell_of(p).unwrap();
+        let (s, t) = (cell(params.start), cell(params.goal));
+        assert!(!cluttered(g.words(), g.geometry(), s, t), "{name}");
+        let mut p = Box::new(Planner300::new());
+        let r = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+        assert!(r.expanded < 100, "{name}: expanded {}", r.expanded);
+    }
+    let open = crate::grid::Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
+    assert!(!cluttered(
+        open.words(),
+        open.geometry(),
+        Cell::new(3, 5),
+        Cell::new(296, 291)
+    ));
+    // Walls on even rows and columns, a gap in every wall: rooms of one cell.
+    let mut maze = crate::grid::Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
+    for y in 0..300 {
+        for x in 0..300 {
+            if (x % 2 == 0 || y % 2 == 0) && (x + 3 * y) % 7 != 0 {
+                maze.set_xy(x, y, true);
+            }
+        }
+    }
+    assert!(cluttered(
+        maze.words(),
+        maze.geometry(),
+        Cell::new(1, 1),
+        Cell::new(297, 297)
+    ));
+}
+
+/// Jump point search alone (whatever the clutter count would choose), on cleared scratch:
+/// `None` when it gave up (cluttered or out of entries), else the cost found (`None` inside when
+/// unreachable) after checking the rebuilt path's cost and collisions.
+fn jump_point_search_alone<const W: usize, const S: usize, const Q: usize>(
+    p: &mut Planner<S, Q>,
+    g: &Grid<W>,
+    s: Cell,
+    t: Cell,
+) -> Option<Option<u32>> {
+    let geometry = *g.geometry();
+    p.scratch.fill(0);
+    p.cells.clear();
+    let search = p.jps(g, geometry.index(s), t, geometry.index(t)).ok()?;
+    if !search.found {
+        return Some(None);
+    }
+    let (_, _, fits) = p.rebuild_merged(&geometry, t);
+    assert!(fits);
+    assert_eq!(steps_and_cost(p.path_cells()).1, search.cost);
+    assert_collision_free(g, p.path_cells());
+    assert_eq!(p.path_cells().first(), Some(&s));
+    Some(Some(search.cost))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(1024))]
+
+    /// Jump point search on its own at every density (the planner only runs it on uncluttered
+    /// maps): when it does not give up, the optimal cost and a path of that cost.
+    #[test]
+    fn jump_point_search_alone_matches_pathfinding((mut g, s, t) in arb_grid()) {
+        g.set(s, false);
+        g.set(t, false);
+        if s == t {
+            return Ok(());
+        }
+        let mut p = Box::new(SmallPlanner::new());
+        if let Some(found) = jump_point_search_alone(&mut *p, &g, s, t) {
+            prop_assert_eq!(found, oracle_astar(&g, s, t));
+        }
+    }
+}
+
+#[test]
+fn one_cell_wide_grids_match_pathfinding_cell_by_cell_and_by_jump_points() {
+    // Every cell of a 1-wide or 1-high grid is on the border (the slow neighbourhood path).
+    for (w, h) in [(1u32, 30u32), (30, 1), (2, 30), (30, 2)] {
+        let mut g = SmallGrid::new(GridGeometry::new(w, h, 0.1).unwrap()).unwrap();
+        for k in [5i32, 11, 17] {
+            // A few blocked cells that leave a way round on 2-wide grids only.
+            let (x, y) = if w <= 2 { (0, k) } else { (k, 0) };
+            g.set_xy(x, y, true);
+        }
+        let (s, t) = (Cell::new(0, 0), Cell::new(w as u16 - 1, h as u16 - 1));
+        let expected = oracle_astar(&g, s, t);
+        let mut p = Box::new(SmallPlanner::new());
+        let r = p.plan_cells(PlannerKind::AStar, &g, s, t).unwrap();
+        assert_eq!(r.status == PlanStatus::Found, expected.is_some(), "{w}x{h}");
+        if let Some(cost) = expected {
+            assert_eq!(r.cost, cost, "{w}x{h}");
+        }
+        p.copy_map(&g);
+        let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
+        let search = p.astar(&g, si, t, ti).unwrap();
+        assert_eq!(search.found.then_some(search.cost), expected, "{w}x{h}");
+        if let Some(found) = jump_point_search_alone(&mut *p, &g, s, t) {
+            assert_eq!(found, expected, "{w}x{h}");
         }
     }
 }
