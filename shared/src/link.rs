@@ -68,10 +68,11 @@ pub mod mcu {
     pub const GRID_WORDS: usize = words_for_cells(GRID_CELLS);
     /// Planner scratch, 32-bit words (4 bits per cell).
     pub const PLANNER_SCRATCH_WORDS: usize = scratch_words_for_cells(GRID_CELLS);
-    /// Planner open-list capacity, entries (12 bytes each): what the 112 KiB SRAM budget leaves
-    /// next to the 80 000-byte scratch. The planner reclaims stale entries when the list fills,
-    /// so A* on the bundled worlds and on 20 % random 400 x 400 grids fits.
-    pub const PLANNER_QUEUE: usize = 2300;
+    /// Planner open-list capacity, entries (12 bytes each). A* needs at most 782 on the 300 x
+    /// 300 benchmark grids (20 % random obstacles; 43 on the bundled worlds) and reclaims stale
+    /// entries when the list fills; BFS needs none (its scalar restart in corridors, a few
+    /// dozen).
+    pub const PLANNER_QUEUE: usize = 1024;
     /// The firmware's planner.
     pub type McuPlanner = Planner<PLANNER_SCRATCH_WORDS, PLANNER_QUEUE>;
     /// The firmware's device.

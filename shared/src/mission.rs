@@ -1726,7 +1726,7 @@ mod tests {
             Mission300::SIZE_BYTES,
             Mission400::SIZE_BYTES
         );
-        const { assert!(Mission300::SIZE_BYTES < 150_000) };
+        const { assert!(Mission300::SIZE_BYTES < 250_000) };
         const { assert!(Mission300::SIZE_BYTES < Mission400::SIZE_BYTES) };
     }
 

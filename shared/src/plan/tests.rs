@@ -332,7 +332,7 @@ fn scratch_too_small_and_queue_full_are_errors() {
 
 #[test]
 fn path_full_keeps_the_report() {
-    // A zig-zag staircase on a 200x200 map needs > 1024 vertices.
+    // A serpentine fits; a corridor that turns every two cells does not.
     const CELLS: usize = 200 * 200;
     let geometry = GridGeometry::new(200, 200, 0.05).unwrap();
     let mut g = Grid::<{ words_for_cells(CELLS) }>::new(geometry).unwrap();
@@ -359,30 +359,44 @@ fn path_full_keeps_the_report() {
     let r = r.unwrap();
     assert_eq!(r.status, PlanStatus::Found);
     assert!(path.len() > 150, "{} vertices", path.len());
-    // A 2-row corridor 4000 cells long whose odd columns are open in alternate rows: the path
-    // turns every two cells, about 2000 vertices.
-    let long = GridGeometry::new(4000, 2, 0.05).unwrap();
+    // Two 2-row corridors 4000 cells long, joined at the east end, whose odd columns are open
+    // in alternate rows: the path turns every two cells, about 4000 vertices (> MAX_PATH_POINTS).
+    let long = GridGeometry::new(4000, 5, 0.05).unwrap();
     let mut g2 = Grid::<{ words_for_cells(CELLS) }>::new(long).unwrap();
     for x in 0..4000 {
         match x % 4 {
-            1 => g2.set_xy(x, 1, true),
-            3 => g2.set_xy(x, 0, true),
+            1 => {
+                g2.set_xy(x, 1, true);
+                g2.set_xy(x, 4, true);
+            }
+            3 => {
+                g2.set_xy(x, 0, true);
+                g2.set_xy(x, 3, true);
+            }
             _ => {}
+        }
+        if x < 3998 {
+            g2.set_xy(x, 2, true);
         }
     }
     let err = p.plan(
         PlannerKind::Bfs,
         &g2,
         long.center_of(Cell::new(0, 0)),
-        long.center_of(Cell::new(3998, 0)),
+        long.center_of(Cell::new(0, 3)),
         &mut path,
     );
-    assert_eq!(err, Err(PlanError::PathFull { capacity: 1024 }));
+    assert_eq!(
+        err,
+        Err(PlanError::PathFull {
+            capacity: MAX_PATH_POINTS as u32
+        })
+    );
     assert!(path.is_empty());
     let last = p.last_report().unwrap();
     assert_eq!(last.status, PlanStatus::Found);
-    // 3998 steps east plus a row change at every even column 2..=3996.
-    assert_eq!(last.cost, 3998 + 1998);
+    // At least 3999 steps east and 3999 back west.
+    assert!(last.cost >= 2 * 3999, "{}", last.cost);
     assert!(p.path_cells().is_empty());
     assert!(last.expanded > 100);
 }
@@ -785,7 +799,7 @@ fn names_and_sizes() {
     assert_eq!(PlanStatus::OutOfBounds.as_str(), "out_of_bounds");
     // 4 bits per cell for 300 x 300 cells, 12 bytes per queue entry, 4 bytes per vertex.
     assert_eq!(SCRATCH_WORDS_300 * 4, 45_000);
-    assert!(core::mem::size_of::<Planner300>() <= 45_000 + 3072 * 12 + 1024 * 4 + 64);
+    assert!(core::mem::size_of::<Planner300>() <= 45_000 + 3072 * 12 + MAX_PATH_POINTS * 4 + 64);
 }
 
 #[test]
