@@ -1,23 +1,25 @@
 //! Bit-parallel layered breadth-first search (see the module doc of [`super`], "BFS").
 //!
 //! The search works on whole 32-cell words: the layer-`k + 1` cells of a word are found from
-//! the layer-`k` cells of the same word and its row neighbours with a few shifts, ANDs and ORs,
-//! instead of one queue entry per cell. The queue holds the *frontier rows* (one entry per row
-//! that gained cells in a layer), so rows the frontier does not touch cost nothing.
+//! the layer-`k` cells of the same word and of the rows below and above with a few shifts,
+//! ANDs and ORs, instead of one queue entry per cell. Only the rows that hold frontier cells
+//! are visited, and in them only the words that do.
 //!
-//! Scratch layout (rows padded to `row_words = ⌈width / 32⌉` words), one *node* of `stride`
-//! words per (row, word), row-major:
+//! Scratch layout (rows padded to `row_words = ⌈width / 32⌉` words, `nodes = height ×
+//! row_words`), bit `b` of word `y · row_words + w` of a plane is cell `(32 w + b, y)`:
 //!
-//! | word of the node | bit `b` of word `w` in row `y` tells about cell `(32 w + b, y)` |
-//! |------------------|------------------------------------------------------------------|
-//! | 0 (`P0`)         | bit 0 of the cell's layer code                                   |
-//! | 1 (`P1`)         | bit 1 of the cell's layer code                                   |
-//! | 2 (`FREE`)       | the cell is on the map and free (stride 3 only)                  |
+//! | words                     | plane / content                                            |
+//! |---------------------------|------------------------------------------------------------|
+//! | `0 .. nodes`              | `P0`: bit 0 of the cell's layer code                       |
+//! | `nodes .. 2 nodes`        | `P1`: bit 1 of the cell's layer code                       |
+//! | `2 nodes .. 3 nodes`      | `FREE`: the cell is free (only when it fits, see below)    |
+//! | then `2 ⌈height / 32⌉`    | two row sets: rows with frontier cells, even / odd layers  |
 //!
-//! followed by one *tag* word per row. The layer code is 0 for a cell not reached, else
-//! `layer mod 3 + 1`. When the three planes do not fit in the scratch (narrow grids, where the
-//! padding wastes most), the stride is 2 and the free bits are read from the grid's own packed
-//! bits (a funnel shift per word: slower, same result).
+//! The layer code is 0 for a cell not reached, else `layer mod 3 + 1`. When `FREE` does not fit
+//! in the scratch (narrow grids, where the padding wastes most), the free bits are read from
+//! the grid's own packed bits instead (a funnel shift per word: slower, same result). Queue
+//! entry `y` holds row `y`'s *word masks* (which words hold frontier cells) for even and odd
+//! layers.
 
 use super::{OpenEntry, PlanError, Planner, Search, STEPS};
 use crate::geom::Cell;
@@ -30,37 +32,36 @@ pub(super) struct BfsLayout {
     height: usize,
     /// Words per padded row.
     row_words: usize,
-    /// Words per node: 3 (`P0`, `P1`, `FREE`) or 2 (`P0`, `P1`; free bits read from the grid).
-    stride: usize,
-    /// Index of the two row bit sets (frontier rows of even / odd layers), `row_set_words`
-    /// words each.
-    row_sets: usize,
+    /// Words per plane: `height × row_words`.
+    nodes: usize,
+    /// Whether the `FREE` plane fits (else the free bits come from the grid).
+    copy_free: bool,
+    /// Words of one row set (frontier rows of even / odd layers; two sets after the planes).
     row_set_words: usize,
     /// A bit of a row's word mask stands for `1 << group_shift` words (0 up to 1 024 columns).
     group_shift: u32,
 }
 
 impl BfsLayout {
-    /// The layout for `geometry` in `capacity_words` words of scratch, three planes if they fit.
+    /// The layout for `geometry` in `capacity_words` words of scratch, with the `FREE` plane if
+    /// it fits.
     ///
-    /// Errors: [`PlanError::ScratchTooSmall`] when not even two planes fit; its `cells` is then
-    /// the scratch two planes and the row sets need, in cells (8 per word).
+    /// Errors: [`PlanError::ScratchTooSmall`] when not even `P0`, `P1` and the row sets fit; its
+    /// `cells` is then the scratch they need, in cells (8 per word).
     pub(super) fn new(geometry: &GridGeometry, capacity_words: usize) -> Result<Self, PlanError> {
         let width = geometry.width() as usize;
         let height = geometry.height() as usize;
         let row_words = width.div_ceil(32);
         let nodes = row_words * height;
         let row_set_words = height.div_ceil(32);
-        let stride = if nodes * 3 + 2 * row_set_words <= capacity_words {
-            3
-        } else if nodes * 2 + 2 * row_set_words <= capacity_words {
-            2
-        } else {
+        let copy_free = nodes * 3 + 2 * row_set_words <= capacity_words;
+        let planes = if copy_free { 3 } else { 2 };
+        if nodes * planes + 2 * row_set_words > capacity_words {
             return Err(PlanError::ScratchTooSmall {
                 cells: ((nodes * 2 + 2 * row_set_words) * 8) as u32,
                 capacity: (capacity_words * 8) as u32,
             });
-        };
+        }
         let mut group_shift = 0;
         while (32usize << group_shift) < row_words {
             group_shift += 1;
@@ -69,17 +70,17 @@ impl BfsLayout {
             width,
             height,
             row_words,
-            stride,
-            row_sets: nodes * stride,
+            nodes,
+            copy_free,
             row_set_words,
             group_shift,
         })
     }
 
-    /// Index of the node of word `w` of row `y`.
+    /// Index of word `w` of row `y` in a plane.
     #[inline(always)]
     fn node(&self, y: usize, w: usize) -> usize {
-        (y * self.row_words + w) * self.stride
+        y * self.row_words + w
     }
 }
 
@@ -99,6 +100,39 @@ fn grid_free_word(words: &[u32], width: usize, y: usize, w: usize) -> u32 {
     !occupied
 }
 
+/// The free bits of a plane word: from the `FREE` plane, or computed from the grid.
+trait FreeBits {
+    fn get(&self, y: usize, w: usize, i: usize) -> u32;
+}
+
+/// The `FREE` plane in the scratch.
+struct FreePlane<'a>(&'a [u32]);
+
+impl FreeBits for FreePlane<'_> {
+    #[inline(always)]
+    fn get(&self, _y: usize, _w: usize, i: usize) -> u32 {
+        self.0.get(i).copied().unwrap_or(0)
+    }
+}
+
+/// The grid's own bits (narrow grids).
+struct GridBits<'a> {
+    words: &'a [u32],
+    width: usize,
+    height: usize,
+}
+
+impl FreeBits for GridBits<'_> {
+    #[inline(always)]
+    fn get(&self, y: usize, w: usize, _i: usize) -> u32 {
+        if y < self.height {
+            grid_free_word(self.words, self.width, y, w)
+        } else {
+            0
+        }
+    }
+}
+
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEUE> {
     /// Layered bit-parallel BFS from `start` until the layer that reaches `goal` (`start !=
     /// goal`, both free and on the map). `Search::cost` is the goal's layer (the number of
@@ -110,27 +144,66 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         goal: Cell,
     ) -> Result<Search, PlanError> {
         let layout = BfsLayout::new(grid.geometry(), SCRATCH_WORDS)?;
+        if self.queue.len() < layout.height {
+            return Err(PlanError::QueueFull {
+                capacity: self.queue.len() as u32,
+            });
+        }
+        let grid_words = grid.words();
+        let (p0, rest) = self.scratch.split_at_mut(layout.nodes);
+        let (p1, rest) = rest.split_at_mut(layout.nodes);
+        let (free, sets) = if layout.copy_free {
+            rest.split_at_mut(layout.nodes)
+        } else {
+            rest.split_at_mut(0)
+        };
+        let sets = sets.get_mut(..2 * layout.row_set_words).unwrap_or(&mut []);
+        p0.fill(0);
+        p1.fill(0);
+        if layout.copy_free {
+            for y in 0..layout.height {
+                let row = free
+                    .get_mut(y * layout.row_words..(y + 1) * layout.row_words)
+                    .unwrap_or(&mut []);
+                for (w, word) in row.iter_mut().enumerate() {
+                    *word = grid_free_word(grid_words, layout.width, y, w);
+                }
+            }
+        }
         let mut layers = Layers {
-            scratch: &mut self.scratch[..],
+            p0,
+            p1,
+            sets,
             queue: &mut self.queue[..],
-            grid_words: grid.words(),
             layout,
             peak: 0,
             layer: 0,
+            next_lo: usize::MAX,
+            next_hi: 0,
             x0: 0,
             x1: 0,
             set0: 0,
             set1: 0,
-            goal_node: layout.node(goal.y as usize, goal.x as usize >> 5),
-            goal_bit: 1 << (goal.x & 31),
         };
-        let result = if layout.stride == 3 {
-            layers.run::<true>(start)
+        let goal_node = layout.node(goal.y as usize, goal.x as usize >> 5);
+        let goal_bit = 1u32 << (goal.x & 31);
+        let found = if layout.copy_free {
+            layers.run(&FreePlane(free), start, goal_node, goal_bit)
         } else {
-            layers.run::<false>(start)
+            let bits = GridBits {
+                words: grid_words,
+                width: layout.width,
+                height: layout.height,
+            };
+            layers.run(&bits, start, goal_node, goal_bit)
         };
         self.queue_peak = layers.peak as u32;
-        result
+        let expanded = count_reached(&self.scratch, &layout);
+        Ok(Search {
+            found: found.is_some(),
+            expanded,
+            cost: found.unwrap_or(0),
+        })
     }
 
     /// Rebuild the BFS path from the layer codes: from the goal (layer `layers`) back to the
@@ -156,7 +229,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             let (x, y) = (x as usize, y as usize);
             let i = layout.node(y, x >> 5);
             let p0 = scratch.get(i).copied().unwrap_or(0);
-            let p1 = scratch.get(i + 1).copied().unwrap_or(0);
+            let p1 = scratch.get(layout.nodes + i).copied().unwrap_or(0);
             ((p0 >> (x & 31)) & 1) | (((p1 >> (x & 31)) & 1) << 1)
         };
         let free = |x: i32, y: i32| grid.geometry().contains_xy(x, y) && !grid.is_occupied_xy(x, y);
@@ -207,60 +280,34 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
 /// The state of one layered search: the planes and row sets in the scratch, the rows' word
 /// masks in the queue.
 struct Layers<'a> {
-    scratch: &'a mut [u32],
+    p0: &'a mut [u32],
+    p1: &'a mut [u32],
+    /// The two row sets (even layers, then odd layers).
+    sets: &'a mut [u32],
     /// Entry `y` holds the word masks of row `y`'s frontier: `f` for even layers, `next` for
     /// odd ones (bit `g`: words `g << group_shift ..`).
     queue: &'a mut [OpenEntry],
-    grid_words: &'a [u32],
     layout: BfsLayout,
     /// Most frontier rows in one layer.
     peak: usize,
     /// Layer being expanded.
     layer: u32,
+    /// Range of row-set words that the next layer's rows fall in.
+    next_lo: usize,
+    next_hi: usize,
     /// Frontier = `(P0 ^ x0) & (P1 ^ x1)`; new cells: `P0 |= n & set0`, `P1 |= n & set1`.
     x0: u32,
     x1: u32,
     set0: u32,
     set1: u32,
-    goal_node: usize,
-    goal_bit: u32,
 }
 
 impl Layers<'_> {
-    fn result(&self, found: bool) -> Search {
-        Search {
-            found,
-            expanded: count_reached(self.scratch, &self.layout),
-            cost: if found { self.layer } else { 0 },
-        }
-    }
-
-    /// `(P0, P1, FREE)` of the node at `i` (word `w` of row `y`); zeros out of range.
-    #[inline(always)]
-    fn load<const COPY: bool>(&self, i: usize, y: usize, w: usize) -> (u32, u32, u32) {
-        if COPY {
-            match self.scratch.get(i..i.wrapping_add(3)) {
-                Some(&[p0, p1, free]) => (p0, p1, free),
-                _ => (0, 0, 0),
-            }
-        } else {
-            match self.scratch.get(i..i.wrapping_add(2)) {
-                Some(&[p0, p1]) => (
-                    p0,
-                    p1,
-                    grid_free_word(self.grid_words, self.layout.width, y, w),
-                ),
-                _ => (0, 0, 0),
-            }
-        }
-    }
-
     /// Take (read and clear) row `y`'s word mask for the layer being expanded.
     #[inline(always)]
-    fn take_mask(&mut self, y: usize) -> u32 {
-        let odd = self.layer & 1 != 0;
+    fn take_mask<const ODD: bool>(&mut self, y: usize) -> u32 {
         match self.queue.get_mut(y) {
-            Some(e) if odd => core::mem::take(&mut e.next),
+            Some(e) if ODD => core::mem::take(&mut e.next),
             Some(e) => core::mem::take(&mut e.f),
             None => 0,
         }
@@ -268,92 +315,95 @@ impl Layers<'_> {
 
     /// Row `y`'s word mask for the layer being expanded, left in place.
     #[inline(always)]
-    fn peek_mask(&self, y: usize) -> u32 {
+    fn peek_mask<const ODD: bool>(&self, y: usize) -> u32 {
         match self.queue.get(y) {
-            Some(e) if self.layer & 1 != 0 => e.next,
+            Some(e) if ODD => e.next,
             Some(e) => e.f,
             None => 0,
         }
     }
 
-    /// Set up the planes and the start, then expand layer after layer.
-    fn run<const COPY: bool>(&mut self, start: Cell) -> Result<Search, PlanError> {
+    /// Mark the start, then expand layer after layer until the goal's word bit is reached
+    /// (`Some(layer)`) or a layer is empty (`None`).
+    fn run(
+        &mut self,
+        free: &impl FreeBits,
+        start: Cell,
+        goal_node: usize,
+        goal_bit: u32,
+    ) -> Option<u32> {
         let layout = self.layout;
-        if self.queue.len() < layout.height {
-            return Err(PlanError::QueueFull {
-                capacity: self.queue.len() as u32,
-            });
-        }
-        for y in 0..layout.height {
-            for w in 0..layout.row_words {
-                let i = layout.node(y, w);
-                if COPY {
-                    let free = grid_free_word(self.grid_words, layout.width, y, w);
-                    if let Some(node) = self.scratch.get_mut(i..i + 3) {
-                        node.copy_from_slice(&[0, 0, free]);
-                    }
-                } else if let Some(node) = self.scratch.get_mut(i..i + 2) {
-                    node.fill(0);
-                }
-            }
-        }
-        self.scratch
-            .get_mut(layout.row_sets..layout.row_sets + 2 * layout.row_set_words)
-            .unwrap_or(&mut [])
-            .fill(0);
+        self.sets.fill(0);
         for e in self.queue.iter_mut().take(layout.height) {
             (e.f, e.next) = (0, 0);
         }
-        // Layer 0 is the start, code 1; it is marked "by" layer -1 (an odd layer).
-        (self.set0, self.set1) = (u32::MAX, 0);
-        self.layer = 1;
+        // Layer 0 is the start, code 1; it is noted as if found by layer -1 (odd).
         let (sx, sy) = (start.x as usize, start.y as usize);
-        self.mark(sy, layout.node(sy, sx >> 5), sx >> 5, 1 << (sx & 31));
+        if let Some(p0) = self.p0.get_mut(layout.node(sy, sx >> 5)) {
+            *p0 |= 1 << (sx & 31);
+        }
+        self.note::<true>(sy, sx >> 5, 1 << (sx & 31));
         self.layer = 0;
         loop {
             (self.x0, self.x1, self.set0, self.set1) = layer_masks(self.layer);
-            let rows = self.expand_layer::<COPY>();
+            let (lo, hi) = (self.next_lo, self.next_hi);
+            (self.next_lo, self.next_hi) = (usize::MAX, 0);
+            let rows = if self.layer & 1 != 0 {
+                self.expand_layer::<true>(free, lo, hi)
+            } else {
+                self.expand_layer::<false>(free, lo, hi)
+            };
             if rows == 0 {
-                return Ok(self.result(false));
+                return None;
             }
             self.peak = self.peak.max(rows);
             self.layer += 1;
-            let reached = self.scratch.get(self.goal_node).copied().unwrap_or(0)
-                | self.scratch.get(self.goal_node + 1).copied().unwrap_or(0);
-            if reached & self.goal_bit != 0 {
-                return Ok(self.result(true));
+            let reached = self.p0.get(goal_node).copied().unwrap_or(0)
+                | self.p1.get(goal_node).copied().unwrap_or(0);
+            if reached & goal_bit != 0 {
+                return Some(self.layer);
             }
         }
     }
 
     /// Expand every frontier row of the layer, in increasing row order; returns how many.
-    fn expand_layer<const COPY: bool>(&mut self) -> usize {
+    fn expand_layer<const ODD: bool>(
+        &mut self,
+        free: &impl FreeBits,
+        lo: usize,
+        hi: usize,
+    ) -> usize {
         let layout = self.layout;
-        let set = layout.row_sets + (self.layer as usize & 1) * layout.row_set_words;
+        let set = usize::from(ODD) * layout.row_set_words;
         let mut rows = 0;
-        for k in 0..layout.row_set_words {
-            let Some(word) = self.scratch.get_mut(set + k) else {
+        for k in lo..=hi.min(layout.row_set_words.saturating_sub(1)) {
+            let Some(word) = self.sets.get_mut(set + k) else {
                 break;
             };
             let mut word = core::mem::take(word);
             while word != 0 {
                 let b = word.trailing_zeros() as usize;
                 let y0 = k * 32 + b;
-                let mask = self.take_mask(y0);
+                let mask = self.take_mask::<ODD>(y0);
                 let mut y1 = y0;
                 if layout.group_shift == 0 && mask.is_power_of_two() {
                     // One word and no frontier cell next to another word: merge the following
                     // rows of the same word into one vertical run.
                     while y1 - k * 32 < 31
                         && word & (2 << (y1 - k * 32)) != 0
-                        && self.peek_mask(y1 + 1) == mask
+                        && self.peek_mask::<ODD>(y1 + 1) == mask
                     {
                         y1 += 1;
-                        self.take_mask(y1);
+                        self.take_mask::<ODD>(y1);
                     }
-                    self.column::<COPY>(y0, y1, mask.trailing_zeros() as usize);
+                    let w = mask.trailing_zeros() as usize;
+                    if y1 == y0 {
+                        self.single::<ODD>(free, y0, w);
+                    } else {
+                        self.column::<ODD>(free, y0, y1, w);
+                    }
                 } else {
-                    self.row::<COPY>(y0, mask);
+                    self.row::<ODD>(free, y0, mask);
                 }
                 rows += y1 + 1 - y0;
                 word &= !(mask_below(y1 - k * 32 + 1) & !mask_below(b));
@@ -362,29 +412,76 @@ impl Layers<'_> {
         rows
     }
 
+    /// Expand the frontier of row `y` in word `w` alone (no frontier cell next to another
+    /// word) into the rows below, level and above.
+    #[inline(always)]
+    fn single<const ODD: bool>(&mut self, free: &impl FreeBits, y: usize, w: usize) {
+        let layout = self.layout;
+        let rw = layout.row_words;
+        let i = layout.node(y, w);
+        let s0 = self.p0.get(i).copied().unwrap_or(0);
+        let s1 = self.p1.get(i).copied().unwrap_or(0);
+        let ms = free.get(y, w, i);
+        let f = (s0 ^ self.x0) & (s1 ^ self.x1);
+        let same = ((f << 1) | (f >> 1)) & ms & !(s0 | s1);
+        if same != 0 {
+            self.mark::<ODD>(y, w, i, same);
+        }
+        // A diagonal step needs the straight step's target free (g) and the side cell in
+        // row y (ms at the target column).
+        if y > 0 {
+            let j = i - rw;
+            let m = free.get(y - 1, w, j);
+            let g = f & m;
+            if g != 0 {
+                let r = self.p0.get(j).copied().unwrap_or(0) | self.p1.get(j).copied().unwrap_or(0);
+                let n = (g | (ms & ((g << 1) | (g >> 1)))) & m & !r;
+                if n != 0 {
+                    self.mark::<ODD>(y - 1, w, j, n);
+                }
+            }
+        }
+        if y + 1 < layout.height {
+            let j = i + rw;
+            let m = free.get(y + 1, w, j);
+            let g = f & m;
+            if g != 0 {
+                let r = self.p0.get(j).copied().unwrap_or(0) | self.p1.get(j).copied().unwrap_or(0);
+                let n = (g | (ms & ((g << 1) | (g >> 1)))) & m & !r;
+                if n != 0 {
+                    self.mark::<ODD>(y + 1, w, j, n);
+                }
+            }
+        }
+    }
+
     /// Expand the frontier of rows `y0 ..= y1` in word `w` alone (none of them has frontier
     /// cells next to another word): targets row by row from `y0 - 1` to `y1 + 1`, each from
     /// the three source rows below, level and above, sliding up the column.
     #[inline(always)]
-    fn column<const COPY: bool>(&mut self, y0: usize, y1: usize, w: usize) {
+    fn column<const ODD: bool>(&mut self, free: &impl FreeBits, y0: usize, y1: usize, w: usize) {
         let layout = self.layout;
-        let row_len = layout.row_words * layout.stride;
-        let (x0, x1) = (self.x0, self.x1);
+        let rw = layout.row_words;
+        let (x0, x1, set0, set1) = (self.x0, self.x1, self.set0, self.set1);
+        let shift = layout.group_shift;
         let first = y0.saturating_sub(1);
         let last = (y1 + 1).min(layout.height.saturating_sub(1));
         let mut i = layout.node(first, w);
+        let load = |p: &[u32], i: usize| p.get(i).copied().unwrap_or(0);
+        let (mut c0, mut c1) = (load(self.p0, i), load(self.p1, i));
+        let mut mc = free.get(first, w, i);
+        let mut fc = (c0 ^ x0) & (c1 ^ x1);
         // Row below the target: frontier and free bits (none below the first target).
         let (mut fb, mut mb) = (0u32, 0u32);
-        let (p0, p1, mut mc) = self.load::<COPY>(i, first, w);
-        let mut fc = (p0 ^ x0) & (p1 ^ x1);
-        let mut rc = p0 | p1;
+        let mut pending = 0u64; // rows `first + k` with new cells
         for t in first..=last {
-            let (p0, p1, ma) = if t + 1 < layout.height {
-                self.load::<COPY>(i.wrapping_add(row_len), t + 1, w)
+            let j = i + rw;
+            let (a0, a1, ma) = if t + 1 < layout.height {
+                (load(self.p0, j), load(self.p1, j), free.get(t + 1, w, j))
             } else {
                 (0, 0, 0)
             };
-            let fa = (p0 ^ x0) & (p1 ^ x1);
+            let fa = (a0 ^ x0) & (a1 ^ x1);
             let gb = fb & mc;
             let ga = fa & mc;
             let reach = gb
@@ -393,58 +490,64 @@ impl Layers<'_> {
                 | (fc >> 1)
                 | (mb & ((gb << 1) | (gb >> 1)))
                 | (ma & ((ga << 1) | (ga >> 1)));
-            let n = reach & mc & !rc;
+            let n = reach & mc & !(c0 | c1);
             if n != 0 {
-                self.mark(t, i, w, n);
+                if let Some(p) = self.p0.get_mut(i) {
+                    *p = c0 | (n & set0);
+                }
+                if let Some(p) = self.p1.get_mut(i) {
+                    *p = c1 | (n & set1);
+                }
+                note_mask::<ODD>(self.queue, shift, t, w, n);
+                pending |= 1 << (t - first);
             }
-            (fb, mb) = (fc, mc);
-            (fc, mc, rc) = (fa, ma, p0 | p1);
-            i = i.wrapping_add(row_len);
+            (fb, mb, fc, mc, c0, c1) = (fc, mc, fa, ma, a0, a1);
+            i = j;
         }
+        self.note_rows::<ODD>(first, pending);
     }
 
     /// Expand the frontier of row `y` in the word groups of `mask`: per run of words, word by
     /// word with the carries between words, into the rows below, level and above.
-    fn row<const COPY: bool>(&mut self, y: usize, mut groups: u32) {
+    fn row<const ODD: bool>(&mut self, free: &impl FreeBits, y: usize, mut groups: u32) {
         let layout = self.layout;
-        let row_len = layout.row_words * layout.stride;
+        let rw = layout.row_words;
         let (x0, x1) = (self.x0, self.x1);
         let frontier = |p0: u32, p1: u32| (p0 ^ x0) & (p1 ^ x1);
-        let base = y * row_len;
-        // Off the map: an index past the scratch, which loads as zeros (no free cell).
-        let base_d = if y > 0 {
-            base - row_len
-        } else {
-            usize::MAX / 2
+        let (has_down, has_up) = (y > 0, y + 1 < layout.height);
+        // (P0, P1, FREE) of word w of row r; zeros for rows off the map.
+        let load = |p0: &[u32], p1: &[u32], r: usize, on_map: bool, w: usize| -> (u32, u32, u32) {
+            if !on_map {
+                return (0, 0, 0);
+            }
+            let i = layout.node(r, w);
+            (
+                p0.get(i).copied().unwrap_or(0),
+                p1.get(i).copied().unwrap_or(0),
+                free.get(r, w, i),
+            )
         };
-        let base_u = if y + 1 < layout.height {
-            base + row_len
-        } else {
-            usize::MAX / 2
-        };
+        let yd = y.wrapping_sub(1);
         while groups != 0 {
             let a = groups.trailing_zeros() as usize;
             let run = (!(groups >> a)).trailing_zeros() as usize; // groups in the run
             groups &= !(mask_below(a + run) & !mask_below(a));
             let first = a << layout.group_shift;
-            let last = ((a + run) << layout.group_shift)
-                .min(layout.row_words)
-                .saturating_sub(1);
+            let last = ((a + run) << layout.group_shift).min(rw).saturating_sub(1);
             if first > last {
                 continue;
             }
-            let at = |b: usize, w: usize| b.wrapping_add(w * layout.stride);
-            let mut d = self.load::<COPY>(at(base_d, first), y.wrapping_sub(1), first);
-            let mut s = self.load::<COPY>(at(base, first), y, first);
-            let mut u = self.load::<COPY>(at(base_u, first), y + 1, first);
+            let mut d = load(self.p0, self.p1, yd, has_down, first);
+            let mut s = load(self.p0, self.p1, y, true, first);
+            let mut u = load(self.p0, self.p1, y + 1, has_up, first);
             // Carries from the word before (its bit 31, moved to bit 0).
             let (mut fc, mut gdc, mut guc) = (0u32, 0u32, 0u32);
             for w in first..=last {
                 let (dn, sn, un) = if w < last {
                     (
-                        self.load::<COPY>(at(base_d, w + 1), y.wrapping_sub(1), w + 1),
-                        self.load::<COPY>(at(base, w + 1), y, w + 1),
-                        self.load::<COPY>(at(base_u, w + 1), y + 1, w + 1),
+                        load(self.p0, self.p1, yd, has_down, w + 1),
+                        load(self.p0, self.p1, y, true, w + 1),
+                        load(self.p0, self.p1, y + 1, has_up, w + 1),
                     )
                 } else {
                     ((0, 0, 0), (0, 0, 0), (0, 0, 0))
@@ -464,13 +567,13 @@ impl Layers<'_> {
                     & u.2
                     & !(u.0 | u.1);
                 if down != 0 {
-                    self.mark(y - 1, at(base_d, w), w, down);
+                    self.mark::<ODD>(yd, w, layout.node(yd, w), down);
                 }
                 if same != 0 {
-                    self.mark(y, at(base, w), w, same);
+                    self.mark::<ODD>(y, w, layout.node(y, w), same);
                 }
                 if up != 0 {
-                    self.mark(y + 1, at(base_u, w), w, up);
+                    self.mark::<ODD>(y + 1, w, layout.node(y + 1, w), up);
                 }
                 (fc, gdc, guc) = (f >> 31, gd >> 31, gu >> 31);
                 (d, s, u) = (dn, sn, un);
@@ -478,32 +581,72 @@ impl Layers<'_> {
         }
     }
 
-    /// Mark the new cells `n` of word `w` of row `t` (node `i`) with the next layer's code, and
-    /// record the row and word (plus the neighbour words that `n`'s edge cells reach) for the
-    /// next layer.
+    /// Mark the new cells `n` of word `w` of row `t` (plane index `i`) with the next layer's
+    /// code and note them.
     #[inline(always)]
-    fn mark(&mut self, t: usize, i: usize, w: usize, n: u32) {
-        if let Some(node) = self.scratch.get_mut(i..i.wrapping_add(2)) {
-            node[0] |= n & self.set0;
-            node[1] |= n & self.set1;
+    fn mark<const ODD: bool>(&mut self, t: usize, w: usize, i: usize, n: u32) {
+        if let Some(p0) = self.p0.get_mut(i) {
+            *p0 |= n & self.set0;
         }
-        let layout = &self.layout;
-        let mut bits = 1u32 << (w >> layout.group_shift);
-        if n & 1 != 0 && w > 0 {
-            bits |= 1 << ((w - 1) >> layout.group_shift);
+        if let Some(p1) = self.p1.get_mut(i) {
+            *p1 |= n & self.set1;
         }
-        if n >> 31 != 0 && w + 1 < layout.row_words {
-            bits |= 1 << ((w + 1) >> layout.group_shift);
-        }
-        let set = layout.row_sets + (!self.layer as usize & 1) * layout.row_set_words;
-        if let Some(word) = self.scratch.get_mut(set + (t >> 5)) {
+        self.note::<ODD>(t, w, n);
+    }
+
+    /// Note new cells `n` of word `w` of row `t` for the next layer: the row in the next row
+    /// set, the word (and the neighbour words `n`'s edge cells reach) in its word mask.
+    #[inline(always)]
+    fn note<const ODD: bool>(&mut self, t: usize, w: usize, n: u32) {
+        note_mask::<ODD>(self.queue, self.layout.group_shift, t, w, n);
+        let k = usize::from(!ODD) * self.layout.row_set_words + (t >> 5);
+        if let Some(word) = self.sets.get_mut(k) {
             *word |= 1 << (t & 31);
         }
-        match self.queue.get_mut(t) {
-            Some(e) if self.layer & 1 != 0 => e.f |= bits,
-            Some(e) => e.next |= bits,
-            None => {}
+        self.next_lo = self.next_lo.min(t >> 5);
+        self.next_hi = self.next_hi.max(t >> 5);
+    }
+
+    /// Put rows `t + j` for the bits `j` of `rows` (at most 34 bits) into the next layer's row
+    /// set.
+    #[inline(always)]
+    fn note_rows<const ODD: bool>(&mut self, t: usize, rows: u64) {
+        if rows == 0 {
+            return;
         }
+        let k = t >> 5;
+        let set = usize::from(!ODD) * self.layout.row_set_words + k;
+        let shift = (t & 31) as u32;
+        let low = rows << shift; // bits past 64 (shift 31, 34 rows) come from `high`
+        let high = if shift == 0 { 0 } else { rows >> (64 - shift) };
+        for (j, part) in [low as u32, (low >> 32) as u32, high as u32]
+            .into_iter()
+            .enumerate()
+        {
+            if part != 0 {
+                if let Some(word) = self.sets.get_mut(set + j) {
+                    *word |= part;
+                }
+                self.next_lo = self.next_lo.min(k + j);
+                self.next_hi = self.next_hi.max(k + j);
+            }
+        }
+    }
+}
+
+/// The word-mask part of [`Layers::note`]: word `w` of row `t` (and the neighbour words that
+/// `n`'s edge cells reach) into the row's mask for the next layer (even when the layer being
+/// expanded is `ODD`).
+#[inline(always)]
+fn note_mask<const ODD: bool>(queue: &mut [OpenEntry], shift: u32, t: usize, w: usize, n: u32) {
+    // Past the row's last word a bit only costs an empty pass; before word 0, none.
+    let bits = (1u32 << (w >> shift))
+        | ((n & 1) << (w.saturating_sub(1) >> shift))
+        | (n >> 31).wrapping_shl(((w + 1) >> shift) as u32);
+    match queue.get_mut(t) {
+        Some(e) if ODD => e.f |= bits,
+        Some(e) => e.next |= bits,
+        None => {}
     }
 }
 
@@ -535,13 +678,9 @@ fn layer_masks(layer: u32) -> (u32, u32, u32, u32) {
 /// Cells reached (layer code not 0) in the planes.
 fn count_reached(scratch: &[u32], layout: &BfsLayout) -> u32 {
     let mut n = 0u32;
-    for y in 0..layout.height {
-        for w in 0..layout.row_words {
-            let i = layout.node(y, w);
-            let p0 = scratch.get(i).copied().unwrap_or(0);
-            let p1 = scratch.get(i + 1).copied().unwrap_or(0);
-            n += (p0 | p1).count_ones();
-        }
+    let (p0, rest) = scratch.split_at(layout.nodes.min(scratch.len()));
+    for (a, b) in p0.iter().zip(rest.iter().take(layout.nodes)) {
+        n += (a | b).count_ones();
     }
     n
 }
