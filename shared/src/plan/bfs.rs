@@ -21,11 +21,11 @@
 //! entry `y` holds row `y`'s *word masks* (which words hold frontier cells) for even and odd
 //! layers.
 
-use super::{OpenEntry, PlanError, Planner, Search, STEPS};
+use super::{PlanError, Planner, Search, STEPS};
 use crate::geom::Cell;
 use crate::grid::{Grid, GridGeometry};
 
-/// Where the BFS planes live in the scratch.
+/// Where the BFS planes and row sets live in the scratch.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct BfsLayout {
     width: usize,
@@ -36,10 +36,11 @@ pub(super) struct BfsLayout {
     nodes: usize,
     /// Whether the `FREE` plane fits (else the free bits come from the grid).
     copy_free: bool,
-    /// Words of one row set (frontier rows of even / odd layers; two sets after the planes).
-    row_set_words: usize,
-    /// A bit of a row's word mask stands for `1 << group_shift` words (0 up to 1 024 columns).
-    group_shift: u32,
+    /// Words of one column's row set: `⌈height / 32⌉`.
+    set_words: usize,
+    /// Words of one layer's summary of non-empty row-set words: `⌈2 row_words × set_words /
+    /// 32⌉`.
+    summary_words: usize,
 }
 
 impl BfsLayout {
@@ -53,18 +54,16 @@ impl BfsLayout {
         let height = geometry.height() as usize;
         let row_words = width.div_ceil(32);
         let nodes = row_words * height;
-        let row_set_words = height.div_ceil(32);
-        let copy_free = nodes * 3 + 2 * row_set_words <= capacity_words;
+        let set_words = height.div_ceil(32);
+        let summary_words = (2 * row_words * set_words).div_ceil(32);
+        let sets = 2 * (2 * row_words * set_words + summary_words);
+        let copy_free = nodes * 3 + sets <= capacity_words;
         let planes = if copy_free { 3 } else { 2 };
-        if nodes * planes + 2 * row_set_words > capacity_words {
+        if nodes * planes + sets > capacity_words {
             return Err(PlanError::ScratchTooSmall {
-                cells: ((nodes * 2 + 2 * row_set_words) * 8) as u32,
+                cells: ((nodes * 2 + sets) * 8) as u32,
                 capacity: (capacity_words * 8) as u32,
             });
-        }
-        let mut group_shift = 0;
-        while (32usize << group_shift) < row_words {
-            group_shift += 1;
         }
         Ok(Self {
             width,
@@ -72,8 +71,8 @@ impl BfsLayout {
             row_words,
             nodes,
             copy_free,
-            row_set_words,
-            group_shift,
+            set_words,
+            summary_words,
         })
     }
 
@@ -81,6 +80,12 @@ impl BfsLayout {
     #[inline(always)]
     fn node(&self, y: usize, w: usize) -> usize {
         y * self.row_words + w
+    }
+
+    /// Words of one layer's row sets (frontier rows and edge rows of every word column).
+    #[inline(always)]
+    fn layer_set_words(&self) -> usize {
+        2 * self.row_words * self.set_words
     }
 }
 
@@ -144,11 +149,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         goal: Cell,
     ) -> Result<Search, PlanError> {
         let layout = BfsLayout::new(grid.geometry(), SCRATCH_WORDS)?;
-        if self.queue.len() < layout.height {
-            return Err(PlanError::QueueFull {
-                capacity: self.queue.len() as u32,
-            });
-        }
         let grid_words = grid.words();
         let (p0, rest) = self.scratch.split_at_mut(layout.nodes);
         let (p1, rest) = rest.split_at_mut(layout.nodes);
@@ -157,7 +157,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         } else {
             rest.split_at_mut(0)
         };
-        let sets = sets.get_mut(..2 * layout.row_set_words).unwrap_or(&mut []);
+        let (sets, summary) = sets.split_at_mut(2 * layout.layer_set_words());
+        let summary = summary
+            .get_mut(..2 * layout.summary_words)
+            .unwrap_or(&mut []);
         p0.fill(0);
         p1.fill(0);
         if layout.copy_free {
@@ -174,12 +177,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             p0,
             p1,
             sets,
-            queue: &mut self.queue[..],
+            summary,
             layout,
             peak: 0,
             layer: 0,
-            next_lo: usize::MAX,
-            next_hi: 0,
             x0: 0,
             x1: 0,
             set0: 0,
@@ -277,24 +278,22 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     }
 }
 
-/// The state of one layered search: the planes and row sets in the scratch, the rows' word
-/// masks in the queue.
+/// The state of one layered search: the planes, the row sets and their summaries.
 struct Layers<'a> {
     p0: &'a mut [u32],
     p1: &'a mut [u32],
-    /// The two row sets (even layers, then odd layers).
+    /// Per layer parity (even, odd), per word column `w`, a bit set of the rows whose word `w`
+    /// holds frontier cells (word `k` of column `w` at `parity · 2 row_words · set_words +
+    /// w · set_words + k`), then per word column `w` (as column `row_words + w`) the rows
+    /// whose word `w` holds frontier cells in bit 0 or 31 (next to another word).
     sets: &'a mut [u32],
-    /// Entry `y` holds the word masks of row `y`'s frontier: `f` for even layers, `next` for
-    /// odd ones (bit `g`: words `g << group_shift ..`).
-    queue: &'a mut [OpenEntry],
+    /// Per layer parity, bit `w · set_words + k` set when that row-set word is not empty.
+    summary: &'a mut [u32],
     layout: BfsLayout,
-    /// Most frontier rows in one layer.
+    /// Most frontier (row, word) pairs in one layer.
     peak: usize,
     /// Layer being expanded.
     layer: u32,
-    /// Range of row-set words that the next layer's rows fall in.
-    next_lo: usize,
-    next_hi: usize,
     /// Frontier = `(P0 ^ x0) & (P1 ^ x1)`; new cells: `P0 |= n & set0`, `P1 |= n & set1`.
     x0: u32,
     x1: u32,
@@ -303,26 +302,6 @@ struct Layers<'a> {
 }
 
 impl Layers<'_> {
-    /// Take (read and clear) row `y`'s word mask for the layer being expanded.
-    #[inline(always)]
-    fn take_mask<const ODD: bool>(&mut self, y: usize) -> u32 {
-        match self.queue.get_mut(y) {
-            Some(e) if ODD => core::mem::take(&mut e.next),
-            Some(e) => core::mem::take(&mut e.f),
-            None => 0,
-        }
-    }
-
-    /// Row `y`'s word mask for the layer being expanded, left in place.
-    #[inline(always)]
-    fn peek_mask<const ODD: bool>(&self, y: usize) -> u32 {
-        match self.queue.get(y) {
-            Some(e) if ODD => e.next,
-            Some(e) => e.f,
-            None => 0,
-        }
-    }
-
     /// Mark the start, then expand layer after layer until the goal's word bit is reached
     /// (`Some(layer)`) or a layer is empty (`None`).
     fn run(
@@ -334,24 +313,23 @@ impl Layers<'_> {
     ) -> Option<u32> {
         let layout = self.layout;
         self.sets.fill(0);
-        for e in self.queue.iter_mut().take(layout.height) {
-            (e.f, e.next) = (0, 0);
-        }
+        self.summary.fill(0);
         // Layer 0 is the start, code 1; it is noted as if found by layer -1 (odd).
         let (sx, sy) = (start.x as usize, start.y as usize);
         if let Some(p0) = self.p0.get_mut(layout.node(sy, sx >> 5)) {
             *p0 |= 1 << (sx & 31);
         }
-        self.note::<true>(sy, sx >> 5, 1 << (sx & 31));
+        self.note_rows::<true>(sx >> 5, sy, 1);
+        if (1u32 << (sx & 31)) & self.edges(sx >> 5) != 0 {
+            self.note_rows::<true>(layout.row_words + (sx >> 5), sy, 1);
+        }
         self.layer = 0;
         loop {
             (self.x0, self.x1, self.set0, self.set1) = layer_masks(self.layer);
-            let (lo, hi) = (self.next_lo, self.next_hi);
-            (self.next_lo, self.next_hi) = (usize::MAX, 0);
             let rows = if self.layer & 1 != 0 {
-                self.expand_layer::<true>(free, lo, hi)
+                self.expand_layer::<true>(free)
             } else {
-                self.expand_layer::<false>(free, lo, hi)
+                self.expand_layer::<false>(free)
             };
             if rows == 0 {
                 return None;
@@ -366,54 +344,72 @@ impl Layers<'_> {
         }
     }
 
-    /// Expand every frontier row of the layer, in increasing row order; returns how many.
-    fn expand_layer<const ODD: bool>(
-        &mut self,
-        free: &impl FreeBits,
-        lo: usize,
-        hi: usize,
-    ) -> usize {
+    /// Expand every frontier (row, word) of the layer, column by column, in runs of consecutive
+    /// rows; returns how many (row, word) pairs.
+    fn expand_layer<const ODD: bool>(&mut self, free: &impl FreeBits) -> usize {
         let layout = self.layout;
-        let set = usize::from(ODD) * layout.row_set_words;
-        let mut rows = 0;
-        for k in lo..=hi.min(layout.row_set_words.saturating_sub(1)) {
-            let Some(word) = self.sets.get_mut(set + k) else {
+        let set_words = layout.set_words;
+        let sets = usize::from(ODD) * layout.layer_set_words();
+        let summary = usize::from(ODD) * layout.summary_words;
+        let mut pairs = 0;
+        for si in 0..layout.summary_words {
+            let Some(s) = self.summary.get_mut(summary + si) else {
                 break;
             };
-            let mut word = core::mem::take(word);
-            while word != 0 {
-                let b = word.trailing_zeros() as usize;
-                let y0 = k * 32 + b;
-                let mask = self.take_mask::<ODD>(y0);
-                let mut y1 = y0;
-                if layout.group_shift == 0 && mask.is_power_of_two() {
-                    // One word and no frontier cell next to another word: merge the following
-                    // rows of the same word into one vertical run.
-                    while y1 - k * 32 < 31
-                        && word & (2 << (y1 - k * 32)) != 0
-                        && self.peek_mask::<ODD>(y1 + 1) == mask
-                    {
-                        y1 += 1;
-                        self.take_mask::<ODD>(y1);
+            let mut nonempty = core::mem::take(s);
+            while nonempty != 0 {
+                let index = si * 32 + nonempty.trailing_zeros() as usize;
+                nonempty &= nonempty - 1;
+                let (w, k) = (index / set_words, index % set_words);
+                let Some(word) = self.sets.get_mut(sets + index) else {
+                    continue;
+                };
+                let mut word = core::mem::take(word);
+                if w >= layout.row_words {
+                    // Rows with frontier cells at the edges of word `w - row_words`.
+                    let w = w - layout.row_words;
+                    let edges = self.edges(w);
+                    while word != 0 {
+                        let y = k * 32 + word.trailing_zeros() as usize;
+                        word &= word - 1;
+                        let i = layout.node(y, w);
+                        let p0 = self.p0.get(i).copied().unwrap_or(0);
+                        let p1 = self.p1.get(i).copied().unwrap_or(0);
+                        let f = (p0 ^ self.x0) & (p1 ^ self.x1) & edges;
+                        self.edge::<ODD>(free, y, w, f);
                     }
-                    let w = mask.trailing_zeros() as usize;
-                    if y1 == y0 {
+                    continue;
+                }
+                while word != 0 {
+                    let b = word.trailing_zeros() as usize;
+                    let run = (!(word >> b)).trailing_zeros() as usize;
+                    word &= !(mask_below(b + run) & !mask_below(b));
+                    pairs += run;
+                    let y0 = k * 32 + b;
+                    if run == 1 {
                         self.single::<ODD>(free, y0, w);
                     } else {
-                        self.column::<ODD>(free, y0, y1, w);
+                        self.column::<ODD>(free, y0, y0 + run - 1, w);
                     }
-                } else {
-                    self.row::<ODD>(free, y0, mask);
                 }
-                rows += y1 + 1 - y0;
-                word &= !(mask_below(y1 - k * 32 + 1) & !mask_below(b));
             }
         }
-        rows
+        pairs
     }
 
-    /// Expand the frontier of row `y` in word `w` alone (no frontier cell next to another
-    /// word) into the rows below, level and above.
+    /// The edge bits of word `w`: bit 0 when a word lies before it, bit 31 when one follows.
+    #[inline(always)]
+    fn edges(&self, w: usize) -> u32 {
+        (if w > 0 { 1 } else { 0 })
+            | (if w + 1 < self.layout.row_words {
+                1 << 31
+            } else {
+                0
+            })
+    }
+
+    /// Expand the frontier of row `y` in word `w` into the rows below, level and above (moves
+    /// out of the word: [`Layers::edge`]).
     #[inline(always)]
     fn single<const ODD: bool>(&mut self, free: &impl FreeBits, y: usize, w: usize) {
         let layout = self.layout;
@@ -455,15 +451,15 @@ impl Layers<'_> {
         }
     }
 
-    /// Expand the frontier of rows `y0 ..= y1` in word `w` alone (none of them has frontier
-    /// cells next to another word): targets row by row from `y0 - 1` to `y1 + 1`, each from
-    /// the three source rows below, level and above, sliding up the column.
+    /// Expand the frontier of rows `y0 ..= y1` in word `w`: targets row by row from `y0 - 1`
+    /// to `y1 + 1`, each from the three source rows below, level and above, sliding up the
+    /// column (moves out of the word: [`Layers::edge`]).
     #[inline(always)]
     fn column<const ODD: bool>(&mut self, free: &impl FreeBits, y0: usize, y1: usize, w: usize) {
         let layout = self.layout;
         let rw = layout.row_words;
         let (x0, x1, set0, set1) = (self.x0, self.x1, self.set0, self.set1);
-        let shift = layout.group_shift;
+        let edges = self.edges(w);
         let first = y0.saturating_sub(1);
         let last = (y1 + 1).min(layout.height.saturating_sub(1));
         let mut i = layout.node(first, w);
@@ -474,6 +470,7 @@ impl Layers<'_> {
         // Row below the target: frontier and free bits (none below the first target).
         let (mut fb, mut mb) = (0u32, 0u32);
         let mut pending = 0u64; // rows `first + k` with new cells
+        let mut pending_edges = 0u64; // ... with new cells in bit 0 or 31
         for t in first..=last {
             let j = i + rw;
             let (a0, a1, ma) = if t + 1 < layout.height {
@@ -498,91 +495,61 @@ impl Layers<'_> {
                 if let Some(p) = self.p1.get_mut(i) {
                     *p = c1 | (n & set1);
                 }
-                note_mask::<ODD>(self.queue, shift, t, w, n);
                 pending |= 1 << (t - first);
+                pending_edges |= u64::from(n & edges != 0) << (t - first);
             }
             (fb, mb, fc, mc, c0, c1) = (fc, mc, fa, ma, a0, a1);
             i = j;
         }
-        self.note_rows::<ODD>(first, pending);
+        self.note_rows::<ODD>(w, first, pending);
+        self.note_rows::<ODD>(rw + w, first, pending_edges);
     }
 
-    /// Expand the frontier of row `y` in the word groups of `mask`: per run of words, word by
-    /// word with the carries between words, into the rows below, level and above.
-    fn row<const ODD: bool>(&mut self, free: &impl FreeBits, y: usize, mut groups: u32) {
+    /// The moves out of word `w` from the frontier `f` of row `y` at the word's edge cells
+    /// (bit 0 to bit 31 of the word before, bit 31 to bit 0 of the word after), into rows
+    /// `y - 1 ..= y + 1`, with the same rule: target free and not reached; for a diagonal both
+    /// side cells free. Rare (one pair of cells per 32 columns), so cell by cell.
+    #[cold]
+    #[inline(never)]
+    fn edge<const ODD: bool>(&mut self, free: &impl FreeBits, y: usize, w: usize, f: u32) {
         let layout = self.layout;
-        let rw = layout.row_words;
-        let (x0, x1) = (self.x0, self.x1);
-        let frontier = |p0: u32, p1: u32| (p0 ^ x0) & (p1 ^ x1);
-        let (has_down, has_up) = (y > 0, y + 1 < layout.height);
-        // (P0, P1, FREE) of word w of row r; zeros for rows off the map.
-        let load = |p0: &[u32], p1: &[u32], r: usize, on_map: bool, w: usize| -> (u32, u32, u32) {
-            if !on_map {
-                return (0, 0, 0);
-            }
-            let i = layout.node(r, w);
-            (
-                p0.get(i).copied().unwrap_or(0),
-                p1.get(i).copied().unwrap_or(0),
-                free.get(r, w, i),
-            )
+        let free_bit = |y: usize, w: usize, bit: u32| -> bool {
+            y < layout.height
+                && w < layout.row_words
+                && free.get(y, w, layout.node(y, w)) >> bit & 1 != 0
         };
-        let yd = y.wrapping_sub(1);
-        while groups != 0 {
-            let a = groups.trailing_zeros() as usize;
-            let run = (!(groups >> a)).trailing_zeros() as usize; // groups in the run
-            groups &= !(mask_below(a + run) & !mask_below(a));
-            let first = a << layout.group_shift;
-            let last = ((a + run) << layout.group_shift).min(rw).saturating_sub(1);
-            if first > last {
-                continue;
-            }
-            let mut d = load(self.p0, self.p1, yd, has_down, first);
-            let mut s = load(self.p0, self.p1, y, true, first);
-            let mut u = load(self.p0, self.p1, y + 1, has_up, first);
-            // Carries from the word before (its bit 31, moved to bit 0).
-            let (mut fc, mut gdc, mut guc) = (0u32, 0u32, 0u32);
-            for w in first..=last {
-                let (dn, sn, un) = if w < last {
-                    (
-                        load(self.p0, self.p1, yd, has_down, w + 1),
-                        load(self.p0, self.p1, y, true, w + 1),
-                        load(self.p0, self.p1, y + 1, has_up, w + 1),
-                    )
-                } else {
-                    ((0, 0, 0), (0, 0, 0), (0, 0, 0))
-                };
-                let f = frontier(s.0, s.1);
-                let f_next = frontier(sn.0, sn.1);
-                // Straight steps down / up (target free): the sources of the diagonals.
-                let gd = f & d.2;
-                let gu = f & u.2;
-                let gd_next = f_next & dn.2;
-                let gu_next = f_next & un.2;
-                let same = ((f << 1) | fc | (f >> 1) | (f_next << 31)) & s.2 & !(s.0 | s.1);
-                let down = (gd | (s.2 & ((gd << 1) | gdc | (gd >> 1) | (gd_next << 31))))
-                    & d.2
-                    & !(d.0 | d.1);
-                let up = (gu | (s.2 & ((gu << 1) | guc | (gu >> 1) | (gu_next << 31))))
-                    & u.2
-                    & !(u.0 | u.1);
-                if down != 0 {
-                    self.mark::<ODD>(yd, w, layout.node(yd, w), down);
+        let mut sides = [(0u32, 0usize, 31u32); 2];
+        let mut count = 0;
+        if w > 0 && f & 1 != 0 {
+            sides[count] = (0, w - 1, 31);
+            count += 1;
+        }
+        if w + 1 < layout.row_words && f >> 31 != 0 {
+            sides[count] = (31, w + 1, 0);
+            count += 1;
+        }
+        for &(src_bit, dst_w, dst_bit) in sides.iter().take(count) {
+            for ty in [y.wrapping_sub(1), y, y + 1] {
+                if !free_bit(ty, dst_w, dst_bit) {
+                    continue;
                 }
-                if same != 0 {
-                    self.mark::<ODD>(y, w, layout.node(y, w), same);
+                let i = layout.node(ty, dst_w);
+                let reached =
+                    self.p0.get(i).copied().unwrap_or(0) | self.p1.get(i).copied().unwrap_or(0);
+                if reached >> dst_bit & 1 != 0 {
+                    continue;
                 }
-                if up != 0 {
-                    self.mark::<ODD>(y + 1, w, layout.node(y + 1, w), up);
+                if ty != y && !(free_bit(ty, w, src_bit) && free_bit(y, dst_w, dst_bit)) {
+                    continue;
                 }
-                (fc, gdc, guc) = (f >> 31, gd >> 31, gu >> 31);
-                (d, s, u) = (dn, sn, un);
+                self.mark::<ODD>(ty, dst_w, i, 1 << dst_bit);
             }
         }
     }
 
     /// Mark the new cells `n` of word `w` of row `t` (plane index `i`) with the next layer's
-    /// code and note them.
+    /// code and put the row in column `w`'s next row set (and its edge set when `n` holds an
+    /// edge cell).
     #[inline(always)]
     fn mark<const ODD: bool>(&mut self, t: usize, w: usize, i: usize, n: u32) {
         if let Some(p0) = self.p0.get_mut(i) {
@@ -591,31 +558,24 @@ impl Layers<'_> {
         if let Some(p1) = self.p1.get_mut(i) {
             *p1 |= n & self.set1;
         }
-        self.note::<ODD>(t, w, n);
-    }
-
-    /// Note new cells `n` of word `w` of row `t` for the next layer: the row in the next row
-    /// set, the word (and the neighbour words `n`'s edge cells reach) in its word mask.
-    #[inline(always)]
-    fn note<const ODD: bool>(&mut self, t: usize, w: usize, n: u32) {
-        note_mask::<ODD>(self.queue, self.layout.group_shift, t, w, n);
-        let k = usize::from(!ODD) * self.layout.row_set_words + (t >> 5);
-        if let Some(word) = self.sets.get_mut(k) {
-            *word |= 1 << (t & 31);
+        self.note_rows::<ODD>(w, t, 1);
+        if n & self.edges(w) != 0 {
+            self.note_rows::<ODD>(self.layout.row_words + w, t, 1);
         }
-        self.next_lo = self.next_lo.min(t >> 5);
-        self.next_hi = self.next_hi.max(t >> 5);
     }
 
-    /// Put rows `t + j` for the bits `j` of `rows` (at most 34 bits) into the next layer's row
-    /// set.
+    /// Put rows `t + j` for the bits `j` of `rows` (at most 34 bits) into column `w`'s row set
+    /// for the next layer (even when the layer being expanded is `ODD`), and its words into the
+    /// summary.
     #[inline(always)]
-    fn note_rows<const ODD: bool>(&mut self, t: usize, rows: u64) {
+    fn note_rows<const ODD: bool>(&mut self, w: usize, t: usize, rows: u64) {
         if rows == 0 {
             return;
         }
-        let k = t >> 5;
-        let set = usize::from(!ODD) * self.layout.row_set_words + k;
+        let layout = &self.layout;
+        let index = w * layout.set_words + (t >> 5);
+        let sets = usize::from(!ODD) * layout.layer_set_words();
+        let summary = usize::from(!ODD) * layout.summary_words;
         let shift = (t & 31) as u32;
         let low = rows << shift; // bits past 64 (shift 31, 34 rows) come from `high`
         let high = if shift == 0 { 0 } else { rows >> (64 - shift) };
@@ -623,30 +583,17 @@ impl Layers<'_> {
             .into_iter()
             .enumerate()
         {
-            if part != 0 {
-                if let Some(word) = self.sets.get_mut(set + j) {
-                    *word |= part;
-                }
-                self.next_lo = self.next_lo.min(k + j);
-                self.next_hi = self.next_hi.max(k + j);
+            if part == 0 {
+                continue;
+            }
+            let at = index + j;
+            if let Some(word) = self.sets.get_mut(sets + at) {
+                *word |= part;
+            }
+            if let Some(word) = self.summary.get_mut(summary + (at >> 5)) {
+                *word |= 1 << (at & 31);
             }
         }
-    }
-}
-
-/// The word-mask part of [`Layers::note`]: word `w` of row `t` (and the neighbour words that
-/// `n`'s edge cells reach) into the row's mask for the next layer (even when the layer being
-/// expanded is `ODD`).
-#[inline(always)]
-fn note_mask<const ODD: bool>(queue: &mut [OpenEntry], shift: u32, t: usize, w: usize, n: u32) {
-    // Past the row's last word a bit only costs an empty pass; before word 0, none.
-    let bits = (1u32 << (w >> shift))
-        | ((n & 1) << (w.saturating_sub(1) >> shift))
-        | (n >> 31).wrapping_shl(((w + 1) >> shift) as u32);
-    match queue.get_mut(t) {
-        Some(e) if ODD => e.f |= bits,
-        Some(e) => e.next |= bits,
-        None => {}
     }
 }
 
