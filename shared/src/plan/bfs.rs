@@ -36,8 +36,10 @@ pub(super) struct BfsLayout {
     nodes: usize,
     /// Whether the `FREE` plane fits (else the free bits come from the grid).
     copy_free: bool,
-    /// Words of one column's row set: `⌈height / 32⌉`.
+    /// Words of one column's row set: `⌈height / 32⌉` rounded up to a power of two,
+    /// `1 << set_shift`.
     set_words: usize,
+    set_shift: u32,
     /// Words of one layer's summary of non-empty row-set words: `⌈2 row_words × set_words /
     /// 32⌉`.
     summary_words: usize,
@@ -54,7 +56,8 @@ impl BfsLayout {
         let height = geometry.height() as usize;
         let row_words = width.div_ceil(32);
         let nodes = row_words * height;
-        let set_words = height.div_ceil(32);
+        let set_words = height.div_ceil(32).next_power_of_two();
+        let set_shift = set_words.trailing_zeros();
         let summary_words = (2 * row_words * set_words).div_ceil(32);
         let sets = 2 * (2 * row_words * set_words + summary_words);
         let copy_free = nodes * 3 + sets <= capacity_words;
@@ -72,6 +75,7 @@ impl BfsLayout {
             nodes,
             copy_free,
             set_words,
+            set_shift,
             summary_words,
         })
     }
@@ -360,7 +364,7 @@ impl Layers<'_> {
             while nonempty != 0 {
                 let index = si * 32 + nonempty.trailing_zeros() as usize;
                 nonempty &= nonempty - 1;
-                let (w, k) = (index / set_words, index % set_words);
+                let (w, k) = (index >> layout.set_shift, index & (set_words - 1));
                 let Some(word) = self.sets.get_mut(sets + index) else {
                     continue;
                 };
@@ -384,12 +388,28 @@ impl Layers<'_> {
                     let b = word.trailing_zeros() as usize;
                     let run = (!(word >> b)).trailing_zeros() as usize;
                     word &= !(mask_below(b + run) & !mask_below(b));
-                    pairs += run;
                     let y0 = k * 32 + b;
-                    if run == 1 {
+                    let mut y1 = y0 + run - 1;
+                    // A run that reaches the word's last row goes on in the next word(s) of
+                    // the column (up to 61 rows, so that `column` keeps its rows in a u64).
+                    let mut next = index + 1;
+                    while y1 & 31 == 31 && next & (set_words - 1) != 0 {
+                        let Some(more) = self.sets.get_mut(sets + next) else {
+                            break;
+                        };
+                        let take = ((!*more).trailing_zeros() as usize).min(60 - (y1 - y0));
+                        if take == 0 {
+                            break;
+                        }
+                        *more &= !mask_below(take);
+                        y1 += take;
+                        next += 1;
+                    }
+                    pairs += y1 + 1 - y0;
+                    if y1 == y0 {
                         self.single::<ODD>(free, y0, w);
                     } else {
-                        self.column::<ODD>(free, y0, y0 + run - 1, w);
+                        self.column::<ODD>(free, y0, y1, w);
                     }
                 }
             }
@@ -558,13 +578,28 @@ impl Layers<'_> {
         if let Some(p1) = self.p1.get_mut(i) {
             *p1 |= n & self.set1;
         }
-        self.note_rows::<ODD>(w, t, 1);
+        self.note_row::<ODD>(w, t);
         if n & self.edges(w) != 0 {
-            self.note_rows::<ODD>(self.layout.row_words + w, t, 1);
+            self.note_row::<ODD>(self.layout.row_words + w, t);
         }
     }
 
-    /// Put rows `t + j` for the bits `j` of `rows` (at most 34 bits) into column `w`'s row set
+    /// Put row `t` into column `w`'s row set for the next layer, and its word into the summary.
+    #[inline(always)]
+    fn note_row<const ODD: bool>(&mut self, w: usize, t: usize) {
+        let layout = &self.layout;
+        let at = (w << layout.set_shift) + (t >> 5);
+        let sets = usize::from(!ODD) * layout.layer_set_words() + at;
+        if let Some(word) = self.sets.get_mut(sets) {
+            *word |= 1 << (t & 31);
+        }
+        let summary = usize::from(!ODD) * layout.summary_words + (at >> 5);
+        if let Some(word) = self.summary.get_mut(summary) {
+            *word |= 1 << (at & 31);
+        }
+    }
+
+    /// Put rows `t + j` for the bits `j` of `rows` (at most 63 bits) into column `w`'s row set
     /// for the next layer (even when the layer being expanded is `ODD`), and its words into the
     /// summary.
     #[inline(always)]
@@ -573,11 +608,11 @@ impl Layers<'_> {
             return;
         }
         let layout = &self.layout;
-        let index = w * layout.set_words + (t >> 5);
+        let index = (w << layout.set_shift) + (t >> 5);
         let sets = usize::from(!ODD) * layout.layer_set_words();
         let summary = usize::from(!ODD) * layout.summary_words;
         let shift = (t & 31) as u32;
-        let low = rows << shift; // bits past 64 (shift 31, 34 rows) come from `high`
+        let low = rows << shift; // bits shifted past 64 come from `high`
         let high = if shift == 0 { 0 } else { rows >> (64 - shift) };
         for (j, part) in [low as u32, (low >> 32) as u32, high as u32]
             .into_iter()
