@@ -80,6 +80,11 @@ impl BfsLayout {
         })
     }
 
+    /// Whether the `FREE` plane is in the scratch (else BFS reads the grid's bits).
+    pub(super) fn copies_free(&self) -> bool {
+        self.copy_free
+    }
+
     /// Index of word `w` of row `y` in a plane.
     #[inline(always)]
     fn node(&self, y: usize, w: usize) -> usize {
@@ -386,18 +391,19 @@ impl Layers<'_> {
                 }
                 while word != 0 {
                     let b = word.trailing_zeros() as usize;
-                    let run = (!(word >> b)).trailing_zeros() as usize;
+                    // At most 30 rows per run (`column` keeps its rows in a u32).
+                    let run = ((!(word >> b)).trailing_zeros() as usize).min(30);
                     word &= !(mask_below(b + run) & !mask_below(b));
                     let y0 = k * 32 + b;
                     let mut y1 = y0 + run - 1;
-                    // A run that reaches the word's last row goes on in the next word(s) of
-                    // the column (up to 61 rows, so that `column` keeps its rows in a u64).
+                    // A run that reaches the word's last row goes on in the next word of the
+                    // column (up to 30 rows, so that `column` keeps its rows in a u32).
                     let mut next = index + 1;
-                    while y1 & 31 == 31 && next & (set_words - 1) != 0 {
+                    while y1 & 31 == 31 && y1 - y0 < 29 && next & (set_words - 1) != 0 {
                         let Some(more) = self.sets.get_mut(sets + next) else {
                             break;
                         };
-                        let take = ((!*more).trailing_zeros() as usize).min(60 - (y1 - y0));
+                        let take = ((!*more).trailing_zeros() as usize).min(29 - (y1 - y0));
                         if take == 0 {
                             break;
                         }
@@ -489,8 +495,8 @@ impl Layers<'_> {
         let mut fc = (c0 ^ x0) & (c1 ^ x1);
         // Row below the target: frontier and free bits (none below the first target).
         let (mut fb, mut mb) = (0u32, 0u32);
-        let mut pending = 0u64; // rows `first + k` with new cells
-        let mut pending_edges = 0u64; // ... with new cells in bit 0 or 31
+        let mut pending = 0u32; // rows `first + k` with new cells
+        let mut pending_edges = 0u32; // ... with new cells in bit 0 or 31
         for t in first..=last {
             let j = i + rw;
             let (a0, a1, ma) = if t + 1 < layout.height {
@@ -516,13 +522,17 @@ impl Layers<'_> {
                     *p = c1 | (n & set1);
                 }
                 pending |= 1 << (t - first);
-                pending_edges |= u64::from(n & edges != 0) << (t - first);
+                if n & edges != 0 {
+                    pending_edges |= 1 << (t - first);
+                }
             }
             (fb, mb, fc, mc, c0, c1) = (fc, mc, fa, ma, a0, a1);
             i = j;
         }
         self.note_rows::<ODD>(w, first, pending);
-        self.note_rows::<ODD>(rw + w, first, pending_edges);
+        if pending_edges != 0 {
+            self.note_rows::<ODD>(rw + w, first, pending_edges);
+        }
     }
 
     /// The moves out of word `w` from the frontier `f` of row `y` at the word's edge cells
@@ -599,11 +609,11 @@ impl Layers<'_> {
         }
     }
 
-    /// Put rows `t + j` for the bits `j` of `rows` (at most 63 bits) into column `w`'s row set
+    /// Put rows `t + j` for the bits `j` of `rows` into column `w`'s row set
     /// for the next layer (even when the layer being expanded is `ODD`), and its words into the
     /// summary.
     #[inline(always)]
-    fn note_rows<const ODD: bool>(&mut self, w: usize, t: usize, rows: u64) {
+    fn note_rows<const ODD: bool>(&mut self, w: usize, t: usize, rows: u32) {
         if rows == 0 {
             return;
         }
@@ -612,12 +622,8 @@ impl Layers<'_> {
         let sets = usize::from(!ODD) * layout.layer_set_words();
         let summary = usize::from(!ODD) * layout.summary_words;
         let shift = (t & 31) as u32;
-        let low = rows << shift; // bits shifted past 64 come from `high`
-        let high = if shift == 0 { 0 } else { rows >> (64 - shift) };
-        for (j, part) in [low as u32, (low >> 32) as u32, high as u32]
-            .into_iter()
-            .enumerate()
-        {
+        let wide = u64::from(rows) << shift;
+        for (j, part) in [wide as u32, (wide >> 32) as u32].into_iter().enumerate() {
             if part == 0 {
                 continue;
             }
