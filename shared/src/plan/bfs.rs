@@ -81,6 +81,7 @@ impl BfsLayout {
     }
 
     /// Whether the `FREE` plane is in the scratch (else BFS reads the grid's bits).
+    #[cfg(test)]
     pub(super) fn copies_free(&self) -> bool {
         self.copy_free
     }

@@ -1019,7 +1019,7 @@ fn bfs_layout_uses_the_grid_bits_when_the_free_plane_does_not_fit() {
     assert_eq!(
         fits(8, 8, scratch_words_for_cells(64)),
         Err(PlanError::ScratchTooSmall {
-            cells: 8 * (2 * 8 + 2 * 2 * 1 + 2),
+            cells: 8 * (2 * 8 + 2 * 2 + 2), // 2 planes, 2 row sets of 2 words, 2 summaries
             capacity: 64
         })
     );
