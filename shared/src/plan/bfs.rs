@@ -21,7 +21,10 @@
 //! entry `y` holds row `y`'s *word masks* (which words hold frontier cells) for even and odd
 //! layers.
 
-use super::{PlanError, Planner, Search, STEPS};
+use super::{
+    nibble, scratch_words_for_cells, set_nibble, PlanError, Planner, Search, BLOCKED, CODE_START,
+    E, N, NE, NW, S, SE, STEPS, SW, W,
+};
 use crate::geom::Cell;
 use crate::grid::{Grid, GridGeometry};
 
@@ -148,16 +151,55 @@ impl FreeBits for GridBits<'_> {
     }
 }
 
+/// The layered search checks after this many layers whether its frontier is narrow: fewer
+/// than [`NARROW_PAIRS_PER_LAYER`] (row, word) pairs per layer on average. Then it restarts as
+/// the scalar queue BFS, which costs less per cell there (corridors and mazes: 1–3 frontier
+/// cells per layer, thousands of layers).
+pub(super) const NARROW_CHECK_LAYER: u32 = 48;
+/// See [`NARROW_CHECK_LAYER`].
+pub(super) const NARROW_PAIRS_PER_LAYER: usize = 8;
+
+/// For each 12-bit window of three nibbles (a row of a 3 × 3 neighbourhood, BFS): bit `k`
+/// (k = 0, 1, 2) set when nibble `k` is 0 (free, not reached), bit `3 + k` when it is not
+/// `BLOCKED`. 4 KB, built at compile time.
+static WINDOW_MASKS: [u8; 4096] = {
+    let mut table = [0u8; 4096];
+    let mut v = 0;
+    while v < 4096 {
+        let mut m = 0u8;
+        let mut k = 0;
+        while k < 3 {
+            let code = (v >> (4 * k)) & 0xF;
+            if code == 0 {
+                m |= 1 << k;
+            }
+            if code != BLOCKED as usize {
+                m |= 8 << k;
+            }
+            k += 1;
+        }
+        table[v] = m;
+        v += 1;
+    }
+    table
+};
+
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEUE> {
-    /// Layered bit-parallel BFS from `start` until the layer that reaches `goal` (`start !=
-    /// goal`, both free and on the map). `Search::cost` is the goal's layer (the number of
-    /// steps), `expanded` the number of cells reached.
+    /// BFS from `start` until the layer that reaches `goal` (`start != goal`, both free and on
+    /// the map): the layered bit-parallel search, or, when its frontier turns out narrow after
+    /// [`NARROW_CHECK_LAYER`] layers, the scalar queue BFS from the start again. Returns the
+    /// search and whether the scalar one ran (its path is in the nibbles: rebuild it with
+    /// `rebuild_merged`; else with [`Planner::bfs_rebuild`]).
+    ///
+    /// Layered: `Search::cost` is the goal's layer (the number of steps), `expanded` the number
+    /// of cells reached. Scalar: `cost` 0 (the rebuild counts the steps), `expanded` the cells
+    /// taken off the queue.
     pub(super) fn bfs<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
         start: Cell,
         goal: Cell,
-    ) -> Result<Search, PlanError> {
+    ) -> Result<(Search, bool), PlanError> {
         let layout = BfsLayout::new(grid.geometry(), SCRATCH_WORDS)?;
         let grid_words = grid.words();
         let (p0, rest) = self.scratch.split_at_mut(layout.nodes);
@@ -209,11 +251,182 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             layers.run(&bits, start, goal_node, goal_bit)
         };
         self.queue_peak = layers.peak as u32;
+        let (found, layer) = match found {
+            Outcome::Found(layer) => (true, layer),
+            Outcome::Unreachable => (false, 0),
+            Outcome::Narrow => {
+                self.copy_map(grid);
+                let geometry = grid.geometry();
+                let search = self.bfs_scalar(grid, geometry.index(start), geometry.index(goal))?;
+                return Ok((search, true));
+            }
+        };
         let expanded = count_reached(&self.scratch, &layout);
+        Ok((
+            Search {
+                found,
+                expanded,
+                cost: layer,
+            },
+            false,
+        ))
+    }
+
+    /// Breadth-first search from `start` until `goal` is discovered, cell by cell with a FIFO
+    /// queue on the nibble copy of the map ([`Planner::copy_map`]): the narrow-frontier
+    /// variant (see [`NARROW_CHECK_LAYER`]).
+    ///
+    /// Hot loop: a popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
+    /// nibbles of a row, from one pair of scratch words), so the side cells read for the side
+    /// moves also decide the diagonal moves. [`WINDOW_MASKS`] and a few operations turn the
+    /// windows into a mask of the targets (nibble 0, and for a diagonal both side cells not
+    /// [`BLOCKED`]), tested in the fixed order E, N, W, S, NE, NW, SW, SE with constant index
+    /// offsets. Cells on the map border take a slower path that reads off-map cells as
+    /// `BLOCKED` (and divides for y). Queue entries carry the index and x, so interior cells
+    /// never divide; a new cell's nibble is 0, so marking it is a single OR.
+    fn bfs_scalar<const GW: usize>(
+        &mut self,
+        grid: &Grid<GW>,
+        start: usize,
+        goal: usize,
+    ) -> Result<Search, PlanError> {
+        let geometry = grid.geometry();
+        let width = geometry.width() as usize;
+        let height = geometry.height() as usize;
+        let used_words = scratch_words_for_cells(geometry.cell_count());
+        let scratch = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
+        let queue = &mut self.queue[..];
+        let capacity = queue.len();
+        let full = PlanError::QueueFull {
+            capacity: capacity as u32,
+        };
+        // Entries ever pushed / popped: the ring slot is the count modulo the capacity (a
+        // constant), the fill is their difference, and `popped` is the number expanded. Two
+        // counters instead of head, tail, fill and expanded keep the loop in registers.
+        let slot_of = |n: usize| n.checked_rem(capacity).unwrap_or(0);
+        let (mut pushed, mut popped) = (0usize, 0usize);
+        let mut peak = 1usize;
+
+        // Interior cells: x in 1..width-1 and index in width..cells-width.
+        let inner_x = width.saturating_sub(2);
+        let inner_span = geometry.cell_count().saturating_sub(2 * width);
+
+        set_nibble(scratch, start, CODE_START);
+        match queue.get_mut(0) {
+            Some(slot) => {
+                slot.node = start as u32;
+                slot.f = (start % width) as u32;
+            }
+            None => return Err(full),
+        }
+        pushed += 1;
+
+        // Nibbles `j`, `j + 1`, `j + 2` in bits 0..12 (beyond the scratch: BLOCKED).
+        #[inline(always)]
+        fn window(scratch: &[u32], j: usize) -> u32 {
+            let w = j >> 3;
+            match scratch.get(w..w.wrapping_add(2)) {
+                Some(&[lo, hi]) => {
+                    // Two 32-bit reads, not one 64-bit read: a wide load right after the
+                    // 32-bit store that marked a neighbour would miss store forwarding.
+                    let shift = ((j & 7) * 4) as u32;
+                    ((lo >> shift) | ((hi << 1) << (31 - shift))) & 0xFFF
+                }
+                // The window's second word is past the scratch: read nibble by nibble.
+                _ => nibble(scratch, j) | nibble(scratch, j + 1) << 4 | nibble(scratch, j + 2) << 8,
+            }
+        }
+        // Nibble of (x + sx, y + sy), BLOCKED off the map (border path).
+        let slow = |scratch: &[u32], index: usize, x: usize, sx: isize, sy: isize| -> u32 {
+            let nx = x as isize + sx;
+            let ny = (index / width) as isize + sy;
+            if nx < 0 || ny < 0 || nx >= width as isize || ny >= height as isize {
+                BLOCKED
+            } else {
+                nibble(scratch, (ny as usize) * width + nx as usize)
+            }
+        };
+
+        while popped != pushed {
+            let (index, x) = match queue.get(slot_of(popped)) {
+                Some(e) => (e.node as usize, e.f as usize),
+                None => break,
+            };
+            popped += 1;
+
+            let (above, cur, below) =
+                if x.wrapping_sub(1) < inner_x && index.wrapping_sub(width) < inner_span {
+                    (
+                        window(scratch, index + width - 1),
+                        window(scratch, index - 1),
+                        window(scratch, index - width - 1),
+                    )
+                } else {
+                    let row = |sy: isize| {
+                        slow(scratch, index, x, -1, sy)
+                            | slow(scratch, index, x, 0, sy) << 4
+                            | slow(scratch, index, x, 1, sy) << 8
+                    };
+                    (row(1), row(0), row(-1))
+                };
+            // Per row: bit `col` of the targets when that cell is 0 (free, not reached); a
+            // diagonal also needs the side cell of its row (the middle one) and the side cell
+            // of its column in the current row open.
+            let m_cur = u32::from(WINDOW_MASKS[(cur & 0xFFF) as usize]);
+            let open_cur = (m_cur >> 3) & 5;
+            let row_targets = |m: u32| m & (2 | (open_cur & ((m >> 4) & 1).wrapping_neg()));
+            let targets = row_targets(u32::from(WINDOW_MASKS[(below & 0xFFF) as usize]))
+                | (m_cur & 5) << 3
+                | row_targets(u32::from(WINDOW_MASKS[(above & 0xFFF) as usize])) << 6;
+            if targets == 0 {
+                continue;
+            }
+
+            macro_rules! visit {
+                ($bit:expr, $n:expr, $nx:expr, $code:expr) => {{
+                    if targets & (1 << $bit) != 0 {
+                        // Reached for the first time (nibble 0): mark with the step, queue it.
+                        let n = $n;
+                        if let Some(w) = scratch.get_mut(n >> 3) {
+                            *w |= $code << ((n & 7) * 4);
+                        }
+                        if n == goal {
+                            self.queue_peak = peak.max(pushed - popped) as u32;
+                            return Ok(Search {
+                                found: true,
+                                expanded: popped as u32,
+                                cost: 0,
+                            });
+                        }
+                        if pushed - popped == capacity {
+                            self.queue_peak = capacity as u32;
+                            return Err(full);
+                        }
+                        if let Some(slot) = queue.get_mut(slot_of(pushed)) {
+                            slot.node = n as u32;
+                            slot.f = $nx as u32;
+                        }
+                        pushed += 1;
+                    }
+                }};
+            }
+            // Bit `row * 3 + col` (rows below, same, above; columns x - 1, x, x + 1), in the
+            // order E, N, W, S, NE, NW, SW, SE. Target cells are on the map, so no wrapping.
+            visit!(5, index + 1, x + 1, E);
+            visit!(7, index + width, x, N);
+            visit!(3, index - 1, x - 1, W);
+            visit!(1, index - width, x, S);
+            visit!(8, index + width + 1, x + 1, NE);
+            visit!(6, index + width - 1, x - 1, NW);
+            visit!(0, index - width - 1, x - 1, SW);
+            visit!(2, index - width + 1, x + 1, SE);
+            peak = peak.max(pushed - popped);
+        }
+        self.queue_peak = peak as u32;
         Ok(Search {
-            found: found.is_some(),
-            expanded,
-            cost: found.unwrap_or(0),
+            found: false,
+            expanded: popped as u32,
+            cost: 0,
         })
     }
 
@@ -288,6 +501,15 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     }
 }
 
+/// How a layered search ended.
+enum Outcome {
+    /// The goal is in this layer.
+    Found(u32),
+    Unreachable,
+    /// The frontier is narrow: better searched cell by cell.
+    Narrow,
+}
+
 /// The state of one layered search: the planes, the row sets and their summaries.
 struct Layers<'a> {
     p0: &'a mut [u32],
@@ -312,15 +534,15 @@ struct Layers<'a> {
 }
 
 impl Layers<'_> {
-    /// Mark the start, then expand layer after layer until the goal's word bit is reached
-    /// (`Some(layer)`) or a layer is empty (`None`).
+    /// Mark the start, then expand layer after layer until the goal's word bit is reached or a
+    /// layer is empty, or the frontier turns out narrow (see [`NARROW_CHECK_LAYER`]).
     fn run(
         &mut self,
         free: &impl FreeBits,
         start: Cell,
         goal_node: usize,
         goal_bit: u32,
-    ) -> Option<u32> {
+    ) -> Outcome {
         let layout = self.layout;
         self.sets.fill(0);
         self.summary.fill(0);
@@ -334,6 +556,7 @@ impl Layers<'_> {
             self.note_rows::<true>(layout.row_words + (sx >> 5), sy, 1);
         }
         self.layer = 0;
+        let mut pairs = 0usize;
         loop {
             (self.x0, self.x1, self.set0, self.set1) = layer_masks(self.layer);
             let rows = if self.layer & 1 != 0 {
@@ -342,14 +565,20 @@ impl Layers<'_> {
                 self.expand_layer::<false>(free)
             };
             if rows == 0 {
-                return None;
+                return Outcome::Unreachable;
             }
             self.peak = self.peak.max(rows);
+            pairs += rows;
             self.layer += 1;
+            if self.layer == NARROW_CHECK_LAYER
+                && pairs < NARROW_PAIRS_PER_LAYER * NARROW_CHECK_LAYER as usize
+            {
+                return Outcome::Narrow;
+            }
             let reached = self.p0.get(goal_node).copied().unwrap_or(0)
                 | self.p1.get(goal_node).copied().unwrap_or(0);
             if reached & goal_bit != 0 {
-                return Some(self.layer);
+                return Outcome::Found(self.layer);
             }
         }
     }

@@ -1115,6 +1115,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         let start_index = geometry.index(start);
         let goal_index = geometry.index(goal);
+        // Whether BFS ran its scalar variant (path in the nibbles) instead of the layered one.
+        let mut bfs_nibbles = false;
         let search = if start_index == goal_index {
             set_nibble(&mut self.scratch, start_index, CODE_START);
             Search {
@@ -1124,7 +1126,11 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             }
         } else {
             match kind {
-                PlannerKind::Bfs => self.bfs(grid, start, goal)?,
+                PlannerKind::Bfs => {
+                    let (search, nibbles) = self.bfs(grid, start, goal)?;
+                    bfs_nibbles = nibbles;
+                    search
+                }
                 PlannerKind::AStar | PlannerKind::AnyAngle => {
                     match self.jps(grid, start_index, goal, goal_index) {
                         Ok(search) => search,
@@ -1155,7 +1161,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         let (length_cells, steps, fits) = match kind {
             PlannerKind::AnyAngle => self.rebuild_any_angle(grid, goal),
-            PlannerKind::Bfs => self.bfs_rebuild(grid, goal, search.cost),
+            PlannerKind::Bfs if !bfs_nibbles => self.bfs_rebuild(grid, goal, search.cost),
             _ => self.rebuild_merged(&geometry, goal),
         };
         let report = PlanReport {

@@ -948,7 +948,7 @@ fn bfs_matches_pathfinding_on_wide_and_tall_grids() {
     // Rows of several words (moves across word edges), columns of several 32-row words (long
     // vertical runs), obstacles from none to many.
     const CELLS: usize = 130 * 110;
-    let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 0>::new());
+    let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 4096>::new());
     for (density, seed) in [(0u64, 1u64), (5, 2), (15, 3), (25, 4), (35, 5)] {
         let mut g = random_grid::<{ words_for_cells(CELLS) }>(130, 110, density, seed);
         for (s, t) in [
@@ -993,7 +993,7 @@ proptest! {
         let (s, t) = (Cell::new(sx as u16, (sy % h) as u16), Cell::new(tx as u16, (ty % h) as u16));
         g.set(s, false);
         g.set(t, false);
-        let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 0>::new());
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 1600>::new());
         prop_assume!(super::bfs::BfsLayout::new(g.geometry(), scratch_words_for_cells(CELLS)).is_ok());
         let r = p.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
         let expected = oracle_bfs(&g, s, t);
@@ -1033,4 +1033,85 @@ fn bfs_layout_uses_the_grid_bits_when_the_free_plane_does_not_fit() {
     assert!(p
         .plan_cells(PlannerKind::AStar, &g, Cell::new(0, 0), Cell::new(7, 7))
         .is_ok());
+}
+
+/// A perfect maze (recursive backtracker, xorshift from `seed`) of `side` × `side` cells with
+/// 1-cell corridors: rooms on odd coordinates.
+fn maze<const W: usize>(side: i32, seed: u64) -> Grid<W> {
+    let mut g = Grid::<W>::new(GridGeometry::new(side as u32, side as u32, 0.05).unwrap()).unwrap();
+    for y in 0..side {
+        g.fill_row(y, 0, side - 1);
+    }
+    let rooms = (side - 1) / 2;
+    let mut visited = std::vec![false; (rooms * rooms) as usize];
+    let mut stack = std::vec![(0i32, 0i32)];
+    visited[0] = true;
+    g.set_xy(1, 1, false);
+    let mut state = seed | 1;
+    while let Some(&(rx, ry)) = stack.last() {
+        let options: Vec<(i32, i32)> = [(1, 0), (-1, 0), (0, 1), (0, -1)]
+            .into_iter()
+            .filter(|&(dx, dy)| {
+                let (nx, ny) = (rx + dx, ry + dy);
+                nx >= 0
+                    && ny >= 0
+                    && nx < rooms
+                    && ny < rooms
+                    && !visited[(ny * rooms + nx) as usize]
+            })
+            .collect();
+        if options.is_empty() {
+            stack.pop();
+            continue;
+        }
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        let (dx, dy) = options[(state % options.len() as u64) as usize];
+        let (nx, ny) = (rx + dx, ry + dy);
+        visited[(ny * rooms + nx) as usize] = true;
+        g.set_xy(2 * rx + 1 + dx, 2 * ry + 1 + dy, false);
+        g.set_xy(2 * nx + 1, 2 * ny + 1, false);
+        stack.push((nx, ny));
+    }
+    g
+}
+
+#[test]
+fn bfs_in_mazes_switches_to_the_scalar_search_with_the_same_steps() {
+    // 1-cell corridors: a frontier of 1-3 cells for hundreds of layers, so after
+    // NARROW_CHECK_LAYER layers BFS restarts cell by cell (it then needs queue entries).
+    const CELLS: usize = 121 * 121;
+    let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 256>::new());
+    for seed in [1u64, 2, 3] {
+        let g = maze::<{ words_for_cells(CELLS) }>(121, seed);
+        for (s, t) in [
+            ((1, 1), (119, 119)),
+            ((119, 1), (1, 119)),
+            ((61, 61), (1, 1)),
+        ] {
+            let (s, t) = (Cell::new(s.0, s.1), Cell::new(t.0, t.1));
+            let steps = oracle_bfs(&g, s, t).unwrap();
+            assert!(steps > 4 * super::bfs::NARROW_CHECK_LAYER, "{steps}");
+            let r = match p.plan_cells(PlannerKind::Bfs, &g, s, t) {
+                Ok(r) => r,
+                Err(PlanError::PathFull { .. }) => p.last_report().unwrap(),
+                Err(e) => panic!("{e}"),
+            };
+            assert_eq!(r.cost, steps, "seed {seed} {s:?} -> {t:?}");
+            if !p.path_cells().is_empty() {
+                assert_eq!(steps_and_cost(p.path_cells()).0, steps);
+                assert_collision_free(&g, p.path_cells());
+            }
+            // The scalar search's queue: a few entries in a maze.
+            assert!(p.queue_peak() < 64, "{}", p.queue_peak());
+        }
+    }
+    // With no queue at all the scalar restart reports QueueFull instead of a wrong answer.
+    let g = maze::<{ words_for_cells(CELLS) }>(121, 1);
+    let mut none = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 0>::new());
+    assert_eq!(
+        none.plan_cells(PlannerKind::Bfs, &g, Cell::new(1, 1), Cell::new(119, 119)),
+        Err(PlanError::QueueFull { capacity: 0 })
+    );
 }
