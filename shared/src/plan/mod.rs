@@ -16,8 +16,8 @@
 //!
 //! ## Memory layout
 //!
-//! The scratch memory is one nibble (4 bits) per cell, 8 cells per `u32` word, row-major like
-//! the grid:
+//! The scratch memory is `SCRATCH_WORDS` `u32` words: 4 bits per cell. A* and the scalar BFS
+//! use it as one nibble per cell, 8 cells per word, row-major like the grid:
 //!
 //! | code      | meaning                                                        |
 //! |-----------|----------------------------------------------------------------|
@@ -25,22 +25,47 @@
 //! | 1 ..= 8   | reached, final; the code names the step *from* the parent      |
 //! | 9         | the start cell (no parent)                                     |
 //! | 10 ..= 14 | unused                                                         |
-//! | 15        | occupied (BFS and the cell-by-cell A* only)                    |
+//! | 15        | occupied (scalar BFS and the cell-by-cell A* only)             |
 //!
-//! BFS (and the cell-by-cell A* fallback) first copy the map into it (occupied → 15, 8 cells
-//! per word with a few shifts), so one nibble read answers both "free?" and "reached?". The jump
-//! point search reads the map's own bits and only clears the nibbles.
+//! The scalar BFS (and the cell-by-cell A* fallback) first copy the map into it (occupied → 15,
+//! 8 cells per word with a few shifts), so one nibble read answers both "free?" and
+//! "reached?". The jump point search reads the map's own bits and only clears the nibbles.
+//!
+//! The layered BFS uses the same words as bit planes, rows padded to `row_words = ⌈width /
+//! 32⌉` words (`nodes = height × row_words`); bit `b` of word `y · row_words + w` of a plane
+//! is cell `(32 w + b, y)`:
+//!
+//! | words                              | content                                             |
+//! |------------------------------------|-----------------------------------------------------|
+//! | `0 .. nodes`                       | `P0`: bit 0 of the cell's layer code                |
+//! | `nodes .. 2 nodes`                 | `P1`: bit 1 of the layer code (code 0: not reached, |
+//! |                                    | else `layer mod 3 + 1`)                             |
+//! | `2 nodes .. 3 nodes`               | `FREE`: 1 = free (only if it fits, see below)       |
+//! | then `2 × 2 row_words × set_words` | row sets per layer parity: per word column, the     |
+//! |                                    | rows with frontier cells in it, then the rows with  |
+//! |                                    | frontier cells at its edges (`set_words` = `⌈height |
+//! |                                    | / 32⌉` rounded up to a power of two)                |
+//! | then `2 × ⌈2 row_words × set_words / 32⌉` | per parity, which row-set words are not empty |
+//!
+//! At 300 × 300: 3 × 3 000 + 2 × 320 + 2 × 10 = 9 660 of the 11 250 words. When the `FREE`
+//! plane does not fit (narrow grids, where the padding to whole words wastes most: e.g. 40 × 40
+//! in `scratch_words_for_cells(1600)` = 200 words), the free bits are read from the grid's own
+//! packed bits instead (two reads and a funnel shift per word: slower, same result); when not
+//! even `P0`, `P1` and the row sets fit (grids narrower than about 18 cells in a scratch sized
+//! exactly for them), BFS reports [`PlanError::ScratchTooSmall`] with the cells it would need.
 //!
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
 //! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
 //! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (4 096 bytes), plus a few hundred bytes
 //! of bit sets on the stack during a jump point search (about 2.2 KB of bucket heads in the
-//! cell-by-cell fallback). Nothing else is allocated; the grid itself is only read. BFS also
-//! reads a constant 4 KB table (read-only data: flash on the MCU).
+//! cell-by-cell fallback). Nothing else is allocated; the grid itself is only read. The scalar
+//! BFS also reads a constant 4 KB table (read-only data: flash on the MCU).
 //! [`Planner::queue_peak`] tells how much of the queue a search used. Measured on the 300 × 300
-//! benchmark grids and the bundled worlds: BFS needs at most 600 entries; A* (jump points: open
-//! list plus records) 3 (open floor), 10 (corridor), 27 (office), 43 (pillars), 5 835 (a maze
-//! of 1-cell corridors, where `Planner300` therefore falls back to cell-by-cell A*).
+//! benchmark grids and the bundled worlds: the layered BFS needs no queue entries (its
+//! `queue_peak` is the most frontier (row, word) pairs of one layer: at most 307); the scalar
+//! BFS (mazes) 13; A* (jump points: open list plus records) 3 (open floor), 10 (corridor), 27
+//! (office), 43 (pillars), 5 835 (a maze of 1-cell corridors, where `Planner300` therefore
+//! falls back to cell-by-cell A*).
 //!
 //! ## A*: jump point search without a g-table
 //!
@@ -104,9 +129,51 @@
 //! dropped in a different order, so an equal-cost path may differ from the one a larger queue
 //! finds; the cost does not. (The jump point heap reclaims the same way before it gives up.)
 //!
-//! BFS marks a cell (with its parent step) when it is first *discovered*: in a FIFO queue the
-//! first discovery is by a fewest-steps parent, so every cell enters the ring buffer at most once.
-//! Its hot loop reads a popped cell's 3 × 3 neighbourhood as three 12-bit *windows* (three
+//! ## BFS: layered and bit-parallel, scalar in corridors
+//!
+//! [`PlannerKind::Bfs`] expands the search *layer by layer* on whole 32-cell words (module
+//! `bfs`, memory layout above). The layer-`k` frontier is the set of cells whose layer code is
+//! `k mod 3 + 1`: older cells with the same code (layers `k - 3`, `k - 6`, …) are inside the
+//! reached region, all their legal neighbours are reached, so they add nothing and need no
+//! separate frontier plane. For a target row `t`, word by word, with `F` the frontier and `M`
+//! the free bits of a row:
+//!
+//! ```text
+//! N[t] = M[t] & !reached[t] & ( F[t-1] & M[t] | F[t+1] & M[t] | east(F[t]) | west(F[t])
+//!        | M[t-1] & spread(F[t-1] & M[t])      // diagonals from the row below
+//!        | M[t+1] & spread(F[t+1] & M[t]) )    // diagonals from the row above
+//! ```
+//!
+//! (`spread(x) = x << 1 | x >> 1`: a diagonal needs its two side cells free, the one in the
+//! target row at the source column, `F & M[t]`, and the one in the source row at the target
+//! column, `M[t∓1]`.) New cells get the next code (two ORs per word). Only the (row, word)
+//! pairs that hold frontier cells are visited: per layer parity, per word column, a bit set of
+//! the rows with frontier cells, and a summary of its non-empty words. Consecutive rows of one
+//! column (up to 30) are expanded as one *vertical run*, sliding a window of three rows up the
+//! column, so each word is loaded once per layer; a single row reads its word and the two
+//! beside it in the rows below and above. Moves across a word edge (bit 31 of word `w` to bit 0
+//! of `w + 1` and back) are rare (one cell pair per 32 columns): new cells at a word edge also
+//! put their row into the column's *edge set*, whose rows are then expanded cell by cell across
+//! the edge with the same rule. The search stops after the layer that reaches the goal, or when
+//! a layer is empty (`Unreachable`); `expanded` is the number of cells reached (popcount of the
+//! planes). The path is walked back from the goal: from a cell of layer `d`, a legal move to a
+//! neighbour whose code is `(d - 1) mod 3 + 1` (its neighbours have layers `d - 1 ..= d + 1`,
+//! which the code tells apart), preferring the previous step's direction, then E, N, W, S, NE,
+//! NW, SW, SE; collinear cells are merged. BFS needs no queue entries.
+//!
+//! *Narrow frontiers.* In a maze or a corridor the frontier holds 1–3 cells for thousands of
+//! layers, and the per-layer and per-word costs outweigh the word parallelism (on the 300 × 300
+//! maze: 8.3 M instructions on the MCU against 4.1 M cell by cell). So after 48 layers
+//! (`NARROW_CHECK_LAYER`), when the frontier averaged fewer than 8 (row, word) pairs per layer
+//! (`NARROW_PAIRS_PER_LAYER`), BFS starts again as the *scalar* queue BFS below (the 48 layers
+//! cost about 50 000 instructions). It uses the queue (a ring buffer; [`PlanError::QueueFull`]
+//! when it fills) and reports the cells taken off the queue as `expanded`. A flood from a
+//! corner of an open floor averages about 30 pairs per layer by then (one per row of its
+//! L-shaped front).
+//!
+//! The scalar BFS marks a cell (with its parent step) when it is first *discovered*: in a FIFO
+//! queue the first discovery is by a fewest-steps parent, so every cell enters the ring buffer at
+//! most once. Its hot loop reads a popped cell's 3 × 3 neighbourhood as three 12-bit *windows* (three
 //! nibbles of a row, from two 32-bit scratch reads), looks each window up in a 4 KB table built
 //! at compile time ("nibble 0?" and "not occupied?" for its three cells) and combines the three
 //! answers into a mask of the targets with a few operations, so the side cells read for the side
@@ -122,8 +189,10 @@
 //!
 //! ## Complexity
 //!
-//! BFS: `O(n)` time for `n` free cells, about 140 x86-64 instructions per cell (165 in a maze
-//! of 1-cell corridors). Jump point
+//! Layered BFS: `O(layers × frontier words + reached cells / 32)`; on the 300 × 300 open floor
+//! (293 layers, 88 803 cells) 7.0 M Cortex-M4 instructions, 79 per cell; 20 % random obstacles
+//! 8.6 M (119 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
+//! cell (4.2 M in the 300 × 300 maze). Jump point
 //! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
 //! seed's room maps a whole plan takes 0.8–2.0 M instructions for 9–22 jump points. The
@@ -308,8 +377,9 @@ impl core::fmt::Display for PlanError {
 pub struct PlanReport {
     /// How it ended.
     pub status: PlanStatus,
-    /// Nodes taken off the queue and expanded: cells for BFS; jump points for A* and
-    /// any-angle (plus the cells of the cell-by-cell search when it fell back to it).
+    /// Nodes expanded: for BFS the cells reached (layered search; the scalar one in narrow
+    /// maps: the cells taken off its queue); jump points for A* and any-angle (plus the cells of
+    /// the cell-by-cell search when it fell back to it).
     pub expanded: u32,
     /// BFS: steps; A* and any-angle: the A* cost in [`STRAIGHT_COST`] units. 0 unless found.
     pub cost: u32,
@@ -1100,8 +1170,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             self.last = Some(report);
             return Ok(report);
         }
-        // BFS starts from a copy of the map in the scratch (occupied cells BLOCKED, free cells
-        // 0), so it reads one nibble per neighbour for both "free?" and "reached?". Jump point
+        // BFS sets up its own bit planes (or, in narrow maps, a copy of the map). Jump point
         // search reads the map's own bits and needs cleared nibbles only (its cell-by-cell
         // fallback copies the map then).
         let used_words = scratch_words_for_cells(geometry.cell_count());
@@ -1196,8 +1265,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         self.last
     }
 
-    /// Most queue entries in use at once during the last search (BFS: ring-buffer entries;
-    /// A*: open-list entries, stale ones included). Size `QUEUE` from this on your maps.
+    /// Most queue entries in use at once during the last search (A*: open-list entries, stale
+    /// ones included; scalar BFS: ring-buffer entries). Size `QUEUE` from this on your maps. The
+    /// layered BFS uses no queue entries: there it is the most frontier (row, word) pairs of one
+    /// layer.
     pub fn queue_peak(&self) -> u32 {
         self.queue_peak
     }
