@@ -773,36 +773,41 @@ impl Layers<'_> {
     #[inline(never)]
     fn edge<const ODD: bool>(&mut self, free: &impl FreeBits, y: usize, w: usize, f: u32) {
         let layout = self.layout;
-        let free_bit = |y: usize, w: usize, bit: u32| -> bool {
-            y < layout.height
-                && w < layout.row_words
-                && free.get(y, w, layout.node(y, w)) >> bit & 1 != 0
-        };
-        let mut sides = [(0u32, 0usize, 31u32); 2];
-        let mut count = 0;
-        if w > 0 && f & 1 != 0 {
-            sides[count] = (0, w - 1, 31);
-            count += 1;
-        }
-        if w + 1 < layout.row_words && f >> 31 != 0 {
-            sides[count] = (31, w + 1, 0);
-            count += 1;
-        }
-        for &(src_bit, dst_w, dst_bit) in sides.iter().take(count) {
-            for ty in [y.wrapping_sub(1), y, y + 1] {
-                if !free_bit(ty, dst_w, dst_bit) {
+        let rw = layout.row_words;
+        // (source bit, destination word, destination bit) for each edge with frontier.
+        let sides = [
+            (w > 0 && f & 1 != 0, 0u32, w.wrapping_sub(1), 31u32),
+            (w + 1 < rw && f >> 31 != 0, 31, w + 1, 0),
+        ];
+        for (active, src_bit, dst_w, dst_bit) in sides {
+            if !active {
+                continue;
+            }
+            let j = layout.node(y, dst_w);
+            // The target in row y is also the side cell of both diagonals (source row,
+            // target column): nothing moves across this edge when it is occupied.
+            let m_y = free.get(y, dst_w, j) >> dst_bit & 1;
+            if m_y == 0 {
+                continue;
+            }
+            let reached = |p0: &[u32], p1: &[u32], j: usize| {
+                (p0.get(j).copied().unwrap_or(0) | p1.get(j).copied().unwrap_or(0)) >> dst_bit & 1
+            };
+            if reached(self.p0, self.p1, j) == 0 {
+                self.mark::<ODD>(y, dst_w, j, 1 << dst_bit);
+            }
+            for ty in [y.wrapping_sub(1), y + 1] {
+                if ty >= layout.height {
                     continue;
                 }
-                let i = layout.node(ty, dst_w);
-                let reached =
-                    self.p0.get(i).copied().unwrap_or(0) | self.p1.get(i).copied().unwrap_or(0);
-                if reached >> dst_bit & 1 != 0 {
-                    continue;
+                let jt = layout.node(ty, dst_w);
+                // Target free, side cell (target row, source column) free, not reached.
+                let ok = free.get(ty, dst_w, jt) >> dst_bit
+                    & free.get(ty, w, layout.node(ty, w)) >> src_bit
+                    & 1;
+                if ok != 0 && reached(self.p0, self.p1, jt) == 0 {
+                    self.mark::<ODD>(ty, dst_w, jt, 1 << dst_bit);
                 }
-                if ty != y && !(free_bit(ty, w, src_bit) && free_bit(y, dst_w, dst_bit)) {
-                    continue;
-                }
-                self.mark::<ODD>(ty, dst_w, i, 1 << dst_bit);
             }
         }
     }
