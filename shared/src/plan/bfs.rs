@@ -769,45 +769,58 @@ impl Layers<'_> {
     /// (bit 0 to bit 31 of the word before, bit 31 to bit 0 of the word after), into rows
     /// `y - 1 ..= y + 1`, with the same rule: target free and not reached; for a diagonal both
     /// side cells free. Rare (one pair of cells per 32 columns), so cell by cell.
-    #[cold]
-    #[inline(never)]
+    #[inline(always)]
     fn edge<const ODD: bool>(&mut self, free: &impl FreeBits, y: usize, w: usize, f: u32) {
+        if w > 0 && f & 1 != 0 {
+            self.edge_side::<ODD>(free, y, w, 0, w - 1, 31);
+        }
+        if w + 1 < self.layout.row_words && f >> 31 != 0 {
+            self.edge_side::<ODD>(free, y, w, 31, w + 1, 0);
+        }
+    }
+
+    /// One side of [`Layers::edge`]: from bit `src_bit` of word `w` in row `y` to bit
+    /// `dst_bit` of word `dst_w` in rows `y - 1 ..= y + 1`.
+    #[inline(always)]
+    fn edge_side<const ODD: bool>(
+        &mut self,
+        free: &impl FreeBits,
+        y: usize,
+        w: usize,
+        src_bit: u32,
+        dst_w: usize,
+        dst_bit: u32,
+    ) {
         let layout = self.layout;
-        let rw = layout.row_words;
-        // (source bit, destination word, destination bit) for each edge with frontier.
-        let sides = [
-            (w > 0 && f & 1 != 0, 0u32, w.wrapping_sub(1), 31u32),
-            (w + 1 < rw && f >> 31 != 0, 31, w + 1, 0),
-        ];
-        for (active, src_bit, dst_w, dst_bit) in sides {
-            if !active {
-                continue;
+        let j = layout.node(y, dst_w);
+        // The target in row y is also the side cell of both diagonals (source row, target
+        // column): nothing moves across this edge when it is occupied.
+        if free.get(y, dst_w, j) >> dst_bit & 1 == 0 {
+            return;
+        }
+        let open = |p0: &[u32], p1: &[u32], j: usize| {
+            (p0.get(j).copied().unwrap_or(0) | p1.get(j).copied().unwrap_or(0)) >> dst_bit & 1 == 0
+        };
+        if open(self.p0, self.p1, j) {
+            self.mark::<ODD>(y, dst_w, j, 1 << dst_bit);
+        }
+        // Diagonals: target free and not reached, side cell (target row, source column) free.
+        if y > 0 {
+            let (t, jt) = (y - 1, j - layout.row_words);
+            if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, jt + w - dst_w) >> src_bit & 1
+                != 0
+                && open(self.p0, self.p1, jt)
+            {
+                self.mark::<ODD>(t, dst_w, jt, 1 << dst_bit);
             }
-            let j = layout.node(y, dst_w);
-            // The target in row y is also the side cell of both diagonals (source row,
-            // target column): nothing moves across this edge when it is occupied.
-            let m_y = free.get(y, dst_w, j) >> dst_bit & 1;
-            if m_y == 0 {
-                continue;
-            }
-            let reached = |p0: &[u32], p1: &[u32], j: usize| {
-                (p0.get(j).copied().unwrap_or(0) | p1.get(j).copied().unwrap_or(0)) >> dst_bit & 1
-            };
-            if reached(self.p0, self.p1, j) == 0 {
-                self.mark::<ODD>(y, dst_w, j, 1 << dst_bit);
-            }
-            for ty in [y.wrapping_sub(1), y + 1] {
-                if ty >= layout.height {
-                    continue;
-                }
-                let jt = layout.node(ty, dst_w);
-                // Target free, side cell (target row, source column) free, not reached.
-                let ok = free.get(ty, dst_w, jt) >> dst_bit
-                    & free.get(ty, w, layout.node(ty, w)) >> src_bit
-                    & 1;
-                if ok != 0 && reached(self.p0, self.p1, jt) == 0 {
-                    self.mark::<ODD>(ty, dst_w, jt, 1 << dst_bit);
-                }
+        }
+        if y + 1 < layout.height {
+            let (t, jt) = (y + 1, j + layout.row_words);
+            if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, jt + w - dst_w) >> src_bit & 1
+                != 0
+                && open(self.p0, self.p1, jt)
+            {
+                self.mark::<ODD>(t, dst_w, jt, 1 << dst_bit);
             }
         }
     }
