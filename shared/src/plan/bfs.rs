@@ -711,6 +711,7 @@ impl Layers<'_> {
     /// to `y1 + 1`, each from the three source rows below, level and above, sliding up the
     /// column (moves out of the word: [`Layers::edge`]).
     #[inline(always)]
+    #[allow(unused_assignments)] // the window's last shift is not read
     fn column<const ODD: bool>(&mut self, free: &impl FreeBits, y0: usize, y1: usize, w: usize) {
         let layout = self.layout;
         let rw = layout.row_words;
@@ -727,37 +728,52 @@ impl Layers<'_> {
         let (mut fb, mut mb) = (0u32, 0u32);
         let mut pending = 0u32; // rows `first + k` with new cells
         let mut pending_edges = 0u32; // ... with new cells in bit 0 or 31
-        for t in first..=last {
+                                      // One step of the window: target row `t` (word at `i`) with the row above (`a0`, `a1`,
+                                      // `ma`; zeros above the map).
+        macro_rules! step {
+            ($t:expr, $a0:expr, $a1:expr, $ma:expr) => {{
+                let (t, a0, a1, ma): (usize, u32, u32, u32) = ($t, $a0, $a1, $ma);
+                let fa = (a0 ^ x0) & (a1 ^ x1);
+                let gb = fb & mc;
+                let ga = fa & mc;
+                let reach = gb
+                    | ga
+                    | (fc << 1)
+                    | (fc >> 1)
+                    | (mb & ((gb << 1) | (gb >> 1)))
+                    | (ma & ((ga << 1) | (ga >> 1)));
+                let n = reach & mc & !(c0 | c1);
+                if n != 0 {
+                    if let Some(p) = self.p0.get_mut(i) {
+                        *p = c0 | (n & set0);
+                    }
+                    if let Some(p) = self.p1.get_mut(i) {
+                        *p = c1 | (n & set1);
+                    }
+                    pending |= 1 << (t - first);
+                    if n & edges != 0 {
+                        pending_edges |= 1 << (t - first);
+                    }
+                }
+                (fb, mb, fc, mc, c0, c1) = (fc, mc, fa, ma, a0, a1);
+            }};
+        }
+        // Rows below `last` have a row above on the map.
+        for t in first..last {
             let j = i + rw;
-            let (a0, a1, ma) = if t + 1 < layout.height {
-                (load(self.p0, j), load(self.p1, j), free.get(t + 1, w, j))
-            } else {
-                (0, 0, 0)
-            };
-            let fa = (a0 ^ x0) & (a1 ^ x1);
-            let gb = fb & mc;
-            let ga = fa & mc;
-            let reach = gb
-                | ga
-                | (fc << 1)
-                | (fc >> 1)
-                | (mb & ((gb << 1) | (gb >> 1)))
-                | (ma & ((ga << 1) | (ga >> 1)));
-            let n = reach & mc & !(c0 | c1);
-            if n != 0 {
-                if let Some(p) = self.p0.get_mut(i) {
-                    *p = c0 | (n & set0);
-                }
-                if let Some(p) = self.p1.get_mut(i) {
-                    *p = c1 | (n & set1);
-                }
-                pending |= 1 << (t - first);
-                if n & edges != 0 {
-                    pending_edges |= 1 << (t - first);
-                }
-            }
-            (fb, mb, fc, mc, c0, c1) = (fc, mc, fa, ma, a0, a1);
+            step!(t, load(self.p0, j), load(self.p1, j), free.get(t + 1, w, j));
             i = j;
+        }
+        if last + 1 < layout.height {
+            let j = i + rw;
+            step!(
+                last,
+                load(self.p0, j),
+                load(self.p1, j),
+                free.get(last + 1, w, j)
+            );
+        } else {
+            step!(last, 0, 0, 0);
         }
         self.note_rows::<ODD>(w, first, pending);
         if pending_edges != 0 {
