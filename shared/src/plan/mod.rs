@@ -163,19 +163,20 @@
 //!
 //! *Narrow frontiers.* In a maze or a corridor the frontier holds 1–3 cells for thousands of
 //! layers, and the per-layer and per-word costs outweigh the word parallelism (on the 300 × 300
-//! maze: 8.3 M instructions on the MCU against 4.1 M cell by cell). So after 48 layers
-//! (`NARROW_CHECK_LAYER`), when the frontier averaged fewer than 8 (row, word) pairs per layer
-//! (`NARROW_PAIRS_PER_LAYER`), BFS starts again as the *scalar* queue BFS below (the 48 layers
-//! cost about 50 000 instructions). It uses the queue (a ring buffer; [`PlanError::QueueFull`]
-//! when it fills) and reports the cells taken off the queue as `expanded`. A flood from a
-//! corner of an open floor averages about 30 pairs per layer by then (one per row of its
-//! L-shaped front).
+//! maze: 8.3 M instructions on the MCU against 4.1 M cell by cell, measured before the last
+//! optimisations of the layered search). So after 48 layers (`NARROW_CHECK_LAYER`), when the
+//! frontier averaged fewer than 8 (row, word) pairs per layer (`NARROW_PAIRS_PER_LAYER`), BFS
+//! starts again as the *scalar* queue BFS below (the false start costs about 0.13 M
+//! instructions on the MCU: the plane set-up and 48 layers). It uses the queue (a ring buffer;
+//! [`PlanError::QueueFull`] when it fills) and reports the cells taken off the queue as
+//! `expanded`. A flood from a corner of an open floor averages about 30 pairs per layer by
+//! then (one per row of its L-shaped front).
 //!
 //! The scalar BFS marks a cell (with its parent step) when it is first *discovered*: in a FIFO
-//! queue the first discovery is by a fewest-steps parent, so every cell enters the ring buffer at
-//! most once. Its hot loop reads a popped cell's 3 × 3 neighbourhood as three 12-bit *windows* (three
-//! nibbles of a row, from two 32-bit scratch reads), looks each window up in a 4 KB table built
-//! at compile time ("nibble 0?" and "not occupied?" for its three cells) and combines the three
+//! queue the first discovery is by a fewest-steps parent, so every cell enters the ring buffer
+//! at most once. Its hot loop reads a popped cell's 3 × 3 neighbourhood as three 12-bit
+//! *windows* (three nibbles of a row, from two 32-bit scratch reads), looks each window up in a
+//! 4 KB table built at compile time ("nibble 0?" and "not occupied?" for its three cells) and combines the three
 //! answers into a mask of the targets with a few operations, so the side cells read for the side
 //! moves also decide the diagonals. The targets are then tested in the fixed order E, N, W, S,
 //! NE, NW, SW, SE with constant index offsets (a loop over the mask's bits had fewer
@@ -190,8 +191,8 @@
 //! ## Complexity
 //!
 //! Layered BFS: `O(layers × frontier words + reached cells / 32)`; on the 300 × 300 open floor
-//! (293 layers, 88 803 cells) 7.0 M Cortex-M4 instructions, 79 per cell; 20 % random obstacles
-//! 8.6 M (119 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
+//! (293 layers, 88 803 cells) 5.9 M Cortex-M4 instructions, 67 per cell; 20 % random obstacles
+//! 7.6 M (105 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
 //! cell (4.2 M in the 300 × 300 maze). Jump point
 //! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
