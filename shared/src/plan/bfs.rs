@@ -728,8 +728,9 @@ impl Layers<'_> {
         let (mut fb, mut mb) = (0u32, 0u32);
         let mut pending = 0u32; // rows `first + k` with new cells
         let mut pending_edges = 0u32; // ... with new cells in bit 0 or 31
-                                      // One step of the window: target row `t` (word at `i`) with the row above (`a0`, `a1`,
-                                      // `ma`; zeros above the map).
+
+        // One step of the window: target row `t` (word at `i`) with the row above (`a0`,
+        // `a1`, `ma`; zeros above the map).
         macro_rules! step {
             ($t:expr, $a0:expr, $a1:expr, $ma:expr) => {{
                 let (t, a0, a1, ma): (usize, u32, u32, u32) = ($t, $a0, $a1, $ma);
