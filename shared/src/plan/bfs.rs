@@ -6,20 +6,24 @@
 //! are visited, and in them only the words that do.
 //!
 //! Scratch layout (rows padded to `row_words = ⌈width / 32⌉` words, `nodes = height ×
-//! row_words`), bit `b` of word `y · row_words + w` of a plane is cell `(32 w + b, y)`:
+//! row_words`, `set_words = ⌈height / 32⌉` rounded up to a power of two); bit `b` of word
+//! `y · row_words + w` of a plane is cell `(32 w + b, y)`:
 //!
-//! | words                     | plane / content                                            |
-//! |---------------------------|------------------------------------------------------------|
-//! | `0 .. nodes`              | `P0`: bit 0 of the cell's layer code                       |
-//! | `nodes .. 2 nodes`        | `P1`: bit 1 of the cell's layer code                       |
-//! | `2 nodes .. 3 nodes`      | `FREE`: the cell is free (only when it fits, see below)    |
-//! | then `2 ⌈height / 32⌉`    | two row sets: rows with frontier cells, even / odd layers  |
+//! | words                              | content                                           |
+//! |------------------------------------|---------------------------------------------------|
+//! | `0 .. nodes`                       | `P0`: bit 0 of the cell's layer code              |
+//! | `nodes .. 2 nodes`                 | `P1`: bit 1 of the cell's layer code              |
+//! | `2 nodes .. 3 nodes`               | `FREE`: the cell is free (only when it fits)      |
+//! | then `2 × 2 row_words × set_words` | per layer parity: per word column `w`, the rows   |
+//! |                                    | with frontier cells in word `w`; then per column  |
+//! |                                    | the rows with frontier cells in bit 0 or 31       |
+//! | then `2 × ⌈2 row_words × set_words / 32⌉` | per parity: the non-empty row-set words    |
 //!
 //! The layer code is 0 for a cell not reached, else `layer mod 3 + 1`. When `FREE` does not fit
 //! in the scratch (narrow grids, where the padding wastes most), the free bits are read from
-//! the grid's own packed bits instead (a funnel shift per word: slower, same result). Queue
-//! entry `y` holds row `y`'s *word masks* (which words hold frontier cells) for even and odd
-//! layers.
+//! the grid's own packed bits instead (a funnel shift per word: slower, same result). The
+//! layered search uses no queue entries; the scalar BFS it falls back to in narrow maps
+//! ([`NARROW_CHECK_LAYER`]) uses the nibble layout of [`super`] and the queue.
 
 use super::{
     nibble, scratch_words_for_cells, set_nibble, PlanError, Planner, Search, BLOCKED, CODE_START,
