@@ -150,8 +150,8 @@
 //! pairs that hold frontier cells are visited: per layer parity, per word column, a bit set of
 //! the rows with frontier cells, and a summary of its non-empty words. Consecutive rows of one
 //! column (up to 30) are expanded as one *vertical run*, sliding a window of three rows up the
-//! column, so each word is loaded once per layer; a single row reads its word and the two
-//! beside it in the rows below and above. Moves across a word edge (bit 31 of word `w` to bit 0
+//! column, so each word is loaded once per layer; a single row reads its word and the same
+//! word in the rows below and above. Moves across a word edge (bit 31 of word `w` to bit 0
 //! of `w + 1` and back) are rare (one cell pair per 32 columns): new cells at a word edge also
 //! put their row into the column's *edge set*, whose rows are then expanded cell by cell across
 //! the edge with the same rule. The search stops after the layer that reaches the goal, or when
