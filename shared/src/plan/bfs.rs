@@ -633,6 +633,19 @@ impl Layers<'_> {
                     word &= !(mask_below(b + run) & !mask_below(b));
                     let y0 = k * 32 + b;
                     let mut y1 = y0 + run - 1;
+                    let mut rows = run;
+                    // Runs of the word one or two rows apart go together: the rows between
+                    // are targets of both anyway (frontier rows only count once).
+                    while word != 0 {
+                        let nb = word.trailing_zeros() as usize;
+                        let nrun = (!(word >> nb)).trailing_zeros() as usize;
+                        if k * 32 + nb > y1 + 3 || k * 32 + nb + nrun - 1 - y0 > 29 {
+                            break;
+                        }
+                        word &= !(mask_below(nb + nrun) & !mask_below(nb));
+                        y1 = k * 32 + nb + nrun - 1;
+                        rows += nrun;
+                    }
                     // A run that reaches the word's last row goes on in the next word of the
                     // column (up to 30 rows, so that `column` keeps its rows in a u32).
                     let mut next = index + 1;
@@ -646,9 +659,10 @@ impl Layers<'_> {
                         }
                         *more &= !mask_below(take);
                         y1 += take;
+                        rows += take;
                         next += 1;
                     }
-                    pairs += y1 + 1 - y0;
+                    pairs += rows;
                     if y1 == y0 {
                         self.single::<ODD>(free, y0, w);
                     } else {
