@@ -149,8 +149,8 @@
 //! column, `M[t∓1]`.) New cells get the next code (two ORs per word). Only the (row, word)
 //! pairs that hold frontier cells are visited: per layer parity, per word column, a bit set of
 //! the rows with frontier cells, and a summary of its non-empty words. Consecutive rows of one
-//! column (up to 30) are expanded as one *vertical run*, sliding a window of three rows up the
-//! column, so each word is loaded once per layer; a single row reads its word and the same
+//! column (up to 30; runs one or two rows apart join) are expanded as one *vertical run*,
+//! sliding a window of three rows up the column, so each word is loaded once per layer; a single row reads its word and the same
 //! word in the rows below and above. Moves across a word edge (bit 31 of word `w` to bit 0
 //! of `w + 1` and back) are rare (one cell pair per 32 columns): new cells at a word edge also
 //! put their row into the column's *edge set*, whose rows are then expanded cell by cell across
@@ -166,7 +166,7 @@
 //! maze: 8.3 M instructions on the MCU against 4.1 M cell by cell, measured before the last
 //! optimisations of the layered search). So after 48 layers (`NARROW_CHECK_LAYER`), when the
 //! frontier averaged fewer than 8 (row, word) pairs per layer (`NARROW_PAIRS_PER_LAYER`), BFS
-//! starts again as the *scalar* queue BFS below (the false start costs about 0.13 M
+//! starts again as the *scalar* queue BFS below (the false start costs about 0.12 M
 //! instructions on the MCU: the plane set-up and 48 layers). It uses the queue (a ring buffer;
 //! [`PlanError::QueueFull`] when it fills) and reports the cells taken off the queue as
 //! `expanded`. A flood from a corner of an open floor averages about 30 pairs per layer by
@@ -191,8 +191,8 @@
 //! ## Complexity
 //!
 //! Layered BFS: `O(layers × frontier words + reached cells / 32)`; on the 300 × 300 open floor
-//! (293 layers, 88 803 cells) 5.9 M Cortex-M4 instructions, 67 per cell; 20 % random obstacles
-//! 7.6 M (105 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
+//! (293 layers, 88 803 cells) 6.0 M Cortex-M4 instructions, 68 per cell; 20 % random obstacles
+//! 7.1 M (98 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
 //! cell (4.2 M in the 300 × 300 maze). Jump point
 //! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
