@@ -16,8 +16,8 @@
 //!
 //! ## Memory layout
 //!
-//! The scratch memory is one nibble (4 bits) per cell, 8 cells per `u32` word, row-major like
-//! the grid:
+//! The scratch memory is `SCRATCH_WORDS` `u32` words: 4 bits per cell. A* and the scalar BFS
+//! use it as one nibble per cell, 8 cells per word, row-major like the grid:
 //!
 //! | code      | meaning                                                        |
 //! |-----------|----------------------------------------------------------------|
@@ -25,24 +25,48 @@
 //! | 1 ..= 8   | reached, final; the code names the step *from* the parent      |
 //! | 9         | the start cell (no parent)                                     |
 //! | 10 ..= 14 | unused                                                         |
-//! | 15        | occupied (BFS and the cell-by-cell A* only)                    |
+//! | 15        | occupied (scalar BFS and the cell-by-cell A* only)             |
 //!
-//! BFS and the cell-by-cell A* first copy the map into it (occupied → 15, 8 cells per word from
-//! a 1 KB table), so one nibble read answers both "free?" and "reached?". The jump point search
-//! reads the map's own bits and only clears the nibbles.
+//! The scalar BFS (mazes, see below) and the cell-by-cell A* first copy the map into it
+//! (occupied → 15, 8 cells per word from a 1 KB table), so one nibble read answers both "free?"
+//! and "reached?". The jump point search reads the map's own bits and only clears the nibbles.
+//!
+//! The layered BFS uses the same words as bit planes, rows padded to `row_words = ⌈width /
+//! 32⌉` words (`nodes = height × row_words`); bit `b` of word `y · row_words + w` of a plane
+//! is cell `(32 w + b, y)`:
+//!
+//! | words                              | content                                             |
+//! |------------------------------------|-----------------------------------------------------|
+//! | `0 .. nodes`                       | `P0`: bit 0 of the cell's layer code                |
+//! | `nodes .. 2 nodes`                 | `P1`: bit 1 of the layer code (code 0: not reached, |
+//! |                                    | else `layer mod 3 + 1`)                             |
+//! | `2 nodes .. 3 nodes`               | `FREE`: 1 = free (only if it fits, see below)       |
+//! | then `2 × 2 row_words × set_words` | row sets per layer parity: per word column, the     |
+//! |                                    | rows with frontier cells in it, then the rows with  |
+//! |                                    | frontier cells at its edges (`set_words` = `⌈height |
+//! |                                    | / 32⌉` rounded up to a power of two)                |
+//! | then `2 × ⌈2 row_words × set_words / 32⌉` | per parity, which row-set words are not empty |
+//!
+//! At 300 × 300: 3 × 3 000 + 2 × 320 + 2 × 10 = 9 660 of the 11 250 words. When the `FREE`
+//! plane does not fit (narrow grids, where the padding to whole words wastes most: e.g. 40 × 40
+//! in `scratch_words_for_cells(1600)` = 200 words), the free bits are read from the grid's own
+//! packed bits instead (two reads and a funnel shift per word: slower, same result); when not
+//! even `P0`, `P1` and the row sets fit (grids narrower than about 18 cells in a scratch sized
+//! exactly for them), BFS reports [`PlanError::ScratchTooSmall`] with the cells it would need.
 //!
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
 //! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
 //! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (4 096 bytes), plus a few hundred bytes
 //! of bit sets on the stack during a jump point search (about 2.1 KB of bucket heads in the
-//! cell-by-cell A*). Nothing else is allocated; the grid itself is only read. BFS and the
-//! cell-by-cell A* each read a constant 4 KB table, `copy_map` a 1 KB one (read-only data: flash
-//! on the MCU).
+//! cell-by-cell A*). Nothing else is allocated; the grid itself is only read. The scalar BFS and
+//! the cell-by-cell A* share a constant 4 KB table (`NIBBLE_WINDOWS`), `copy_map` reads a 1 KB
+//! one (read-only data: flash on the MCU).
 //! [`Planner::queue_peak`] tells how much of the queue a search used. Measured on the 300 × 300
-//! benchmark grids and the bundled worlds: BFS needs at most 600 entries; A* by jump points
-//! (open list plus records) 3 (open floor), 9 (corridor), 18 (office), 40 (pillars); cell by
-//! cell (20 % random obstacles, a maze of 1-cell corridors) 782 and 13. So 1 024 entries cover
-//! every benchmark case.
+//! benchmark grids and the bundled worlds: the layered BFS needs no queue entries (its
+//! `queue_peak` is the most frontier (row, word) pairs of one layer: at most 307); the scalar
+//! BFS (mazes) 13; A* by jump points (open list plus records) 3 (open floor), 9 (corridor), 18
+//! (office), 40 (pillars); cell by cell (20 % random obstacles, a maze of 1-cell corridors) 782
+//! and 13. So 1 024 entries cover every benchmark case.
 //!
 //! ## A*: jump point search without a g-table
 //!
@@ -143,11 +167,54 @@
 //! dropped in a different order, so an equal-cost path may differ from the one a larger queue
 //! finds; the cost does not. (The jump point heap reclaims the same way before it gives up.)
 //!
-//! BFS marks a cell (with its parent step) when it is first *discovered*: in a FIFO queue the
-//! first discovery is by a fewest-steps parent, so every cell enters the ring buffer at most once.
-//! Its hot loop reads a popped cell's 3 × 3 neighbourhood as three 12-bit *windows* (three
-//! nibbles of a row, from two 32-bit scratch reads), looks each window up in a 4 KB table built
-//! at compile time ("nibble 0?" and "not occupied?" for its three cells) and combines the three
+//! ## BFS: layered and bit-parallel, scalar in corridors
+//!
+//! [`PlannerKind::Bfs`] expands the search *layer by layer* on whole 32-cell words (module
+//! `bfs`, memory layout above). The layer-`k` frontier is the set of cells whose layer code is
+//! `k mod 3 + 1`: older cells with the same code (layers `k - 3`, `k - 6`, …) are inside the
+//! reached region, all their legal neighbours are reached, so they add nothing and need no
+//! separate frontier plane. For a target row `t`, word by word, with `F` the frontier and `M`
+//! the free bits of a row:
+//!
+//! ```text
+//! N[t] = M[t] & !reached[t] & ( F[t-1] & M[t] | F[t+1] & M[t] | east(F[t]) | west(F[t])
+//!        | M[t-1] & spread(F[t-1] & M[t])      // diagonals from the row below
+//!        | M[t+1] & spread(F[t+1] & M[t]) )    // diagonals from the row above
+//! ```
+//!
+//! (`spread(x) = x << 1 | x >> 1`: a diagonal needs its two side cells free, the one in the
+//! target row at the source column, `F & M[t]`, and the one in the source row at the target
+//! column, `M[t∓1]`.) New cells get the next code (two ORs per word). Only the (row, word)
+//! pairs that hold frontier cells are visited: per layer parity, per word column, a bit set of
+//! the rows with frontier cells, and a summary of its non-empty words. Consecutive rows of one
+//! column (up to 30; runs one or two rows apart join) are expanded as one *vertical run*,
+//! sliding a window of three rows up the column, so each word is loaded once per layer; a single row reads its word and the same
+//! word in the rows below and above. Moves across a word edge (bit 31 of word `w` to bit 0
+//! of `w + 1` and back) are rare (one cell pair per 32 columns): new cells at a word edge also
+//! put their row into the column's *edge set*, whose rows are then expanded cell by cell across
+//! the edge with the same rule. The search stops after the layer that reaches the goal, or when
+//! a layer is empty (`Unreachable`); `expanded` is the number of cells reached (popcount of the
+//! planes). The path is walked back from the goal: from a cell of layer `d`, a legal move to a
+//! neighbour whose code is `(d - 1) mod 3 + 1` (its neighbours have layers `d - 1 ..= d + 1`,
+//! which the code tells apart), preferring the previous step's direction, then E, N, W, S, NE,
+//! NW, SW, SE; collinear cells are merged. BFS needs no queue entries.
+//!
+//! *Narrow frontiers.* In a maze or a corridor the frontier holds 1–3 cells for thousands of
+//! layers, and the per-layer and per-word costs outweigh the word parallelism (on the 300 × 300
+//! maze: 8.3 M instructions on the MCU against 4.1 M cell by cell, measured before the last
+//! optimisations of the layered search). So after 48 layers (`NARROW_CHECK_LAYER`), when the
+//! frontier averaged fewer than 8 (row, word) pairs per layer (`NARROW_PAIRS_PER_LAYER`), BFS
+//! starts again as the *scalar* queue BFS below (the false start costs about 0.12 M
+//! instructions on the MCU: the plane set-up and 48 layers). It uses the queue (a ring buffer;
+//! [`PlanError::QueueFull`] when it fills) and reports the cells taken off the queue as
+//! `expanded`. A flood from a corner of an open floor averages about 30 pairs per layer by
+//! then (one per row of its L-shaped front).
+//!
+//! The scalar BFS marks a cell (with its parent step) when it is first *discovered*: in a FIFO
+//! queue the first discovery is by a fewest-steps parent, so every cell enters the ring buffer
+//! at most once. Its hot loop reads a popped cell's 3 × 3 neighbourhood as three 12-bit
+//! *windows* (three nibbles of a row, from two 32-bit scratch reads), looks each window up in a
+//! 4 KB table built at compile time ("nibble 0?" and "not occupied?" for its three cells) and combines the three
 //! answers into a mask of the targets with a few operations, so the side cells read for the side
 //! moves also decide the diagonals. The targets are then tested in the fixed order E, N, W, S,
 //! NE, NW, SW, SE with constant index offsets (a loop over the mask's bits had fewer
@@ -161,8 +228,10 @@
 //!
 //! ## Complexity
 //!
-//! BFS: `O(n)` time for `n` free cells, about 140 x86-64 instructions per cell (165 in a maze
-//! of 1-cell corridors). Jump point
+//! Layered BFS: `O(layers × frontier words + reached cells / 32)`; on the 300 × 300 open floor
+//! (293 layers, 88 803 cells) 6.0 M Cortex-M4 instructions, 68 per cell; 20 % random obstacles
+//! 7.1 M (98 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
+//! cell (4.2 M in the 300 × 300 maze). Jump point
 //! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
 //! seed's room maps a whole plan takes 0.9–2.9 M Cortex-M4 instructions for 9–22 jump points.
@@ -207,6 +276,7 @@
 //! assert!(report.length_m > 1.7);
 //! ```
 
+mod bfs;
 mod los;
 mod prune;
 
@@ -353,8 +423,9 @@ impl core::fmt::Display for PlanError {
 pub struct PlanReport {
     /// How it ended.
     pub status: PlanStatus,
-    /// Nodes taken off the queue and expanded: cells for BFS; jump points for A* and
-    /// any-angle (plus the cells of the cell-by-cell search when it fell back to it).
+    /// Nodes expanded: for BFS the cells reached (layered search; the scalar one in narrow
+    /// maps: the cells taken off its queue); jump points for A* and any-angle (plus the cells of
+    /// the cell-by-cell search when it fell back to it).
     pub expanded: u32,
     /// BFS: steps; A* and any-angle: the A* cost in [`STRAIGHT_COST`] units. 0 unless found.
     pub cost: u32,
@@ -396,31 +467,6 @@ impl OpenEntry {
 const CODE_START: u32 = 9;
 /// Nibble code of an occupied cell (copied from the map before a search).
 const BLOCKED: u32 = 0xF;
-
-/// For each 12-bit window of three nibbles (a row of a 3 × 3 neighbourhood, BFS): bit `k`
-/// (k = 0, 1, 2) set when nibble `k` is 0 (free, not reached), bit `3 + k` when it is not
-/// [`BLOCKED`]. 4 KB, built at compile time.
-static WINDOW_MASKS: [u8; 4096] = {
-    let mut table = [0u8; 4096];
-    let mut v = 0;
-    while v < 4096 {
-        let mut m = 0u8;
-        let mut k = 0;
-        while k < 3 {
-            let code = (v >> (4 * k)) & 0xF;
-            if code == 0 {
-                m |= 1 << k;
-            }
-            if code != BLOCKED as usize {
-                m |= 8 << k;
-            }
-            k += 1;
-        }
-        table[v] = m;
-        v += 1;
-    }
-    table
-};
 
 /// Spread the 8 bits of `byte` to the low bit of 8 nibbles (bit k -> bit 4k).
 #[inline(always)]
@@ -512,7 +558,7 @@ fn octile(dx: u32, dy: u32) -> u32 {
 
 /// Nibbles `j`, `j + 1`, `j + 2` of the scratch in bits 0..12 (beyond it: [`BLOCKED`]).
 #[inline(always)]
-fn nibble_window(scratch: &[u32], j: usize) -> u32 {
+pub(super) fn nibble_window(scratch: &[u32], j: usize) -> u32 {
     let w = j >> 3;
     match scratch.get(w..w.wrapping_add(2)) {
         Some(&[lo, hi]) => {
@@ -523,10 +569,11 @@ fn nibble_window(scratch: &[u32], j: usize) -> u32 {
     }
 }
 
-/// For each 12-bit window of three nibbles (a row of a 3 × 3 neighbourhood, cell-by-cell A*):
-/// bit `k` (k = 0, 1, 2) set when nibble `k` is 0 (free, not closed), bit `3 + k` when it is
-/// not [`BLOCKED`]. 4 KB of read-only data, built at compile time.
-static ASTAR_WINDOWS: [u8; 4096] = {
+/// For each 12-bit window of three nibbles (a row of a 3 × 3 neighbourhood, for the scalar BFS
+/// and the cell-by-cell A*): bit `k` (k = 0, 1, 2) set when nibble `k` is 0 (free, not reached
+/// or closed), bit `3 + k` when it is not [`BLOCKED`]. 4 KB of read-only data, built at compile
+/// time.
+pub(super) static NIBBLE_WINDOWS: [u8; 4096] = {
     let mut table = [0u8; 4096];
     let mut v = 0;
     while v < 4096 {
@@ -548,7 +595,7 @@ static ASTAR_WINDOWS: [u8; 4096] = {
     table
 };
 
-// The 18-bit neighbourhood mask of the cell-by-cell A*: three rows of [`ASTAR_WINDOWS`]
+// The 18-bit neighbourhood mask of the cell-by-cell A*: three rows of [`NIBBLE_WINDOWS`]
 // entries (below, same, above; 6 bits each). `Z_*`: the neighbour's nibble is 0 (a possible
 // target); `O_*`: the neighbour is not blocked (a side cell a diagonal step may pass).
 const Z_SW: u32 = 0;
@@ -1335,8 +1382,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             self.last = Some(report);
             return Ok(report);
         }
-        // BFS starts from a copy of the map in the scratch (occupied cells BLOCKED, free cells
-        // 0), so it reads one nibble per neighbour for both "free?" and "reached?". Jump point
+        // BFS sets up its own bit planes (or, in narrow maps, a copy of the map). Jump point
         // search reads the map's own bits and needs cleared nibbles only (its cell-by-cell
         // fallback copies the map then).
         let used_words = scratch_words_for_cells(geometry.cell_count());
@@ -1345,7 +1391,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let cell_by_cell =
             kind != PlannerKind::Bfs && cluttered(grid.words(), &geometry, start, goal);
         match kind {
-            PlannerKind::Bfs => self.copy_map(grid),
+            PlannerKind::Bfs => {} // sets up its own bit planes
             _ if cell_by_cell => self.copy_map(grid),
             _ => self
                 .scratch
@@ -1355,6 +1401,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         let start_index = geometry.index(start);
         let goal_index = geometry.index(goal);
+        // Whether BFS ran its scalar variant (path in the nibbles) instead of the layered one.
+        let mut bfs_nibbles = false;
         let search = if start_index == goal_index {
             set_nibble(&mut self.scratch, start_index, CODE_START);
             Search {
@@ -1364,7 +1412,11 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             }
         } else {
             match kind {
-                PlannerKind::Bfs => self.bfs(grid, start_index, goal_index)?,
+                PlannerKind::Bfs => {
+                    let (search, nibbles) = self.bfs(grid, start, goal)?;
+                    bfs_nibbles = nibbles;
+                    search
+                }
                 PlannerKind::AStar | PlannerKind::AnyAngle if cell_by_cell => {
                     self.astar(grid, start_index, goal, goal_index)?
                 }
@@ -1398,6 +1450,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         let (length_cells, steps, fits) = match kind {
             PlannerKind::AnyAngle => self.rebuild_any_angle(grid, goal),
+            PlannerKind::Bfs if !bfs_nibbles => self.bfs_rebuild(grid, goal, search.cost),
             _ => self.rebuild_merged(&geometry, goal),
         };
         let report = PlanReport {
@@ -1432,8 +1485,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         self.last
     }
 
-    /// Most queue entries in use at once during the last search (BFS: ring-buffer entries;
-    /// A*: open-list entries, stale ones included). Size `QUEUE` from this on your maps.
+    /// Most queue entries in use at once during the last search (A*: open-list entries, stale
+    /// ones included; scalar BFS: ring-buffer entries). Size `QUEUE` from this on your maps. The
+    /// layered BFS uses no queue entries: there it is the most frontier (row, word) pairs of one
+    /// layer.
     pub fn queue_peak(&self) -> u32 {
         self.queue_peak
     }
@@ -1470,169 +1525,13 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
     }
 
-    /// Breadth-first search from `start` until `goal` is discovered.
-    ///
-    /// Hot loop: a popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
-    /// nibbles of a row, from one pair of scratch words), so the side cells read for the side
-    /// moves also decide the diagonal moves. [`WINDOW_MASKS`] and a few operations turn the
-    /// windows into a mask of the targets (nibble 0, and for a diagonal both side cells not
-    /// [`BLOCKED`]), tested in the fixed order E, N, W, S, NE, NW, SW, SE with constant index
-    /// offsets. Cells on the map border take a slower path that reads off-map cells as
-    /// `BLOCKED` (and divides for y). Queue entries carry the index and x, so interior cells
-    /// never divide; a new cell's nibble is 0, so marking it is a single OR.
-    fn bfs<const GW: usize>(
-        &mut self,
-        grid: &Grid<GW>,
-        start: usize,
-        goal: usize,
-    ) -> Result<Search, PlanError> {
-        let geometry = grid.geometry();
-        let width = geometry.width() as usize;
-        let height = geometry.height() as usize;
-        let used_words = scratch_words_for_cells(geometry.cell_count());
-        let scratch = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
-        let queue = &mut self.queue[..];
-        let capacity = queue.len();
-        let full = PlanError::QueueFull {
-            capacity: capacity as u32,
-        };
-        // Entries ever pushed / popped: the ring slot is the count modulo the capacity (a
-        // constant), the fill is their difference, and `popped` is the number expanded. Two
-        // counters instead of head, tail, fill and expanded keep the loop in registers.
-        let slot_of = |n: usize| n.checked_rem(capacity).unwrap_or(0);
-        let (mut pushed, mut popped) = (0usize, 0usize);
-        let mut peak = 1usize;
-
-        // Interior cells: x in 1..width-1 and index in width..cells-width.
-        let inner_x = width.saturating_sub(2);
-        let inner_span = geometry.cell_count().saturating_sub(2 * width);
-
-        set_nibble(scratch, start, CODE_START);
-        match queue.get_mut(0) {
-            Some(slot) => {
-                slot.node = start as u32;
-                slot.f = (start % width) as u32;
-            }
-            None => return Err(full),
-        }
-        pushed += 1;
-
-        // Nibbles `j`, `j + 1`, `j + 2` in bits 0..12 (beyond the scratch: BLOCKED).
-        #[inline(always)]
-        fn window(scratch: &[u32], j: usize) -> u32 {
-            let w = j >> 3;
-            match scratch.get(w..w.wrapping_add(2)) {
-                Some(&[lo, hi]) => {
-                    // Two 32-bit reads, not one 64-bit read: a wide load right after the
-                    // 32-bit store that marked a neighbour would miss store forwarding.
-                    let shift = ((j & 7) * 4) as u32;
-                    ((lo >> shift) | ((hi << 1) << (31 - shift))) & 0xFFF
-                }
-                // The window's second word is past the scratch: read nibble by nibble.
-                _ => nibble(scratch, j) | nibble(scratch, j + 1) << 4 | nibble(scratch, j + 2) << 8,
-            }
-        }
-        // Nibble of (x + sx, y + sy), BLOCKED off the map (border path).
-        let slow = |scratch: &[u32], index: usize, x: usize, sx: isize, sy: isize| -> u32 {
-            let nx = x as isize + sx;
-            let ny = (index / width) as isize + sy;
-            if nx < 0 || ny < 0 || nx >= width as isize || ny >= height as isize {
-                BLOCKED
-            } else {
-                nibble(scratch, (ny as usize) * width + nx as usize)
-            }
-        };
-
-        while popped != pushed {
-            let (index, x) = match queue.get(slot_of(popped)) {
-                Some(e) => (e.node as usize, e.f as usize),
-                None => break,
-            };
-            popped += 1;
-
-            let (above, cur, below) =
-                if x.wrapping_sub(1) < inner_x && index.wrapping_sub(width) < inner_span {
-                    (
-                        window(scratch, index + width - 1),
-                        window(scratch, index - 1),
-                        window(scratch, index - width - 1),
-                    )
-                } else {
-                    let row = |sy: isize| {
-                        slow(scratch, index, x, -1, sy)
-                            | slow(scratch, index, x, 0, sy) << 4
-                            | slow(scratch, index, x, 1, sy) << 8
-                    };
-                    (row(1), row(0), row(-1))
-                };
-            // Per row: bit `col` of the targets when that cell is 0 (free, not reached); a
-            // diagonal also needs the side cell of its row (the middle one) and the side cell
-            // of its column in the current row open.
-            let m_cur = u32::from(WINDOW_MASKS[(cur & 0xFFF) as usize]);
-            let open_cur = (m_cur >> 3) & 5;
-            let row_targets = |m: u32| m & (2 | (open_cur & ((m >> 4) & 1).wrapping_neg()));
-            let targets = row_targets(u32::from(WINDOW_MASKS[(below & 0xFFF) as usize]))
-                | (m_cur & 5) << 3
-                | row_targets(u32::from(WINDOW_MASKS[(above & 0xFFF) as usize])) << 6;
-            if targets == 0 {
-                continue;
-            }
-
-            macro_rules! visit {
-                ($bit:expr, $n:expr, $nx:expr, $code:expr) => {{
-                    if targets & (1 << $bit) != 0 {
-                        // Reached for the first time (nibble 0): mark with the step, queue it.
-                        let n = $n;
-                        if let Some(w) = scratch.get_mut(n >> 3) {
-                            *w |= $code << ((n & 7) * 4);
-                        }
-                        if n == goal {
-                            self.queue_peak = peak.max(pushed - popped) as u32;
-                            return Ok(Search {
-                                found: true,
-                                expanded: popped as u32,
-                                cost: 0,
-                            });
-                        }
-                        if pushed - popped == capacity {
-                            self.queue_peak = capacity as u32;
-                            return Err(full);
-                        }
-                        if let Some(slot) = queue.get_mut(slot_of(pushed)) {
-                            slot.node = n as u32;
-                            slot.f = $nx as u32;
-                        }
-                        pushed += 1;
-                    }
-                }};
-            }
-            // Bit `row * 3 + col` (rows below, same, above; columns x - 1, x, x + 1), in the
-            // order E, N, W, S, NE, NW, SW, SE. Target cells are on the map, so no wrapping.
-            visit!(5, index + 1, x + 1, E);
-            visit!(7, index + width, x, N);
-            visit!(3, index - 1, x - 1, W);
-            visit!(1, index - width, x, S);
-            visit!(8, index + width + 1, x + 1, NE);
-            visit!(6, index + width - 1, x - 1, NW);
-            visit!(0, index - width - 1, x - 1, SW);
-            visit!(2, index - width + 1, x + 1, SE);
-            peak = peak.max(pushed - popped);
-        }
-        self.queue_peak = peak as u32;
-        Ok(Search {
-            found: false,
-            expanded: popped as u32,
-            cost: 0,
-        })
-    }
-
     /// Cell-by-cell A* with the octile heuristic, a lazy-deletion bucket queue and the
     /// *arrival pruning* of successors (see the module docs): a closed cell pushes only the
     /// neighbours that no other cell covers with a key no larger. The scratch must hold the map
     /// ([`Planner::copy_map`]).
     ///
     /// Hot loop: the popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
-    /// nibbles of a row from two scratch words) and turned by [`ASTAR_WINDOWS`] into an 18-bit
+    /// nibbles of a row from two scratch words) and turned by [`NIBBLE_WINDOWS`] into an 18-bit
     /// mask ("nibble 0" and "not blocked" per cell); one arm per arrival step tests its
     /// candidate targets in the mask and pushes them with constant offsets. Cells on the map
     /// border read their neighbours one by one.
@@ -1742,7 +1641,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     let row = |sy: usize| at(0, sy) | at(1, sy) << 4 | at(2, sy) << 8;
                     (row(2), row(1), row(0))
                 };
-            let window = |w: u32| u32::from(ASTAR_WINDOWS[(w & 0xFFF) as usize]);
+            let window = |w: u32| u32::from(NIBBLE_WINDOWS[(w & 0xFFF) as usize]);
             let m = window(below) | window(cur) << 6 | window(above) << 12;
             // The targets by arrival step (arrival pruning, see the module docs), each tested
             // and pushed with constant offsets: straight on, plus the forced side and diagonal

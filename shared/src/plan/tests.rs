@@ -66,7 +66,7 @@ fn oracle_astar<const W: usize>(g: &Grid<W>, s: Cell, t: Cell) -> Option<u32> {
     .map(|(_, cost)| cost)
 }
 
-fn oracle_bfs(g: &SmallGrid, s: Cell, t: Cell) -> Option<u32> {
+fn oracle_bfs<const W: usize>(g: &Grid<W>, s: Cell, t: Cell) -> Option<u32> {
     let goal = (t.x as i32, t.y as i32);
     pathfinding::prelude::bfs(
         &(s.x as i32, s.y as i32),
@@ -293,11 +293,15 @@ fn scratch_too_small_and_queue_full_are_errors() {
         })
     );
     let mut short = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 4>::new());
+    // BFS keeps its frontier in the scratch (bit planes and row sets), not in the queue.
+    let r = short
+        .plan_cells(PlannerKind::Bfs, &g, Cell::new(20, 20), Cell::new(0, 39))
+        .unwrap();
     assert_eq!(
-        short.plan_cells(PlannerKind::Bfs, &g, Cell::new(20, 20), Cell::new(0, 39)),
-        Err(PlanError::QueueFull { capacity: 4 })
+        Some(r.cost),
+        oracle_bfs(&g, Cell::new(20, 20), Cell::new(0, 39))
     );
-    assert!(short.path_cells().is_empty());
+    assert_eq!(r.cost, 20);
     // On an open floor jump point search needs two entries (the start, then the jump point
     // next to the goal, plus its record): 4 are enough.
     let r = short
@@ -312,18 +316,31 @@ fn scratch_too_small_and_queue_full_are_errors() {
             pillars.set_xy(x, y, true);
         }
     }
-    for kind in [PlannerKind::Bfs, PlannerKind::AStar, PlannerKind::AnyAngle] {
+    for kind in [PlannerKind::AStar, PlannerKind::AnyAngle] {
         assert_eq!(
             short.plan_cells(kind, &pillars, Cell::new(20, 20), Cell::new(0, 38)),
             Err(PlanError::QueueFull { capacity: 4 })
         );
         assert!(short.path_cells().is_empty());
     }
-    let mut none = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 0>::new());
+    let r = short
+        .plan_cells(
+            PlannerKind::Bfs,
+            &pillars,
+            Cell::new(20, 20),
+            Cell::new(0, 38),
+        )
+        .unwrap();
     assert_eq!(
-        none.plan_cells(PlannerKind::Bfs, &g, Cell::new(20, 20), Cell::new(0, 39)),
-        Err(PlanError::QueueFull { capacity: 0 })
+        Some(r.cost),
+        oracle_bfs(&pillars, Cell::new(20, 20), Cell::new(0, 38))
     );
+    assert_collision_free(&pillars, short.path_cells());
+    let mut none = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 0>::new());
+    let r = none
+        .plan_cells(PlannerKind::Bfs, &g, Cell::new(20, 20), Cell::new(0, 39))
+        .unwrap();
+    assert_eq!(r.cost, 20);
     assert_eq!(
         none.plan_cells(PlannerKind::AStar, &g, Cell::new(20, 20), Cell::new(0, 39)),
         Err(PlanError::QueueFull { capacity: 0 })
@@ -984,6 +1001,103 @@ proptest! {
     }
 }
 
+/// A grid of `w` × `h` cells with `density` % occupied cells (xorshift from `seed`).
+fn random_grid<const W: usize>(w: u32, h: u32, density: u64, seed: u64) -> Grid<W> {
+    let mut g = Grid::<W>::new(GridGeometry::new(w, h, 0.05).unwrap()).unwrap();
+    let mut state = seed | 1;
+    for y in 0..h as i32 {
+        for x in 0..w as i32 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            if state % 100 < density {
+                g.set_xy(x, y, true);
+            }
+        }
+    }
+    g
+}
+
+#[test]
+fn bfs_open_300_reaches_every_cell_of_the_last_layer() {
+    // Layers on an open floor are Chebyshev rings: the search stops after the goal's layer 293,
+    // when every cell within 293 steps of (3, 5) is reached: 297 columns × 299 rows. Frontier
+    // runs span many 32-row words and the frontier crosses every word edge.
+    let g = crate::grid::Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
+    let mut p = Box::new(Planner300::new());
+    let r = p
+        .plan_cells(PlannerKind::Bfs, &g, Cell::new(3, 5), Cell::new(296, 291))
+        .unwrap();
+    assert_eq!(r.cost, 293);
+    assert_eq!(r.expanded, 297 * 299);
+    // 7 steps east and 286 diagonal ones, in two runs.
+    assert_eq!(p.path_cells().len(), 3);
+    assert_eq!(steps_and_cost(p.path_cells()).0, 293);
+    assert_collision_free(&g, p.path_cells());
+}
+
+#[test]
+fn bfs_matches_pathfinding_on_wide_and_tall_grids() {
+    // Rows of several words (moves across word edges), columns of several 32-row words (long
+    // vertical runs), obstacles from none to many.
+    const CELLS: usize = 130 * 110;
+    let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 4096>::new());
+    for (density, seed) in [(0u64, 1u64), (5, 2), (15, 3), (25, 4), (35, 5)] {
+        let mut g = random_grid::<{ words_for_cells(CELLS) }>(130, 110, density, seed);
+        for (s, t) in [
+            ((0, 0), (129, 109)),
+            ((127, 3), (1, 100)),
+            ((31, 64), (96, 33)),
+            ((64, 0), (63, 109)),
+        ] {
+            let (s, t) = (Cell::new(s.0, s.1), Cell::new(t.0, t.1));
+            g.set(s, false);
+            g.set(t, false);
+            let r = p.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
+            let expected = oracle_bfs(&g, s, t);
+            assert_eq!(
+                r.status == PlanStatus::Found,
+                expected.is_some(),
+                "{density} {s:?} {t:?}"
+            );
+            if let Some(steps) = expected {
+                assert_eq!(r.cost, steps, "density {density} {s:?} -> {t:?}");
+                assert_eq!(steps_and_cost(p.path_cells()).0, steps);
+                assert_eq!(p.path_cells().first(), Some(&s));
+                assert_eq!(p.path_cells().last(), Some(&t));
+                assert_collision_free(&g, p.path_cells());
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// A planner with exactly `scratch_words_for_cells` words for a 33..40-wide grid: the free
+    /// plane does not fit, BFS reads the grid's bits in place. Same steps as pathfinding.
+    #[test]
+    fn bfs_without_the_free_plane_matches_pathfinding(
+        w in 33u32..=40, h in 2u32..=40, density in 0u64..=40, seed in any::<u64>(),
+        sx in 0u32..33, sy in 0u32..40, tx in 0u32..33, ty in 0u32..40,
+    ) {
+        const CELLS: usize = 40 * 40;
+        let mut g = random_grid::<{ words_for_cells(CELLS) }>(w, h, density, seed);
+        let (s, t) = (Cell::new(sx as u16, (sy % h) as u16), Cell::new(tx as u16, (ty % h) as u16));
+        g.set(s, false);
+        g.set(t, false);
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 1600>::new());
+        prop_assume!(super::bfs::BfsLayout::new(g.geometry(), scratch_words_for_cells(CELLS)).is_ok());
+        let r = p.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
+        let expected = oracle_bfs(&g, s, t);
+        prop_assert_eq!(r.status == PlanStatus::Found, expected.is_some());
+        if let Some(steps) = expected {
+            prop_assert_eq!(r.cost, steps);
+            prop_assert_eq!(steps_and_cost(p.path_cells()).0, steps);
+        }
+    }
+}
+
 #[test]
 fn the_clutter_count_keeps_jump_points_on_room_maps_and_open_floors() {
     // The seed's room worlds and an empty floor keep jump point search (a few dozen jump points
@@ -1090,4 +1204,115 @@ fn one_cell_wide_grids_match_pathfinding_cell_by_cell_and_by_jump_points() {
             assert_eq!(found, expected, "{w}x{h}");
         }
     }
+}
+
+#[test]
+fn bfs_layout_uses_the_grid_bits_when_the_free_plane_does_not_fit() {
+    let fits = |w: u32, h: u32, words: usize| {
+        super::bfs::BfsLayout::new(&GridGeometry::new(w, h, 0.05).unwrap(), words)
+            .map(|l| l.copies_free())
+    };
+    // 300 x 300 in the 11 250 words of Planner300: three planes (9 000) and the row sets.
+    assert_eq!(fits(300, 300, SCRATCH_WORDS_300), Ok(true));
+    // 40 x 40 in 200 words: two planes of 80 words, the free bits come from the grid.
+    assert_eq!(fits(40, 40, scratch_words_for_cells(1600)), Ok(false));
+    // 8 x 8 in 8 words: not even two planes fit; the error names what is needed.
+    assert_eq!(
+        fits(8, 8, scratch_words_for_cells(64)),
+        Err(PlanError::ScratchTooSmall {
+            cells: 8 * (2 * 8 + 2 * 2 + 2), // 2 planes, 2 row sets of 2 words, 2 summaries
+            capacity: 64
+        })
+    );
+    let g = Grid::<{ words_for_cells(64) }>::new(GridGeometry::new(8, 8, 0.05).unwrap()).unwrap();
+    let mut p = Planner::<{ scratch_words_for_cells(64) }, 16>::new();
+    assert!(matches!(
+        p.plan_cells(PlannerKind::Bfs, &g, Cell::new(0, 0), Cell::new(7, 7)),
+        Err(PlanError::ScratchTooSmall { .. })
+    ));
+    // A* needs only its nibbles.
+    assert!(p
+        .plan_cells(PlannerKind::AStar, &g, Cell::new(0, 0), Cell::new(7, 7))
+        .is_ok());
+}
+
+/// A perfect maze (recursive backtracker, xorshift from `seed`) of `side` × `side` cells with
+/// 1-cell corridors: rooms on odd coordinates.
+fn maze<const W: usize>(side: i32, seed: u64) -> Grid<W> {
+    let mut g = Grid::<W>::new(GridGeometry::new(side as u32, side as u32, 0.05).unwrap()).unwrap();
+    for y in 0..side {
+        g.fill_row(y, 0, side - 1);
+    }
+    let rooms = (side - 1) / 2;
+    let mut visited = std::vec![false; (rooms * rooms) as usize];
+    let mut stack = std::vec![(0i32, 0i32)];
+    visited[0] = true;
+    g.set_xy(1, 1, false);
+    let mut state = seed | 1;
+    while let Some(&(rx, ry)) = stack.last() {
+        let options: Vec<(i32, i32)> = [(1, 0), (-1, 0), (0, 1), (0, -1)]
+            .into_iter()
+            .filter(|&(dx, dy)| {
+                let (nx, ny) = (rx + dx, ry + dy);
+                nx >= 0
+                    && ny >= 0
+                    && nx < rooms
+                    && ny < rooms
+                    && !visited[(ny * rooms + nx) as usize]
+            })
+            .collect();
+        if options.is_empty() {
+            stack.pop();
+            continue;
+        }
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        let (dx, dy) = options[(state % options.len() as u64) as usize];
+        let (nx, ny) = (rx + dx, ry + dy);
+        visited[(ny * rooms + nx) as usize] = true;
+        g.set_xy(2 * rx + 1 + dx, 2 * ry + 1 + dy, false);
+        g.set_xy(2 * nx + 1, 2 * ny + 1, false);
+        stack.push((nx, ny));
+    }
+    g
+}
+
+#[test]
+fn bfs_in_mazes_switches_to_the_scalar_search_with_the_same_steps() {
+    // 1-cell corridors: a frontier of 1-3 cells for hundreds of layers, so after
+    // NARROW_CHECK_LAYER layers BFS restarts cell by cell (it then needs queue entries).
+    const CELLS: usize = 121 * 121;
+    let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 256>::new());
+    for seed in [1u64, 2, 3] {
+        let g = maze::<{ words_for_cells(CELLS) }>(121, seed);
+        for (s, t) in [
+            ((1, 1), (119, 119)),
+            ((119, 1), (1, 119)),
+            ((61, 61), (1, 1)),
+        ] {
+            let (s, t) = (Cell::new(s.0, s.1), Cell::new(t.0, t.1));
+            let steps = oracle_bfs(&g, s, t).unwrap();
+            assert!(steps > 4 * super::bfs::NARROW_CHECK_LAYER, "{steps}");
+            let r = match p.plan_cells(PlannerKind::Bfs, &g, s, t) {
+                Ok(r) => r,
+                Err(PlanError::PathFull { .. }) => p.last_report().unwrap(),
+                Err(e) => panic!("{e}"),
+            };
+            assert_eq!(r.cost, steps, "seed {seed} {s:?} -> {t:?}");
+            if !p.path_cells().is_empty() {
+                assert_eq!(steps_and_cost(p.path_cells()).0, steps);
+                assert_collision_free(&g, p.path_cells());
+            }
+            // The scalar search's queue: a few entries in a maze.
+            assert!(p.queue_peak() < 64, "{}", p.queue_peak());
+        }
+    }
+    // With no queue at all the scalar restart reports QueueFull instead of a wrong answer.
+    let g = maze::<{ words_for_cells(CELLS) }>(121, 1);
+    let mut none = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 0>::new());
+    assert_eq!(
+        none.plan_cells(PlannerKind::Bfs, &g, Cell::new(1, 1), Cell::new(119, 119)),
+        Err(PlanError::QueueFull { capacity: 0 })
+    );
 }

@@ -1,0 +1,921 @@
+//! Bit-parallel layered breadth-first search (see the module doc of [`super`], "BFS").
+//!
+//! The search works on whole 32-cell words: the layer-`k + 1` cells of a word are found from
+//! the layer-`k` cells of the same word and of the rows below and above with a few shifts,
+//! ANDs and ORs, instead of one queue entry per cell. Only the rows that hold frontier cells
+//! are visited, and in them only the words that do.
+//!
+//! Scratch layout (rows padded to `row_words = ⌈width / 32⌉` words, `nodes = height ×
+//! row_words`, `set_words = ⌈height / 32⌉` rounded up to a power of two); bit `b` of word
+//! `y · row_words + w` of a plane is cell `(32 w + b, y)`:
+//!
+//! | words                              | content                                           |
+//! |------------------------------------|---------------------------------------------------|
+//! | `0 .. nodes`                       | `P0`: bit 0 of the cell's layer code              |
+//! | `nodes .. 2 nodes`                 | `P1`: bit 1 of the cell's layer code              |
+//! | `2 nodes .. 3 nodes`               | `FREE`: the cell is free (only when it fits)      |
+//! | then `2 × 2 row_words × set_words` | per layer parity: per word column `w`, the rows   |
+//! |                                    | with frontier cells in word `w`; then per column  |
+//! |                                    | the rows with frontier cells in bit 0 or 31       |
+//! | then `2 × ⌈2 row_words × set_words / 32⌉` | per parity: the non-empty row-set words    |
+//!
+//! The layer code is 0 for a cell not reached, else `layer mod 3 + 1`. When `FREE` does not fit
+//! in the scratch (narrow grids, where the padding wastes most), the free bits are read from
+//! the grid's own packed bits instead (a funnel shift per word: slower, same result). The
+//! layered search uses no queue entries; the scalar BFS it falls back to in narrow maps
+//! ([`NARROW_CHECK_LAYER`]) uses the nibble layout of [`super`] and the queue.
+
+use super::{
+    nibble, nibble_window, scratch_words_for_cells, set_nibble, PlanError, Planner, Search,
+    BLOCKED, CODE_START, E, N, NE, NIBBLE_WINDOWS, NW, S, SE, STEPS, SW, W,
+};
+use crate::geom::Cell;
+use crate::grid::{Grid, GridGeometry};
+
+/// Where the BFS planes and row sets live in the scratch.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct BfsLayout {
+    width: usize,
+    height: usize,
+    /// Words per padded row.
+    row_words: usize,
+    /// Words per plane: `height × row_words`.
+    nodes: usize,
+    /// Whether the `FREE` plane fits (else the free bits come from the grid).
+    copy_free: bool,
+    /// Words of one column's row set: `⌈height / 32⌉` rounded up to a power of two,
+    /// `1 << set_shift`.
+    set_words: usize,
+    set_shift: u32,
+    /// Words of one layer's summary of non-empty row-set words: `⌈2 row_words × set_words /
+    /// 32⌉`.
+    summary_words: usize,
+}
+
+impl BfsLayout {
+    /// The layout for `geometry` in `capacity_words` words of scratch, with the `FREE` plane if
+    /// it fits.
+    ///
+    /// Errors: [`PlanError::ScratchTooSmall`] when not even `P0`, `P1` and the row sets fit; its
+    /// `cells` is then the scratch they need, in cells (8 per word).
+    pub(super) fn new(geometry: &GridGeometry, capacity_words: usize) -> Result<Self, PlanError> {
+        let width = geometry.width() as usize;
+        let height = geometry.height() as usize;
+        let row_words = width.div_ceil(32);
+        let nodes = row_words * height;
+        let set_words = height.div_ceil(32).next_power_of_two();
+        let set_shift = set_words.trailing_zeros();
+        let summary_words = (2 * row_words * set_words).div_ceil(32);
+        let sets = 2 * (2 * row_words * set_words + summary_words);
+        let copy_free = nodes * 3 + sets <= capacity_words;
+        let planes = if copy_free { 3 } else { 2 };
+        if nodes * planes + sets > capacity_words {
+            return Err(PlanError::ScratchTooSmall {
+                cells: ((nodes * 2 + sets) * 8) as u32,
+                capacity: (capacity_words * 8) as u32,
+            });
+        }
+        Ok(Self {
+            width,
+            height,
+            row_words,
+            nodes,
+            copy_free,
+            set_words,
+            set_shift,
+            summary_words,
+        })
+    }
+
+    /// Whether the `FREE` plane is in the scratch (else BFS reads the grid's bits).
+    #[cfg(test)]
+    pub(super) fn copies_free(&self) -> bool {
+        self.copy_free
+    }
+
+    /// Index of word `w` of row `y` in a plane.
+    #[inline(always)]
+    fn node(&self, y: usize, w: usize) -> usize {
+        y * self.row_words + w
+    }
+
+    /// Words of one layer's row sets (frontier rows and edge rows of every word column).
+    #[inline(always)]
+    fn layer_set_words(&self) -> usize {
+        2 * self.row_words * self.set_words
+    }
+}
+
+/// Free bits (1 = free) of word `w` of row `y`, read from the grid's packed occupancy bits:
+/// columns past the row's end and anything off the grid read as occupied.
+#[inline(always)]
+fn grid_free_word(words: &[u32], width: usize, y: usize, w: usize) -> u32 {
+    let bit = y * width + 32 * w;
+    let i = bit >> 5;
+    let lo = words.get(i).copied().unwrap_or(u32::MAX) as u64;
+    let hi = words.get(i + 1).copied().unwrap_or(u32::MAX) as u64;
+    let mut occupied = ((lo | (hi << 32)) >> (bit & 31)) as u32;
+    let valid = width.saturating_sub(32 * w);
+    if valid < 32 {
+        occupied |= u32::MAX << valid;
+    }
+    !occupied
+}
+
+/// The free bits of a plane word: from the `FREE` plane, or computed from the grid.
+trait FreeBits {
+    fn get(&self, y: usize, w: usize, i: usize) -> u32;
+}
+
+/// The `FREE` plane in the scratch.
+struct FreePlane<'a>(&'a [u32]);
+
+impl FreeBits for FreePlane<'_> {
+    #[inline(always)]
+    fn get(&self, _y: usize, _w: usize, i: usize) -> u32 {
+        self.0.get(i).copied().unwrap_or(0)
+    }
+}
+
+/// The grid's own bits (narrow grids).
+struct GridBits<'a> {
+    words: &'a [u32],
+    width: usize,
+    height: usize,
+}
+
+impl FreeBits for GridBits<'_> {
+    #[inline(always)]
+    fn get(&self, y: usize, w: usize, _i: usize) -> u32 {
+        if y < self.height {
+            grid_free_word(self.words, self.width, y, w)
+        } else {
+            0
+        }
+    }
+}
+
+/// The layered search checks after this many layers whether its frontier is narrow: fewer
+/// than [`NARROW_PAIRS_PER_LAYER`] (row, word) pairs per layer on average. Then it restarts as
+/// the scalar queue BFS, which costs less per cell there (corridors and mazes: 1–3 frontier
+/// cells per layer, thousands of layers).
+pub(super) const NARROW_CHECK_LAYER: u32 = 48;
+/// See [`NARROW_CHECK_LAYER`].
+pub(super) const NARROW_PAIRS_PER_LAYER: usize = 8;
+
+impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEUE> {
+    /// BFS from `start` until the layer that reaches `goal` (`start != goal`, both free and on
+    /// the map): the layered bit-parallel search, or, when its frontier turns out narrow after
+    /// [`NARROW_CHECK_LAYER`] layers, the scalar queue BFS from the start again. Returns the
+    /// search and whether the scalar one ran (its path is in the nibbles: rebuild it with
+    /// `rebuild_merged`; else with [`Planner::bfs_rebuild`]).
+    ///
+    /// Layered: `Search::cost` is the goal's layer (the number of steps), `expanded` the number
+    /// of cells reached. Scalar: `cost` 0 (the rebuild counts the steps), `expanded` the cells
+    /// taken off the queue.
+    pub(super) fn bfs<const GW: usize>(
+        &mut self,
+        grid: &Grid<GW>,
+        start: Cell,
+        goal: Cell,
+    ) -> Result<(Search, bool), PlanError> {
+        let layout = BfsLayout::new(grid.geometry(), SCRATCH_WORDS)?;
+        let grid_words = grid.words();
+        // `BfsLayout::new` checked that the planes, row sets and summaries fit in the scratch,
+        // so these splits are within it (the checked variants cost 7 % more instructions on
+        // the MCU: they change how the expansion is compiled).
+        let (p0, rest) = self.scratch.split_at_mut(layout.nodes);
+        let (p1, rest) = rest.split_at_mut(layout.nodes);
+        let (free, sets) = if layout.copy_free {
+            rest.split_at_mut(layout.nodes)
+        } else {
+            rest.split_at_mut(0)
+        };
+        let (sets, summary) = sets.split_at_mut(2 * layout.layer_set_words());
+        let summary = summary
+            .get_mut(..2 * layout.summary_words)
+            .unwrap_or(&mut []);
+        p0.fill(0);
+        p1.fill(0);
+        if layout.copy_free {
+            for y in 0..layout.height {
+                let row = free
+                    .get_mut(y * layout.row_words..(y + 1) * layout.row_words)
+                    .unwrap_or(&mut []);
+                for (w, word) in row.iter_mut().enumerate() {
+                    *word = grid_free_word(grid_words, layout.width, y, w);
+                }
+            }
+        }
+        let mut layers = Layers {
+            p0,
+            p1,
+            sets,
+            summary,
+            layout,
+            peak: 0,
+            layer: 0,
+            x0: 0,
+            x1: 0,
+            set0: 0,
+            set1: 0,
+        };
+        let goal_node = layout.node(goal.y as usize, goal.x as usize >> 5);
+        let goal_bit = 1u32 << (goal.x & 31);
+        let found = if layout.copy_free {
+            layers.run(&FreePlane(free), start, goal_node, goal_bit)
+        } else {
+            let bits = GridBits {
+                words: grid_words,
+                width: layout.width,
+                height: layout.height,
+            };
+            layers.run(&bits, start, goal_node, goal_bit)
+        };
+        self.queue_peak = layers.peak as u32;
+        let (found, layer) = match found {
+            Outcome::Found(layer) => (true, layer),
+            Outcome::Unreachable => (false, 0),
+            Outcome::Narrow => {
+                self.copy_map(grid);
+                let geometry = grid.geometry();
+                let search = self.bfs_scalar(grid, geometry.index(start), geometry.index(goal))?;
+                return Ok((search, true));
+            }
+        };
+        let expanded = count_reached(&self.scratch, &layout);
+        Ok((
+            Search {
+                found,
+                expanded,
+                cost: layer,
+            },
+            false,
+        ))
+    }
+
+    /// Breadth-first search from `start` until `goal` is discovered, cell by cell with a FIFO
+    /// queue on the nibble copy of the map ([`Planner::copy_map`]): the narrow-frontier
+    /// variant (see [`NARROW_CHECK_LAYER`]).
+    ///
+    /// Hot loop: a popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
+    /// nibbles of a row, from one pair of scratch words), so the side cells read for the side
+    /// moves also decide the diagonal moves. [`NIBBLE_WINDOWS`] and a few operations turn the
+    /// windows into a mask of the targets (nibble 0, and for a diagonal both side cells not
+    /// [`BLOCKED`]), tested in the fixed order E, N, W, S, NE, NW, SW, SE with constant index
+    /// offsets. Cells on the map border take a slower path that reads off-map cells as
+    /// `BLOCKED` (and divides for y). Queue entries carry the index and x, so interior cells
+    /// never divide; a new cell's nibble is 0, so marking it is a single OR.
+    fn bfs_scalar<const GW: usize>(
+        &mut self,
+        grid: &Grid<GW>,
+        start: usize,
+        goal: usize,
+    ) -> Result<Search, PlanError> {
+        let geometry = grid.geometry();
+        let width = geometry.width() as usize;
+        let height = geometry.height() as usize;
+        let used_words = scratch_words_for_cells(geometry.cell_count());
+        let scratch = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
+        let queue = &mut self.queue[..];
+        let capacity = queue.len();
+        let full = PlanError::QueueFull {
+            capacity: capacity as u32,
+        };
+        // Entries ever pushed / popped: the ring slot is the count modulo the capacity (a
+        // constant), the fill is their difference, and `popped` is the number expanded. Two
+        // counters instead of head, tail, fill and expanded keep the loop in registers.
+        let slot_of = |n: usize| n.checked_rem(capacity).unwrap_or(0);
+        let (mut pushed, mut popped) = (0usize, 0usize);
+        let mut peak = 1usize;
+
+        // Interior cells: x in 1..width-1 and index in width..cells-width.
+        let inner_x = width.saturating_sub(2);
+        let inner_span = geometry.cell_count().saturating_sub(2 * width);
+
+        set_nibble(scratch, start, CODE_START);
+        match queue.get_mut(0) {
+            Some(slot) => {
+                slot.node = start as u32;
+                slot.f = (start % width) as u32;
+            }
+            None => return Err(full),
+        }
+        pushed += 1;
+
+        let window = nibble_window;
+        // Nibble of (x + sx, y + sy), BLOCKED off the map (border path).
+        let slow = |scratch: &[u32], index: usize, x: usize, sx: isize, sy: isize| -> u32 {
+            let nx = x as isize + sx;
+            let ny = (index / width) as isize + sy;
+            if nx < 0 || ny < 0 || nx >= width as isize || ny >= height as isize {
+                BLOCKED
+            } else {
+                nibble(scratch, (ny as usize) * width + nx as usize)
+            }
+        };
+
+        while popped != pushed {
+            let (index, x) = match queue.get(slot_of(popped)) {
+                Some(e) => (e.node as usize, e.f as usize),
+                None => break,
+            };
+            popped += 1;
+
+            let (above, cur, below) =
+                if x.wrapping_sub(1) < inner_x && index.wrapping_sub(width) < inner_span {
+                    (
+                        window(scratch, index + width - 1),
+                        window(scratch, index - 1),
+                        window(scratch, index - width - 1),
+                    )
+                } else {
+                    let row = |sy: isize| {
+                        slow(scratch, index, x, -1, sy)
+                            | slow(scratch, index, x, 0, sy) << 4
+                            | slow(scratch, index, x, 1, sy) << 8
+                    };
+                    (row(1), row(0), row(-1))
+                };
+            // Per row: bit `col` of the targets when that cell is 0 (free, not reached); a
+            // diagonal also needs the side cell of its row (the middle one) and the side cell
+            // of its column in the current row open.
+            let m_cur = u32::from(NIBBLE_WINDOWS[(cur & 0xFFF) as usize]);
+            let open_cur = (m_cur >> 3) & 5;
+            let row_targets = |m: u32| m & (2 | (open_cur & ((m >> 4) & 1).wrapping_neg()));
+            let targets = row_targets(u32::from(NIBBLE_WINDOWS[(below & 0xFFF) as usize]))
+                | (m_cur & 5) << 3
+                | row_targets(u32::from(NIBBLE_WINDOWS[(above & 0xFFF) as usize])) << 6;
+            if targets == 0 {
+                continue;
+            }
+
+            macro_rules! visit {
+                ($bit:expr, $n:expr, $nx:expr, $code:expr) => {{
+                    if targets & (1 << $bit) != 0 {
+                        // Reached for the first time (nibble 0): mark with the step, queue it.
+                        let n = $n;
+                        if let Some(w) = scratch.get_mut(n >> 3) {
+                            *w |= $code << ((n & 7) * 4);
+                        }
+                        if n == goal {
+                            self.queue_peak = peak.max(pushed - popped) as u32;
+                            return Ok(Search {
+                                found: true,
+                                expanded: popped as u32,
+                                cost: 0,
+                            });
+                        }
+                        if pushed - popped == capacity {
+                            self.queue_peak = capacity as u32;
+                            return Err(full);
+                        }
+                        if let Some(slot) = queue.get_mut(slot_of(pushed)) {
+                            slot.node = n as u32;
+                            slot.f = $nx as u32;
+                        }
+                        pushed += 1;
+                    }
+                }};
+            }
+            // Bit `row * 3 + col` (rows below, same, above; columns x - 1, x, x + 1), in the
+            // order E, N, W, S, NE, NW, SW, SE. Target cells are on the map, so no wrapping.
+            visit!(5, index + 1, x + 1, E);
+            visit!(7, index + width, x, N);
+            visit!(3, index - 1, x - 1, W);
+            visit!(1, index - width, x, S);
+            visit!(8, index + width + 1, x + 1, NE);
+            visit!(6, index + width - 1, x - 1, NW);
+            visit!(0, index - width - 1, x - 1, SW);
+            visit!(2, index - width + 1, x + 1, SE);
+            peak = peak.max(pushed - popped);
+        }
+        self.queue_peak = peak as u32;
+        Ok(Search {
+            found: false,
+            expanded: popped as u32,
+            cost: 0,
+        })
+    }
+
+    /// Rebuild the BFS path from the layer codes: from the goal (layer `layers`) back to the
+    /// start, each step goes to a neighbour of the previous layer that a legal move joins,
+    /// preferring the previous step's direction, then E, N, W, S, NE, NW, SW, SE. Collinear
+    /// cells are merged. Returns the length in cells, the steps and whether every vertex fitted.
+    pub(super) fn bfs_rebuild<const GW: usize>(
+        &mut self,
+        grid: &Grid<GW>,
+        goal: Cell,
+        layers: u32,
+    ) -> (f32, u32, bool) {
+        let mut fits = self.cells.push(goal).is_ok();
+        let layout = match BfsLayout::new(grid.geometry(), SCRATCH_WORDS) {
+            Ok(layout) => layout,
+            Err(_) => return (0.0, 0, fits),
+        };
+        let scratch = &self.scratch[..];
+        let code = |x: i32, y: i32| -> u32 {
+            if x < 0 || y < 0 || x as usize >= layout.width || y as usize >= layout.height {
+                return 0;
+            }
+            let (x, y) = (x as usize, y as usize);
+            let i = layout.node(y, x >> 5);
+            let p0 = scratch.get(i).copied().unwrap_or(0);
+            let p1 = scratch.get(layout.nodes + i).copied().unwrap_or(0);
+            ((p0 >> (x & 31)) & 1) | (((p1 >> (x & 31)) & 1) << 1)
+        };
+        let free = |x: i32, y: i32| grid.geometry().contains_xy(x, y) && !grid.is_occupied_xy(x, y);
+        let (mut straight, mut diagonal) = (0u32, 0u32);
+        let mut previous: Option<usize> = None;
+        let (mut x, mut y) = (goal.x as i32, goal.y as i32);
+        for layer in (1..=layers).rev() {
+            let want = (layer - 1) % 3 + 1;
+            let legal = |k: usize| -> bool {
+                let Some(&(dx, dy)) = STEPS.get(k) else {
+                    return false;
+                };
+                let (px, py) = (x - dx, y - dy);
+                code(px, py) == want && (dx == 0 || dy == 0 || (free(x, py) && free(px, y)))
+            };
+            let step = match previous {
+                Some(k) if legal(k) => Some(k),
+                _ => (0..STEPS.len()).find(|&k| legal(k)),
+            };
+            let Some(k) = step else {
+                break; // cannot happen with a consistent layering; the guard ends the walk
+            };
+            if previous.is_some_and(|p| p != k) {
+                fits &= self.cells.push(Cell::new(x as u16, y as u16)).is_ok();
+            }
+            let Some(&(dx, dy)) = STEPS.get(k) else {
+                break;
+            };
+            if dx != 0 && dy != 0 {
+                diagonal += 1;
+            } else {
+                straight += 1;
+            }
+            x -= dx;
+            y -= dy;
+            previous = Some(k);
+        }
+        let start = Cell::new(x as u16, y as u16);
+        if start != goal {
+            fits &= self.cells.push(start).is_ok();
+        }
+        self.cells.reverse();
+        let length = straight as f32 + diagonal as f32 * core::f32::consts::SQRT_2;
+        (length, straight + diagonal, fits)
+    }
+}
+
+/// How a layered search ended.
+enum Outcome {
+    /// The goal is in this layer.
+    Found(u32),
+    Unreachable,
+    /// The frontier is narrow: better searched cell by cell.
+    Narrow,
+}
+
+/// The state of one layered search: the planes, the row sets and their summaries.
+struct Layers<'a> {
+    p0: &'a mut [u32],
+    p1: &'a mut [u32],
+    /// Per layer parity (even, odd), per word column `w`, a bit set of the rows whose word `w`
+    /// holds frontier cells (word `k` of column `w` at `parity · 2 row_words · set_words +
+    /// w · set_words + k`), then per word column `w` (as column `row_words + w`) the rows
+    /// whose word `w` holds frontier cells in bit 0 or 31 (next to another word).
+    sets: &'a mut [u32],
+    /// Per layer parity, bit `w · set_words + k` set when that row-set word is not empty.
+    summary: &'a mut [u32],
+    layout: BfsLayout,
+    /// Most frontier (row, word) pairs in one layer.
+    peak: usize,
+    /// Layer being expanded.
+    layer: u32,
+    /// Frontier = `(P0 ^ x0) & (P1 ^ x1)`; new cells: `P0 |= n & set0`, `P1 |= n & set1`.
+    x0: u32,
+    x1: u32,
+    set0: u32,
+    set1: u32,
+}
+
+impl Layers<'_> {
+    /// Mark the start, then expand layer after layer until the goal's word bit is reached or a
+    /// layer is empty, or the frontier turns out narrow (see [`NARROW_CHECK_LAYER`]).
+    fn run(
+        &mut self,
+        free: &impl FreeBits,
+        start: Cell,
+        goal_node: usize,
+        goal_bit: u32,
+    ) -> Outcome {
+        let layout = self.layout;
+        self.sets.fill(0);
+        self.summary.fill(0);
+        // Layer 0 is the start, code 1; it is noted as if found by layer -1 (odd).
+        let (sx, sy) = (start.x as usize, start.y as usize);
+        if let Some(p0) = self.p0.get_mut(layout.node(sy, sx >> 5)) {
+            *p0 |= 1 << (sx & 31);
+        }
+        self.note_rows::<true>(sx >> 5, sy, 1);
+        if (1u32 << (sx & 31)) & self.edges(sx >> 5) != 0 {
+            self.note_rows::<true>(layout.row_words + (sx >> 5), sy, 1);
+        }
+        self.layer = 0;
+        let mut pairs = 0usize;
+        loop {
+            (self.x0, self.x1, self.set0, self.set1) = layer_masks(self.layer);
+            let rows = if self.layer & 1 != 0 {
+                self.expand_layer::<true>(free)
+            } else {
+                self.expand_layer::<false>(free)
+            };
+            if rows == 0 {
+                return Outcome::Unreachable;
+            }
+            self.peak = self.peak.max(rows);
+            pairs += rows;
+            self.layer += 1;
+            if self.layer == NARROW_CHECK_LAYER
+                && pairs < NARROW_PAIRS_PER_LAYER * NARROW_CHECK_LAYER as usize
+            {
+                return Outcome::Narrow;
+            }
+            let reached = self.p0.get(goal_node).copied().unwrap_or(0)
+                | self.p1.get(goal_node).copied().unwrap_or(0);
+            if reached & goal_bit != 0 {
+                return Outcome::Found(self.layer);
+            }
+        }
+    }
+
+    /// Expand every frontier (row, word) of the layer, column by column, in runs of consecutive
+    /// rows; returns how many (row, word) pairs.
+    fn expand_layer<const ODD: bool>(&mut self, free: &impl FreeBits) -> usize {
+        let layout = self.layout;
+        let set_words = layout.set_words;
+        let sets = usize::from(ODD) * layout.layer_set_words();
+        let summary = usize::from(ODD) * layout.summary_words;
+        let mut pairs = 0;
+        for si in 0..layout.summary_words {
+            let Some(s) = self.summary.get_mut(summary + si) else {
+                break;
+            };
+            let mut nonempty = core::mem::take(s);
+            while nonempty != 0 {
+                let index = si * 32 + nonempty.trailing_zeros() as usize;
+                nonempty &= nonempty - 1;
+                let (w, k) = (index >> layout.set_shift, index & (set_words - 1));
+                let Some(word) = self.sets.get_mut(sets + index) else {
+                    continue;
+                };
+                let mut word = core::mem::take(word);
+                if w >= layout.row_words {
+                    // Rows with frontier cells at the edges of word `w - row_words`.
+                    let w = w - layout.row_words;
+                    let edges = self.edges(w);
+                    while word != 0 {
+                        let y = k * 32 + word.trailing_zeros() as usize;
+                        word &= word - 1;
+                        let i = layout.node(y, w);
+                        let p0 = self.p0.get(i).copied().unwrap_or(0);
+                        let p1 = self.p1.get(i).copied().unwrap_or(0);
+                        let f = (p0 ^ self.x0) & (p1 ^ self.x1) & edges;
+                        self.edge::<ODD>(free, y, w, f);
+                    }
+                    continue;
+                }
+                while word != 0 {
+                    let b = word.trailing_zeros() as usize;
+                    // At most 30 rows per run (`column` keeps its rows in a u32).
+                    let run = ((!(word >> b)).trailing_zeros() as usize).min(30);
+                    word &= !(mask_below(b + run) & !mask_below(b));
+                    let y0 = k * 32 + b;
+                    let mut y1 = y0 + run - 1;
+                    let mut rows = run;
+                    // Runs of the word one or two rows apart go together: the rows between
+                    // are targets of both anyway (frontier rows only count once).
+                    while word != 0 {
+                        let nb = word.trailing_zeros() as usize;
+                        let nrun = (!(word >> nb)).trailing_zeros() as usize;
+                        if k * 32 + nb > y1 + 3 || k * 32 + nb + nrun - 1 - y0 > 29 {
+                            break;
+                        }
+                        word &= !(mask_below(nb + nrun) & !mask_below(nb));
+                        y1 = k * 32 + nb + nrun - 1;
+                        rows += nrun;
+                    }
+                    // A run that reaches the word's last row goes on in the next word of the
+                    // column (up to 30 rows, so that `column` keeps its rows in a u32).
+                    let mut next = index + 1;
+                    while y1 & 31 == 31 && y1 - y0 < 29 && next & (set_words - 1) != 0 {
+                        let Some(more) = self.sets.get_mut(sets + next) else {
+                            break;
+                        };
+                        let take = ((!*more).trailing_zeros() as usize).min(29 - (y1 - y0));
+                        if take == 0 {
+                            break;
+                        }
+                        *more &= !mask_below(take);
+                        y1 += take;
+                        rows += take;
+                        next += 1;
+                    }
+                    pairs += rows;
+                    if y1 == y0 {
+                        self.single::<ODD>(free, y0, w);
+                    } else {
+                        self.column::<ODD>(free, y0, y1, w);
+                    }
+                }
+            }
+        }
+        pairs
+    }
+
+    /// The edge bits of word `w`: bit 0 when a word lies before it, bit 31 when one follows.
+    #[inline(always)]
+    fn edges(&self, w: usize) -> u32 {
+        (if w > 0 { 1 } else { 0 })
+            | (if w + 1 < self.layout.row_words {
+                1 << 31
+            } else {
+                0
+            })
+    }
+
+    /// Expand the frontier of row `y` in word `w` into the rows below, level and above (moves
+    /// out of the word: [`Layers::edge`]).
+    #[inline(always)]
+    fn single<const ODD: bool>(&mut self, free: &impl FreeBits, y: usize, w: usize) {
+        let layout = self.layout;
+        let rw = layout.row_words;
+        let i = layout.node(y, w);
+        let s0 = self.p0.get(i).copied().unwrap_or(0);
+        let s1 = self.p1.get(i).copied().unwrap_or(0);
+        let ms = free.get(y, w, i);
+        let f = (s0 ^ self.x0) & (s1 ^ self.x1);
+        let same = ((f << 1) | (f >> 1)) & ms & !(s0 | s1);
+        if same != 0 {
+            self.mark::<ODD>(y, w, i, same);
+        }
+        // A diagonal step needs the straight step's target free (g) and the side cell in
+        // row y (ms at the target column).
+        if y > 0 {
+            let j = i - rw;
+            let m = free.get(y - 1, w, j);
+            let g = f & m;
+            if g != 0 {
+                let r = self.p0.get(j).copied().unwrap_or(0) | self.p1.get(j).copied().unwrap_or(0);
+                let n = (g | (ms & ((g << 1) | (g >> 1)))) & m & !r;
+                if n != 0 {
+                    self.mark::<ODD>(y - 1, w, j, n);
+                }
+            }
+        }
+        if y + 1 < layout.height {
+            let j = i + rw;
+            let m = free.get(y + 1, w, j);
+            let g = f & m;
+            if g != 0 {
+                let r = self.p0.get(j).copied().unwrap_or(0) | self.p1.get(j).copied().unwrap_or(0);
+                let n = (g | (ms & ((g << 1) | (g >> 1)))) & m & !r;
+                if n != 0 {
+                    self.mark::<ODD>(y + 1, w, j, n);
+                }
+            }
+        }
+    }
+
+    /// Expand the frontier of rows `y0 ..= y1` in word `w`: targets row by row from `y0 - 1`
+    /// to `y1 + 1`, each from the three source rows below, level and above, sliding up the
+    /// column (moves out of the word: [`Layers::edge`]).
+    #[inline(always)]
+    #[allow(unused_assignments)] // the window's last shift is not read
+    fn column<const ODD: bool>(&mut self, free: &impl FreeBits, y0: usize, y1: usize, w: usize) {
+        let layout = self.layout;
+        let rw = layout.row_words;
+        let (x0, x1, set0, set1) = (self.x0, self.x1, self.set0, self.set1);
+        let edges = self.edges(w);
+        let first = y0.saturating_sub(1);
+        let last = (y1 + 1).min(layout.height.saturating_sub(1));
+        let mut i = layout.node(first, w);
+        let load = |p: &[u32], i: usize| p.get(i).copied().unwrap_or(0);
+        let (mut c0, mut c1) = (load(self.p0, i), load(self.p1, i));
+        let mut mc = free.get(first, w, i);
+        let mut fc = (c0 ^ x0) & (c1 ^ x1);
+        // Row below the target: frontier and free bits (none below the first target).
+        let (mut fb, mut mb) = (0u32, 0u32);
+        let mut pending = 0u32; // rows `first + k` with new cells
+        let mut pending_edges = 0u32; // ... with new cells in bit 0 or 31
+
+        // One step of the window: target row `t` (word at `i`) with the row above (`a0`,
+        // `a1`, `ma`; zeros above the map).
+        macro_rules! step {
+            ($t:expr, $a0:expr, $a1:expr, $ma:expr) => {{
+                let (t, a0, a1, ma): (usize, u32, u32, u32) = ($t, $a0, $a1, $ma);
+                let fa = (a0 ^ x0) & (a1 ^ x1);
+                let gb = fb & mc;
+                let ga = fa & mc;
+                let reach = gb
+                    | ga
+                    | (fc << 1)
+                    | (fc >> 1)
+                    | (mb & ((gb << 1) | (gb >> 1)))
+                    | (ma & ((ga << 1) | (ga >> 1)));
+                let n = reach & mc & !(c0 | c1);
+                if n != 0 {
+                    if let Some(p) = self.p0.get_mut(i) {
+                        *p = c0 | (n & set0);
+                    }
+                    if let Some(p) = self.p1.get_mut(i) {
+                        *p = c1 | (n & set1);
+                    }
+                    pending |= 1 << (t - first);
+                    if n & edges != 0 {
+                        pending_edges |= 1 << (t - first);
+                    }
+                }
+                (fb, mb, fc, mc, c0, c1) = (fc, mc, fa, ma, a0, a1);
+            }};
+        }
+        // Rows below `last` have a row above on the map.
+        for t in first..last {
+            let j = i + rw;
+            step!(t, load(self.p0, j), load(self.p1, j), free.get(t + 1, w, j));
+            i = j;
+        }
+        if last + 1 < layout.height {
+            let j = i + rw;
+            step!(
+                last,
+                load(self.p0, j),
+                load(self.p1, j),
+                free.get(last + 1, w, j)
+            );
+        } else {
+            step!(last, 0, 0, 0);
+        }
+        self.note_rows::<ODD>(w, first, pending);
+        if pending_edges != 0 {
+            self.note_rows::<ODD>(rw + w, first, pending_edges);
+        }
+    }
+
+    /// The moves out of word `w` from the frontier `f` of row `y` at the word's edge cells
+    /// (bit 0 to bit 31 of the word before, bit 31 to bit 0 of the word after), into rows
+    /// `y - 1 ..= y + 1`, with the same rule: target free and not reached; for a diagonal both
+    /// side cells free. Rare (one pair of cells per 32 columns), so cell by cell.
+    #[inline(always)]
+    fn edge<const ODD: bool>(&mut self, free: &impl FreeBits, y: usize, w: usize, f: u32) {
+        if w > 0 && f & 1 != 0 {
+            self.edge_side::<ODD>(free, y, w, 0, w - 1, 31);
+        }
+        if w + 1 < self.layout.row_words && f >> 31 != 0 {
+            self.edge_side::<ODD>(free, y, w, 31, w + 1, 0);
+        }
+    }
+
+    /// One side of [`Layers::edge`]: from bit `src_bit` of word `w` in row `y` to bit
+    /// `dst_bit` of word `dst_w` in rows `y - 1 ..= y + 1`.
+    #[inline(always)]
+    fn edge_side<const ODD: bool>(
+        &mut self,
+        free: &impl FreeBits,
+        y: usize,
+        w: usize,
+        src_bit: u32,
+        dst_w: usize,
+        dst_bit: u32,
+    ) {
+        let layout = self.layout;
+        let j = layout.node(y, dst_w);
+        // The target in row y is also the side cell of both diagonals (source row, target
+        // column): nothing moves across this edge when it is occupied.
+        if free.get(y, dst_w, j) >> dst_bit & 1 == 0 {
+            return;
+        }
+        let open = |p0: &[u32], p1: &[u32], j: usize| {
+            (p0.get(j).copied().unwrap_or(0) | p1.get(j).copied().unwrap_or(0)) >> dst_bit & 1 == 0
+        };
+        if open(self.p0, self.p1, j) {
+            self.mark::<ODD>(y, dst_w, j, 1 << dst_bit);
+        }
+        // Diagonals: target free and not reached, side cell (target row, source column) free.
+        if y > 0 {
+            let (t, jt) = (y - 1, j - layout.row_words);
+            if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, jt + w - dst_w) >> src_bit & 1
+                != 0
+                && open(self.p0, self.p1, jt)
+            {
+                self.mark::<ODD>(t, dst_w, jt, 1 << dst_bit);
+            }
+        }
+        if y + 1 < layout.height {
+            let (t, jt) = (y + 1, j + layout.row_words);
+            if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, jt + w - dst_w) >> src_bit & 1
+                != 0
+                && open(self.p0, self.p1, jt)
+            {
+                self.mark::<ODD>(t, dst_w, jt, 1 << dst_bit);
+            }
+        }
+    }
+
+    /// Mark the new cells `n` of word `w` of row `t` (plane index `i`) with the next layer's
+    /// code and put the row in column `w`'s next row set (and its edge set when `n` holds an
+    /// edge cell).
+    #[inline(always)]
+    fn mark<const ODD: bool>(&mut self, t: usize, w: usize, i: usize, n: u32) {
+        if let Some(p0) = self.p0.get_mut(i) {
+            *p0 |= n & self.set0;
+        }
+        if let Some(p1) = self.p1.get_mut(i) {
+            *p1 |= n & self.set1;
+        }
+        self.note_row::<ODD>(w, t);
+        if n & self.edges(w) != 0 {
+            self.note_row::<ODD>(self.layout.row_words + w, t);
+        }
+    }
+
+    /// Put row `t` into column `w`'s row set for the next layer, and its word into the summary.
+    #[inline(always)]
+    fn note_row<const ODD: bool>(&mut self, w: usize, t: usize) {
+        let layout = &self.layout;
+        let at = (w << layout.set_shift) + (t >> 5);
+        let sets = usize::from(!ODD) * layout.layer_set_words() + at;
+        if let Some(word) = self.sets.get_mut(sets) {
+            *word |= 1 << (t & 31);
+        }
+        let summary = usize::from(!ODD) * layout.summary_words + (at >> 5);
+        if let Some(word) = self.summary.get_mut(summary) {
+            *word |= 1 << (at & 31);
+        }
+    }
+
+    /// Put rows `t + j` for the bits `j` of `rows` into column `w`'s row set
+    /// for the next layer (even when the layer being expanded is `ODD`), and its words into the
+    /// summary.
+    #[inline(always)]
+    fn note_rows<const ODD: bool>(&mut self, w: usize, t: usize, rows: u32) {
+        if rows == 0 {
+            return;
+        }
+        let layout = &self.layout;
+        let index = (w << layout.set_shift) + (t >> 5);
+        let sets = usize::from(!ODD) * layout.layer_set_words();
+        let summary = usize::from(!ODD) * layout.summary_words;
+        let shift = (t & 31) as u32;
+        let wide = u64::from(rows) << shift;
+        for (j, part) in [wide as u32, (wide >> 32) as u32].into_iter().enumerate() {
+            if part == 0 {
+                continue;
+            }
+            let at = index + j;
+            if let Some(word) = self.sets.get_mut(sets + at) {
+                *word |= part;
+            }
+            if let Some(word) = self.summary.get_mut(summary + (at >> 5)) {
+                *word |= 1 << (at & 31);
+            }
+        }
+    }
+}
+
+/// The 32-bit mask of bits `0 .. n` (all bits for `n >= 32`).
+#[inline(always)]
+fn mask_below(n: usize) -> u32 {
+    if n >= 32 {
+        u32::MAX
+    } else {
+        (1u32 << n) - 1
+    }
+}
+
+/// `(x0, x1, set0, set1)` for expanding `layer`: its frontier is `(P0 ^ x0) & (P1 ^ x1)`
+/// (code `layer mod 3 + 1`), new cells get `P0 |= n & set0`, `P1 |= n & set1` (the next code).
+#[inline(always)]
+fn layer_masks(layer: u32) -> (u32, u32, u32, u32) {
+    let code = layer % 3 + 1;
+    let next = (layer + 1) % 3 + 1;
+    let all = |bit: bool| if bit { u32::MAX } else { 0 };
+    (
+        all(code & 1 == 0),
+        all(code & 2 == 0),
+        all(next & 1 != 0),
+        all(next & 2 != 0),
+    )
+}
+
+/// Cells reached (layer code not 0) in the planes.
+fn count_reached(scratch: &[u32], layout: &BfsLayout) -> u32 {
+    let mut n = 0u32;
+    let (p0, rest) = scratch.split_at(layout.nodes.min(scratch.len()));
+    for (a, b) in p0.iter().zip(rest.iter().take(layout.nodes)) {
+        n += (a | b).count_ones();
+    }
+    n
+}
