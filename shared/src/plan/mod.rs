@@ -567,6 +567,34 @@ const O_NW: u32 = 15;
 const O_N: u32 = 16;
 const O_NE: u32 = 17;
 
+/// Corridor test of the cell-by-cell A*, indexed by the nine "not blocked" bits of a 3 × 3
+/// neighbourhood (bits 0..3: the row below, W to E; 3..6: the cell's row; 6..9: the row above;
+/// see [`corridor_index`]): the side neighbours (bit 0 E, 1 N, 2 W, 3 S) when the centre has
+/// one or two *legal* neighbours under the no-corner-cutting rule (a dead end or a corridor
+/// cell), else 0. A legal diagonal needs both its side cells free, so a cell with at most two
+/// legal neighbours has side neighbours only. 512 bytes of read-only data.
+static CORRIDOR_SIDES: [u8; 512] = {
+    let mut table = [0u8; 512];
+    let mut v = 0;
+    while v < 512 {
+        // Sides: E (row 1, col 2), N (row 2, col 1), W (row 1, col 0), S (row 0, col 1).
+        let (e, n, w, s) = ((v >> 5) & 1, (v >> 7) & 1, (v >> 3) & 1, (v >> 1) & 1);
+        let (ne, nw, sw, se) = ((v >> 8) & 1, (v >> 6) & 1, v & 1, (v >> 2) & 1);
+        let legal = e + n + w + s + (ne & n & e) + (nw & n & w) + (sw & s & w) + (se & s & e);
+        if legal == 1 || legal == 2 {
+            table[v] = (e | n << 1 | w << 2 | s << 3) as u8;
+        }
+        v += 1;
+    }
+    table
+};
+
+/// The index into [`CORRIDOR_SIDES`] of an 18-bit neighbourhood mask (the `O_*` bits).
+#[inline(always)]
+fn corridor_index(m: u32) -> usize {
+    (((m >> 3) & 7) | ((m >> 6) & 0x38) | ((m >> 9) & 0x1C0)) as usize
+}
+
 /// End of a bucket list.
 const NIL: u32 = u32::MAX;
 /// Buckets of the open list (`(f >> 5) % 512`): they span 16 384 key values, more than the
@@ -609,7 +637,16 @@ struct BucketQueue<'a> {
     pool: &'a mut [OpenEntry],
     heads: [u32; BUCKETS],
     map: [u32; BUCKETS / 32],
+    /// Head of the list of *far* entries: keys more than [`NEAR_KEYS`] above the last popped
+    /// key when they were pushed (the ends of corridor walks), unsorted.
+    far: u32,
+    /// The smallest key in the far list (`u32::MAX` when it is empty).
+    far_min: u32,
 }
+
+/// Keys at most this far above the last popped key go to the buckets (a child of the popped
+/// cell is at most `2 · DIAGONAL_COST` above it); farther ones to the far list.
+const NEAR_KEYS: u32 = 2 * DIAGONAL_COST;
 
 impl<'a> BucketQueue<'a> {
     fn new(pool: &'a mut [OpenEntry], first_key: u32) -> (Self, QueueState) {
@@ -618,6 +655,8 @@ impl<'a> BucketQueue<'a> {
                 pool,
                 heads: [NIL; BUCKETS],
                 map: [0; BUCKETS / 32],
+                far: NIL,
+                far_min: u32::MAX,
             },
             QueueState {
                 summary: 0,
@@ -652,6 +691,61 @@ impl<'a> BucketQueue<'a> {
         true
     }
 
+    /// Insert a key that may lie beyond the buckets' window (more than [`NEAR_KEYS`] above the
+    /// last popped key): such an entry waits in the far list until the queue gets near it.
+    /// `false` when the pool is full. `key` must not be below `s.last`.
+    #[inline(never)]
+    fn push_far(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
+        if key.wrapping_sub(s.last) <= NEAR_KEYS {
+            return self.push(s, key, node);
+        }
+        let slot = if s.free != NIL { s.free } else { s.bump };
+        let Some(entry) = self.pool.get_mut(slot as usize) else {
+            return false;
+        };
+        if s.free != NIL {
+            s.free = entry.next;
+        } else {
+            s.bump += 1;
+        }
+        *entry = OpenEntry {
+            f: key,
+            node,
+            next: self.far,
+        };
+        self.far = slot;
+        self.far_min = self.far_min.min(key);
+        true
+    }
+
+    /// Move the far entries within [`NEAR_KEYS`] of the last popped key into the buckets; when
+    /// the buckets are empty, first move the last popped key up to the smallest far key.
+    #[cold]
+    #[inline(never)]
+    fn migrate(&mut self, s: &mut QueueState) {
+        if s.summary == 0 && self.far != NIL {
+            s.last = self.far_min;
+        }
+        let (mut kept, mut kept_min, mut slot) = (NIL, u32::MAX, self.far);
+        while let Some(e) = self.pool.get_mut(slot as usize) {
+            let (key, next) = (e.f, e.next);
+            if key.wrapping_sub(s.last) <= NEAR_KEYS {
+                let b = (key >> 5) as usize % BUCKETS;
+                e.next = self.heads[b];
+                self.heads[b] = slot;
+                self.map[b / 32] |= 1 << (b % 32);
+                s.summary |= 1 << (b / 32);
+            } else {
+                e.next = kept;
+                kept = slot;
+                kept_min = kept_min.min(key);
+            }
+            slot = next;
+        }
+        self.far = kept;
+        self.far_min = kept_min;
+    }
+
     /// The first non-empty bucket at or after `from`, circularly: one word of the map and the
     /// summary of the words.
     #[inline(never)]
@@ -677,11 +771,24 @@ impl<'a> BucketQueue<'a> {
     /// Remove an entry of the smallest key: `(key, node)`.
     #[inline(always)]
     fn pop(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
+        if self.far_min.wrapping_sub(s.last) <= NEAR_KEYS {
+            self.migrate(s);
+        }
         let mut b = (s.last >> 5) as usize % BUCKETS;
         let mut head = self.heads[b];
         if head == NIL {
-            b = self.next_bucket(s.summary, b)? % BUCKETS;
-            head = self.heads[b];
+            if s.summary == 0 {
+                // Only far entries left (or none): jump to the smallest.
+                if self.far == NIL {
+                    return None;
+                }
+                self.migrate(s);
+                b = (s.last >> 5) as usize % BUCKETS;
+                head = self.heads[b];
+            } else {
+                b = self.next_bucket(s.summary, b)? % BUCKETS;
+                head = self.heads[b];
+            }
         }
         let first = self.pool.get_mut(head as usize)?;
         if first.next == NIL || first.f == s.last {
@@ -756,7 +863,7 @@ impl<'a> BucketQueue<'a> {
                 (n >> 16) as usize * width + ((n >> 4) & 0xFFF) as usize,
             ) != 0
         });
-        (freed >= (self.pool.len() / 16).max(1) && self.push(&mut s, key, node)).then_some(s)
+        (freed >= (self.pool.len() / 16).max(1) && self.push_far(&mut s, key, node)).then_some(s)
     }
 
     /// Drop every entry for which `stale(node)` holds from every bucket. Returns the new state
@@ -1675,6 +1782,14 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         // (`next_node`, NIL when none).
         // (`next_node`, NIL when none; its key is the current `f`, its `g` is `next_g`).
         let (mut f, mut next_g, mut next_node) = (0u32, 0u32, NIL);
+        // Index and entry steps of the side codes E, N, W, S (corridor walks).
+        let walk_index_step = [1, width, usize::MAX, width.wrapping_neg()];
+        const WALK_NODE_STEP: [u32; 4] = [
+            1 << 4,
+            1 << 16,
+            (1u32 << 4).wrapping_neg(),
+            (1u32 << 16).wrapping_neg(),
+        ];
         loop {
             // Close the cell: its nibble gets the arrival step (it was 0).
             let (node, x, y, index, g) = if next_node != NIL {
@@ -1748,6 +1863,24 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             // neighbours after a side step; the two sides and the diagonal after a diagonal
             // step; all eight from the start.
             let base = node & !0xF;
+            // Push `child` (`y << 16 | x << 4 | code`) with `key` and `g`, or keep it for the
+            // immediate expansion when its key is the one just popped.
+            macro_rules! push {
+                ($push:ident, $key:expr, $child_g:expr, $child:expr) => {{
+                    let (key, child_g, child) = ($key, $child_g, $child);
+                    if key == f && next_node == NIL {
+                        (next_g, next_node) = (child_g, child);
+                    } else if !open.$push(&mut state, key, child) {
+                        match open.reclaim_and_push(state, scratch, width, key, child) {
+                            Some(after) => state = after,
+                            None => {
+                                self.queue_peak = state.bump;
+                                return Err(full);
+                            }
+                        }
+                    }
+                }};
+            }
             macro_rules! visit {
                 ($z:expr, $code:expr) => {{
                     if m & (1 << $z) != 0 {
@@ -1763,19 +1896,54 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                             (x as u32).wrapping_add(dx as u32),
                             (y as u32).wrapping_add(dy as u32),
                         ));
-                        if key == f && next_node == NIL {
-                            (next_g, next_node) = (child_g, child);
-                        } else if !open.push(&mut state, key, child) {
-                            match open.reclaim_and_push(state, scratch, width, key, child) {
-                                Some(after) => state = after,
-                                None => {
-                                    self.queue_peak = state.bump;
-                                    return Err(full);
-                                }
-                            }
-                        }
+                        push!(push, key, child_g, child);
                     }
                 }};
+            }
+            // Corridor contraction (see "Corridors" in the module docs): a cell with one or
+            // two legal neighbours, reached by a side step, has at most one continuation. Walk
+            // along the chain of such cells, closing each with its step, up to the first cell
+            // that is not one (pushed), the goal or a cell on the map border (pushed), a dead
+            // end (closed, nothing pushed) or a closed cell (nothing pushed).
+            let sides = u32::from(CORRIDOR_SIDES[corridor_index(m)]);
+            if sides != 0 && code <= S {
+                // Side bit `code - 1`; the side behind a step of code `c` is bit `(c + 1) & 3`.
+                let mut rest = sides & !(1 << ((code + 1) & 3));
+                let (mut wi, mut wnode, mut wg) = (index, node, g);
+                while rest != 0 {
+                    let c = rest.trailing_zeros() + 1;
+                    let k = (c - 1) as usize & 3;
+                    wi = wi.wrapping_add(walk_index_step[k]);
+                    wnode = (wnode & !0xF).wrapping_add(WALK_NODE_STEP[k]) | c;
+                    wg = wg.wrapping_add(STRAIGHT_COST);
+                    let (wx, wy) = ((wnode >> 4) & 0xFFF, wnode >> 16);
+                    if wi == goal
+                        || (wx as usize).wrapping_sub(1) >= inner_x
+                        || wi.wrapping_sub(width) >= inner_span
+                    {
+                        push!(push_far, wg.wrapping_add(h(wx, wy)), wg, wnode);
+                        break;
+                    }
+                    let window = |j: usize| {
+                        u32::from(ASTAR_WINDOWS[nibble_window(scratch, j) as usize & 0xFFF])
+                    };
+                    let wc = window(wi - 1);
+                    if wc & 2 == 0 {
+                        break; // closed already
+                    }
+                    let wm = window(wi - width - 1) | wc << 6 | window(wi + width - 1) << 12;
+                    let t = u32::from(CORRIDOR_SIDES[corridor_index(wm)]);
+                    if t == 0 {
+                        push!(push_far, wg.wrapping_add(h(wx, wy)), wg, wnode);
+                        break;
+                    }
+                    if let Some(word) = scratch.get_mut(wi >> 3) {
+                        *word |= c << ((wi & 7) * 4);
+                    }
+                    expanded += 1;
+                    rest = t & !(1 << ((c + 1) & 3));
+                }
+                continue;
             }
             macro_rules! diagonal {
                 ($z:expr, $code:expr, $o1:expr, $o2:expr) => {{

@@ -1077,3 +1077,26 @@ fn one_cell_wide_grids_match_pathfinding_cell_by_cell_and_by_jump_points() {
         }
     }
 }
+
+/// A corridor walked away from the goal ends far above the last popped key (here 18 208 above
+/// it, beyond the buckets' 16 384): its end waits in the far list instead of wrapping around
+/// to an early bucket (which popped it too soon and gave a path 14 845 units too long).
+#[test]
+fn corridor_walk_ending_far_above_the_last_key_keeps_the_optimal_cost() {
+    let mut g = grid_from_rows(&[
+        "....", "#.##", "...#", ".#..", "..#.", "....", "..##", "....", "....", "#...", "...#",
+        "..#.", "..#.", "....", "#...", ".#..", ".#..", "..##", "....", "...#",
+    ]);
+    let (s, t) = (Cell::new(1, 3), Cell::new(3, 18));
+    g.set(s, false);
+    g.set(t, false);
+    let mut p = Box::new(SmallPlanner::new());
+    p.copy_map(&g);
+    let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
+    let search = p.astar(&g, si, t, ti).unwrap();
+    assert_eq!(Some(search.cost), oracle_astar(&g, s, t));
+    assert_eq!(search.cost, 125_317);
+    p.rebuild_merged(g.geometry(), t);
+    assert_eq!(steps_and_cost(p.path_cells()).1, search.cost);
+    assert_collision_free(&g, p.path_cells());
+}
