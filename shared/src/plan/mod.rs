@@ -1905,8 +1905,12 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             // along the chain of such cells, closing each with its step, up to the first cell
             // that is not one (pushed), the goal or a cell on the map border (pushed), a dead
             // end (closed, nothing pushed) or a closed cell (nothing pushed).
-            let sides = u32::from(CORRIDOR_SIDES[corridor_index(m)]);
-            if sides != 0 && code <= S {
+            let sides = if code <= S {
+                u32::from(CORRIDOR_SIDES[corridor_index(m)])
+            } else {
+                0
+            };
+            if sides != 0 {
                 // Side bit `code - 1`; the side behind a step of code `c` is bit `(c + 1) & 3`.
                 let mut rest = sides & !(1 << ((code + 1) & 3));
                 let (mut wi, mut wnode, mut wg) = (index, node, g);
