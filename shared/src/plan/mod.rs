@@ -2300,6 +2300,9 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let mut anchor = goal;
         let mut cur = goal;
         let mut steps = 0u32;
+        // The code of the run just taken from the anchor (the anchor lies on its line behind
+        // `cur`), else 0.
+        let mut prev_code = 0u32;
         // Each pass either moves `cur` towards the start or moves the anchor forward; the
         // bound only guards against a corrupt parent chain.
         for _ in 0..2 * geometry.cell_count() {
@@ -2316,7 +2319,35 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 run += 1;
             }
             // From the anchor itself the run is an A* move sequence: visible without a test.
-            if cur == anchor || line_of_sight(grid, anchor, end) {
+            if cur == anchor {
+                cur = end;
+                steps += run;
+                prev_code = code;
+                continue;
+            }
+            // A side-step turn after a run from the anchor, whose inner corner (the cell
+            // beside the previous run and the next one) is blocked: no cell of the next run is
+            // visible past it (the Bresenham line to the first one crosses that corner or
+            // steps diagonally past it), so `cur` is the vertex, with no line-of-sight test.
+            if prev_code != 0 && prev_code <= S && code <= S && (prev_code ^ code) & 1 == 1 {
+                let (Some(&(px, py)), Some(&(dx, dy))) = (
+                    STEPS.get(prev_code as usize - 1),
+                    STEPS.get(code as usize - 1),
+                ) else {
+                    break;
+                };
+                if grid.is_occupied_xy(cur.x as i32 + px - dx, cur.y as i32 + py - dy) {
+                    fits &= self.cells.push(cur).is_ok();
+                    length += cells_distance(anchor, cur);
+                    anchor = cur;
+                    cur = end;
+                    steps += run;
+                    prev_code = code;
+                    continue;
+                }
+            }
+            prev_code = 0;
+            if line_of_sight(grid, anchor, end) {
                 cur = end;
                 steps += run;
                 continue;
