@@ -1175,7 +1175,7 @@ fn carved_grid(w: u32, h: u32, seed: u64, segments: u32) -> SmallGrid {
         let x = (next_random(&mut state) % w as u64) as i32;
         let y = (next_random(&mut state) % h as u64) as i32;
         let len = (next_random(&mut state) % (w.max(h) as u64)) as i32;
-        let horizontal = next_random(&mut state) % 2 == 0;
+        let horizontal = next_random(&mut state) & 1 == 0;
         for k in 0..=len {
             if horizontal {
                 g.set_xy(x + k, y, false);
