@@ -1284,4 +1284,3 @@ fn corridor_table_counts_legal_neighbours() {
     // Free diagonals without both side cells are not legal neighbours.
     assert_eq!(CORRIDOR_SIDES[row(0b101, 0b111, 0b101)], 0b0101);
 }
-
