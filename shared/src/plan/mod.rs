@@ -940,6 +940,69 @@ impl<'a> BucketQueue<'a> {
     }
 }
 
+/// Walk a chain of corridor cells (see "Corridors" in the module docs) from the closed cell
+/// `index` (entry `node`, interior) along its open side `rest` (bit `code - 1`, at most one
+/// bit; 0 for a dead end): each corridor cell is closed with its step code. Returns the entry
+/// of the cell to push at the end (`NIL` when nothing is to be pushed: a dead end or a closed
+/// cell), the number of steps to it and the number of cells closed. Out of line so that the
+/// search loop's registers are not spent on it.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn walk_corridor(
+    scratch: &mut [u32],
+    width: usize,
+    inner_x: usize,
+    inner_span: usize,
+    goal: usize,
+    mut wi: usize,
+    mut wnode: u32,
+    mut rest: u32,
+) -> (u32, u32, u32) {
+    // Index and entry steps of the side codes E, N, W, S.
+    let index_step = [1, width, usize::MAX, width.wrapping_neg()];
+    const WALK_NODE_STEP: [u32; 4] = [
+        1 << 4,
+        1 << 16,
+        (1u32 << 4).wrapping_neg(),
+        (1u32 << 16).wrapping_neg(),
+    ];
+    let (mut steps, mut closed) = (0u32, 0u32);
+    while rest != 0 {
+        let c = rest.trailing_zeros() + 1;
+        let k = (c - 1) as usize & 3;
+        wi = wi.wrapping_add(index_step[k]);
+        wnode = (wnode & !0xF).wrapping_add(WALK_NODE_STEP[k]) | c;
+        steps += 1;
+        let wx = (wnode >> 4) & 0xFFF;
+        if wi == goal
+            || (wx as usize).wrapping_sub(1) >= inner_x
+            || wi.wrapping_sub(width) >= inner_span
+        {
+            // Pushed, not walked (a closed cell must not be pushed: it could be expanded at
+            // once by the immediate expansion).
+            let end = if nibble(scratch, wi) == 0 { wnode } else { NIL };
+            return (end, steps, closed);
+        }
+        let window =
+            |j: usize| u32::from(ASTAR_WINDOWS[nibble_window(scratch, j) as usize & 0xFFF]);
+        let wc = window(wi - 1);
+        if wc & 2 == 0 {
+            return (NIL, steps, closed); // closed already
+        }
+        let wm = window(wi - width - 1) | wc << 6 | window(wi + width - 1) << 12;
+        let t = u32::from(CORRIDOR_SIDES[corridor_index(wm)]);
+        if t == 0 {
+            return (wnode, steps, closed); // not a corridor cell
+        }
+        if let Some(word) = scratch.get_mut(wi >> 3) {
+            *word |= c << ((wi & 7) * 4);
+        }
+        closed += 1;
+        rest = t & !(1 << ((c + 1) & 3));
+    }
+    (NIL, steps, closed) // a dead end
+}
+
 /// Euclidean length of the segment between two cells, in cells.
 #[inline]
 fn cells_distance(a: Cell, b: Cell) -> f32 {
@@ -1824,17 +1887,9 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         // (`next_node`, NIL when none).
         // (`next_node`, NIL when none; its key is the current `f`, its `g` is `next_g`).
         let (mut f, mut next_g, mut next_node) = (0u32, 0u32, NIL);
-        // Index and entry steps of the side codes E, N, W, S (corridor walks).
-        let walk_index_step = [1, width, usize::MAX, width.wrapping_neg()];
         // Corridor walks start after arrival codes up to this one (S; 0 once they have been
         // given up on this map), with this balance of cells closed minus walks started.
         let (mut walk_codes, mut walk_credit) = (S, 0i32);
-        const WALK_NODE_STEP: [u32; 4] = [
-            1 << 4,
-            1 << 16,
-            (1u32 << 4).wrapping_neg(),
-            (1u32 << 16).wrapping_neg(),
-        ];
         loop {
             // Close the cell: its nibble gets the arrival step (it was 0).
             let (node, x, y, index, g) = if next_node != NIL {
@@ -1957,47 +2012,17 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             };
             if sides != 0 {
                 // Side bit `code - 1`; the side behind a step of code `c` is bit `(c + 1) & 3`.
-                let mut rest = sides & !(1 << ((code + 1) & 3));
-                let (mut wi, mut wnode, mut wg) = (index, node, g);
-                let closed_before = expanded;
-                while rest != 0 {
-                    let c = rest.trailing_zeros() + 1;
-                    let k = (c - 1) as usize & 3;
-                    wi = wi.wrapping_add(walk_index_step[k]);
-                    wnode = (wnode & !0xF).wrapping_add(WALK_NODE_STEP[k]) | c;
-                    wg = wg.wrapping_add(STRAIGHT_COST);
-                    let (wx, wy) = ((wnode >> 4) & 0xFFF, wnode >> 16);
-                    if wi == goal
-                        || (wx as usize).wrapping_sub(1) >= inner_x
-                        || wi.wrapping_sub(width) >= inner_span
-                    {
-                        // (A closed cell must not be pushed: it could be expanded at once.)
-                        if nibble(scratch, wi) == 0 {
-                            push!(push_far, wg.wrapping_add(h(wx, wy)), wg, wnode);
-                        }
-                        break;
-                    }
-                    let window = |j: usize| {
-                        u32::from(ASTAR_WINDOWS[nibble_window(scratch, j) as usize & 0xFFF])
-                    };
-                    let wc = window(wi - 1);
-                    if wc & 2 == 0 {
-                        break; // closed already
-                    }
-                    let wm = window(wi - width - 1) | wc << 6 | window(wi + width - 1) << 12;
-                    let t = u32::from(CORRIDOR_SIDES[corridor_index(wm)]);
-                    if t == 0 {
-                        push!(push_far, wg.wrapping_add(h(wx, wy)), wg, wnode);
-                        break;
-                    }
-                    if let Some(word) = scratch.get_mut(wi >> 3) {
-                        *word |= c << ((wi & 7) * 4);
-                    }
-                    expanded += 1;
-                    rest = t & !(1 << ((c + 1) & 3));
+                let rest = sides & !(1 << ((code + 1) & 3));
+                let (end, steps, closed) =
+                    walk_corridor(scratch, width, inner_x, inner_span, goal, index, node, rest);
+                expanded += closed;
+                if end != NIL {
+                    let wg = g.wrapping_add(steps.wrapping_mul(STRAIGHT_COST));
+                    let key = wg.wrapping_add(h((end >> 4) & 0xFFF, end >> 16));
+                    push!(push_far, key, wg, end);
                 }
                 // Walks that close (nearly) nothing cost more than the arms' pushes.
-                walk_credit += expanded.wrapping_sub(closed_before) as i32 - 1;
+                walk_credit += closed as i32 - 1;
                 if walk_credit < WALK_GIVE_UP_CREDIT {
                     walk_codes = 0;
                 }
