@@ -908,8 +908,9 @@ impl<'a> BucketQueue<'a> {
         (freed >= (self.pool.len() / 16).max(1) && self.push_far(&mut s, key, node)).then_some(s)
     }
 
-    /// Drop every entry for which `stale(node)` holds from every bucket. Returns the new state
-    /// and how many slots were freed. O(entries); used only when the pool is full.
+    /// Drop every entry for which `stale(node)` holds from every bucket and the far list.
+    /// Returns the new state and how many slots were freed. O(entries); used only when the
+    /// pool is full.
     #[cold]
     #[inline(never)]
     fn collect(&mut self, mut s: QueueState, stale: impl Fn(u32) -> bool) -> (QueueState, usize) {
@@ -936,6 +937,23 @@ impl<'a> BucketQueue<'a> {
                 }
             }
         }
+        // The far list too.
+        let (mut kept, mut kept_min, mut slot) = (NIL, u32::MAX, self.far);
+        while let Some(e) = self.pool.get_mut(slot as usize) {
+            let next = e.next;
+            if stale(e.node) {
+                e.next = s.free;
+                s.free = slot;
+                freed += 1;
+            } else {
+                e.next = kept;
+                kept = slot;
+                kept_min = kept_min.min(e.f);
+            }
+            slot = next;
+        }
+        self.far = kept;
+        self.far_min = kept_min;
         (s, freed)
     }
 }

@@ -1236,6 +1236,18 @@ fn check_corridor_case(g: &SmallGrid, s: Cell, t: Cell) -> Result<(), TestCaseEr
         prop_assert_eq!(cells.last(), Some(&t));
         prop_assert!(exact_length(cells) <= exact_length(&astar_cells) + 1e-9);
     }
+    // A small queue reclaims stale entries (in the buckets and in the far list of walk ends):
+    // the same cost, or `QueueFull`.
+    let mut small = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 12>::new());
+    match small.plan_cells(PlannerKind::AStar, g, s, t) {
+        Ok(r) => {
+            prop_assert_eq!((r.status == PlanStatus::Found).then_some(r.cost), expected);
+            if expected.is_some() {
+                prop_assert_eq!(steps_and_cost(small.path_cells()).1, r.cost);
+            }
+        }
+        Err(e) => prop_assert_eq!(e, PlanError::QueueFull { capacity: 12 }),
+    }
     Ok(())
 }
 
