@@ -56,7 +56,7 @@
 //!
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
 //! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
-//! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (4 096 bytes), plus a few hundred bytes
+//! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (12 288 bytes), plus a few hundred bytes
 //! of bit sets on the stack during a jump point search (about 2.1 KB of bucket heads in the
 //! cell-by-cell A*). Nothing else is allocated; the grid itself is only read. The scalar BFS and
 //! the cell-by-cell A* share a constant 4 KB table (`NIBBLE_WINDOWS`), the corridor walks read a
