@@ -1401,8 +1401,9 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         let start_index = geometry.index(start);
         let goal_index = geometry.index(goal);
-        // Whether BFS ran its scalar variant (path in the nibbles) instead of the layered one.
-        let mut bfs_nibbles = false;
+        // Where the layered BFS met (else, when found, the scalar BFS left its path in the
+        // nibbles).
+        let mut bfs_meet = None;
         let search = if start_index == goal_index {
             set_nibble(&mut self.scratch, start_index, CODE_START);
             Search {
@@ -1413,8 +1414,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         } else {
             match kind {
                 PlannerKind::Bfs => {
-                    let (search, nibbles) = self.bfs(grid, start, goal)?;
-                    bfs_nibbles = nibbles;
+                    let (search, meet) = self.bfs(grid, start, goal)?;
+                    bfs_meet = meet;
                     search
                 }
                 PlannerKind::AStar | PlannerKind::AnyAngle if cell_by_cell => {
@@ -1450,7 +1451,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         let (length_cells, steps, fits) = match kind {
             PlannerKind::AnyAngle => self.rebuild_any_angle(grid, goal),
-            PlannerKind::Bfs if !bfs_nibbles => self.bfs_rebuild(grid, goal, search.cost),
+            PlannerKind::Bfs => match bfs_meet {
+                Some(meet) => self.bfs_rebuild(grid, meet),
+                None => self.rebuild_merged(&geometry, goal),
+            },
             _ => self.rebuild_merged(&geometry, goal),
         };
         let report = PlanReport {
