@@ -238,8 +238,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             x1: 0,
             set0: 0,
             set1: 0,
-            xs: 0,
-            sset: 0,
             meet: None,
         };
         let found = if layout.copy_free {
@@ -426,6 +424,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     pub(super) fn bfs_rebuild<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
+        goal: Cell,
         meet: Meet,
     ) -> (f32, u32, bool) {
         self.cells.clear();
@@ -468,25 +467,42 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 path.push(d);
             }
         };
-        let (mx, my) = (meet.cell.x as i32, meet.cell.y as i32);
         // The start side's cell `u` of the meeting move and its layer, and the goal side's `v`.
         let ((ux, uy, u_layer), v) = if meet.one_sided {
-            // `cell` is the goal, reached in `layer`.
-            ((mx, my, meet.layer), None)
+            ((goal.x as i32, goal.y as i32, meet.layer), None)
         } else {
-            // The meeting cell's layer: the other side's last layer, or the one before.
+            // A meeting cell `m` of the other side (of its last layer, or the one before) in
+            // the rows and word noted, and the frontier cell `f` of the expanding side that
+            // reaches it.
             let m_side = !meet.goal_side;
-            let m_layer = if cell(mx, my) == (code_of(meet.other_layer), m_side) {
-                meet.other_layer
-            } else {
-                meet.other_layer.saturating_sub(1)
-            };
-            // The frontier cell of the expanding side that reached it.
-            let f = STEPS
-                .iter()
-                .find(|&&d| legal(mx, my, d, code_of(meet.layer), meet.goal_side))
-                .map(|&(dx, dy)| (mx + dx, my + dy));
-            let Some((fx, fy)) = f else {
+            let f_code = code_of(meet.layer);
+            let mut found = None;
+            'rows: for y in meet.rows.0..=meet.rows.1 {
+                for b in 0..32 {
+                    let (mx, my) = ((32 * meet.word + b) as i32, y as i32);
+                    let m_layer = match cell(mx, my) {
+                        (c, side) if side == m_side && c == code_of(meet.other_layer) => {
+                            meet.other_layer
+                        }
+                        (c, side)
+                            if side == m_side
+                                && meet.other_layer > 0
+                                && c == code_of(meet.other_layer - 1) =>
+                        {
+                            meet.other_layer - 1
+                        }
+                        _ => continue,
+                    };
+                    if let Some(&(dx, dy)) = STEPS
+                        .iter()
+                        .find(|&&d| legal(mx, my, d, f_code, meet.goal_side))
+                    {
+                        found = Some((mx, my, m_layer, mx + dx, my + dy));
+                        break 'rows;
+                    }
+                }
+            }
+            let Some((mx, my, m_layer, fx, fy)) = found else {
                 return (0.0, 0, false);
             };
             if meet.goal_side {
@@ -520,19 +536,20 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     }
 }
 
-/// Where the two sides of a layered search met: `cell`, reached by the other side, is a legal
-/// move away from a cell of the side that was expanding its layer `layer`.
+/// Where the two sides of a layered search met: rows `rows.0 ..= rows.1` of word `word` hold
+/// a cell of the other side that is a legal move away from a cell of the side that was
+/// expanding its layer `layer`. One-sided: the goal's row and word.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Meet {
-    cell: Cell,
+    rows: (usize, usize),
+    word: usize,
     /// The expanding side was the goal's.
     goal_side: bool,
     /// The expanding side's frontier layer.
     layer: u32,
     /// The other side's last layer.
     other_layer: u32,
-    /// The search ran from the start only (no `SIDE` plane): `cell` is the goal, `layer` its
-    /// layer.
+    /// The search ran from the start only (no `SIDE` plane): `layer` is the goal's layer.
     one_sided: bool,
 }
 
@@ -612,10 +629,9 @@ struct Layers<'a> {
     x1: u32,
     set0: u32,
     set1: u32,
-    xs: u32,
-    sset: u32,
-    /// A meeting found in this layer: row, word and the other side's cells reached.
-    meet: Option<(usize, usize, u32)>,
+    /// A meeting found in this layer: rows `y0 ..= y1` of word `w` hold a cell of the other
+    /// side that a frontier cell reaches.
+    meet: Option<(usize, usize, usize)>,
 }
 
 impl Layers<'_> {
@@ -633,9 +649,9 @@ impl Layers<'_> {
                 *ps |= 1 << (x & 31);
             }
         }
-        self.note_rows::<true>(x >> 5, y, 1);
+        self.note_rows::<true, false>(x >> 5, y, 1);
         if (1u32 << (x & 31)) & self.edges(x >> 5) != 0 {
-            self.note_rows::<true>(layout.row_words + (x >> 5), y, 1);
+            self.note_rows::<true, false>(layout.row_words + (x >> 5), y, 1);
         }
     }
 
@@ -677,19 +693,17 @@ impl Layers<'_> {
                 core::mem::swap(&mut last, &mut other_last);
             }
             (self.x0, self.x1, self.set0, self.set1) = layer_masks(self.layer);
-            let all = |bit: bool| if bit { u32::MAX } else { 0 };
-            self.xs = all(!self.goal_side);
-            self.sset = all(self.goal_side);
             let odd = self.layer & 1 != 0;
-            let rows = if odd {
-                self.expand_layer::<true>(free)
-            } else {
-                self.expand_layer::<false>(free)
+            let rows = match (odd, self.goal_side) {
+                (false, false) => self.expand_layer::<false, false>(free),
+                (true, false) => self.expand_layer::<true, false>(free),
+                (false, true) => self.expand_layer::<false, true>(free),
+                (true, true) => self.expand_layer::<true, true>(free),
             };
-            if let Some((y, w, bits)) = self.meet {
-                let x = 32 * w + bits.trailing_zeros() as usize;
+            if let Some((y0, y1, w)) = self.meet {
                 return Outcome::Met(Meet {
-                    cell: Cell::new(x as u16, y as u16),
+                    rows: (y0, y1),
+                    word: w,
                     goal_side: self.goal_side,
                     layer: self.layer,
                     other_layer: self.other_layer,
@@ -716,7 +730,8 @@ impl Layers<'_> {
                     | self.p1.get(goal_node).copied().unwrap_or(0);
                 if reached & goal_bit != 0 {
                     return Outcome::Met(Meet {
-                        cell: goal,
+                        rows: (goal.y as usize, goal.y as usize),
+                        word: goal.x as usize >> 5,
                         goal_side: false,
                         layer: self.layer,
                         other_layer: 0,
@@ -734,7 +749,7 @@ impl Layers<'_> {
 
     /// Expand every frontier (row, word) of the layer, column by column, in runs of consecutive
     /// rows; returns how many (row, word) pairs.
-    fn expand_layer<const ODD: bool>(&mut self, free: &impl FreeBits) -> usize {
+    fn expand_layer<const ODD: bool, const GOAL: bool>(&mut self, free: &impl FreeBits) -> usize {
         let layout = self.layout;
         let set_words = layout.set_words;
         let sets = usize::from(ODD) * layout.layer_set_words();
@@ -764,8 +779,11 @@ impl Layers<'_> {
                         let p0 = self.p0.get(i).copied().unwrap_or(0);
                         let p1 = self.p1.get(i).copied().unwrap_or(0);
                         let side = self.ps.get(i).copied().unwrap_or(0);
-                        let f = (p0 ^ self.x0) & (p1 ^ self.x1) & (side ^ self.xs) & edges;
-                        self.edge::<ODD>(free, y, w, f);
+                        let f = (p0 ^ self.x0)
+                            & (p1 ^ self.x1)
+                            & (side ^ side_masks::<GOAL>().0)
+                            & edges;
+                        self.edge::<ODD, GOAL>(free, y, w, f);
                     }
                     continue;
                 }
@@ -807,9 +825,9 @@ impl Layers<'_> {
                     }
                     pairs += rows;
                     if y1 == y0 {
-                        self.single::<ODD>(free, y0, w);
+                        self.single::<ODD, GOAL>(free, y0, w);
                     } else {
-                        self.column::<ODD>(free, y0, y1, w);
+                        self.column::<ODD, GOAL>(free, y0, y1, w);
                     }
                 }
             }
@@ -831,7 +849,12 @@ impl Layers<'_> {
     /// Expand the frontier of row `y` in word `w` into the rows below, level and above (moves
     /// out of the word: [`Layers::edge`]).
     #[inline(always)]
-    fn single<const ODD: bool>(&mut self, free: &impl FreeBits, y: usize, w: usize) {
+    fn single<const ODD: bool, const GOAL: bool>(
+        &mut self,
+        free: &impl FreeBits,
+        y: usize,
+        w: usize,
+    ) {
         let layout = self.layout;
         let rw = layout.row_words;
         let i = layout.node(y, w);
@@ -839,15 +862,15 @@ impl Layers<'_> {
         let s1 = self.p1.get(i).copied().unwrap_or(0);
         let ss = self.ps.get(i).copied().unwrap_or(0);
         let ms = free.get(y, w, i);
-        let f = (s0 ^ self.x0) & (s1 ^ self.x1) & (ss ^ self.xs);
+        let f = (s0 ^ self.x0) & (s1 ^ self.x1) & (ss ^ side_masks::<GOAL>().0);
         let spread = (f << 1) | (f >> 1);
         let same = spread & ms & !(s0 | s1);
         if same != 0 {
-            self.mark::<ODD>(y, w, i, same);
+            self.mark::<ODD, GOAL>(y, w, i, same);
         }
-        let meet = spread & (s0 | s1) & !(ss ^ self.xs);
+        let meet = spread & (s0 | s1) & !(ss ^ side_masks::<GOAL>().0);
         if meet != 0 {
-            self.meet = Some((y, w, meet));
+            self.meet = Some((y, y, w));
         }
         // A diagonal step needs the straight step's target free (g) and the side cell in
         // row y (ms at the target column).
@@ -860,11 +883,12 @@ impl Layers<'_> {
                 let reach = (g | (ms & ((g << 1) | (g >> 1)))) & m;
                 let n = reach & !r;
                 if n != 0 {
-                    self.mark::<ODD>(y - 1, w, j, n);
+                    self.mark::<ODD, GOAL>(y - 1, w, j, n);
                 }
-                let meet = reach & r & !(self.ps.get(j).copied().unwrap_or(0) ^ self.xs);
+                let meet =
+                    reach & r & !(self.ps.get(j).copied().unwrap_or(0) ^ side_masks::<GOAL>().0);
                 if meet != 0 {
-                    self.meet = Some((y - 1, w, meet));
+                    self.meet = Some((y - 1, y - 1, w));
                 }
             }
         }
@@ -877,11 +901,12 @@ impl Layers<'_> {
                 let reach = (g | (ms & ((g << 1) | (g >> 1)))) & m;
                 let n = reach & !r;
                 if n != 0 {
-                    self.mark::<ODD>(y + 1, w, j, n);
+                    self.mark::<ODD, GOAL>(y + 1, w, j, n);
                 }
-                let meet = reach & r & !(self.ps.get(j).copied().unwrap_or(0) ^ self.xs);
+                let meet =
+                    reach & r & !(self.ps.get(j).copied().unwrap_or(0) ^ side_masks::<GOAL>().0);
                 if meet != 0 {
-                    self.meet = Some((y + 1, w, meet));
+                    self.meet = Some((y + 1, y + 1, w));
                 }
             }
         }
@@ -892,11 +917,17 @@ impl Layers<'_> {
     /// column (moves out of the word: [`Layers::edge`]).
     #[inline(always)]
     #[allow(unused_assignments)] // the window's last shift is not read
-    fn column<const ODD: bool>(&mut self, free: &impl FreeBits, y0: usize, y1: usize, w: usize) {
+    fn column<const ODD: bool, const GOAL: bool>(
+        &mut self,
+        free: &impl FreeBits,
+        y0: usize,
+        y1: usize,
+        w: usize,
+    ) {
         let layout = self.layout;
         let rw = layout.row_words;
         let (x0, x1, set0, set1) = (self.x0, self.x1, self.set0, self.set1);
-        let (xs, sset) = (self.xs, self.sset);
+        let (xs, sset) = side_masks::<GOAL>();
         let edges = self.edges(w);
         let first = y0.saturating_sub(1);
         let last = (y1 + 1).min(layout.height.saturating_sub(1));
@@ -909,6 +940,7 @@ impl Layers<'_> {
         let (mut fb, mut mb) = (0u32, 0u32);
         let mut pending = 0u32; // rows `first + k` with new cells
         let mut pending_edges = 0u32; // ... with new cells in bit 0 or 31
+        let mut met = 0u32; // cells of the other side reached
 
         // One step of the window: target row `t` (word at `i`) with the row above (`a0`,
         // `a1`, `as_`, `ma`; zeros above the map).
@@ -932,18 +964,17 @@ impl Layers<'_> {
                     if let Some(p) = self.p1.get_mut(i) {
                         *p = c1 | (n & set1);
                     }
-                    if let Some(p) = self.ps.get_mut(i) {
-                        *p = cs | (n & sset);
+                    if GOAL {
+                        if let Some(p) = self.ps.get_mut(i) {
+                            *p = cs | (n & sset);
+                        }
                     }
                     pending |= 1 << (t - first);
                     if n & edges != 0 {
                         pending_edges |= 1 << (t - first);
                     }
                 }
-                let meet = reach & (c0 | c1) & !(cs ^ xs);
-                if meet != 0 {
-                    self.meet = Some((t, w, meet));
-                }
+                met |= reach & (c0 | c1) & !(cs ^ xs);
                 (fb, mb, fc, mc, c0, c1, cs) = (fc, mc, fa, ma, a0, a1, as_);
             }};
         }
@@ -971,9 +1002,12 @@ impl Layers<'_> {
         } else {
             step!(last, 0, 0, 0, 0);
         }
-        self.note_rows::<ODD>(w, first, pending);
+        if met != 0 {
+            self.meet = Some((first, last, w));
+        }
+        self.note_rows::<ODD, GOAL>(w, first, pending);
         if pending_edges != 0 {
-            self.note_rows::<ODD>(rw + w, first, pending_edges);
+            self.note_rows::<ODD, GOAL>(rw + w, first, pending_edges);
         }
     }
 
@@ -982,19 +1016,25 @@ impl Layers<'_> {
     /// `y - 1 ..= y + 1`, with the same rule: target free and not reached; for a diagonal both
     /// side cells free. Rare (one pair of cells per 32 columns), so cell by cell.
     #[inline(always)]
-    fn edge<const ODD: bool>(&mut self, free: &impl FreeBits, y: usize, w: usize, f: u32) {
+    fn edge<const ODD: bool, const GOAL: bool>(
+        &mut self,
+        free: &impl FreeBits,
+        y: usize,
+        w: usize,
+        f: u32,
+    ) {
         if w > 0 && f & 1 != 0 {
-            self.edge_side::<ODD>(free, y, w, 0, w - 1, 31);
+            self.edge_side::<ODD, GOAL>(free, y, w, 0, w - 1, 31);
         }
         if w + 1 < self.layout.row_words && f >> 31 != 0 {
-            self.edge_side::<ODD>(free, y, w, 31, w + 1, 0);
+            self.edge_side::<ODD, GOAL>(free, y, w, 31, w + 1, 0);
         }
     }
 
     /// One side of [`Layers::edge`]: from bit `src_bit` of word `w` in row `y` to bit
     /// `dst_bit` of word `dst_w` in rows `y - 1 ..= y + 1`.
     #[inline(always)]
-    fn edge_side<const ODD: bool>(
+    fn edge_side<const ODD: bool, const GOAL: bool>(
         &mut self,
         free: &impl FreeBits,
         y: usize,
@@ -1010,14 +1050,14 @@ impl Layers<'_> {
         if free.get(y, dst_w, j) >> dst_bit & 1 == 0 {
             return;
         }
-        self.edge_target::<ODD>(y, dst_w, j, dst_bit);
+        self.edge_target::<ODD, GOAL>(y, dst_w, j, dst_bit);
         // Diagonals: target free and not reached, side cell (target row, source column) free.
         if y > 0 {
             let (t, jt) = (y - 1, j - layout.row_words);
             if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, jt + w - dst_w) >> src_bit & 1
                 != 0
             {
-                self.edge_target::<ODD>(t, dst_w, jt, dst_bit);
+                self.edge_target::<ODD, GOAL>(t, dst_w, jt, dst_bit);
             }
         }
         if y + 1 < layout.height {
@@ -1025,7 +1065,7 @@ impl Layers<'_> {
             if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, jt + w - dst_w) >> src_bit & 1
                 != 0
             {
-                self.edge_target::<ODD>(t, dst_w, jt, dst_bit);
+                self.edge_target::<ODD, GOAL>(t, dst_w, jt, dst_bit);
             }
         }
     }
@@ -1033,12 +1073,18 @@ impl Layers<'_> {
     /// A legal move across a word edge reaches bit `bit` of word `w` of row `t` (plane index
     /// `i`): mark it when not reached, note a meeting when the other side reached it.
     #[inline(always)]
-    fn edge_target<const ODD: bool>(&mut self, t: usize, w: usize, i: usize, bit: u32) {
+    fn edge_target<const ODD: bool, const GOAL: bool>(
+        &mut self,
+        t: usize,
+        w: usize,
+        i: usize,
+        bit: u32,
+    ) {
         let reached = self.p0.get(i).copied().unwrap_or(0) | self.p1.get(i).copied().unwrap_or(0);
         if reached >> bit & 1 == 0 {
-            self.mark::<ODD>(t, w, i, 1 << bit);
-        } else if !(self.ps.get(i).copied().unwrap_or(0) ^ self.xs) >> bit & 1 != 0 {
-            self.meet = Some((t, w, 1 << bit));
+            self.mark::<ODD, GOAL>(t, w, i, 1 << bit);
+        } else if !(self.ps.get(i).copied().unwrap_or(0) ^ side_masks::<GOAL>().0) >> bit & 1 != 0 {
+            self.meet = Some((t, t, w));
         }
     }
 
@@ -1046,25 +1092,27 @@ impl Layers<'_> {
     /// code and put the row in column `w`'s next row set (and its edge set when `n` holds an
     /// edge cell).
     #[inline(always)]
-    fn mark<const ODD: bool>(&mut self, t: usize, w: usize, i: usize, n: u32) {
+    fn mark<const ODD: bool, const GOAL: bool>(&mut self, t: usize, w: usize, i: usize, n: u32) {
         if let Some(p0) = self.p0.get_mut(i) {
             *p0 |= n & self.set0;
         }
         if let Some(p1) = self.p1.get_mut(i) {
             *p1 |= n & self.set1;
         }
-        if let Some(ps) = self.ps.get_mut(i) {
-            *ps |= n & self.sset;
+        if GOAL {
+            if let Some(ps) = self.ps.get_mut(i) {
+                *ps |= n;
+            }
         }
-        self.note_row::<ODD>(w, t);
+        self.note_row::<ODD, GOAL>(w, t);
         if n & self.edges(w) != 0 {
-            self.note_row::<ODD>(self.layout.row_words + w, t);
+            self.note_row::<ODD, GOAL>(self.layout.row_words + w, t);
         }
     }
 
     /// Put row `t` into column `w`'s row set for the next layer, and its word into the summary.
     #[inline(always)]
-    fn note_row<const ODD: bool>(&mut self, w: usize, t: usize) {
+    fn note_row<const ODD: bool, const GOAL: bool>(&mut self, w: usize, t: usize) {
         let layout = &self.layout;
         let at = (w << layout.set_shift) + (t >> 5);
         let sets = usize::from(!ODD) * layout.layer_set_words() + at;
@@ -1081,7 +1129,7 @@ impl Layers<'_> {
     /// for the next layer (even when the layer being expanded is `ODD`), and its words into the
     /// summary.
     #[inline(always)]
-    fn note_rows<const ODD: bool>(&mut self, w: usize, t: usize, rows: u32) {
+    fn note_rows<const ODD: bool, const GOAL: bool>(&mut self, w: usize, t: usize, rows: u32) {
         if rows == 0 {
             return;
         }
@@ -1113,6 +1161,17 @@ fn mask_below(n: usize) -> u32 {
         u32::MAX
     } else {
         (1u32 << n) - 1
+    }
+}
+
+/// `(xs, sset)` for expanding a layer of the goal's side (`GOAL`) or the start's: the side's
+/// cells are `SIDE ^ xs`, new cells get `SIDE |= n & sset`.
+#[inline(always)]
+const fn side_masks<const GOAL: bool>() -> (u32, u32) {
+    if GOAL {
+        (0, u32::MAX)
+    } else {
+        (u32::MAX, 0)
     }
 }
 

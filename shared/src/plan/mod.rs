@@ -1452,7 +1452,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let (length_cells, steps, fits) = match kind {
             PlannerKind::AnyAngle => self.rebuild_any_angle(grid, goal),
             PlannerKind::Bfs => match bfs_meet {
-                Some(meet) => self.bfs_rebuild(grid, meet),
+                Some(meet) => self.bfs_rebuild(grid, goal, meet),
                 None => self.rebuild_merged(&geometry, goal),
             },
             _ => self.rebuild_merged(&geometry, goal),
