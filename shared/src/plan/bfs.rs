@@ -663,8 +663,8 @@ impl Layers<'_> {
         self.goal_side = !self.goal_side;
     }
 
-    /// Mark the start and the goal, then expand layer after layer, each time on the side whose
-    /// last layer had fewer frontier (row, word) pairs (alternating on ties), until a layer
+    /// Mark the start and the goal, then expand layer after layer, alternating between the
+    /// sides (the start's first), until a layer
     /// reaches a cell of the other side, or adds no cell (unreachable), or the frontier turns
     /// out narrow (see [`NARROW_CHECK_LAYER`]).
     fn run(&mut self, free: &impl FreeBits, start: Cell, goal: Cell) -> Outcome {
@@ -683,14 +683,11 @@ impl Layers<'_> {
         let goal_node = self.layout.node(goal.y as usize, goal.x as usize >> 5);
         let goal_bit = 1u32 << (goal.x & 31);
         (self.layer, self.other_layer) = (0, 0);
-        // Frontier pairs of the last layer each side expanded.
-        let (mut last, mut other_last) = (0usize, 0usize);
         let mut pairs = 0usize;
         let mut layers = 0u32;
         loop {
-            if two_sided && layers > 0 && other_last <= last {
+            if two_sided && layers > 0 {
                 self.switch();
-                core::mem::swap(&mut last, &mut other_last);
             }
             (self.x0, self.x1, self.set0, self.set1) = layer_masks(self.layer);
             let odd = self.layer & 1 != 0;
@@ -721,7 +718,6 @@ impl Layers<'_> {
                 return Outcome::Unreachable;
             }
             self.peak = self.peak.max(rows);
-            last = rows;
             pairs += rows;
             self.layer += 1;
             layers += 1;
