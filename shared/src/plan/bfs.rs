@@ -13,17 +13,24 @@
 //! |------------------------------------|---------------------------------------------------|
 //! | `0 .. nodes`                       | `P0`: bit 0 of the cell's layer code              |
 //! | `nodes .. 2 nodes`                 | `P1`: bit 1 of the cell's layer code              |
-//! | `2 nodes .. 3 nodes`               | `FREE`: the cell is free (only when it fits)      |
-//! | then `2 × 2 row_words × set_words` | per layer parity: per word column `w`, the rows   |
-//! |                                    | with frontier cells in word `w`; then per column  |
-//! |                                    | the rows with frontier cells in bit 0 or 31       |
-//! | then `2 × ⌈2 row_words × set_words / 32⌉` | per parity: the non-empty row-set words    |
+//! | `2 nodes .. 3 nodes`               | `SIDE`: reached from the goal (when it fits)      |
+//! | `3 nodes .. 4 nodes`               | `FREE`: the cell is free (when it fits too)       |
+//! | then `2 × 2 × 2 row_words × set_words` | per side (start's, goal's) and layer parity:  |
+//! |                                    | per word column `w`, the rows with frontier cells |
+//! |                                    | in word `w`; then per column the rows with        |
+//! |                                    | frontier cells in bit 0 or 31                     |
+//! | then `2 × 2 × ⌈2 row_words × set_words / 32⌉` | per side and parity: the non-empty     |
+//! |                                    | row-set words                                     |
 //!
-//! The layer code is 0 for a cell not reached, else `layer mod 3 + 1`. When `FREE` does not fit
-//! in the scratch (narrow grids, where the padding wastes most), the free bits are read from
-//! the grid's own packed bits instead (a funnel shift per word: slower, same result). The
-//! layered search uses no queue entries; the scalar BFS it falls back to in narrow maps
-//! ([`NARROW_CHECK_LAYER`]) uses the nibble layout of [`super`] and the queue.
+//! The layer code is 0 for a cell not reached, else `layer mod 3 + 1` (the layer of the side
+//! that reached it). The sides alternate, one layer each; a layer stops the search when it
+//! reaches a cell of the other side (see the module doc of [`super`] for why that gives the
+//! fewest steps). When `FREE` does not fit in the scratch, the free bits are read from the
+//! grid's own packed bits instead (a funnel shift per word: slower, same result); when `SIDE`
+//! does not fit either (narrow grids, where the padding wastes most), the search runs from the
+//! start only, to the goal's layer. The layered search uses no queue entries; the scalar BFS
+//! it falls back to in narrow maps ([`NARROW_CHECK_LAYER`]) uses the nibble layout of
+//! [`super`] and the queue.
 
 use super::{
     nibble, nibble_window, scratch_words_for_cells, set_nibble, PathCells, PlanError, Planner,
