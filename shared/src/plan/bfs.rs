@@ -593,6 +593,43 @@ impl PathBuilder<'_> {
     }
 }
 
+/// A rectangle of blocks (word column `w0 ..= w1`, 32-row block `k0 ..= k1`) that holds all
+/// cells of one side; empty when `w0 > w1`.
+#[derive(Clone, Copy, Debug)]
+struct Blocks {
+    w0: usize,
+    w1: usize,
+    k0: usize,
+    k1: usize,
+}
+
+impl Blocks {
+    const EMPTY: Self = Self {
+        w0: usize::MAX,
+        w1: 0,
+        k0: usize::MAX,
+        k1: 0,
+    };
+
+    fn add(&mut self, w: usize, k: usize) {
+        self.w0 = self.w0.min(w);
+        self.w1 = self.w1.max(w);
+        self.k0 = self.k0.min(k);
+        self.k1 = self.k1.max(k);
+    }
+
+    /// Whether a layer of one side can touch a word of the other: their rectangles, one grown
+    /// by a block each way (a move goes one row or one word further), meet.
+    fn near(&self, other: &Self) -> bool {
+        self.w0 <= self.w1
+            && other.w0 <= other.w1
+            && self.w0 <= other.w1.saturating_add(1)
+            && other.w0 <= self.w1.saturating_add(1)
+            && self.k0 <= other.k1.saturating_add(1)
+            && other.k0 <= self.k1.saturating_add(1)
+    }
+}
+
 /// How a layered search ended.
 enum Outcome {
     /// The two sides met.
@@ -642,6 +679,16 @@ struct Layers<'a> {
 }
 
 impl Layers<'_> {
+    /// The `SIDE` word of node `i`; 0 when the sides are [`APART`].
+    #[inline(always)]
+    fn side_word<const SIDE: u8>(&self, i: usize) -> u32 {
+        if SIDE == APART {
+            0
+        } else {
+            self.ps.get(i).copied().unwrap_or(0)
+        }
+    }
+
     /// Mark `cell` as layer 0 of the side being expanded and note it as if found by layer -1
     /// (odd).
     fn seed(&mut self, cell: Cell) {
@@ -656,9 +703,50 @@ impl Layers<'_> {
                 *ps |= 1 << (x & 31);
             }
         }
-        self.note_rows::<true, false>(x >> 5, y, 1);
+        self.note_rows::<true, APART>(x >> 5, y, 1);
         if (1u32 << (x & 31)) & self.edges(x >> 5) != 0 {
-            self.note_rows::<true, false>(layout.row_words + (x >> 5), y, 1);
+            self.note_rows::<true, APART>(layout.row_words + (x >> 5), y, 1);
+        }
+    }
+
+    /// Add the blocks of the side's row sets of `parity` (from their summary) to `blocks`.
+    fn grow_blocks(&self, parity: usize, blocks: &mut Blocks) {
+        let layout = self.layout;
+        let at = parity * layout.summary_words;
+        let words = self
+            .summary
+            .get(at..at + layout.summary_words)
+            .unwrap_or(&[]);
+        for (si, &word) in words.iter().enumerate() {
+            let mut word = word;
+            while word != 0 {
+                let index = si * 32 + word.trailing_zeros() as usize;
+                word &= word - 1;
+                let w = index >> layout.set_shift;
+                let w = if w >= layout.row_words {
+                    w - layout.row_words
+                } else {
+                    w
+                };
+                blocks.add(w, index & (layout.set_words - 1));
+            }
+        }
+    }
+
+    /// Set `SIDE` to the reached cells of `blocks` (the goal side's, apart from the start's).
+    fn mark_goal_side(&mut self, blocks: &Blocks) {
+        let layout = self.layout;
+        for k in blocks.k0..=blocks.k1 {
+            for y in 32 * k..(32 * k + 32).min(layout.height) {
+                for w in blocks.w0..=blocks.w1 {
+                    let i = layout.node(y, w);
+                    let reached =
+                        self.p0.get(i).copied().unwrap_or(0) | self.p1.get(i).copied().unwrap_or(0);
+                    if let Some(side) = self.ps.get_mut(i) {
+                        *side = reached;
+                    }
+                }
+            }
         }
     }
 
@@ -682,11 +770,20 @@ impl Layers<'_> {
         self.goal_side = false;
         self.seed(start);
         let two_sided = self.layout.two_sided;
+        // Per side, the blocks (word column, 32 rows) its cells lie in.
+        let (mut bounds, mut other_bounds) = (Blocks::EMPTY, Blocks::EMPTY);
+        self.grow_blocks(0, &mut bounds);
         if two_sided {
             self.switch();
+            core::mem::swap(&mut bounds, &mut other_bounds);
             self.seed(goal);
+            self.grow_blocks(0, &mut bounds);
             self.switch();
+            core::mem::swap(&mut bounds, &mut other_bounds);
         }
+        // Whether `SIDE` is kept: from the first layer whose words may hold cells of both sides
+        // (the seeds set it; while the sides are apart, the goal side's new cells do not).
+        let mut mixed = two_sided && bounds.near(&other_bounds);
         let goal_node = self.layout.node(goal.y as usize, goal.x as usize >> 5);
         let goal_bit = 1u32 << (goal.x & 31);
         (self.layer, self.other_layer) = (0, 0);
@@ -695,15 +792,31 @@ impl Layers<'_> {
         loop {
             if two_sided && layers > 0 {
                 self.switch();
+                core::mem::swap(&mut bounds, &mut other_bounds);
+            }
+            if two_sided && !mixed && bounds.near(&other_bounds) {
+                // The blocks of the two sides are still apart: `SIDE` is the reached cells in
+                // the goal side's blocks.
+                let goal_bounds = if self.goal_side { bounds } else { other_bounds };
+                self.mark_goal_side(&goal_bounds);
+                mixed = true;
             }
             (self.x0, self.x1, self.set0, self.set1) = layer_masks(self.layer);
             let odd = self.layer & 1 != 0;
-            let rows = match (odd, self.goal_side) {
-                (false, false) => self.expand_layer::<false, false>(free),
-                (true, false) => self.expand_layer::<true, false>(free),
-                (false, true) => self.expand_layer::<false, true>(free),
-                (true, true) => self.expand_layer::<true, true>(free),
+            let side = match (mixed, self.goal_side) {
+                (false, _) => APART,
+                (true, false) => START_SIDE,
+                (true, true) => GOAL_SIDE,
             };
+            let rows = match (odd, side) {
+                (false, START_SIDE) => self.expand_layer::<false, START_SIDE>(free),
+                (true, START_SIDE) => self.expand_layer::<true, START_SIDE>(free),
+                (false, GOAL_SIDE) => self.expand_layer::<false, GOAL_SIDE>(free),
+                (true, GOAL_SIDE) => self.expand_layer::<true, GOAL_SIDE>(free),
+                (false, _) => self.expand_layer::<false, APART>(free),
+                (true, _) => self.expand_layer::<true, APART>(free),
+            };
+            self.grow_blocks(usize::from(!odd), &mut bounds);
             if let Some((y0, y1, w)) = self.meet {
                 return Outcome::Met(Meet {
                     rows: (y0, y1),
@@ -752,7 +865,7 @@ impl Layers<'_> {
 
     /// Expand every frontier (row, word) of the layer, column by column, in runs of consecutive
     /// rows; returns how many (row, word) pairs.
-    fn expand_layer<const ODD: bool, const GOAL: bool>(&mut self, free: &impl FreeBits) -> usize {
+    fn expand_layer<const ODD: bool, const SIDE: u8>(&mut self, free: &impl FreeBits) -> usize {
         let layout = self.layout;
         let set_words = layout.set_words;
         let sets = usize::from(ODD) * layout.layer_set_words();
@@ -781,12 +894,12 @@ impl Layers<'_> {
                         let i = layout.node(y, w);
                         let p0 = self.p0.get(i).copied().unwrap_or(0);
                         let p1 = self.p1.get(i).copied().unwrap_or(0);
-                        let side = self.ps.get(i).copied().unwrap_or(0);
+                        let side = self.side_word::<SIDE>(i);
                         let f = (p0 ^ self.x0)
                             & (p1 ^ self.x1)
-                            & (side ^ side_masks::<GOAL>().0)
+                            & (side ^ side_masks::<SIDE>().0)
                             & edges;
-                        self.edge::<ODD, GOAL>(free, y, w, f);
+                        self.edge::<ODD, SIDE>(free, y, w, f);
                     }
                     continue;
                 }
@@ -828,9 +941,9 @@ impl Layers<'_> {
                     }
                     pairs += rows;
                     if y1 == y0 {
-                        self.single::<ODD, GOAL>(free, y0, w);
+                        self.single::<ODD, SIDE>(free, y0, w);
                     } else {
-                        self.column::<ODD, GOAL>(free, y0, y1, w);
+                        self.column::<ODD, SIDE>(free, y0, y1, w);
                     }
                 }
             }
@@ -852,7 +965,7 @@ impl Layers<'_> {
     /// Expand the frontier of row `y` in word `w` into the rows below, level and above (moves
     /// out of the word: [`Layers::edge`]).
     #[inline(always)]
-    fn single<const ODD: bool, const GOAL: bool>(
+    fn single<const ODD: bool, const SIDE: u8>(
         &mut self,
         free: &impl FreeBits,
         y: usize,
@@ -863,15 +976,15 @@ impl Layers<'_> {
         let i = layout.node(y, w);
         let s0 = self.p0.get(i).copied().unwrap_or(0);
         let s1 = self.p1.get(i).copied().unwrap_or(0);
-        let ss = self.ps.get(i).copied().unwrap_or(0);
+        let ss = self.side_word::<SIDE>(i);
         let ms = free.get(y, w, i);
-        let f = (s0 ^ self.x0) & (s1 ^ self.x1) & (ss ^ side_masks::<GOAL>().0);
+        let f = (s0 ^ self.x0) & (s1 ^ self.x1) & (ss ^ side_masks::<SIDE>().0);
         let spread = (f << 1) | (f >> 1);
         let same = spread & ms & !(s0 | s1);
         if same != 0 {
-            self.mark::<ODD, GOAL>(y, w, i, same);
+            self.mark::<ODD, SIDE>(y, w, i, same);
         }
-        let meet = spread & (s0 | s1) & !(ss ^ side_masks::<GOAL>().0);
+        let meet = spread & (s0 | s1) & !(ss ^ side_masks::<SIDE>().0);
         if meet != 0 {
             self.meet = Some((y, y, w));
         }
@@ -886,10 +999,9 @@ impl Layers<'_> {
                 let reach = (g | (ms & ((g << 1) | (g >> 1)))) & m;
                 let n = reach & !r;
                 if n != 0 {
-                    self.mark::<ODD, GOAL>(y - 1, w, j, n);
+                    self.mark::<ODD, SIDE>(y - 1, w, j, n);
                 }
-                let meet =
-                    reach & r & !(self.ps.get(j).copied().unwrap_or(0) ^ side_masks::<GOAL>().0);
+                let meet = reach & r & !(self.side_word::<SIDE>(j) ^ side_masks::<SIDE>().0);
                 if meet != 0 {
                     self.meet = Some((y - 1, y - 1, w));
                 }
@@ -904,10 +1016,9 @@ impl Layers<'_> {
                 let reach = (g | (ms & ((g << 1) | (g >> 1)))) & m;
                 let n = reach & !r;
                 if n != 0 {
-                    self.mark::<ODD, GOAL>(y + 1, w, j, n);
+                    self.mark::<ODD, SIDE>(y + 1, w, j, n);
                 }
-                let meet =
-                    reach & r & !(self.ps.get(j).copied().unwrap_or(0) ^ side_masks::<GOAL>().0);
+                let meet = reach & r & !(self.side_word::<SIDE>(j) ^ side_masks::<SIDE>().0);
                 if meet != 0 {
                     self.meet = Some((y + 1, y + 1, w));
                 }
@@ -922,7 +1033,7 @@ impl Layers<'_> {
     // fewer MCU instructions).
     #[inline(never)]
     #[allow(unused_assignments)] // the window's last shift is not read
-    fn column<const ODD: bool, const GOAL: bool>(
+    fn column<const ODD: bool, const SIDE: u8>(
         &mut self,
         free: &impl FreeBits,
         y0: usize,
@@ -932,13 +1043,17 @@ impl Layers<'_> {
         let layout = self.layout;
         let rw = layout.row_words;
         let (x0, x1, set0, set1) = (self.x0, self.x1, self.set0, self.set1);
-        let (xs, sset) = side_masks::<GOAL>();
+        let (xs, sset) = side_masks::<SIDE>();
         let edges = self.edges(w);
         let first = y0.saturating_sub(1);
         let last = (y1 + 1).min(layout.height.saturating_sub(1));
         let mut i = layout.node(first, w);
         let load = |p: &[u32], i: usize| p.get(i).copied().unwrap_or(0);
-        let (mut c0, mut c1, mut cs) = (load(self.p0, i), load(self.p1, i), load(self.ps, i));
+        let (mut c0, mut c1, mut cs) = (
+            load(self.p0, i),
+            load(self.p1, i),
+            self.side_word::<SIDE>(i),
+        );
         let mut mc = free.get(first, w, i);
         let mut fc = (c0 ^ x0) & (c1 ^ x1) & (cs ^ xs);
         // Row below the target: frontier and free bits (none below the first target).
@@ -969,7 +1084,7 @@ impl Layers<'_> {
                     if let Some(p) = self.p1.get_mut(i) {
                         *p = c1 | (n & set1);
                     }
-                    if GOAL {
+                    if SIDE == GOAL_SIDE {
                         if let Some(p) = self.ps.get_mut(i) {
                             *p = cs | (n & sset);
                         }
@@ -990,7 +1105,7 @@ impl Layers<'_> {
                 t,
                 load(self.p0, j),
                 load(self.p1, j),
-                load(self.ps, j),
+                self.side_word::<SIDE>(j),
                 free.get(t + 1, w, j)
             );
             i = j;
@@ -1001,7 +1116,7 @@ impl Layers<'_> {
                 last,
                 load(self.p0, j),
                 load(self.p1, j),
-                load(self.ps, j),
+                self.side_word::<SIDE>(j),
                 free.get(last + 1, w, j)
             );
         } else {
@@ -1010,9 +1125,9 @@ impl Layers<'_> {
         if met != 0 {
             self.meet = Some((first, last, w));
         }
-        self.note_rows::<ODD, GOAL>(w, first, pending);
+        self.note_rows::<ODD, SIDE>(w, first, pending);
         if pending_edges != 0 {
-            self.note_rows::<ODD, GOAL>(rw + w, first, pending_edges);
+            self.note_rows::<ODD, SIDE>(rw + w, first, pending_edges);
         }
     }
 
@@ -1021,7 +1136,7 @@ impl Layers<'_> {
     /// `y - 1 ..= y + 1`, with the same rule: target free and not reached; for a diagonal both
     /// side cells free. Rare (one pair of cells per 32 columns), so cell by cell.
     #[inline(always)]
-    fn edge<const ODD: bool, const GOAL: bool>(
+    fn edge<const ODD: bool, const SIDE: u8>(
         &mut self,
         free: &impl FreeBits,
         y: usize,
@@ -1029,17 +1144,17 @@ impl Layers<'_> {
         f: u32,
     ) {
         if w > 0 && f & 1 != 0 {
-            self.edge_side::<ODD, GOAL>(free, y, w, 0, w - 1, 31);
+            self.edge_side::<ODD, SIDE>(free, y, w, 0, w - 1, 31);
         }
         if w + 1 < self.layout.row_words && f >> 31 != 0 {
-            self.edge_side::<ODD, GOAL>(free, y, w, 31, w + 1, 0);
+            self.edge_side::<ODD, SIDE>(free, y, w, 31, w + 1, 0);
         }
     }
 
     /// One side of [`Layers::edge`]: from bit `src_bit` of word `w` in row `y` to bit
     /// `dst_bit` of word `dst_w` in rows `y - 1 ..= y + 1`.
     #[inline(always)]
-    fn edge_side<const ODD: bool, const GOAL: bool>(
+    fn edge_side<const ODD: bool, const SIDE: u8>(
         &mut self,
         free: &impl FreeBits,
         y: usize,
@@ -1055,14 +1170,14 @@ impl Layers<'_> {
         if free.get(y, dst_w, j) >> dst_bit & 1 == 0 {
             return;
         }
-        self.edge_target::<ODD, GOAL>(y, dst_w, j, dst_bit);
+        self.edge_target::<ODD, SIDE>(y, dst_w, j, dst_bit);
         // Diagonals: target free and not reached, side cell (target row, source column) free.
         if y > 0 {
             let (t, jt) = (y - 1, j - layout.row_words);
             if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, jt + w - dst_w) >> src_bit & 1
                 != 0
             {
-                self.edge_target::<ODD, GOAL>(t, dst_w, jt, dst_bit);
+                self.edge_target::<ODD, SIDE>(t, dst_w, jt, dst_bit);
             }
         }
         if y + 1 < layout.height {
@@ -1070,7 +1185,7 @@ impl Layers<'_> {
             if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, jt + w - dst_w) >> src_bit & 1
                 != 0
             {
-                self.edge_target::<ODD, GOAL>(t, dst_w, jt, dst_bit);
+                self.edge_target::<ODD, SIDE>(t, dst_w, jt, dst_bit);
             }
         }
     }
@@ -1078,7 +1193,7 @@ impl Layers<'_> {
     /// A legal move across a word edge reaches bit `bit` of word `w` of row `t` (plane index
     /// `i`): mark it when not reached, note a meeting when the other side reached it.
     #[inline(always)]
-    fn edge_target<const ODD: bool, const GOAL: bool>(
+    fn edge_target<const ODD: bool, const SIDE: u8>(
         &mut self,
         t: usize,
         w: usize,
@@ -1087,8 +1202,8 @@ impl Layers<'_> {
     ) {
         let reached = self.p0.get(i).copied().unwrap_or(0) | self.p1.get(i).copied().unwrap_or(0);
         if reached >> bit & 1 == 0 {
-            self.mark::<ODD, GOAL>(t, w, i, 1 << bit);
-        } else if !(self.ps.get(i).copied().unwrap_or(0) ^ side_masks::<GOAL>().0) >> bit & 1 != 0 {
+            self.mark::<ODD, SIDE>(t, w, i, 1 << bit);
+        } else if !(self.side_word::<SIDE>(i) ^ side_masks::<SIDE>().0) >> bit & 1 != 0 {
             self.meet = Some((t, t, w));
         }
     }
@@ -1097,27 +1212,27 @@ impl Layers<'_> {
     /// code and put the row in column `w`'s next row set (and its edge set when `n` holds an
     /// edge cell).
     #[inline(always)]
-    fn mark<const ODD: bool, const GOAL: bool>(&mut self, t: usize, w: usize, i: usize, n: u32) {
+    fn mark<const ODD: bool, const SIDE: u8>(&mut self, t: usize, w: usize, i: usize, n: u32) {
         if let Some(p0) = self.p0.get_mut(i) {
             *p0 |= n & self.set0;
         }
         if let Some(p1) = self.p1.get_mut(i) {
             *p1 |= n & self.set1;
         }
-        if GOAL {
+        if SIDE == GOAL_SIDE {
             if let Some(ps) = self.ps.get_mut(i) {
                 *ps |= n;
             }
         }
-        self.note_row::<ODD, GOAL>(w, t);
+        self.note_row::<ODD, SIDE>(w, t);
         if n & self.edges(w) != 0 {
-            self.note_row::<ODD, GOAL>(self.layout.row_words + w, t);
+            self.note_row::<ODD, SIDE>(self.layout.row_words + w, t);
         }
     }
 
     /// Put row `t` into column `w`'s row set for the next layer, and its word into the summary.
     #[inline(always)]
-    fn note_row<const ODD: bool, const GOAL: bool>(&mut self, w: usize, t: usize) {
+    fn note_row<const ODD: bool, const SIDE: u8>(&mut self, w: usize, t: usize) {
         let layout = &self.layout;
         let at = (w << layout.set_shift) + (t >> 5);
         let sets = usize::from(!ODD) * layout.layer_set_words() + at;
@@ -1134,7 +1249,7 @@ impl Layers<'_> {
     /// for the next layer (even when the layer being expanded is `ODD`), and its words into the
     /// summary.
     #[inline(always)]
-    fn note_rows<const ODD: bool, const GOAL: bool>(&mut self, w: usize, t: usize, rows: u32) {
+    fn note_rows<const ODD: bool, const SIDE: u8>(&mut self, w: usize, t: usize, rows: u32) {
         if rows == 0 {
             return;
         }
@@ -1169,11 +1284,20 @@ fn mask_below(n: usize) -> u32 {
     }
 }
 
-/// `(xs, sset)` for expanding a layer of the goal's side (`GOAL`) or the start's: the side's
-/// cells are `SIDE ^ xs`, new cells get `SIDE |= n & sset`.
+/// The side expanded (`SIDE` parameter of the expansion): the start's, the goal's, or either
+/// while no word can hold cells of both ([`APART`]: `SIDE` is neither read nor written).
+const START_SIDE: u8 = 0;
+/// See [`START_SIDE`].
+const GOAL_SIDE: u8 = 1;
+/// See [`START_SIDE`].
+const APART: u8 = 2;
+
+/// `(xs, sset)` for expanding a layer of side `SIDE`: the side's cells are `SIDE ^ xs`, new
+/// cells get `SIDE |= n & sset` (apart: the `SIDE` word reads as 0, so every reached cell is
+/// the side's own and none is the other's).
 #[inline(always)]
-const fn side_masks<const GOAL: bool>() -> (u32, u32) {
-    if GOAL {
+const fn side_masks<const SIDE: u8>() -> (u32, u32) {
+    if SIDE == GOAL_SIDE {
         (0, u32::MAX)
     } else {
         (u32::MAX, 0)

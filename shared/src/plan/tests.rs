@@ -1492,3 +1492,25 @@ proptest! {
         check_bfs(&mut *p, &g, s, t)?;
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(96))]
+
+    /// Grids of 3–5 words × 3–4 row blocks with start and goal anywhere: the sides start apart
+    /// (no `SIDE` bits kept) and switch to keeping them when their blocks come near, or start
+    /// near.
+    #[test]
+    fn bfs_sides_apart_then_near_match_pathfinding(
+        w in 70u32..=160, h in 66u32..=110, density in 0u64..=35, seed in any::<u64>(),
+        a in any::<u32>(), b in any::<u32>(),
+    ) {
+        const CELLS: usize = 160 * 110;
+        let mut g = random_grid::<{ words_for_cells(CELLS) }>(w, h, density, seed);
+        let cell = |k: u32| Cell::new((k % w) as u16, ((k / w) % h) as u16);
+        let (s, t) = (cell(a), cell(b));
+        g.set(s, false);
+        g.set(t, false);
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 4096>::new());
+        check_bfs(&mut *p, &g, s, t)?;
+    }
+}
