@@ -223,7 +223,11 @@
 //! previous step's direction, then E, N, W, S, NE, NW, SW, SE; collinear cells are merged
 //! across the join. When the `SIDE` plane does not fit in the scratch (narrow grids with
 //! much row padding), the search runs from the start only and stops at the layer that
-//! reaches the goal. The scalar restart below is one-sided.
+//! reaches the goal. While the two sides are far apart (the rectangles of 32-row × 32-column
+//! blocks holding each side's cells, one grown by a block, do not meet) no word holds cells of
+//! both and no meeting is possible: those layers run without `SIDE` (neither read nor
+//! written), and before the first layer where the rectangles come near `SIDE` is set to the
+//! reached cells of the goal side's rectangle. The scalar restart below is one-sided.
 //!
 //! *Narrow frontiers.* In a maze or a corridor the frontier holds 1–3 cells for thousands of
 //! layers, and the per-layer and per-word costs outweigh the word parallelism (on the 300 × 300
@@ -255,8 +259,8 @@
 //! ## Complexity
 //!
 //! Layered BFS: `O(layers × frontier words + reached cells / 32)`; from both ends on the
-//! 300 × 300 open floor (2 × 146 layers, 46 345 cells) 4.2 M Cortex-M4 instructions, 91 per
-//! cell; 20 % random obstacles 6.6 M (53 055 cells, 125 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
+//! 300 × 300 open floor (2 × 146 layers, 46 345 cells) 4.0 M Cortex-M4 instructions, 87 per
+//! cell; 20 % random obstacles 6.6 M (53 055 cells, 124 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
 //! cell (4.2 M in the 300 × 300 maze). Jump point
 //! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
