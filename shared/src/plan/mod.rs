@@ -40,19 +40,25 @@
 //! | `0 .. nodes`                       | `P0`: bit 0 of the cell's layer code                |
 //! | `nodes .. 2 nodes`                 | `P1`: bit 1 of the layer code (code 0: not reached, |
 //! |                                    | else `layer mod 3 + 1`)                             |
-//! | `2 nodes .. 3 nodes`               | `FREE`: 1 = free (only if it fits, see below)       |
-//! | then `2 × 2 row_words × set_words` | row sets per layer parity: per word column, the     |
-//! |                                    | rows with frontier cells in it, then the rows with  |
-//! |                                    | frontier cells at its edges (`set_words` = `⌈height |
-//! |                                    | / 32⌉` rounded up to a power of two)                |
-//! | then `2 × ⌈2 row_words × set_words / 32⌉` | per parity, which row-set words are not empty |
+//! | `2 nodes .. 3 nodes`               | `SIDE`: 1 = reached from the goal (if it fits)      |
+//! | `3 nodes .. 4 nodes`               | `FREE`: 1 = free (only if it fits, see below)       |
+//! | then `2 × 2 × 2 row_words × set_words` | row sets per side and layer parity: per word    |
+//! |                                    | column, the rows with frontier cells in it, then    |
+//! |                                    | the rows with frontier cells at its edges           |
+//! |                                    | (`set_words` = `⌈height / 32⌉` rounded up to a      |
+//! |                                    | power of two)                                       |
+//! | then `2 × 2 × ⌈2 row_words × set_words / 32⌉` | per side and parity, the non-empty row-set words |
 //!
-//! At 300 × 300: 3 × 3 000 + 2 × 320 + 2 × 10 = 9 660 of the 11 250 words. When the `FREE`
-//! plane does not fit (narrow grids, where the padding to whole words wastes most: e.g. 40 × 40
-//! in `scratch_words_for_cells(1600)` = 200 words), the free bits are read from the grid's own
-//! packed bits instead (two reads and a funnel shift per word: slower, same result); when not
-//! even `P0`, `P1` and the row sets fit (grids narrower than about 18 cells in a scratch sized
-//! exactly for them), BFS reports [`PlanError::ScratchTooSmall`] with the cells it would need.
+//! At 300 × 300 (`nodes` = 3 000, row sets 4 × 330 words): in the 20 000 words of the MCU's
+//! 400 × 400 planner all four planes fit (13 320 words); in the 11 250 words of
+//! [`Planner300`] `P0`, `P1`, `SIDE` and the row sets (10 320 words), and the free bits are
+//! read from the grid's own packed bits instead (two reads and a funnel shift per word:
+//! slower, same result). When `SIDE` does not fit either (narrow grids, where the padding to
+//! whole words wastes most: e.g. 40 × 40 in `scratch_words_for_cells(1600)` = 200 words), BFS
+//! searches from the start only, on `P0`, `P1` and the grid's bits; when not even those and
+//! the row sets fit (grids narrower than about 18 cells in a scratch sized exactly for them),
+//! BFS reports [`PlanError::ScratchTooSmall`] with the cells it would need.
+//! `scratch_words_for_cells` is unchanged (4 bits per cell).
 //!
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
 //! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
@@ -221,12 +227,36 @@
 //! word in the rows below and above. Moves across a word edge (bit 31 of word `w` to bit 0
 //! of `w + 1` and back) are rare (one cell pair per 32 columns): new cells at a word edge also
 //! put their row into the column's *edge set*, whose rows are then expanded cell by cell across
-//! the edge with the same rule. The search stops after the layer that reaches the goal, or when
-//! a layer is empty (`Unreachable`); `expanded` is the number of cells reached (popcount of the
-//! planes). The path is walked back from the goal: from a cell of layer `d`, a legal move to a
-//! neighbour whose code is `(d - 1) mod 3 + 1` (its neighbours have layers `d - 1 ..= d + 1`,
-//! which the code tells apart), preferring the previous step's direction, then E, N, W, S, NE,
-//! NW, SW, SE; collinear cells are merged. BFS needs no queue entries.
+//! the edge with the same rule. BFS needs no queue entries.
+//!
+//! *From both ends.* The search floods from the start (side A) and from the goal (side B),
+//! one layer of one side at a time, alternating, so that on open floors each side floods a ball
+//! of about half the distance (on the 300 × 300 open floor 46 345 cells instead of 88 803). A
+//! third plane `SIDE` tells the sides apart (1 = reached from the goal): side X's frontier at
+//! its layer `l` is "code `l mod 3 + 1` and `SIDE` = X", new cells get X's next code and `SIDE`
+//! bit. Next to the new cells `N = reach & M & !reached` the kernel computes the *meetings*
+//! `reach & reached & other side`. Why the first meeting gives the fewest steps: as long as
+//! no layer met the other side, each side's marks are exactly its ball (`d_A ≤ a`, `d_B ≤ b`,
+//! true distances) and the balls are disjoint and not joined by a move, so the distance `D`
+//! is at least `a + b + 1`. When side X expands its layer `a` and reaches a cell `m` of side
+//! Y, `d_Y(m) = b` (a Y cell of layer `≤ b - 1` next to X's frontier cell would have reached
+//! that cell, or met it, when Y expanded that layer), so `a + 1 + b` steps join start and goal
+//! and `D = a + b + 1`. The search ends after that layer; `cost` = `a + 1 + b` (counted by the
+//! rebuild), `expanded` = cells reached by both sides (popcount of the code planes). It is
+//! `Unreachable` when a layer adds no cell before any meeting (that side's region is all
+//! reached and holds no cell of the other side). The path: the meeting move joins a cell of A
+//! and a cell of B (the kernel notes the rows and word of the meeting; the rebuild finds the
+//! pair there); each side is walked down its own layers (from a cell of layer `d` to a
+//! neighbour of the same side with code `(d - 1) mod 3 + 1` that a legal move joins; its
+//! neighbours have layers `d - 1 ..= d + 1`, which the code tells apart), preferring the
+//! previous step's direction, then E, N, W, S, NE, NW, SW, SE; collinear cells are merged
+//! across the join. When the `SIDE` plane does not fit in the scratch (narrow grids with
+//! much row padding), the search runs from the start only and stops at the layer that
+//! reaches the goal. While the two sides are far apart (the rectangles of 32-row × 32-column
+//! blocks holding each side's cells, one grown by a block, do not meet) no word holds cells of
+//! both and no meeting is possible: those layers run without `SIDE` (neither read nor
+//! written), and before the first layer where the rectangles come near `SIDE` is set to the
+//! reached cells of the goal side's rectangle. The scalar restart below is one-sided.
 //!
 //! *Narrow frontiers.* In a maze or a corridor the frontier holds 1–3 cells for thousands of
 //! layers, and the per-layer and per-word costs outweigh the word parallelism (on the 300 × 300
@@ -257,9 +287,9 @@
 //!
 //! ## Complexity
 //!
-//! Layered BFS: `O(layers × frontier words + reached cells / 32)`; on the 300 × 300 open floor
-//! (293 layers, 88 803 cells) 6.0 M Cortex-M4 instructions, 68 per cell; 20 % random obstacles
-//! 7.1 M (98 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
+//! Layered BFS: `O(layers × frontier words + reached cells / 32)`; from both ends on the
+//! 300 × 300 open floor (2 × 146 layers, 46 345 cells) 4.0 M Cortex-M4 instructions, 87 per
+//! cell; 20 % random obstacles 6.6 M (53 055 cells, 124 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
 //! cell (4.2 M in the 300 × 300 maze). Jump point
 //! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
@@ -1632,8 +1662,9 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         let start_index = geometry.index(start);
         let goal_index = geometry.index(goal);
-        // Whether BFS ran its scalar variant (path in the nibbles) instead of the layered one.
-        let mut bfs_nibbles = false;
+        // Where the layered BFS met (else, when found, the scalar BFS left its path in the
+        // nibbles).
+        let mut bfs_meet = None;
         let search = if start_index == goal_index {
             set_nibble(&mut self.scratch, start_index, CODE_START);
             Search {
@@ -1644,8 +1675,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         } else {
             match kind {
                 PlannerKind::Bfs => {
-                    let (search, nibbles) = self.bfs(grid, start, goal)?;
-                    bfs_nibbles = nibbles;
+                    let (search, meet) = self.bfs(grid, start, goal)?;
+                    bfs_meet = meet;
                     search
                 }
                 PlannerKind::AStar | PlannerKind::AnyAngle if cell_by_cell => {
@@ -1681,7 +1712,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         let (length_cells, steps, fits) = match kind {
             PlannerKind::AnyAngle => self.rebuild_any_angle(grid, goal),
-            PlannerKind::Bfs if !bfs_nibbles => self.bfs_rebuild(grid, goal, search.cost),
+            PlannerKind::Bfs => match bfs_meet {
+                Some(meet) => self.bfs_rebuild(grid, goal, meet),
+                None => self.rebuild_merged(&geometry, goal),
+            },
             _ => self.rebuild_merged(&geometry, goal),
         };
         let report = PlanReport {

@@ -1019,19 +1019,27 @@ fn random_grid<const W: usize>(w: u32, h: u32, density: u64, seed: u64) -> Grid<
 }
 
 #[test]
-fn bfs_open_300_reaches_every_cell_of_the_last_layer() {
-    // Layers on an open floor are Chebyshev rings: the search stops after the goal's layer 293,
-    // when every cell within 293 steps of (3, 5) is reached: 297 columns × 299 rows. Frontier
-    // runs span many 32-row words and the frontier crosses every word edge.
+fn bfs_open_300_floods_two_half_balls() {
+    // Layers on an open floor are Chebyshev rings. From both ends, each side floods about half
+    // the distance, 146 layers: 150 columns × 152 rows round (3, 5), 150 × 155 round
+    // (296, 291), plus part of one more ring (at most 303 cells) in the round where they meet;
+    // one-sided it was every cell within 293 steps of (3, 5) (297 × 299 = 88 803 cells).
+    // Frontier runs span many 32-row words and the frontier crosses every word edge.
     let g = crate::grid::Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
     let mut p = Box::new(Planner300::new());
     let r = p
         .plan_cells(PlannerKind::Bfs, &g, Cell::new(3, 5), Cell::new(296, 291))
         .unwrap();
     assert_eq!(r.cost, 293);
-    assert_eq!(r.expanded, 297 * 299);
-    // 7 steps east and 286 diagonal ones, in two runs.
-    assert_eq!(p.path_cells().len(), 3);
+    let balls = 150 * 152 + 150 * 155;
+    assert!(
+        (balls..=balls + 303).contains(&r.expanded),
+        "{}",
+        r.expanded
+    );
+    // 7 steps east and 286 diagonal ones, in at most three runs (the two walks down the sides
+    // put the east run between diagonal ones).
+    assert!(p.path_cells().len() <= 4, "{:?}", p.path_cells());
     assert_eq!(steps_and_cost(p.path_cells()).0, 293);
     assert_collision_free(&g, p.path_cells());
 }
@@ -1210,17 +1218,25 @@ fn one_cell_wide_grids_match_pathfinding_cell_by_cell_and_by_jump_points() {
 fn bfs_layout_uses_the_grid_bits_when_the_free_plane_does_not_fit() {
     let fits = |w: u32, h: u32, words: usize| {
         super::bfs::BfsLayout::new(&GridGeometry::new(w, h, 0.05).unwrap(), words)
-            .map(|l| l.copies_free())
+            .map(|l| (l.copies_free(), l.two_sided()))
     };
-    // 300 x 300 in the 11 250 words of Planner300: three planes (9 000) and the row sets.
-    assert_eq!(fits(300, 300, SCRATCH_WORDS_300), Ok(true));
-    // 40 x 40 in 200 words: two planes of 80 words, the free bits come from the grid.
-    assert_eq!(fits(40, 40, scratch_words_for_cells(1600)), Ok(false));
+    // 300 x 300 in the 20 000 words of a 400 x 400 planner: four planes (12 000) and the row
+    // sets, from both ends.
+    assert_eq!(fits(300, 300, SCRATCH_WORDS_400), Ok((true, true)));
+    // 300 x 300 in the 11 250 words of Planner300: three planes (9 000) and the row sets (the
+    // free bits come from the grid), from both ends.
+    assert_eq!(fits(300, 300, SCRATCH_WORDS_300), Ok((false, true)));
+    // 40 x 40 in 200 words: two planes of 80 words, from the start only.
+    assert_eq!(
+        fits(40, 40, scratch_words_for_cells(1600)),
+        Ok((false, false))
+    );
     // 8 x 8 in 8 words: not even two planes fit; the error names what is needed.
     assert_eq!(
         fits(8, 8, scratch_words_for_cells(64)),
         Err(PlanError::ScratchTooSmall {
-            cells: 8 * (2 * 8 + 2 * 2 + 2), // 2 planes, 2 row sets of 2 words, 2 summaries
+            // 2 planes, 4 row sets (2 sides × 2 parities) of 2 words, 4 summaries
+            cells: 8 * (2 * 8 + 4 * 2 + 4),
             capacity: 64
         })
     );
@@ -1490,6 +1506,56 @@ fn check_corridor_case(g: &SmallGrid, s: Cell, t: Cell) -> Result<(), TestCaseEr
     Ok(())
 }
 
+/// Walks a merged BFS polyline unit move by unit move: every move is legal (target free, a
+/// diagonal's two side cells free). Returns the number of moves.
+fn legal_moves<const W: usize>(g: &Grid<W>, cells: &[Cell]) -> u32 {
+    let free = |x: i32, y: i32| g.geometry().contains_xy(x, y) && !g.is_occupied_xy(x, y);
+    let mut moves = 0;
+    for pair in cells.windows(2) {
+        let (mut x, mut y) = (pair[0].x as i32, pair[0].y as i32);
+        let (tx, ty) = (pair[1].x as i32, pair[1].y as i32);
+        let (dx, dy) = ((tx - x).signum(), (ty - y).signum());
+        assert!(
+            (tx - x).abs() == 0 || (ty - y).abs() == 0 || (tx - x).abs() == (ty - y).abs(),
+            "not an 8-direction run: {pair:?}"
+        );
+        assert!(free(x, y), "vertex {pair:?} occupied");
+        while (x, y) != (tx, ty) {
+            assert!(free(x + dx, y + dy), "move into ({}, {})", x + dx, y + dy);
+            if dx != 0 && dy != 0 {
+                assert!(
+                    free(x + dx, y) && free(x, y + dy),
+                    "corner cut at ({x}, {y})"
+                );
+            }
+            x += dx;
+            y += dy;
+            moves += 1;
+        }
+    }
+    moves
+}
+
+/// Plan with BFS and check against `pathfinding::bfs`: same reachability, `cost` = fewest
+/// steps, a path of legal moves from `s` to `t` with that many steps.
+fn check_bfs<const W: usize, const S: usize, const Q: usize>(
+    p: &mut Planner<S, Q>,
+    g: &Grid<W>,
+    s: Cell,
+    t: Cell,
+) -> Result<(), TestCaseError> {
+    let r = p.plan_cells(PlannerKind::Bfs, g, s, t).unwrap();
+    let expected = oracle_bfs(g, s, t);
+    prop_assert_eq!(r.status == PlanStatus::Found, expected.is_some(), "{:?}", r);
+    if let Some(steps) = expected {
+        prop_assert_eq!(r.cost, steps);
+        prop_assert_eq!(p.path_cells().first(), Some(&s));
+        prop_assert_eq!(p.path_cells().last(), Some(&t));
+        prop_assert_eq!(legal_moves(g, p.path_cells()), steps);
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(1024))]
 
@@ -1534,4 +1600,136 @@ fn corridor_table_counts_legal_neighbours() {
     assert_eq!(CORRIDOR_SIDES[row(0b000, 0b111, 0b010)], 0);
     // Free diagonals without both side cells are not legal neighbours.
     assert_eq!(CORRIDOR_SIDES[row(0b101, 0b111, 0b101)], 0b0101);
+}
+
+/// A 3 × 3 ring of walls round `c` (clipped to the map), leaving `c` free.
+fn enclose<const W: usize>(g: &mut Grid<W>, c: Cell) {
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            if dx != 0 || dy != 0 {
+                g.set_xy(c.x as i32 + dx, c.y as i32 + dy, true);
+            }
+        }
+    }
+    g.set(c, false);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(1024))]
+
+    /// BFS from both ends on small random grids (up to 24 × 24: the planes fit, both sides
+    /// run): fewest steps as pathfinding, a legal path.
+    #[test]
+    fn bfs_two_sided_matches_pathfinding((mut g, s, t) in arb_grid()) {
+        g.set(s, false);
+        g.set(t, false);
+        let mut p = Box::new(SmallPlanner::new());
+        check_bfs(&mut *p, &g, s, t)?;
+    }
+
+    /// Start and goal next to each other (straight or diagonal, a diagonal possibly blocked by
+    /// its side cells): one step, or the way round.
+    #[test]
+    fn bfs_adjacent_start_and_goal((mut g, s, _) in arb_grid(), k in 0usize..8) {
+        let (dx, dy) = STEPS[k];
+        let (tx, ty) = (s.x as i32 + dx, s.y as i32 + dy);
+        prop_assume!(g.geometry().contains_xy(tx, ty));
+        let t = Cell::new(tx as u16, ty as u16);
+        g.set(s, false);
+        g.set(t, false);
+        let mut p = Box::new(SmallPlanner::new());
+        check_bfs(&mut *p, &g, s, t)?;
+    }
+
+    /// An enclosed start or goal (a ring of walls round it): unreachable, whichever side runs
+    /// out first; with one ring cell opened again, the way through it.
+    #[test]
+    fn bfs_enclosed_start_or_goal((mut g, s, t) in arb_grid(), goal in any::<bool>(), open in 0usize..9) {
+        let c = if goal { t } else { s };
+        enclose(&mut g, c);
+        g.set(s, false);
+        g.set(t, false);
+        if let Some(&(dx, dy)) = STEPS.get(open) {
+            let (x, y) = (c.x as i32 + dx, c.y as i32 + dy);
+            if g.geometry().contains_xy(x, y) {
+                g.set_xy(x, y, false);
+            }
+        }
+        let mut p = Box::new(SmallPlanner::new());
+        check_bfs(&mut *p, &g, s, t)?;
+    }
+
+    /// Narrow grids (1 to 3 cells wide or high) with obstacles: long thin searches.
+    #[test]
+    fn bfs_narrow_grids(
+        long in 2u32..=40, thin in 1u32..=3, tall in any::<bool>(), density in 0u64..=30,
+        seed in any::<u64>(), a in 0u32..120, b in 0u32..120,
+    ) {
+        const CELLS: usize = 40 * 3;
+        let (w, h) = if tall { (thin, long) } else { (long, thin) };
+        let mut g = random_grid::<{ words_for_cells(CELLS) }>(w, h, density, seed);
+        let cell = |k: u32| Cell::new((k % w) as u16, ((k / w) % h) as u16);
+        let (s, t) = (cell(a), cell(b));
+        g.set(s, false);
+        g.set(t, false);
+        let mut p = Box::new(Planner::<{ 4 * CELLS }, 256>::new());
+        check_bfs(&mut *p, &g, s, t)?;
+    }
+
+    /// Perfect mazes of 1-cell corridors between random rooms (short searches meet in the
+    /// layered search, long ones restart cell by cell).
+    #[test]
+    fn bfs_mazes_match_pathfinding(
+        rooms in 2i32..=20, seed in any::<u64>(), a in 0i32..400, b in 0i32..400,
+    ) {
+        const CELLS: usize = 41 * 41;
+        let side = 2 * rooms + 1;
+        let g = maze::<{ words_for_cells(CELLS) }>(side, seed);
+        let room = |k: i32| Cell::new((2 * (k % rooms) + 1) as u16, (2 * ((k / rooms) % rooms) + 1) as u16);
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 1024>::new());
+        check_bfs(&mut *p, &g, room(a), room(b))?;
+    }
+
+    /// 33..40-wide grids in a scratch where the `SIDE` plane fits but the `FREE` plane does
+    /// not: both sides read the grid's bits.
+    #[test]
+    fn bfs_two_sided_from_the_grid_bits_matches_pathfinding(
+        w in 33u32..=40, h in 36u32..=40, density in 0u64..=40, seed in any::<u64>(),
+        sx in 0u32..33, sy in 0u32..40, tx in 0u32..33, ty in 0u32..40,
+    ) {
+        const CELLS: usize = 40 * 40;
+        // 3 planes of 2 × 40 words and 4 × 9 words of row sets fit, 4 planes of 2 × 36 do not.
+        const WORDS: usize = 280;
+        let g0 = random_grid::<{ words_for_cells(CELLS) }>(w, h, density, seed);
+        let layout = super::bfs::BfsLayout::new(g0.geometry(), WORDS).unwrap();
+        prop_assert!(layout.two_sided() && !layout.copies_free());
+        let mut g = g0;
+        let (s, t) = (Cell::new(sx as u16, (sy % h) as u16), Cell::new(tx as u16, (ty % h) as u16));
+        g.set(s, false);
+        g.set(t, false);
+        let mut p = Box::new(Planner::<WORDS, 1600>::new());
+        check_bfs(&mut *p, &g, s, t)?;
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(96))]
+
+    /// Grids of 3–5 words × 3–4 row blocks with start and goal anywhere: the sides start apart
+    /// (no `SIDE` bits kept) and switch to keeping them when their blocks come near, or start
+    /// near.
+    #[test]
+    fn bfs_sides_apart_then_near_match_pathfinding(
+        w in 70u32..=160, h in 66u32..=110, density in 0u64..=35, seed in any::<u64>(),
+        a in any::<u32>(), b in any::<u32>(),
+    ) {
+        const CELLS: usize = 160 * 110;
+        let mut g = random_grid::<{ words_for_cells(CELLS) }>(w, h, density, seed);
+        let cell = |k: u32| Cell::new((k % w) as u16, ((k / w) % h) as u16);
+        let (s, t) = (cell(a), cell(b));
+        g.set(s, false);
+        g.set(t, false);
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 4096>::new());
+        check_bfs(&mut *p, &g, s, t)?;
+    }
 }
