@@ -33,8 +33,8 @@
 //! [`super`] and the queue.
 
 use super::{
-    nibble, nibble_window, scratch_words_for_cells, set_nibble, PathCells, PlanError, Planner,
-    Search, BLOCKED, CODE_START, E, N, NE, NIBBLE_WINDOWS, NW, S, SE, STEPS, SW, W,
+    scratch_words_for_cells, set_nibble, PathCells, PlanError, Planner, Search, CODE_START, E, N,
+    NE, NIBBLE_WINDOWS, NW, S, SE, STEPS, SW, W,
 };
 use crate::geom::Cell;
 use crate::grid::{Grid, GridGeometry};
@@ -299,7 +299,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     ) -> Result<Search, PlanError> {
         let geometry = grid.geometry();
         let width = geometry.width() as usize;
-        let height = geometry.height() as usize;
         let used_words = scratch_words_for_cells(geometry.cell_count());
         let scratch = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
         let queue = &mut self.queue[..];
@@ -314,9 +313,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let (mut pushed, mut popped) = (0usize, 0usize);
         let mut peak = 1usize;
 
-        // Interior cells: x in 1..width-1 and index in width..cells-width.
-        let inner_x = width.saturating_sub(2);
-        let inner_span = geometry.cell_count().saturating_sub(2 * width);
+        let interior = super::Interior::new(geometry);
 
         set_nibble(scratch, start, CODE_START);
         match queue.get_mut(0) {
@@ -328,18 +325,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         pushed += 1;
 
-        let window = nibble_window;
-        // Nibble of (x + sx, y + sy), BLOCKED off the map (border path).
-        let slow = |scratch: &[u32], index: usize, x: usize, sx: isize, sy: isize| -> u32 {
-            let nx = x as isize + sx;
-            let ny = (index / width) as isize + sy;
-            if nx < 0 || ny < 0 || nx >= width as isize || ny >= height as isize {
-                BLOCKED
-            } else {
-                nibble(scratch, (ny as usize) * width + nx as usize)
-            }
-        };
-
         while popped != pushed {
             let (index, x) = match queue.get(slot_of(popped)) {
                 Some(e) => (e.node as usize, e.f as usize),
@@ -347,21 +332,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             };
             popped += 1;
 
-            let (above, cur, below) =
-                if x.wrapping_sub(1) < inner_x && index.wrapping_sub(width) < inner_span {
-                    (
-                        window(scratch, index + width - 1),
-                        window(scratch, index - 1),
-                        window(scratch, index - width - 1),
-                    )
-                } else {
-                    let row = |sy: isize| {
-                        slow(scratch, index, x, -1, sy)
-                            | slow(scratch, index, x, 0, sy) << 4
-                            | slow(scratch, index, x, 1, sy) << 8
-                    };
-                    (row(1), row(0), row(-1))
-                };
+            let (above, cur, below) = interior.neighbourhood(scratch, index, x, || index / width);
             // Per row: bit `col` of the targets when that cell is 0 (free, not reached); a
             // diagonal also needs the side cell of its row (the middle one) and the side cell
             // of its column in the current row open.

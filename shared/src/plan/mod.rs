@@ -637,6 +637,70 @@ pub(super) fn nibble_window(scratch: &[u32], j: usize) -> u32 {
     }
 }
 
+/// The map's interior for the nibble searches (scalar BFS, cell-by-cell A*): cells whose 3 × 3
+/// neighbourhood lies on the map, i.e. `x` in `1 .. width - 1` and `index` in
+/// `width .. cells - width`. Their neighbourhood is three [`nibble_window`]s at constant
+/// offsets; border cells read nibble by nibble.
+#[derive(Clone, Copy)]
+pub(super) struct Interior {
+    width: usize,
+    height: usize,
+    inner_x: usize,
+    inner_span: usize,
+}
+
+impl Interior {
+    pub(super) fn new(geometry: &GridGeometry) -> Self {
+        let width = geometry.width() as usize;
+        Self {
+            width,
+            height: geometry.height() as usize,
+            inner_x: width.saturating_sub(2),
+            inner_span: geometry.cell_count().saturating_sub(2 * width),
+        }
+    }
+
+    /// Whether cell `index` (column `x`) is an interior cell.
+    #[inline(always)]
+    pub(super) fn contains(&self, index: usize, x: usize) -> bool {
+        x.wrapping_sub(1) < self.inner_x && index.wrapping_sub(self.width) < self.inner_span
+    }
+
+    /// The 3 × 3 neighbourhood of cell `index` (column `x`) as three 12-bit windows, (row
+    /// above, same row, row below), column `x - 1` in bits 0..4 of each. Off-map cells read as
+    /// [`BLOCKED`]. `y` is called on border cells only (so a caller without the row at hand
+    /// divides there only).
+    #[inline(always)]
+    pub(super) fn neighbourhood(
+        &self,
+        scratch: &[u32],
+        index: usize,
+        x: usize,
+        y: impl FnOnce() -> usize,
+    ) -> (u32, u32, u32) {
+        let width = self.width;
+        if self.contains(index, x) {
+            return (
+                nibble_window(scratch, index + width - 1),
+                nibble_window(scratch, index - 1),
+                nibble_window(scratch, index - width - 1),
+            );
+        }
+        let y = y();
+        // Nibble of (x + sx - 1, y + sy - 1), BLOCKED off the map.
+        let at = |sx: usize, sy: usize| -> u32 {
+            let (nx, ny) = ((x + sx).wrapping_sub(1), (y + sy).wrapping_sub(1));
+            if nx < width && ny < self.height {
+                nibble(scratch, ny * width + nx)
+            } else {
+                BLOCKED
+            }
+        };
+        let row = |sy: usize| at(0, sy) | at(1, sy) << 4 | at(2, sy) << 8;
+        (row(2), row(1), row(0))
+    }
+}
+
 /// For each 12-bit window of three nibbles (a row of a 3 × 3 neighbourhood, for the scalar BFS
 /// and the cell-by-cell A*): bit `k` (k = 0, 1, 2) set when nibble `k` is 0 (free, not reached
 /// or closed), bit `3 + k` when it is not [`BLOCKED`]. 4 KB of read-only data, built at compile
@@ -1043,18 +1107,16 @@ impl<'a> BucketQueue<'a> {
 /// of the cell to push at the end (`NIL` when nothing is to be pushed: a dead end or a closed
 /// cell), the number of steps to it and the number of cells closed. Out of line so that the
 /// search loop's registers are not spent on it.
-#[allow(clippy::too_many_arguments)]
 #[inline(never)]
 fn walk_corridor(
     scratch: &mut [u32],
-    width: usize,
-    inner_x: usize,
-    inner_span: usize,
+    interior: Interior,
     goal: usize,
     mut wi: usize,
     mut wnode: u32,
     mut rest: u32,
 ) -> (u32, u32, u32) {
+    let width = interior.width;
     // Index and entry steps of the side codes E, N, W, S.
     let index_step = [1, width, usize::MAX, width.wrapping_neg()];
     const WALK_NODE_STEP: [u32; 4] = [
@@ -1071,10 +1133,7 @@ fn walk_corridor(
         wnode = (wnode & !0xF).wrapping_add(WALK_NODE_STEP[k]) | c;
         steps += 1;
         let wx = (wnode >> 4) & 0xFFF;
-        if wi == goal
-            || (wx as usize).wrapping_sub(1) >= inner_x
-            || wi.wrapping_sub(width) >= inner_span
-        {
+        if wi == goal || !interior.contains(wi, wx as usize) {
             // Pushed, not walked (a closed cell must not be pushed: it could be expanded at
             // once by the immediate expansion).
             let end = if nibble(scratch, wi) == 0 { wnode } else { NIL };
@@ -1809,7 +1868,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     ) -> Result<Search, PlanError> {
         let geometry = grid.geometry();
         let width = geometry.width() as usize;
-        let height = geometry.height() as usize;
         let (gx, gy) = (goal_cell.x as u32, goal_cell.y as u32);
         let used_words = scratch_words_for_cells(geometry.cell_count());
         let scratch = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
@@ -1831,9 +1889,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         if !open.push(&mut state, h(sx, sy), (sy << 16) | (sx << 4) | CODE_START) {
             return Err(full);
         }
-        // Interior cells: x in 1..width-1 and index in width..cells-width.
-        let inner_x = width.saturating_sub(2);
-        let inner_span = geometry.cell_count().saturating_sub(2 * width);
+        let interior = Interior::new(geometry);
 
         // A target whose key equals the key just popped is the next pop anyway (nothing in the
         // queue is below it): one such target skips the queue and is expanded next
@@ -1889,26 +1945,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 });
             }
 
-            let (above, cur, below) =
-                if x.wrapping_sub(1) < inner_x && index.wrapping_sub(width) < inner_span {
-                    (
-                        nibble_window(scratch, index + width - 1),
-                        nibble_window(scratch, index - 1),
-                        nibble_window(scratch, index - width - 1),
-                    )
-                } else {
-                    // Border: nibble of (x + sx - 1, y + sy - 1), BLOCKED off the map.
-                    let at = |sx: usize, sy: usize| -> u32 {
-                        let (nx, ny) = ((x + sx).wrapping_sub(1), (y + sy).wrapping_sub(1));
-                        if nx < width && ny < height {
-                            nibble(scratch, ny * width + nx)
-                        } else {
-                            BLOCKED
-                        }
-                    };
-                    let row = |sy: usize| at(0, sy) | at(1, sy) << 4 | at(2, sy) << 8;
-                    (row(2), row(1), row(0))
-                };
+            let (above, cur, below) = interior.neighbourhood(scratch, index, x, || y);
             let window = |w: u32| u32::from(NIBBLE_WINDOWS[(w & 0xFFF) as usize]);
             let m = window(below) | window(cur) << 6 | window(above) << 12;
             // The targets by arrival step (arrival pruning, see the module docs), each tested
@@ -1967,7 +2004,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 // Side bit `code - 1`; the side behind a step of code `c` is bit `(c + 1) & 3`.
                 let rest = sides & !(1 << ((code + 1) & 3));
                 let (end, steps, closed) =
-                    walk_corridor(scratch, width, inner_x, inner_span, goal, index, node, rest);
+                    walk_corridor(scratch, interior, goal, index, node, rest);
                 expanded += closed;
                 if end != NIL {
                     let wg = g.wrapping_add(steps.wrapping_mul(STRAIGHT_COST));
