@@ -244,45 +244,34 @@ fn same_seed_same_trajectory_and_all_outputs_written() {
     assert_eq!(pngs, plans);
 }
 
+/// Run `twil simulate --real WORLD --params office.par EXTRA…`, which must fail with exit code 1
+/// and print nothing on stdout; returns its stderr.
+fn simulate_fails(world: &Path, extra: &[&str]) -> String {
+    let out = common::twil()
+        .args(["simulate", "--real"])
+        .arg(world)
+        .arg("--params")
+        .arg(common::world("office.par"))
+        .args(extra)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(out.stdout.is_empty());
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
 #[test]
 fn bad_inputs_exit_1_naming_the_file_and_line() {
     let tmp = tempfile::tempdir().unwrap();
     let bad = tmp.path().join("bad.da");
     std::fs::write(&bad, "2\n4\n1.0 1.0\n2.0 oops\n").unwrap();
-    let out = common::twil()
-        .args(["simulate", "--real"])
-        .arg(&bad)
-        .arg("--params")
-        .arg(common::world("office.par"))
-        .arg("--json")
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(1));
-    assert!(out.stdout.is_empty());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = simulate_fails(&bad, &["--json"]);
     assert!(err.contains("bad.da") && err.contains("line 4"), "{err}");
 
-    let out = common::twil()
-        .args(["simulate", "--real"])
-        .arg(common::world("office.da"))
-        .arg("--params")
-        .arg(common::world("office.par"))
-        .args(["--sonar-range", "9"])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
+    let office = common::world("office.da");
+    let err = simulate_fails(&office, &["--sonar-range", "9"]);
     assert!(err.contains("sonar_range_m"), "{err}");
 
-    let out = common::twil()
-        .args(["simulate", "--real"])
-        .arg(common::world("office.da"))
-        .arg("--params")
-        .arg(common::world("office.par"))
-        .args(["--size", "5x5"])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = simulate_fails(&office, &["--size", "5x5"]);
     assert!(err.contains("goal") && err.contains("off"), "{err}");
 }
