@@ -101,9 +101,12 @@ fn ensure_thumb_target() -> Result<()> {
     if out.status.success() && Path::new(&libdir).exists() {
         return Ok(());
     }
+    // `rustup toolchain install` is not enough: under `cargo` the active toolchain comes from
+    // `RUSTUP_TOOLCHAIN`, and rustup then installs that name without the file's targets (seen
+    // when the pinned toolchain is already present, e.g. as a link to `stable`).
     let mut c = Command::new("rustup");
     c.current_dir(workspace_root())
-        .args(["toolchain", "install"]);
+        .args(["target", "add", THUMB]);
     run(c)
 }
 
