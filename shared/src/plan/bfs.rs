@@ -113,7 +113,7 @@ impl BfsLayout {
     /// Index of word `w` of row `y` in a plane.
     #[inline(always)]
     fn node(&self, y: usize, w: usize) -> usize {
-        y * self.row_words + w
+        w * self.height + y
     }
 
     /// Words of one layer's row sets (frontier rows and edge rows of every word column).
@@ -141,7 +141,11 @@ fn grid_free_word(words: &[u32], width: usize, y: usize, w: usize) -> u32 {
 
 /// The free bits of a plane word: from the `FREE` plane, or computed from the grid.
 trait FreeBits {
+    /// The free bits of word `w` of row `y` (plane index `i`).
     fn get(&self, y: usize, w: usize, i: usize) -> u32;
+    /// The free bits of rows `y .. y + n` of word column `w` (plane indices from `i`), in
+    /// order (fewer when the planes end early: that cannot happen for a valid layout).
+    fn column(&self, y: usize, w: usize, i: usize, n: usize) -> impl Iterator<Item = u32>;
 }
 
 /// The `FREE` plane in the scratch.
@@ -151,6 +155,11 @@ impl FreeBits for FreePlane<'_> {
     #[inline(always)]
     fn get(&self, _y: usize, _w: usize, i: usize) -> u32 {
         self.0.get(i).copied().unwrap_or(0)
+    }
+
+    #[inline(always)]
+    fn column(&self, _y: usize, _w: usize, i: usize, n: usize) -> impl Iterator<Item = u32> {
+        self.0.get(i..i + n).unwrap_or(&[]).iter().copied()
     }
 }
 
@@ -169,6 +178,11 @@ impl FreeBits for GridBits<'_> {
         } else {
             0
         }
+    }
+
+    #[inline(always)]
+    fn column(&self, y: usize, w: usize, _i: usize, n: usize) -> impl Iterator<Item = u32> {
+        (y..y + n).map(move |y| self.get(y, w, 0))
     }
 }
 
@@ -219,13 +233,9 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         p1.fill(0);
         ps.fill(0);
         if layout.copy_free {
-            for y in 0..layout.height {
-                let row = free
-                    .get_mut(y * layout.row_words..(y + 1) * layout.row_words)
-                    .unwrap_or(&mut []);
-                for (w, word) in row.iter_mut().enumerate() {
-                    *word = grid_free_word(grid_words, layout.width, y, w);
-                }
+            for (k, word) in free.iter_mut().enumerate() {
+                let (w, y) = (k / layout.height.max(1), k % layout.height.max(1));
+                *word = grid_free_word(grid_words, layout.width, y, w);
             }
         }
         let mut layers = Layers {
@@ -943,7 +953,6 @@ impl Layers<'_> {
         w: usize,
     ) {
         let layout = self.layout;
-        let rw = layout.row_words;
         let i = layout.node(y, w);
         let s0 = self.p0.get(i).copied().unwrap_or(0);
         let s1 = self.p1.get(i).copied().unwrap_or(0);
@@ -962,7 +971,7 @@ impl Layers<'_> {
         // A diagonal step needs the straight step's target free (g) and the side cell in
         // row y (ms at the target column).
         if y > 0 {
-            let j = i - rw;
+            let j = i - 1;
             let m = free.get(y - 1, w, j);
             let g = f & m;
             if g != 0 {
@@ -979,7 +988,7 @@ impl Layers<'_> {
             }
         }
         if y + 1 < layout.height {
-            let j = i + rw;
+            let j = i + 1;
             let m = free.get(y + 1, w, j);
             let g = f & m;
             if g != 0 {
@@ -1012,93 +1021,99 @@ impl Layers<'_> {
         w: usize,
     ) {
         let layout = self.layout;
-        let rw = layout.row_words;
         let (x0, x1, set0, set1) = (self.x0, self.x1, self.set0, self.set1);
         let (xs, sset) = side_masks::<SIDE>();
         let edges = self.edges(w);
         let first = y0.saturating_sub(1);
         let last = (y1 + 1).min(layout.height.saturating_sub(1));
-        let mut i = layout.node(first, w);
-        let load = |p: &[u32], i: usize| p.get(i).copied().unwrap_or(0);
-        let (mut c0, mut c1, mut cs) = (
-            load(self.p0, i),
-            load(self.p1, i),
-            self.side_word::<SIDE>(i),
-        );
-        let mut mc = free.get(first, w, i);
+        // The column's words from the first target row up to the row above the last one (when
+        // on the map): consecutive plane words (the planes are stored column by column), so
+        // the window slides along slices without index arithmetic or bounds tests.
+        let rows = (last + 2).min(layout.height).saturating_sub(first);
+        let base = layout.node(first, w);
+        let range = base..base + rows;
+        let (Some(p0), Some(p1)) = (
+            self.p0.get_mut(range.clone()),
+            self.p1.get_mut(range.clone()),
+        ) else {
+            return;
+        };
+        let p0 = core::cell::Cell::from_mut(p0).as_slice_of_cells();
+        let p1 = core::cell::Cell::from_mut(p1).as_slice_of_cells();
+        // `SIDE` is neither read nor written while the sides are apart (the loads of `p0`
+        // standing in for it are dead code then).
+        let ps = if SIDE == APART {
+            p0
+        } else {
+            match self.ps.get_mut(range) {
+                Some(ps) => core::cell::Cell::from_mut(ps).as_slice_of_cells(),
+                None => return,
+            }
+        };
+        let side = |c: &core::cell::Cell<u32>| if SIDE == APART { 0 } else { c.get() };
+        let mut window = p0
+            .iter()
+            .zip(p1.iter())
+            .zip(ps.iter())
+            .zip(free.column(first, w, base, rows));
+        let Some((((r0, r1), rs), mut mc)) = window.next() else {
+            return;
+        };
+        // The target row: its cells and values.
+        let (mut t0, mut t1, mut ts) = (r0, r1, rs);
+        let (mut c0, mut c1, mut cs) = (r0.get(), r1.get(), side(rs));
         let mut fc = (c0 ^ x0) & (c1 ^ x1) & (cs ^ xs);
         // Row below the target: frontier and free bits (none below the first target).
         let (mut fb, mut mb) = (0u32, 0u32);
         let mut pending = 0u32; // rows `first + k` with new cells
         let mut pending_edges = 0u32; // ... with new cells in bit 0 or 31
         let mut met = 0u32; // cells of the other side reached
-
-        // One step of the window: target row `t` (word at `i`) with the row above (`a0`,
-        // `a1`, `as_`, `ma`; zeros above the map).
-        macro_rules! step {
-            ($t:expr, $a0:expr, $a1:expr, $as:expr, $ma:expr) => {{
-                let (t, a0, a1, as_, ma): (usize, u32, u32, u32, u32) = ($t, $a0, $a1, $as, $ma);
-                let fa = (a0 ^ x0) & (a1 ^ x1) & (as_ ^ xs);
-                let gb = fb & mc;
-                let ga = fa & mc;
-                let reach = gb
-                    | ga
-                    | (fc << 1)
-                    | (fc >> 1)
-                    | (mb & ((gb << 1) | (gb >> 1)))
-                    | (ma & ((ga << 1) | (ga >> 1)));
-                let n = reach & mc & !(c0 | c1);
-                if n != 0 {
-                    if let Some(p) = self.p0.get_mut(i) {
-                        *p = c0 | (n & set0);
-                    }
-                    if let Some(p) = self.p1.get_mut(i) {
-                        *p = c1 | (n & set1);
-                    }
-                    if SIDE == GOAL_SIDE {
-                        if let Some(p) = self.ps.get_mut(i) {
-                            *p = cs | (n & sset);
-                        }
-                    }
-                    pending |= 1 << (t - first);
-                    if n & edges != 0 {
-                        pending_edges |= 1 << (t - first);
-                    }
+        let mut bit = 1u32; // `1 << (t - first)`
+        loop {
+            // The row above the target (zeros above the map).
+            let above = window.next();
+            let (a0, a1, as_, ma) = match above {
+                Some((((r0, r1), rs), m)) => (r0.get(), r1.get(), side(rs), m),
+                None => (0, 0, 0, 0),
+            };
+            let fa = (a0 ^ x0) & (a1 ^ x1) & (as_ ^ xs);
+            let gb = fb & mc;
+            let ga = fa & mc;
+            let reach = gb
+                | ga
+                | (fc << 1)
+                | (fc >> 1)
+                | (mb & ((gb << 1) | (gb >> 1)))
+                | (ma & ((ga << 1) | (ga >> 1)));
+            let n = reach & mc & !(c0 | c1);
+            if n != 0 {
+                t0.set(c0 | (n & set0));
+                t1.set(c1 | (n & set1));
+                if SIDE == GOAL_SIDE {
+                    ts.set(cs | (n & sset));
                 }
-                met |= reach & (c0 | c1) & !(cs ^ xs);
-                (fb, mb, fc, mc, c0, c1, cs) = (fc, mc, fa, ma, a0, a1, as_);
-            }};
-        }
-        // Rows below `last` have a row above on the map.
-        for t in first..last {
-            let j = i + rw;
-            step!(
-                t,
-                load(self.p0, j),
-                load(self.p1, j),
-                self.side_word::<SIDE>(j),
-                free.get(t + 1, w, j)
-            );
-            i = j;
-        }
-        if last + 1 < layout.height {
-            let j = i + rw;
-            step!(
-                last,
-                load(self.p0, j),
-                load(self.p1, j),
-                self.side_word::<SIDE>(j),
-                free.get(last + 1, w, j)
-            );
-        } else {
-            step!(last, 0, 0, 0, 0);
+                pending |= bit;
+                if n & edges != 0 {
+                    pending_edges |= bit;
+                }
+            }
+            met |= reach & (c0 | c1) & !(cs ^ xs);
+            let Some((((r0, r1), rs), _)) = above else {
+                break; // the target was the map's top row
+            };
+            if bit >> (last - first) != 0 {
+                break; // the target was the last one
+            }
+            (fb, mb, fc, mc, c0, c1, cs) = (fc, mc, fa, ma, a0, a1, as_);
+            (t0, t1, ts) = (r0, r1, rs);
+            bit <<= 1;
         }
         if met != 0 {
             self.meet = Some((first, last, w));
         }
         self.note_rows::<ODD, SIDE>(w, first, pending);
         if pending_edges != 0 {
-            self.note_rows::<ODD, SIDE>(rw + w, first, pending_edges);
+            self.note_rows::<ODD, SIDE>(layout.row_words + w, first, pending_edges);
         }
     }
 
@@ -1144,16 +1159,16 @@ impl Layers<'_> {
         self.edge_target::<ODD, SIDE>(y, dst_w, j, dst_bit);
         // Diagonals: target free and not reached, side cell (target row, source column) free.
         if y > 0 {
-            let (t, jt) = (y - 1, j - layout.row_words);
-            if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, jt + w - dst_w) >> src_bit & 1
+            let (t, jt) = (y - 1, j - 1);
+            if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, layout.node(t, w)) >> src_bit & 1
                 != 0
             {
                 self.edge_target::<ODD, SIDE>(t, dst_w, jt, dst_bit);
             }
         }
         if y + 1 < layout.height {
-            let (t, jt) = (y + 1, j + layout.row_words);
-            if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, jt + w - dst_w) >> src_bit & 1
+            let (t, jt) = (y + 1, j + 1);
+            if free.get(t, dst_w, jt) >> dst_bit & free.get(t, w, layout.node(t, w)) >> src_bit & 1
                 != 0
             {
                 self.edge_target::<ODD, SIDE>(t, dst_w, jt, dst_bit);
