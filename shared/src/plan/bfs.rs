@@ -1062,57 +1062,89 @@ impl Layers<'_> {
             .zip(p1.iter())
             .zip(ps.iter())
             .zip(free.column(first, w, base, rows));
-        let Some((((r0, r1), rs), mut mc)) = window.next() else {
+        let Some((((r0, r1), rs), m)) = window.next() else {
             return;
         };
-        // The target row: its cells and values.
-        let (mut t0, mut t1, mut ts) = (r0, r1, rs);
-        let (mut c0, mut c1, mut cs) = (r0.get(), r1.get(), side(rs));
-        let mut fc = (c0 ^ x0) & (c1 ^ x1) & (cs ^ xs);
-        // Row below the target: frontier and free bits (none below the first target).
-        let (mut fb, mut mb) = (0u32, 0u32);
         let mut pending = 0u32; // rows `first + k` with new cells
         let mut pending_edges = 0u32; // ... with new cells in bit 0 or 31
         let mut met = 0u32; // cells of the other side reached
         let mut bit = 1u32; // `1 << (t - first)`
+        let end = 1u32 << (last - first); // the last target's bit
+                                          // A row of the window: frontier `f`, free `m`, codes `c0`, `c1`, side `cs`, and its
+                                          // words (to mark new cells). Row 0: the first target; the row below it has no frontier
+                                          // and no free cell (a diagonal move needs both side cells free).
+        macro_rules! row {
+            ($item:expr) => {{
+                let (((r0, r1), rs), m) = $item;
+                let (c0, c1, cs) = (r0.get(), r1.get(), side(rs));
+                ((c0 ^ x0) & (c1 ^ x1) & (cs ^ xs), m, c0, c1, cs, r0, r1, rs)
+            }};
+        }
+        let (mut fb, mut mb) = (0u32, 0u32);
+        let mut cur = row!((((r0, r1), rs), m));
+        // Target `cur` from the rows below (`fb`, `mb`) and above (`a`: its frontier, free bits;
+        // zeros above the map).
+        macro_rules! step {
+            ($cur:expr, $fa:expr, $ma:expr) => {{
+                let (fc, mc, c0, c1, cs, t0, t1, ts) = $cur;
+                let (fa, ma): (u32, u32) = ($fa, $ma);
+                let gb = fb & mc;
+                let ga = fa & mc;
+                let reach = gb
+                    | ga
+                    | (fc << 1)
+                    | (fc >> 1)
+                    | (mb & ((gb << 1) | (gb >> 1)))
+                    | (ma & ((ga << 1) | (ga >> 1)));
+                let n = reach & mc & !(c0 | c1);
+                if n != 0 {
+                    t0.set(c0 | (n & set0));
+                    t1.set(c1 | (n & set1));
+                    if SIDE == GOAL_SIDE {
+                        ts.set(cs | (n & sset));
+                    }
+                    pending |= bit;
+                    if n & edges != 0 {
+                        pending_edges |= bit;
+                    }
+                }
+                met |= reach & (c0 | c1) & !(cs ^ xs);
+                (fb, mb) = (fc, mc);
+            }};
+        }
+        // Unrolled by three so that the window's rows change roles by name, not by moves.
         loop {
-            // The row above the target (zeros above the map).
-            let above = window.next();
-            let (a0, a1, as_, ma) = match above {
-                Some((((r0, r1), rs), m)) => (r0.get(), r1.get(), side(rs), m),
-                None => (0, 0, 0, 0),
+            let Some(a) = window.next() else {
+                step!(cur, 0, 0);
+                break;
             };
-            let fa = (a0 ^ x0) & (a1 ^ x1) & (as_ ^ xs);
-            let gb = fb & mc;
-            let ga = fa & mc;
-            let reach = gb
-                | ga
-                | (fc << 1)
-                | (fc >> 1)
-                | (mb & ((gb << 1) | (gb >> 1)))
-                | (ma & ((ga << 1) | (ga >> 1)));
-            let n = reach & mc & !(c0 | c1);
-            if n != 0 {
-                t0.set(c0 | (n & set0));
-                t1.set(c1 | (n & set1));
-                if SIDE == GOAL_SIDE {
-                    ts.set(cs | (n & sset));
-                }
-                pending |= bit;
-                if n & edges != 0 {
-                    pending_edges |= bit;
-                }
+            let a = row!(a);
+            step!(cur, a.0, a.1);
+            if bit == end {
+                break;
             }
-            met |= reach & (c0 | c1) & !(cs ^ xs);
-            let Some((((r0, r1), rs), _)) = above else {
-                break; // the target was the map's top row
-            };
-            if bit >> (last - first) != 0 {
-                break; // the target was the last one
-            }
-            (fb, mb, fc, mc, c0, c1, cs) = (fc, mc, fa, ma, a0, a1, as_);
-            (t0, t1, ts) = (r0, r1, rs);
             bit <<= 1;
+            let Some(b) = window.next() else {
+                step!(a, 0, 0);
+                break;
+            };
+            let b = row!(b);
+            step!(a, b.0, b.1);
+            if bit == end {
+                break;
+            }
+            bit <<= 1;
+            let Some(c) = window.next() else {
+                step!(b, 0, 0);
+                break;
+            };
+            let c = row!(c);
+            step!(b, c.0, c.1);
+            if bit == end {
+                break;
+            }
+            bit <<= 1;
+            cur = c;
         }
         if met != 0 {
             self.meet = Some((first, last, w));
