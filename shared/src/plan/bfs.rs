@@ -772,6 +772,7 @@ impl Layers<'_> {
     /// sides (the start's first), until a layer
     /// reaches a cell of the other side, or adds no cell (unreachable), or the frontier turns
     /// out narrow (see [`NARROW_CHECK_LAYER`]).
+    #[inline(never)]
     fn run(&mut self, free: &impl FreeBits, start: Cell, goal: Cell) -> Outcome {
         self.sets.fill(0);
         self.summary.fill(0);
@@ -978,7 +979,7 @@ impl Layers<'_> {
 
     /// Expand the frontier of row `y` in word `w` into the rows below, level and above (moves
     /// out of the word: [`Layers::edge`]).
-    #[inline(always)]
+    #[inline(never)]
     fn single<const ODD: bool, const SIDE: u8>(
         &mut self,
         free: &impl FreeBits,
@@ -1188,7 +1189,7 @@ impl Layers<'_> {
     /// (bit 0 to bit 31 of the word before, bit 31 to bit 0 of the word after), into rows
     /// `y - 1 ..= y + 1`, with the same rule: target free and not reached; for a diagonal both
     /// side cells free. Rare (one pair of cells per 32 columns), so cell by cell.
-    #[inline(always)]
+    #[inline(never)]
     fn edge<const ODD: bool, const SIDE: u8>(
         &mut self,
         free: &impl FreeBits,
