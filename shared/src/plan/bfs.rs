@@ -6,8 +6,10 @@
 //! are visited, and in them only the words that do.
 //!
 //! Scratch layout (rows padded to `row_words = ⌈width / 32⌉` words, `nodes = height ×
-//! row_words`, `set_words = ⌈height / 32⌉` rounded up to a power of two); bit `b` of word
-//! `y · row_words + w` of a plane is cell `(32 w + b, y)`:
+//! row_words`, `set_words = ⌈height / 32⌉` rounded up to a power of two); the planes are
+//! stored column by column: bit `b` of word `w · height + y` of a plane is cell `(32 w + b,
+//! y)` (a word column's rows are consecutive words, which [`Layers::column`] walks as
+//! slices):
 //!
 //! | words                              | content                                           |
 //! |------------------------------------|---------------------------------------------------|
