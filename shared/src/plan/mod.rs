@@ -1542,6 +1542,14 @@ fn cluttered(words: &[u32], geometry: &GridGeometry, start: Cell, goal: Cell) ->
     runs * CLUTTER_CELLS_PER_RUN > cells
 }
 
+/// Unit-cost jump point search ([`Planner::jps_steps`]): the heap key is
+/// `f << UNIT_KEY_SHIFT | h`.
+const UNIT_KEY_SHIFT: u32 = 12;
+/// The heuristic's bits in a unit-cost key (at most 4 095 on grids of at most 4 096 a side).
+const UNIT_H_MASK: u32 = (1 << UNIT_KEY_SHIFT) - 1;
+/// The largest `f` a unit-cost key holds.
+const UNIT_MAX_F: u32 = u32::MAX >> UNIT_KEY_SHIFT;
+
 /// Binary min-heap over a fixed slice of entries, ordered by `f`.
 #[inline(always)]
 fn heap_before(a: &OpenEntry, b: &OpenEntry) -> bool {
@@ -1682,6 +1690,19 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         start: Cell,
         goal: Cell,
     ) -> Result<PlanReport, PlanError> {
+        self.plan_cells_with(kind, grid, start, goal, true)
+    }
+
+    /// [`Planner::plan_cells`]; with `bfs_jump_points` false BFS always runs the layered search
+    /// (the tests check it on maps where the planner would run jump points).
+    fn plan_cells_with<const W: usize>(
+        &mut self,
+        kind: PlannerKind,
+        grid: &Grid<W>,
+        start: Cell,
+        goal: Cell,
+        bfs_jump_points: bool,
+    ) -> Result<PlanReport, PlanError> {
         self.cells.clear();
         self.last = None;
         self.queue_peak = 0;
@@ -1702,22 +1723,22 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             self.last = Some(report);
             return Ok(report);
         }
-        // BFS sets up its own bit planes (or, in narrow maps, a copy of the map). Jump point
-        // search reads the map's own bits and needs cleared nibbles only (its cell-by-cell
-        // fallback copies the map then).
+        // Jump point search (A* and any-angle with octile costs, BFS with unit costs) reads
+        // the map's own bits and needs cleared nibbles only (its fallbacks set up their own
+        // scratch). On a cluttered map (nearly every free cell would be a jump point) A* runs
+        // cell by cell at once, from a copy of the map, and BFS runs the layered search, which
+        // sets up its own bit planes (or, in narrow maps, a copy of the map).
         let used_words = scratch_words_for_cells(geometry.cell_count());
-        // A* on a cluttered map runs cell by cell at once (nearly every free cell would be a
-        // jump point), also from a copy of the map.
-        let cell_by_cell =
-            kind != PlannerKind::Bfs && cluttered(grid.words(), &geometry, start, goal);
+        let jump_points = (kind != PlannerKind::Bfs || bfs_jump_points)
+            && !cluttered(grid.words(), &geometry, start, goal);
         match kind {
-            PlannerKind::Bfs => {} // sets up its own bit planes
-            _ if cell_by_cell => self.copy_map(grid),
-            _ => self
+            _ if jump_points => self
                 .scratch
                 .get_mut(..used_words)
                 .unwrap_or(&mut [])
                 .fill(0),
+            PlannerKind::Bfs => {} // sets up its own bit planes
+            _ => self.copy_map(grid),
         }
         let start_index = geometry.index(start);
         let goal_index = geometry.index(goal);
@@ -1733,12 +1754,27 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             }
         } else {
             match kind {
+                PlannerKind::Bfs if jump_points => {
+                    match self.jps_steps(grid, start_index, goal, goal_index) {
+                        Ok(search) => search,
+                        Err(jps_expanded) => {
+                            // Jump points turned out too many, or the queue ran out of entries
+                            // for them: the layered BFS.
+                            let (search, meet) = self.bfs(grid, start, goal)?;
+                            bfs_meet = meet;
+                            Search {
+                                expanded: search.expanded.saturating_add(jps_expanded),
+                                ..search
+                            }
+                        }
+                    }
+                }
                 PlannerKind::Bfs => {
                     let (search, meet) = self.bfs(grid, start, goal)?;
                     bfs_meet = meet;
                     search
                 }
-                PlannerKind::AStar | PlannerKind::AnyAngle if cell_by_cell => {
+                PlannerKind::AStar | PlannerKind::AnyAngle if !jump_points => {
                     self.astar(grid, start_index, goal, goal_index)?
                 }
                 PlannerKind::AStar | PlannerKind::AnyAngle => {
@@ -2110,11 +2146,70 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         goal_cell: Cell,
         goal: usize,
     ) -> Result<Search, u32> {
+        self.jump_points::<GW, false>(grid, start, goal_cell, goal)
+    }
+
+    /// Jump point search with unit costs (a side step and a diagonal step both cost 1, the
+    /// Chebyshev heuristic): BFS's fewest steps on uncluttered maps. `Search::cost` is the
+    /// number of steps; `Err(expanded)` as for [`Planner::jps`] (the caller then runs the
+    /// layered BFS), and also when a key would not fit (`f ≥ 2²⁰` steps).
+    fn jps_steps<const GW: usize>(
+        &mut self,
+        grid: &Grid<GW>,
+        start: usize,
+        goal_cell: Cell,
+        goal: usize,
+    ) -> Result<Search, u32> {
+        self.jump_points::<GW, true>(grid, start, goal_cell, goal)
+    }
+
+    /// The jump point search of [`Planner::jps`] (`UNIT = false`: octile costs and heuristic)
+    /// and [`Planner::jps_steps`] (`UNIT = true`: unit costs, Chebyshev heuristic). With unit
+    /// costs many entries share one `f`, so the heap key is `f << 12 | h` ([`UNIT_KEY_SHIFT`]):
+    /// equal `f` pops the smallest `h`, i.e. the largest `g`, first (towards the goal); `h` is at
+    /// most 4 095 on grids of at most [`crate::grid::MAX_SIDE_CELLS`] a side, and `f` must stay
+    /// below 2²⁰ (else the search gives up).
+    fn jump_points<const GW: usize, const UNIT: bool>(
+        &mut self,
+        grid: &Grid<GW>,
+        start: usize,
+        goal_cell: Cell,
+        goal: usize,
+    ) -> Result<Search, u32> {
         let geometry = grid.geometry();
         let width = geometry.width() as i32;
         let height = geometry.height() as i32;
         let (gx, gy) = (goal_cell.x as i32, goal_cell.y as i32);
-        let h = |x: i32, y: i32| octile(x.abs_diff(gx), y.abs_diff(gy));
+        let h = |x: i32, y: i32| {
+            if UNIT {
+                x.abs_diff(gx).max(y.abs_diff(gy))
+            } else {
+                octile(x.abs_diff(gx), y.abs_diff(gy))
+            }
+        };
+        // Heap key of an entry with cost `g` to the cell of heuristic `hc`; `None` when a unit
+        // key does not fit.
+        let key = |g: u32, hc: u32| -> Option<u32> {
+            if UNIT {
+                let f = g.checked_add(hc)?;
+                (f <= UNIT_MAX_F && hc <= UNIT_H_MASK).then_some(f << UNIT_KEY_SHIFT | hc)
+            } else {
+                Some(g.saturating_add(hc))
+            }
+        };
+        // `g` of a popped key at a cell of heuristic `hc`.
+        let g_of = |k: u32, hc: u32| {
+            if UNIT {
+                (k >> UNIT_KEY_SHIFT).wrapping_sub(hc)
+            } else {
+                k.wrapping_sub(hc)
+            }
+        };
+        let (straight_cost, diagonal_cost) = if UNIT {
+            (1, 1)
+        } else {
+            (STRAIGHT_COST, DIAGONAL_COST)
+        };
         let pack = |x: i32, y: i32, code: u32| ((y as u32) << 16) | ((x as u32) << 4) | code;
         let pool = &mut self.queue[..];
         let capacity = pool.len();
@@ -2122,7 +2217,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let mut len = match pool.first_mut() {
             Some(slot) => {
                 *slot = OpenEntry {
-                    f: h(sx, sy),
+                    f: match key(0, h(sx, sy)) {
+                        Some(k) => k,
+                        None => return Err(0),
+                    },
                     node: pack(sx, sy, CODE_START),
                     next: NIL,
                 };
@@ -2163,7 +2261,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 next: top.next,
             };
             records += 1;
-            let g = top.f.wrapping_sub(h(x, y));
+            let g = g_of(top.f, h(x, y));
             if index == goal {
                 self.queue_peak = peak as u32;
                 self.write_jump_chain(width, record as usize);
@@ -2215,10 +2313,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 };
                 let found = if dx == 0 || dy == 0 {
                     scan.straight(x, y, dx, dy)
-                        .map(|(jx, jy, k)| (jx, jy, k * STRAIGHT_COST))
+                        .map(|(jx, jy, k)| (jx, jy, k * straight_cost))
                 } else {
                     scan.diagonal(x, y, dx, dy)
-                        .map(|(jx, jy, k)| (jx, jy, k * DIAGONAL_COST))
+                        .map(|(jx, jy, k)| (jx, jy, k * diagonal_cost))
                 };
                 let Some((jx, jy, cost)) = found else {
                     continue;
@@ -2226,8 +2324,12 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 if nibble(&self.scratch, (jy * width + jx) as usize) != 0 {
                     continue; // closed already
                 }
+                let Some(f) = key(g.saturating_add(cost), h(jx, jy)) else {
+                    self.queue_peak = peak as u32;
+                    return Err(expanded);
+                };
                 let entry = OpenEntry {
-                    f: g.saturating_add(cost).saturating_add(h(jx, jy)),
+                    f,
                     node: pack(jx, jy, d),
                     next: record,
                 };
