@@ -1247,8 +1247,9 @@ proptest! {
 #[test]
 fn bfs_on_the_bundled_worlds_runs_few_jump_points_with_pathfindings_steps() {
     // The room worlds are not cluttered: BFS runs jump points (8–15 of them instead of 46 000
-    // – 65 000 cells reached by the layered search) for the same fewest steps.
-    for name in ["office", "corridor", "pillars"] {
+    // – 65 000 cells reached by the layered search) for the same fewest steps. Ties on `f`
+    // pop the larger `g` first: without that, pillars expands 22 jump points (queue peak 40).
+    for (name, most) in [("office", 15), ("corridor", 8), ("pillars", 12)] {
         let (g, params) = world(name);
         let cell = |p| g.geometry().cell_of(p).unwrap();
         let (s, t) = (cell(params.start), cell(params.goal));
@@ -1257,8 +1258,8 @@ fn bfs_on_the_bundled_worlds_runs_few_jump_points_with_pathfindings_steps() {
         let r = p.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
         assert_eq!(r.status, PlanStatus::Found, "{name}");
         assert_eq!(r.cost, steps, "{name}");
-        assert!(r.expanded < 64, "{name}: expanded {}", r.expanded);
-        assert!(p.queue_peak() < 64, "{name}: queue peak {}", p.queue_peak());
+        assert!(r.expanded <= most, "{name}: expanded {}", r.expanded);
+        assert!(p.queue_peak() <= 32, "{name}: queue peak {}", p.queue_peak());
         assert_eq!(p.path_cells().first(), Some(&s));
         assert_eq!(p.path_cells().last(), Some(&t));
         assert_eq!(legal_moves(&g, p.path_cells()), steps, "{name}");
@@ -1268,6 +1269,35 @@ fn bfs_on_the_bundled_worlds_runs_few_jump_points_with_pathfindings_steps() {
             .unwrap();
         assert_eq!(layered.cost, steps, "{name}");
         assert!(layered.expanded > 10_000, "{name}: {}", layered.expanded);
+    }
+}
+
+#[test]
+fn unit_cost_keys_hold_the_largest_grids() {
+    // 4 096 cells long (the largest side): the heuristic reaches 4 095, all 12 bits of the
+    // key's low part; jump points must not give up and must count the steps exactly.
+    const CELLS: usize = 4096 * 2;
+    for (w, h, s, t) in [
+        (4096u32, 2u32, (0u16, 0u16), (4095u16, 1u16)),
+        (2, 4096, (1, 4095), (0, 0)),
+    ] {
+        let mut g = Grid::<{ words_for_cells(CELLS) }>::new(GridGeometry::new(w, h, 0.05).unwrap())
+            .unwrap();
+        // A few walls across the long side, alternating sides, so the path turns.
+        for k in 1..40i32 {
+            let along = k * 100;
+            let across = k % 2;
+            if w > h {
+                g.set_xy(along, across, true);
+            } else {
+                g.set_xy(across, along, true);
+            }
+        }
+        let (s, t) = (Cell::new(s.0, s.1), Cell::new(t.0, t.1));
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 256>::new());
+        let steps = jump_point_steps_alone(&mut *p, &g, s, t);
+        assert_eq!(steps, Some(oracle_bfs(&g, s, t)), "{w}x{h}");
+        assert_eq!(steps, Some(Some(4095)), "{w}x{h}");
     }
 }
 
@@ -1873,4 +1903,5 @@ proptest! {
         check_bfs(&mut *p, &g, s, t)?;
     }
 }
+
 
