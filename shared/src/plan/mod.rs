@@ -1495,6 +1495,12 @@ const JPS_MAX_EXPANSIONS_PER_CELLS: usize = 256;
 /// obstacles, 2 in a maze of 1-cell corridors, where jump point search stays 3x ahead).
 const JPS_WIDE_FRONTIER: usize = 16;
 
+/// Unit-cost jump point search (BFS) gives up, and the layered BFS runs, past this many jump
+/// points (with the wide-frontier test of [`JPS_WIDE_FRONTIER`]): the bundled worlds need 8–15,
+/// sparse random obstacles (1–3 %, not cluttered by the count) hundreds, at about 7 400
+/// Cortex-M4 instructions each, which the layered BFS (about 4 M on 300 × 300) does not repay.
+const JPS_STEPS_MAX_EXPANSIONS: u32 = 32;
+
 /// A* runs cell by cell straight away (no jump point search) when the rows between start and
 /// goal (plus [`CLUTTER_MARGIN_ROWS`] on each side) hold more than one obstacle run per this
 /// many cells: 20 % random obstacles have about 1 in 6, a maze of 1-cell corridors 1 in 4, the
@@ -1755,7 +1761,13 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         } else {
             match kind {
                 PlannerKind::Bfs if jump_points => {
-                    match self.jps_steps(grid, start_index, goal, goal_index) {
+                    match self.jps_steps(
+                        grid,
+                        start_index,
+                        goal,
+                        goal_index,
+                        JPS_STEPS_MAX_EXPANSIONS,
+                    ) {
                         Ok(search) => search,
                         Err(jps_expanded) => {
                             // Jump points turned out too many, or the queue ran out of entries
@@ -2146,21 +2158,25 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         goal_cell: Cell,
         goal: usize,
     ) -> Result<Search, u32> {
-        self.jump_points::<GW, false>(grid, start, goal_cell, goal)
+        let max_expanded = (grid.geometry().cell_count() / JPS_MAX_EXPANSIONS_PER_CELLS).max(256);
+        self.jump_points::<GW, false>(grid, start, goal_cell, goal, max_expanded as u32)
     }
 
     /// Jump point search with unit costs (a side step and a diagonal step both cost 1, the
     /// Chebyshev heuristic): BFS's fewest steps on uncluttered maps. `Search::cost` is the
-    /// number of steps; `Err(expanded)` as for [`Planner::jps`] (the caller then runs the
-    /// layered BFS), and also when a key would not fit (`f ≥ 2²⁰` steps).
+    /// number of steps. `Err(expanded)` (the caller then runs the layered BFS) when the entries
+    /// run out, when more than `max_expanded` jump points were expanded with a wide open list
+    /// (the planner passes [`JPS_STEPS_MAX_EXPANSIONS`]), or when a key would not fit (`f ≥ 2²⁰`
+    /// steps).
     fn jps_steps<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
         start: usize,
         goal_cell: Cell,
         goal: usize,
+        max_expanded: u32,
     ) -> Result<Search, u32> {
-        self.jump_points::<GW, true>(grid, start, goal_cell, goal)
+        self.jump_points::<GW, true>(grid, start, goal_cell, goal, max_expanded)
     }
 
     /// The jump point search of [`Planner::jps`] (`UNIT = false`: octile costs and heuristic)
@@ -2175,6 +2191,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         start: usize,
         goal_cell: Cell,
         goal: usize,
+        max_expanded: u32,
     ) -> Result<Search, u32> {
         let geometry = grid.geometry();
         let width = geometry.width() as i32;
@@ -2228,7 +2245,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             }
             None => return Err(0),
         };
-        let max_expanded = (geometry.cell_count() / JPS_MAX_EXPANSIONS_PER_CELLS).max(256) as u32;
         // Closed jump points: record r lives at `pool[capacity - 1 - r]`.
         let mut records = 0usize;
         let mut peak = len;

@@ -1196,9 +1196,9 @@ proptest! {
 }
 
 /// Unit-cost jump point search alone ([`Planner::jps_steps`], whatever the clutter count would
-/// choose), on cleared scratch: `None` when it gave up, else the steps found (`None` inside when
-/// unreachable) after checking the rebuilt path: from `s` to `t`, legal unit moves, as many as
-/// the search's cost.
+/// choose, with no limit on the jump points), on cleared scratch: `None` when it gave up (out
+/// of entries), else the steps found (`None` inside when unreachable) after checking the
+/// rebuilt path: from `s` to `t`, legal unit moves, as many as the search's cost.
 fn jump_point_steps_alone<const W: usize, const S: usize, const Q: usize>(
     p: &mut Planner<S, Q>,
     g: &Grid<W>,
@@ -1208,7 +1208,9 @@ fn jump_point_steps_alone<const W: usize, const S: usize, const Q: usize>(
     let geometry = *g.geometry();
     p.scratch.fill(0);
     p.cells.clear();
-    let search = p.jps_steps(g, geometry.index(s), t, geometry.index(t)).ok()?;
+    let search = p
+        .jps_steps(g, geometry.index(s), t, geometry.index(t), u32::MAX)
+        .ok()?;
     if !search.found {
         return Some(None);
     }
@@ -1237,10 +1239,10 @@ proptest! {
             return Ok(());
         }
         let mut p = Box::new(SmallPlanner::new());
-        // It gives up only past 256 jump points (with a wide open list), rare on 24 × 24 cells.
-        if let Some(found) = jump_point_steps_alone(&mut *p, &g, s, t) {
-            prop_assert_eq!(found, oracle_bfs(&g, s, t));
-        }
+        // 4 096 entries: heap and records never run out on 24 × 24 cells here.
+        let found = jump_point_steps_alone(&mut *p, &g, s, t);
+        prop_assert!(found.is_some());
+        prop_assert_eq!(found.unwrap(), oracle_bfs(&g, s, t));
     }
 }
 
@@ -1304,7 +1306,7 @@ fn unit_cost_keys_hold_the_largest_grids() {
 #[test]
 fn bfs_jump_points_fall_back_to_the_layered_search_counting_both() {
     // Random obstacles at 3 %: not cluttered by the count (about one run in 35 cells, the
-    // limit is one in 32), yet more than 351 jump points (one cell in 256) with a wide open
+    // limit is one in 32), yet more than JPS_STEPS_MAX_EXPANSIONS jump points with a wide open
     // list, so the search gives up and the layered BFS finds the steps; `expanded` counts both.
     let mut g = random_grid::<{ words_for_cells(300 * 300) }>(300, 300, 3, 7);
     let (s, t) = (Cell::new(2, 2), Cell::new(297, 297));
@@ -1316,7 +1318,13 @@ fn bfs_jump_points_fall_back_to_the_layered_search_counting_both() {
     assert!(!cluttered(g.words(), &geometry, s, t));
     p.scratch.fill(0);
     let gave_up = p
-        .jps_steps(&g, geometry.index(s), t, geometry.index(t))
+        .jps_steps(
+            &g,
+            geometry.index(s),
+            t,
+            geometry.index(t),
+            JPS_STEPS_MAX_EXPANSIONS,
+        )
         .err();
     let r = p.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
     assert_eq!(r.cost, steps);
@@ -1324,8 +1332,8 @@ fn bfs_jump_points_fall_back_to_the_layered_search_counting_both() {
     let layered = p
         .plan_cells_with(PlannerKind::Bfs, &g, s, t, false)
         .unwrap();
-    assert_eq!(gave_up, Some(352));
-    assert_eq!(r.expanded, layered.expanded + 352);
+    assert_eq!(gave_up, Some(JPS_STEPS_MAX_EXPANSIONS + 1));
+    assert_eq!(r.expanded, layered.expanded + JPS_STEPS_MAX_EXPANSIONS + 1);
     // A queue of 8 entries: jump points run out of entries, the layered search needs none.
     let mut small = Box::new(Planner::<SCRATCH_WORDS_300, 8>::new());
     let r = small.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
@@ -1903,5 +1911,3 @@ proptest! {
         check_bfs(&mut *p, &g, s, t)?;
     }
 }
-
-
