@@ -5,7 +5,8 @@
 //!
 //! - Neighbour rule (seed §IV.2, `gera_trajetoria`): the 4 side neighbours, plus a diagonal
 //!   neighbour only when both side cells it passes between are free (no corner cutting).
-//! - Costs: BFS counts steps (a diagonal step is one step); A* uses the integer octile costs
+//! - Costs: BFS counts steps (a diagonal step is one step; on maps that are not cluttered it is
+//!   jump point search with unit costs, see "BFS by jump points"); A* uses the integer octile costs
 //!   [`STRAIGHT_COST`] / [`DIAGONAL_COST`] (their ratio is √2 to 7 digits), so costs compare
 //!   exactly with a reference implementation.
 //! - Memory: a [`Planner`] owns all its scratch: 4 bits per cell and a queue of fixed capacity.
@@ -71,8 +72,9 @@
 //! benchmark grids and the bundled worlds: the layered BFS needs no queue entries (its
 //! `queue_peak` is the most frontier (row, word) pairs of one layer: at most 307); the scalar
 //! BFS (mazes) 13; A* by jump points (open list plus records) 3 (open floor), 9 (corridor), 18
-//! (office), 40 (pillars); cell by cell (20 % random obstacles, a maze of 1-cell corridors) 782
-//! and 11. So 1 024 entries cover every benchmark case.
+//! (office), 40 (pillars); BFS by jump points 3, 9, 20, 24; cell by cell (20 % random
+//! obstacles, a maze of 1-cell corridors) 782 and 11. So 1 024 entries cover every benchmark
+//! case.
 //!
 //! ## A*: jump point search without a g-table
 //!
@@ -123,6 +125,42 @@
 //! them (a wide frontier), or when the queue runs out of entries for the heap and the records,
 //! the search restarts as cell-by-cell A* below; `expanded` then counts the jump points and
 //! the cells.
+//!
+//! ## BFS by jump points
+//!
+//! On maps that are not cluttered (the same clutter count as A*), [`PlannerKind::Bfs`] runs the
+//! same jump point search with *unit costs*: a side step and a diagonal step both cost 1, the
+//! heuristic is the Chebyshev distance `max(|dx|, |dy|)` (the octile formula with both costs
+//! 1: admissible and consistent, since one step changes it by at most 1), so the first pop of
+//! the goal has the fewest steps. The scans, the pruning rules and the record chain are those
+//! of A*, chosen at compile time (`jump_points::<UNIT>`, so the octile search compiles as
+//! before). Why the pruning stays exact with unit costs: every neighbour a jump point does not
+//! scan towards is reachable from its parent, through free cells, in no more steps (after a
+//! side step east from `p`: north is `p`'s diagonal neighbour when the cell north of `p` is
+//! free, one step against two, and north-east is then two steps from `p` through that cell;
+//! after a diagonal step north-east: west and south are `p`'s side neighbours, north-west and
+//! south-east two side steps from `p`, against two steps through the cell). With octile costs
+//! some of these were strict and are now ties; JPS's canonical-path argument allows ties (the
+//! pruned paths are matched by diagonal-first ones the scans do follow). Checked, not assumed:
+//! a property test runs the unit-cost search alone against `pathfinding::bfs` on 2 048 random
+//! grids at 0–45 % obstacles (300 000 on grids up to 40 × 40 in a one-off run); dropping the
+//! second side scan after a diagonal step, or the forward diagonal at a forced neighbour, makes
+//! it fail.
+//!
+//! *Ties.* Many entries share one `f` with unit costs; the heap key is `f << 12 | h`, so among
+//! equal `f` the entry nearest the goal (largest `g`) pops first: pillars 22 → 12 jump points
+//! (the first `f` only order expanded the same 22 as A*). `h ≤ 4 095` on grids of at most 4 096
+//! cells a side, so `g = (key >> 12) − h` is exact; a key whose `f` reaches 2²⁰ steps (only
+//! on grids with paths of a million steps) ends the search with the fallback.
+//!
+//! `cost` is the number of steps (counted by the rebuild, equal to the search's `g`), `expanded`
+//! the jump points expanded. *Fallback:* when more than 32 jump points
+//! (`JPS_STEPS_MAX_EXPANSIONS`) have been expanded while the open list holds more than one
+//! entry per 16 of them, or the queue runs out of entries, the layered BFS below runs and
+//! `expanded` counts both. The bundled worlds need 8–15 jump points; sparse random obstacles
+//! (1–3 %, not cluttered by the count) need hundreds at about 7 400 Cortex-M4 instructions
+//! each, where giving up early is cheaper (A*'s limit of one cell in 256 cost 2.6 M
+//! instructions before the layered search there).
 //!
 //! ## Cell-by-cell A*
 //!
@@ -204,7 +242,8 @@
 //!
 //! ## BFS: layered and bit-parallel, scalar in corridors
 //!
-//! [`PlannerKind::Bfs`] expands the search *layer by layer* on whole 32-cell words (module
+//! On cluttered maps (and as the fallback of BFS by jump points), [`PlannerKind::Bfs`] expands
+//! the search *layer by layer* on whole 32-cell words (module
 //! `bfs`, memory layout above). The layer-`k` frontier is the set of cells whose layer code is
 //! `k mod 3 + 1`: older cells with the same code (layers `k - 3`, `k - 6`, …) are inside the
 //! reached region, all their legal neighbours are reached, so they add nothing and need no
@@ -291,9 +330,10 @@
 //! 300 × 300 open floor (2 × 146 layers, 46 345 cells) 4.0 M Cortex-M4 instructions, 87 per
 //! cell; 20 % random obstacles 6.6 M (53 055 cells, 124 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
 //! cell (4.2 M in the 300 × 300 maze). Jump point
-//! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
+//! search (A*, and BFS on uncluttered maps): each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
-//! seed's room maps a whole plan takes 0.9–2.9 M Cortex-M4 instructions for 9–22 jump points.
+//! seed's room maps a whole plan takes 0.9–2.9 M Cortex-M4 instructions for 9–22 jump points
+//! (A*), 0.76–1.76 M for 8–15 (BFS, unit costs).
 //! Keys are `u32`: a path may cost at most `u32::MAX` (more than 529 000 diagonal steps, which
 //! only grids above about 727 × 727 cells can hold); beyond that the cell-by-cell search's keys
 //! wrap and its result is undefined (but it does not panic).
@@ -490,10 +530,11 @@ impl core::fmt::Display for PlanError {
 pub struct PlanReport {
     /// How it ended.
     pub status: PlanStatus,
-    /// Nodes expanded: for BFS the cells reached (layered search; the scalar one in narrow
-    /// maps: the cells taken off its queue); jump points for A* and any-angle (plus the cells of
-    /// the cell-by-cell search when it fell back to it: the cells it closed, those closed by
-    /// corridor walks included).
+    /// Nodes expanded: for BFS on uncluttered maps the jump points expanded (unit-cost jump
+    /// point search), on cluttered ones the cells reached (layered search; the scalar one in
+    /// narrow maps: the cells taken off its queue), both added when jump points gave up; jump
+    /// points for A* and any-angle (plus the cells of the cell-by-cell search when it fell back
+    /// to it: the cells it closed, those closed by corridor walks included).
     pub expanded: u32,
     /// BFS: steps; A* and any-angle: the A* cost in [`STRAIGHT_COST`] units. 0 unless found.
     pub cost: u32,

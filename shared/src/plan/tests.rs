@@ -1030,7 +1030,13 @@ fn bfs_open_300_floods_two_half_balls() {
     let g = crate::grid::Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
     let mut p = Box::new(Planner300::new());
     let r = p
-        .plan_cells_with(PlannerKind::Bfs, &g, Cell::new(3, 5), Cell::new(296, 291), false)
+        .plan_cells_with(
+            PlannerKind::Bfs,
+            &g,
+            Cell::new(3, 5),
+            Cell::new(296, 291),
+            false,
+        )
         .unwrap();
     assert_eq!(r.cost, 293);
     let balls = 150 * 152 + 150 * 155;
@@ -1262,7 +1268,11 @@ fn bfs_on_the_bundled_worlds_runs_few_jump_points_with_pathfindings_steps() {
         assert_eq!(r.status, PlanStatus::Found, "{name}");
         assert_eq!(r.cost, steps, "{name}");
         assert!(r.expanded <= most, "{name}: expanded {}", r.expanded);
-        assert!(p.queue_peak() <= 32, "{name}: queue peak {}", p.queue_peak());
+        assert!(
+            p.queue_peak() <= 32,
+            "{name}: queue peak {}",
+            p.queue_peak()
+        );
         assert_eq!(p.path_cells().first(), Some(&s));
         assert_eq!(p.path_cells().last(), Some(&t));
         assert_eq!(legal_moves(&g, p.path_cells()), steps, "{name}");
@@ -1339,7 +1349,12 @@ fn bfs_jump_points_fall_back_to_the_layered_search_counting_both() {
     let mut small = Box::new(Planner::<SCRATCH_WORDS_300, 8>::new());
     let r = small.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
     assert_eq!(r.cost, steps);
-    assert!(r.expanded > layered.expanded, "{} {}", r.expanded, layered.expanded);
+    assert!(
+        r.expanded > layered.expanded,
+        "{} {}",
+        r.expanded,
+        layered.expanded
+    );
 }
 
 #[test]
@@ -1401,7 +1416,13 @@ fn bfs_layout_uses_the_grid_bits_when_the_free_plane_does_not_fit() {
     let g = Grid::<{ words_for_cells(64) }>::new(GridGeometry::new(8, 8, 0.05).unwrap()).unwrap();
     let mut p = Planner::<{ scratch_words_for_cells(64) }, 16>::new();
     assert!(matches!(
-        p.plan_cells_with(PlannerKind::Bfs, &g, Cell::new(0, 0), Cell::new(7, 7), false),
+        p.plan_cells_with(
+            PlannerKind::Bfs,
+            &g,
+            Cell::new(0, 0),
+            Cell::new(7, 7),
+            false
+        ),
         Err(PlanError::ScratchTooSmall { .. })
     ));
     // BFS by jump points (an empty map is not cluttered) needs only the nibbles too.
