@@ -5,7 +5,8 @@
 //!
 //! - Neighbour rule (seed §IV.2, `gera_trajetoria`): the 4 side neighbours, plus a diagonal
 //!   neighbour only when both side cells it passes between are free (no corner cutting).
-//! - Costs: BFS counts steps (a diagonal step is one step); A* uses the integer octile costs
+//! - Costs: BFS counts steps (a diagonal step is one step; on maps that are not cluttered it is
+//!   jump point search with unit costs, see "BFS by jump points"); A* uses the integer octile costs
 //!   [`STRAIGHT_COST`] / [`DIAGONAL_COST`] (their ratio is √2 to 7 digits), so costs compare
 //!   exactly with a reference implementation.
 //! - Memory: a [`Planner`] owns all its scratch: 4 bits per cell and a queue of fixed capacity.
@@ -72,8 +73,9 @@
 //! benchmark grids and the bundled worlds: the layered BFS needs no queue entries (its
 //! `queue_peak` is the most frontier (row, word) pairs of one layer: at most 307); the scalar
 //! BFS (mazes) 13; A* by jump points (open list plus records) 3 (open floor), 9 (corridor), 18
-//! (office), 40 (pillars); cell by cell (20 % random obstacles, a maze of 1-cell corridors) 782
-//! and 11. So 1 024 entries cover every benchmark case.
+//! (office), 40 (pillars); BFS by jump points 3, 9, 20, 24; cell by cell (20 % random
+//! obstacles, a maze of 1-cell corridors) 782 and 11. So 1 024 entries cover every benchmark
+//! case.
 //!
 //! ## A*: jump point search without a g-table
 //!
@@ -124,6 +126,42 @@
 //! them (a wide frontier), or when the queue runs out of entries for the heap and the records,
 //! the search restarts as cell-by-cell A* below; `expanded` then counts the jump points and
 //! the cells.
+//!
+//! ## BFS by jump points
+//!
+//! On maps that are not cluttered (the same clutter count as A*), [`PlannerKind::Bfs`] runs the
+//! same jump point search with *unit costs*: a side step and a diagonal step both cost 1, the
+//! heuristic is the Chebyshev distance `max(|dx|, |dy|)` (the octile formula with both costs
+//! 1: admissible and consistent, since one step changes it by at most 1), so the first pop of
+//! the goal has the fewest steps. The scans, the pruning rules and the record chain are those
+//! of A*, chosen at compile time (`jump_points::<UNIT>`, so the octile search compiles as
+//! before). Why the pruning stays exact with unit costs: every neighbour a jump point does not
+//! scan towards is reachable from its parent, through free cells, in no more steps (after a
+//! side step east from `p`: north is `p`'s diagonal neighbour when the cell north of `p` is
+//! free, one step against two, and north-east is then two steps from `p` through that cell;
+//! after a diagonal step north-east: west and south are `p`'s side neighbours, north-west and
+//! south-east two side steps from `p`, against two steps through the cell). With octile costs
+//! some of these were strict and are now ties; JPS's canonical-path argument allows ties (the
+//! pruned paths are matched by diagonal-first ones the scans do follow). Checked, not assumed:
+//! a property test runs the unit-cost search alone against `pathfinding::bfs` on 2 048 random
+//! grids at 0–45 % obstacles (300 000 on grids up to 40 × 40 in a one-off run); dropping the
+//! second side scan after a diagonal step, or the forward diagonal at a forced neighbour, makes
+//! it fail.
+//!
+//! *Ties.* Many entries share one `f` with unit costs; the heap key is `f << 12 | h`, so among
+//! equal `f` the entry nearest the goal (largest `g`) pops first: pillars 22 → 12 jump points
+//! (the first `f` only order expanded the same 22 as A*). `h ≤ 4 095` on grids of at most 4 096
+//! cells a side, so `g = (key >> 12) − h` is exact; a key whose `f` reaches 2²⁰ steps (only
+//! on grids with paths of a million steps) ends the search with the fallback.
+//!
+//! `cost` is the number of steps (counted by the rebuild, equal to the search's `g`), `expanded`
+//! the jump points expanded. *Fallback:* when more than 32 jump points
+//! (`JPS_STEPS_MAX_EXPANSIONS`) have been expanded while the open list holds more than one
+//! entry per 16 of them, or the queue runs out of entries, the layered BFS below runs and
+//! `expanded` counts both. The bundled worlds need 8–15 jump points; sparse random obstacles
+//! (1–3 %, not cluttered by the count) need hundreds at about 7 400 Cortex-M4 instructions
+//! each, where giving up early is cheaper (A*'s limit of one cell in 256 cost 2.6 M
+//! instructions before the layered search there).
 //!
 //! ## Cell-by-cell A*
 //!
@@ -205,7 +243,8 @@
 //!
 //! ## BFS: layered and bit-parallel, scalar in corridors
 //!
-//! [`PlannerKind::Bfs`] expands the search *layer by layer* on whole 32-cell words (module
+//! On cluttered maps (and as the fallback of BFS by jump points), [`PlannerKind::Bfs`] expands
+//! the search *layer by layer* on whole 32-cell words (module
 //! `bfs`, memory layout above). The layer-`k` frontier is the set of cells whose layer code is
 //! `k mod 3 + 1`: older cells with the same code (layers `k - 3`, `k - 6`, …) are inside the
 //! reached region, all their legal neighbours are reached, so they add nothing and need no
@@ -298,9 +337,10 @@
 //! 300 × 300 open floor (2 × 146 layers, 46 345 cells) 4.0 M Cortex-M4 instructions, 87 per
 //! cell; 20 % random obstacles 6.6 M (53 055 cells, 124 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
 //! cell (4.2 M in the 300 × 300 maze). Jump point
-//! search: each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
+//! search (A*, and BFS on uncluttered maps): each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
-//! seed's room maps a whole plan takes 0.9–2.9 M Cortex-M4 instructions for 9–22 jump points.
+//! seed's room maps a whole plan takes 0.9–2.9 M Cortex-M4 instructions for 9–22 jump points
+//! (A*), 0.76–1.76 M for 8–15 (BFS, unit costs).
 //! Keys are `u32`: a path may cost at most `u32::MAX` (more than 529 000 diagonal steps, which
 //! only grids above about 727 × 727 cells can hold); beyond that the cell-by-cell search's keys
 //! wrap and its result is undefined (but it does not panic).
@@ -497,10 +537,11 @@ impl core::fmt::Display for PlanError {
 pub struct PlanReport {
     /// How it ended.
     pub status: PlanStatus,
-    /// Nodes expanded: for BFS the cells reached (layered search; the scalar one in narrow
-    /// maps: the cells taken off its queue); jump points for A* and any-angle (plus the cells of
-    /// the cell-by-cell search when it fell back to it: the cells it closed, those closed by
-    /// corridor walks included).
+    /// Nodes expanded: for BFS on uncluttered maps the jump points expanded (unit-cost jump
+    /// point search), on cluttered ones the cells reached (layered search; the scalar one in
+    /// narrow maps: the cells taken off its queue), both added when jump points gave up; jump
+    /// points for A* and any-angle (plus the cells of the cell-by-cell search when it fell back
+    /// to it: the cells it closed, those closed by corridor walks included).
     pub expanded: u32,
     /// BFS: steps; A* and any-angle: the A* cost in [`STRAIGHT_COST`] units. 0 unless found.
     pub cost: u32,
@@ -1502,6 +1543,12 @@ const JPS_MAX_EXPANSIONS_PER_CELLS: usize = 256;
 /// obstacles, 2 in a maze of 1-cell corridors, where jump point search stays 3x ahead).
 const JPS_WIDE_FRONTIER: usize = 16;
 
+/// Unit-cost jump point search (BFS) gives up, and the layered BFS runs, past this many jump
+/// points (with the wide-frontier test of [`JPS_WIDE_FRONTIER`]): the bundled worlds need 8–15,
+/// sparse random obstacles (1–3 %, not cluttered by the count) hundreds, at about 7 400
+/// Cortex-M4 instructions each, which the layered BFS (about 4 M on 300 × 300) does not repay.
+const JPS_STEPS_MAX_EXPANSIONS: u32 = 32;
+
 /// A* runs cell by cell straight away (no jump point search) when the rows between start and
 /// goal (plus [`CLUTTER_MARGIN_ROWS`] on each side) hold more than one obstacle run per this
 /// many cells: 20 % random obstacles have about 1 in 6, a maze of 1-cell corridors 1 in 4, the
@@ -1548,6 +1595,14 @@ fn cluttered(words: &[u32], geometry: &GridGeometry, start: Cell, goal: Cell) ->
     let cells = sampled * 32;
     runs * CLUTTER_CELLS_PER_RUN > cells
 }
+
+/// Unit-cost jump point search ([`Planner::jps_steps`]): the heap key is
+/// `f << UNIT_KEY_SHIFT | h`.
+const UNIT_KEY_SHIFT: u32 = 12;
+/// The heuristic's bits in a unit-cost key (at most 4 095 on grids of at most 4 096 a side).
+const UNIT_H_MASK: u32 = (1 << UNIT_KEY_SHIFT) - 1;
+/// The largest `f` a unit-cost key holds.
+const UNIT_MAX_F: u32 = u32::MAX >> UNIT_KEY_SHIFT;
 
 /// Binary min-heap over a fixed slice of entries, ordered by `f`.
 #[inline(always)]
@@ -1689,6 +1744,19 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         start: Cell,
         goal: Cell,
     ) -> Result<PlanReport, PlanError> {
+        self.plan_cells_with(kind, grid, start, goal, true)
+    }
+
+    /// [`Planner::plan_cells`]; with `bfs_jump_points` false BFS always runs the layered search
+    /// (the tests check it on maps where the planner would run jump points).
+    fn plan_cells_with<const W: usize>(
+        &mut self,
+        kind: PlannerKind,
+        grid: &Grid<W>,
+        start: Cell,
+        goal: Cell,
+        bfs_jump_points: bool,
+    ) -> Result<PlanReport, PlanError> {
         self.cells.clear();
         self.last = None;
         self.queue_peak = 0;
@@ -1709,22 +1777,22 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             self.last = Some(report);
             return Ok(report);
         }
-        // BFS sets up its own bit planes (or, in narrow maps, a copy of the map). Jump point
-        // search reads the map's own bits and needs cleared nibbles only (its cell-by-cell
-        // fallback copies the map then).
+        // Jump point search (A* and any-angle with octile costs, BFS with unit costs) reads
+        // the map's own bits and needs cleared nibbles only (its fallbacks set up their own
+        // scratch). On a cluttered map (nearly every free cell would be a jump point) A* runs
+        // cell by cell at once, from a copy of the map, and BFS runs the layered search, which
+        // sets up its own bit planes (or, in narrow maps, a copy of the map).
         let used_words = scratch_words_for_cells(geometry.cell_count());
-        // A* on a cluttered map runs cell by cell at once (nearly every free cell would be a
-        // jump point), also from a copy of the map.
-        let cell_by_cell =
-            kind != PlannerKind::Bfs && cluttered(grid.words(), &geometry, start, goal);
+        let jump_points = (kind != PlannerKind::Bfs || bfs_jump_points)
+            && !cluttered(grid.words(), &geometry, start, goal);
         match kind {
-            PlannerKind::Bfs => {} // sets up its own bit planes
-            _ if cell_by_cell => self.copy_map(grid),
-            _ => self
+            _ if jump_points => self
                 .scratch
                 .get_mut(..used_words)
                 .unwrap_or(&mut [])
                 .fill(0),
+            PlannerKind::Bfs => {} // sets up its own bit planes
+            _ => self.copy_map(grid),
         }
         let start_index = geometry.index(start);
         let goal_index = geometry.index(goal);
@@ -1740,12 +1808,33 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             }
         } else {
             match kind {
+                PlannerKind::Bfs if jump_points => {
+                    match self.jps_steps(
+                        grid,
+                        start_index,
+                        goal,
+                        goal_index,
+                        JPS_STEPS_MAX_EXPANSIONS,
+                    ) {
+                        Ok(search) => search,
+                        Err(jps_expanded) => {
+                            // Jump points turned out too many, or the queue ran out of entries
+                            // for them: the layered BFS.
+                            let (search, meet) = self.bfs(grid, start, goal)?;
+                            bfs_meet = meet;
+                            Search {
+                                expanded: search.expanded.saturating_add(jps_expanded),
+                                ..search
+                            }
+                        }
+                    }
+                }
                 PlannerKind::Bfs => {
                     let (search, meet) = self.bfs(grid, start, goal)?;
                     bfs_meet = meet;
                     search
                 }
-                PlannerKind::AStar | PlannerKind::AnyAngle if cell_by_cell => {
+                PlannerKind::AStar | PlannerKind::AnyAngle if !jump_points => {
                     self.astar(grid, start_index, goal, goal_index)?
                 }
                 PlannerKind::AStar | PlannerKind::AnyAngle => {
@@ -2117,11 +2206,75 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         goal_cell: Cell,
         goal: usize,
     ) -> Result<Search, u32> {
+        let max_expanded = (grid.geometry().cell_count() / JPS_MAX_EXPANSIONS_PER_CELLS).max(256);
+        self.jump_points::<GW, false>(grid, start, goal_cell, goal, max_expanded as u32)
+    }
+
+    /// Jump point search with unit costs (a side step and a diagonal step both cost 1, the
+    /// Chebyshev heuristic): BFS's fewest steps on uncluttered maps. `Search::cost` is the
+    /// number of steps. `Err(expanded)` (the caller then runs the layered BFS) when the entries
+    /// run out, when more than `max_expanded` jump points were expanded with a wide open list
+    /// (the planner passes [`JPS_STEPS_MAX_EXPANSIONS`]), or when a key would not fit (`f ≥ 2²⁰`
+    /// steps).
+    fn jps_steps<const GW: usize>(
+        &mut self,
+        grid: &Grid<GW>,
+        start: usize,
+        goal_cell: Cell,
+        goal: usize,
+        max_expanded: u32,
+    ) -> Result<Search, u32> {
+        self.jump_points::<GW, true>(grid, start, goal_cell, goal, max_expanded)
+    }
+
+    /// The jump point search of [`Planner::jps`] (`UNIT = false`: octile costs and heuristic)
+    /// and [`Planner::jps_steps`] (`UNIT = true`: unit costs, Chebyshev heuristic). With unit
+    /// costs many entries share one `f`, so the heap key is `f << 12 | h` ([`UNIT_KEY_SHIFT`]):
+    /// equal `f` pops the smallest `h`, i.e. the largest `g`, first (towards the goal); `h` is at
+    /// most 4 095 on grids of at most [`crate::grid::MAX_SIDE_CELLS`] a side, and `f` must stay
+    /// below 2²⁰ (else the search gives up).
+    fn jump_points<const GW: usize, const UNIT: bool>(
+        &mut self,
+        grid: &Grid<GW>,
+        start: usize,
+        goal_cell: Cell,
+        goal: usize,
+        max_expanded: u32,
+    ) -> Result<Search, u32> {
         let geometry = grid.geometry();
         let width = geometry.width() as i32;
         let height = geometry.height() as i32;
         let (gx, gy) = (goal_cell.x as i32, goal_cell.y as i32);
-        let h = |x: i32, y: i32| octile(x.abs_diff(gx), y.abs_diff(gy));
+        let h = |x: i32, y: i32| {
+            if UNIT {
+                x.abs_diff(gx).max(y.abs_diff(gy))
+            } else {
+                octile(x.abs_diff(gx), y.abs_diff(gy))
+            }
+        };
+        // Heap key of an entry with cost `g` to the cell of heuristic `hc`; `None` when a unit
+        // key does not fit.
+        let key = |g: u32, hc: u32| -> Option<u32> {
+            if UNIT {
+                let f = g.checked_add(hc)?;
+                (f <= UNIT_MAX_F && hc <= UNIT_H_MASK).then_some(f << UNIT_KEY_SHIFT | hc)
+            } else {
+                Some(g.saturating_add(hc))
+            }
+        };
+        // `g` of a popped key at a cell of heuristic `hc`.
+        let g_of = |k: u32, hc: u32| {
+            if UNIT {
+                (k >> UNIT_KEY_SHIFT).wrapping_sub(hc)
+            } else {
+                k.wrapping_sub(hc)
+            }
+        };
+        let (straight_cost, diagonal_cost) = if UNIT {
+            (1, 1)
+        } else {
+            (STRAIGHT_COST, DIAGONAL_COST)
+        };
         let pack = |x: i32, y: i32, code: u32| ((y as u32) << 16) | ((x as u32) << 4) | code;
         let pool = &mut self.queue[..];
         let capacity = pool.len();
@@ -2129,7 +2282,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let mut len = match pool.first_mut() {
             Some(slot) => {
                 *slot = OpenEntry {
-                    f: h(sx, sy),
+                    f: match key(0, h(sx, sy)) {
+                        Some(k) => k,
+                        None => return Err(0),
+                    },
                     node: pack(sx, sy, CODE_START),
                     next: NIL,
                 };
@@ -2137,7 +2293,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             }
             None => return Err(0),
         };
-        let max_expanded = (geometry.cell_count() / JPS_MAX_EXPANSIONS_PER_CELLS).max(256) as u32;
         // Closed jump points: record r lives at `pool[capacity - 1 - r]`.
         let mut records = 0usize;
         let mut peak = len;
@@ -2170,7 +2325,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 next: top.next,
             };
             records += 1;
-            let g = top.f.wrapping_sub(h(x, y));
+            let g = g_of(top.f, h(x, y));
             if index == goal {
                 self.queue_peak = peak as u32;
                 self.write_jump_chain(width, record as usize);
@@ -2222,10 +2377,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 };
                 let found = if dx == 0 || dy == 0 {
                     scan.straight(x, y, dx, dy)
-                        .map(|(jx, jy, k)| (jx, jy, k * STRAIGHT_COST))
+                        .map(|(jx, jy, k)| (jx, jy, k * straight_cost))
                 } else {
                     scan.diagonal(x, y, dx, dy)
-                        .map(|(jx, jy, k)| (jx, jy, k * DIAGONAL_COST))
+                        .map(|(jx, jy, k)| (jx, jy, k * diagonal_cost))
                 };
                 let Some((jx, jy, cost)) = found else {
                     continue;
@@ -2233,8 +2388,12 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 if nibble(&self.scratch, (jy * width + jx) as usize) != 0 {
                     continue; // closed already
                 }
+                let Some(f) = key(g.saturating_add(cost), h(jx, jy)) else {
+                    self.queue_peak = peak as u32;
+                    return Err(expanded);
+                };
                 let entry = OpenEntry {
-                    f: g.saturating_add(cost).saturating_add(h(jx, jy)),
+                    f,
                     node: pack(jx, jy, d),
                     next: record,
                 };

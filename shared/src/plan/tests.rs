@@ -1025,10 +1025,18 @@ fn bfs_open_300_floods_two_half_balls() {
     // (296, 291), plus part of one more ring (at most 303 cells) in the round where they meet;
     // one-sided it was every cell within 293 steps of (3, 5) (297 × 299 = 88 803 cells).
     // Frontier runs span many 32-row words and the frontier crosses every word edge.
+    // (The planner runs jump points on an open floor: `plan_cells_with(.., false)` forces the
+    // layered search.)
     let g = crate::grid::Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
     let mut p = Box::new(Planner300::new());
     let r = p
-        .plan_cells(PlannerKind::Bfs, &g, Cell::new(3, 5), Cell::new(296, 291))
+        .plan_cells_with(
+            PlannerKind::Bfs,
+            &g,
+            Cell::new(3, 5),
+            Cell::new(296, 291),
+            false,
+        )
         .unwrap();
     assert_eq!(r.cost, 293);
     let balls = 150 * 152 + 150 * 155;
@@ -1042,6 +1050,13 @@ fn bfs_open_300_floods_two_half_balls() {
     assert!(p.path_cells().len() <= 4, "{:?}", p.path_cells());
     assert_eq!(steps_and_cost(p.path_cells()).0, 293);
     assert_collision_free(&g, p.path_cells());
+    // By jump points: the same steps, a handful of jump points, a legal path.
+    let r = p
+        .plan_cells(PlannerKind::Bfs, &g, Cell::new(3, 5), Cell::new(296, 291))
+        .unwrap();
+    assert_eq!(r.cost, 293);
+    assert!(r.expanded <= 4, "{}", r.expanded);
+    assert_eq!(legal_moves(&g, p.path_cells()), 293);
 }
 
 #[test]
@@ -1186,6 +1201,162 @@ proptest! {
     }
 }
 
+/// Unit-cost jump point search alone ([`Planner::jps_steps`], whatever the clutter count would
+/// choose, with no limit on the jump points), on cleared scratch: `None` when it gave up (out
+/// of entries), else the steps found (`None` inside when unreachable) after checking the
+/// rebuilt path: from `s` to `t`, legal unit moves, as many as the search's cost.
+fn jump_point_steps_alone<const W: usize, const S: usize, const Q: usize>(
+    p: &mut Planner<S, Q>,
+    g: &Grid<W>,
+    s: Cell,
+    t: Cell,
+) -> Option<Option<u32>> {
+    let geometry = *g.geometry();
+    p.scratch.fill(0);
+    p.cells.clear();
+    let search = p
+        .jps_steps(g, geometry.index(s), t, geometry.index(t), u32::MAX)
+        .ok()?;
+    if !search.found {
+        return Some(None);
+    }
+    let (_, steps, fits) = p.rebuild_merged(&geometry, t);
+    assert!(fits);
+    assert_eq!(steps, search.cost);
+    assert_eq!(legal_moves(g, p.path_cells()), search.cost);
+    assert_eq!(p.path_cells().first(), Some(&s));
+    assert_eq!(p.path_cells().last(), Some(&t));
+    Some(Some(search.cost))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2048))]
+
+    /// Unit-cost jump point search on its own at every density 0–45 % (the planner runs it
+    /// for BFS on uncluttered maps only), with no limit on the jump points: pathfinding's
+    /// fewest steps and a legal path of that many moves; unreachable exactly when pathfinding
+    /// finds nothing. (A one-off run of 300 000 cases on grids up to 40 × 40 passed too.)
+    /// (The pruning rules leave ties with unit costs, e.g. a diagonal step then the side step
+    /// away from it costs 2, like the two side steps from the parent: this checks them.)
+    #[test]
+    fn jump_point_steps_alone_match_pathfinding_bfs((mut g, s, t) in arb_grid()) {
+        g.set(s, false);
+        g.set(t, false);
+        if s == t {
+            return Ok(());
+        }
+        let mut p = Box::new(SmallPlanner::new());
+        // 4 096 entries: heap and records never run out on 24 × 24 cells here.
+        let found = jump_point_steps_alone(&mut *p, &g, s, t);
+        prop_assert!(found.is_some());
+        prop_assert_eq!(found.unwrap(), oracle_bfs(&g, s, t));
+    }
+}
+
+#[test]
+fn bfs_on_the_bundled_worlds_runs_few_jump_points_with_pathfindings_steps() {
+    // The room worlds are not cluttered: BFS runs jump points (8–15 of them instead of 46 000
+    // – 65 000 cells reached by the layered search) for the same fewest steps. Ties on `f`
+    // pop the larger `g` first: without that, pillars expands 22 jump points (queue peak 40).
+    for (name, most) in [("office", 15), ("corridor", 8), ("pillars", 12)] {
+        let (g, params) = world(name);
+        let cell = |p| g.geometry().cell_of(p).unwrap();
+        let (s, t) = (cell(params.start), cell(params.goal));
+        let steps = oracle_bfs(&g, s, t).unwrap();
+        let mut p = Box::new(Planner300::new());
+        let r = p.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
+        assert_eq!(r.status, PlanStatus::Found, "{name}");
+        assert_eq!(r.cost, steps, "{name}");
+        assert!(r.expanded <= most, "{name}: expanded {}", r.expanded);
+        assert!(
+            p.queue_peak() <= 32,
+            "{name}: queue peak {}",
+            p.queue_peak()
+        );
+        assert_eq!(p.path_cells().first(), Some(&s));
+        assert_eq!(p.path_cells().last(), Some(&t));
+        assert_eq!(legal_moves(&g, p.path_cells()), steps, "{name}");
+        // The layered search agrees.
+        let layered = p
+            .plan_cells_with(PlannerKind::Bfs, &g, s, t, false)
+            .unwrap();
+        assert_eq!(layered.cost, steps, "{name}");
+        assert!(layered.expanded > 10_000, "{name}: {}", layered.expanded);
+    }
+}
+
+#[test]
+fn unit_cost_keys_hold_the_largest_grids() {
+    // 4 096 cells long (the largest side): the heuristic reaches 4 095, all 12 bits of the
+    // key's low part; jump points must not give up and must count the steps exactly.
+    const CELLS: usize = 4096 * 2;
+    for (w, h, s, t) in [
+        (4096u32, 2u32, (0u16, 0u16), (4095u16, 1u16)),
+        (2, 4096, (1, 4095), (0, 0)),
+    ] {
+        let mut g = Grid::<{ words_for_cells(CELLS) }>::new(GridGeometry::new(w, h, 0.05).unwrap())
+            .unwrap();
+        // A few walls across the long side, alternating sides, so the path turns.
+        for k in 1..40i32 {
+            let along = k * 100;
+            let across = k % 2;
+            if w > h {
+                g.set_xy(along, across, true);
+            } else {
+                g.set_xy(across, along, true);
+            }
+        }
+        let (s, t) = (Cell::new(s.0, s.1), Cell::new(t.0, t.1));
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 256>::new());
+        let steps = jump_point_steps_alone(&mut *p, &g, s, t);
+        assert_eq!(steps, Some(oracle_bfs(&g, s, t)), "{w}x{h}");
+        assert_eq!(steps, Some(Some(4095)), "{w}x{h}");
+    }
+}
+
+#[test]
+fn bfs_jump_points_fall_back_to_the_layered_search_counting_both() {
+    // Random obstacles at 3 %: not cluttered by the count (about one run in 35 cells, the
+    // limit is one in 32), yet more than JPS_STEPS_MAX_EXPANSIONS jump points with a wide open
+    // list, so the search gives up and the layered BFS finds the steps; `expanded` counts both.
+    let mut g = random_grid::<{ words_for_cells(300 * 300) }>(300, 300, 3, 7);
+    let (s, t) = (Cell::new(2, 2), Cell::new(297, 297));
+    g.set(s, false);
+    g.set(t, false);
+    let steps = oracle_bfs(&g, s, t).unwrap();
+    let mut p = Box::new(Planner300::new());
+    let geometry = *g.geometry();
+    assert!(!cluttered(g.words(), &geometry, s, t));
+    p.scratch.fill(0);
+    let gave_up = p
+        .jps_steps(
+            &g,
+            geometry.index(s),
+            t,
+            geometry.index(t),
+            JPS_STEPS_MAX_EXPANSIONS,
+        )
+        .err();
+    let r = p.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
+    assert_eq!(r.cost, steps);
+    assert_eq!(legal_moves(&g, p.path_cells()), steps);
+    let layered = p
+        .plan_cells_with(PlannerKind::Bfs, &g, s, t, false)
+        .unwrap();
+    assert_eq!(gave_up, Some(JPS_STEPS_MAX_EXPANSIONS + 1));
+    assert_eq!(r.expanded, layered.expanded + JPS_STEPS_MAX_EXPANSIONS + 1);
+    // A queue of 8 entries: jump points run out of entries, the layered search needs none.
+    let mut small = Box::new(Planner::<SCRATCH_WORDS_300, 8>::new());
+    let r = small.plan_cells(PlannerKind::Bfs, &g, s, t).unwrap();
+    assert_eq!(r.cost, steps);
+    assert!(
+        r.expanded > layered.expanded,
+        "{} {}",
+        r.expanded,
+        layered.expanded
+    );
+}
+
 #[test]
 fn one_cell_wide_grids_match_pathfinding_cell_by_cell_and_by_jump_points() {
     // Every cell of a 1-wide or 1-high grid is on the border (the slow neighbourhood path).
@@ -1211,6 +1382,8 @@ fn one_cell_wide_grids_match_pathfinding_cell_by_cell_and_by_jump_points() {
         if let Some(found) = jump_point_search_alone(&mut *p, &g, s, t) {
             assert_eq!(found, expected, "{w}x{h}");
         }
+        let steps = jump_point_steps_alone(&mut *p, &g, s, t);
+        assert_eq!(steps, Some(oracle_bfs(&g, s, t)), "{w}x{h}");
     }
 }
 
@@ -1243,7 +1416,29 @@ fn bfs_layout_uses_the_grid_bits_when_the_free_plane_does_not_fit() {
     let g = Grid::<{ words_for_cells(64) }>::new(GridGeometry::new(8, 8, 0.05).unwrap()).unwrap();
     let mut p = Planner::<{ scratch_words_for_cells(64) }, 16>::new();
     assert!(matches!(
-        p.plan_cells(PlannerKind::Bfs, &g, Cell::new(0, 0), Cell::new(7, 7)),
+        p.plan_cells_with(
+            PlannerKind::Bfs,
+            &g,
+            Cell::new(0, 0),
+            Cell::new(7, 7),
+            false
+        ),
+        Err(PlanError::ScratchTooSmall { .. })
+    ));
+    // BFS by jump points (an empty map is not cluttered) needs only the nibbles too.
+    let r = p
+        .plan_cells(PlannerKind::Bfs, &g, Cell::new(0, 0), Cell::new(7, 7))
+        .unwrap();
+    assert_eq!((r.status, r.cost), (PlanStatus::Found, 7));
+    // A map that jump points give up on (the queue is too small for them) falls back to the
+    // layered search, which reports what it needs.
+    let mut g = g;
+    for x in 0..7 {
+        g.set_xy(x, 3, true);
+    }
+    let mut tiny = Planner::<{ scratch_words_for_cells(64) }, 1>::new();
+    assert!(matches!(
+        tiny.plan_cells(PlannerKind::Bfs, &g, Cell::new(0, 0), Cell::new(0, 7)),
         Err(PlanError::ScratchTooSmall { .. })
     ));
     // A* needs only its nibbles.
@@ -1544,14 +1739,19 @@ fn check_bfs<const W: usize, const S: usize, const Q: usize>(
     s: Cell,
     t: Cell,
 ) -> Result<(), TestCaseError> {
-    let r = p.plan_cells(PlannerKind::Bfs, g, s, t).unwrap();
     let expected = oracle_bfs(g, s, t);
-    prop_assert_eq!(r.status == PlanStatus::Found, expected.is_some(), "{:?}", r);
-    if let Some(steps) = expected {
-        prop_assert_eq!(r.cost, steps);
-        prop_assert_eq!(p.path_cells().first(), Some(&s));
-        prop_assert_eq!(p.path_cells().last(), Some(&t));
-        prop_assert_eq!(legal_moves(g, p.path_cells()), steps);
+    // As the planner chooses (jump points unless cluttered), then the layered search alone.
+    for jump_points in [true, false] {
+        let r = p
+            .plan_cells_with(PlannerKind::Bfs, g, s, t, jump_points)
+            .unwrap();
+        prop_assert_eq!(r.status == PlanStatus::Found, expected.is_some(), "{:?}", r);
+        if let Some(steps) = expected {
+            prop_assert_eq!(r.cost, steps);
+            prop_assert_eq!(p.path_cells().first(), Some(&s));
+            prop_assert_eq!(p.path_cells().last(), Some(&t));
+            prop_assert_eq!(legal_moves(g, p.path_cells()), steps);
+        }
     }
     Ok(())
 }
