@@ -780,18 +780,49 @@ fn corridor_index(m: u32) -> usize {
 /// walk about 0.15 cells per walk, a maze of 1-cell corridors dozens).
 const WALK_GIVE_UP_CREDIT: i32 = -64;
 
-/// End of a bucket list.
+/// End of a list of the open list.
 const NIL: u32 = u32::MAX;
-/// Buckets of the open list (`(f >> 5) % 512`): they span 16 384 key values, more than the
-/// 16 238 by which a pushed `f` can exceed the last popped one (see [`BucketQueue`]).
-const BUCKETS: usize = 512;
 
-/// The scalar state of a [`BucketQueue`], kept apart from its arrays so that the search loop
+/// The reduced costs `r = cost + h(child) − h(parent)` of an octile step under the octile
+/// heuristic, other than 0, in increasing order: `2S − D`, `2D − 2S`, `D`, `2S`, `2D` (S =
+/// [`STRAIGHT_COST`], D = [`DIAGONAL_COST`]). A child's key is its parent's plus one of these
+/// (or plus 0), see [`ClassQueue`].
+const REDUCED_COSTS: [u32; CLASSES] = [
+    2 * STRAIGHT_COST - DIAGONAL_COST,
+    2 * DIAGONAL_COST - 2 * STRAIGHT_COST,
+    DIAGONAL_COST,
+    2 * STRAIGHT_COST,
+    2 * DIAGONAL_COST,
+];
+/// FIFO classes of the open list: one per non-zero reduced cost.
+const CLASSES: usize = 5;
+/// The class of a reduced cost `r` by `r >> 10` (`r < 16 384`), `NO_CLASS` for none; the
+/// five reduced costs fall into five different slots (3, 4, 7, 11, 15).
+const CLASS_BY_KILO: [u8; 16] = {
+    let mut table = [NO_CLASS; 16];
+    let mut c = 0;
+    while c < CLASSES {
+        table[(REDUCED_COSTS[c] >> 10) as usize] = c as u8;
+        c += 1;
+    }
+    table
+};
+const NO_CLASS: u8 = 0xFF;
+
+/// The FIFO class of reduced cost `r` (`key − last popped key`), `None` when `r` is 0 or not
+/// an octile step's reduced cost.
+#[inline(always)]
+fn reduced_cost_class(r: u32) -> Option<usize> {
+    let c = *CLASS_BY_KILO.get((r >> 10) as usize)? as usize;
+    (REDUCED_COSTS.get(c) == Some(&r)).then_some(c)
+}
+
+/// The scalar state of a [`ClassQueue`], kept apart from its arrays so that the search loop
 /// holds it in registers (it is passed by value to the queue's out-of-line parts).
 #[derive(Clone, Copy)]
 struct QueueState {
-    /// Bit `w` set when word `w` of the bucket map is not 0.
-    summary: u32,
+    /// Head of the stack of entries whose key equals `last` (reduced cost 0).
+    stack: u32,
     /// The last key popped (every key in the queue is at least this).
     last: u32,
     /// Entries of the pool ever used (the queue peak).
@@ -800,51 +831,49 @@ struct QueueState {
     free: u32,
 }
 
-/// The open list of A*: a bucket queue over a fixed pool of entries.
+/// The open list of the cell-by-cell A*: lists by *reduced cost* over a fixed pool of entries.
 ///
-/// With a consistent heuristic, a child's `f` exceeds its parent's by at most twice the step
-/// cost (`0 ≤ Δf = cost + Δh ≤ 2 · DIAGONAL_COST = 16 238`), and the parent's `f` is the last
-/// key popped. So every key in the queue lies in the window `[last, last + 16 238]`, and a
-/// circular array of 512 buckets of 32 key values each (`(f >> 5) % 512`) holds each key value
-/// in one bucket only. A push links an entry at the head of its bucket's list, O(1). A pop
-/// takes the first entry of smallest `f` in the bucket of the last popped key, or, when that is
-/// empty, in the next non-empty bucket, found in a 512-bit map with a 16-bit summary (two
-/// trailing-zero counts). Octile keys are sparse (steps cost thousands), so a bucket rarely
-/// holds more than a few entries; an entry whose `f` equals the last popped key ends the scan at
-/// once (nothing can be smaller), which keeps runs of equal keys O(1) per pop.
+/// With the octile heuristic (consistent), a child's key is its parent's plus the reduced cost
+/// `r = cost + h(child) − h(parent)`, which takes only six values: 0 and [`REDUCED_COSTS`]
+/// (checked for every cell and move around goals in the tests). The parent's key is the last
+/// key popped, and popped keys never decrease, so the children pushed with one `r` arrive with
+/// non-decreasing keys: one FIFO list per non-zero `r` is sorted by construction, its head is
+/// its smallest key. Entries with `r = 0` carry the last popped key itself, the smallest there
+/// is: they go on a LIFO *stack*, popped first while it is not empty (ties pop the last pushed
+/// first: the deeper entries, which on open floors keeps the search on one straight line). So
+/// a push is O(1) (a link at the stack's head or a FIFO's tail), and a pop takes the stack's
+/// head or the smallest of the five FIFO heads (their keys are kept in an array; ties go to
+/// the smallest `r`, i.e. the latest parent). Keys that are not the last popped key plus one of
+/// the six values (the ends of corridor walks) go to the *far list*, kept sorted by key
+/// (insertion walks it; it holds a few entries), whose head is the sixth candidate of a pop.
 ///
-/// Ties (equal `f`) pop the last pushed entry first: the children of the cell just expanded,
-/// i.e. the deeper entries (larger `g`), which on open floors keeps the search on one straight
-/// line instead of flooding every cell of equal `f`. Entries of cells closed meanwhile stay in
-/// the lists (lazy deletion) until popped, or until [`BucketQueue::collect`] reclaims them when
-/// the pool is full.
-struct BucketQueue<'a> {
+/// Entries of cells closed meanwhile stay in the lists (lazy deletion) until popped, or until
+/// [`ClassQueue::collect`] reclaims them when the pool is full.
+struct ClassQueue<'a> {
     pool: &'a mut [OpenEntry],
-    heads: [u32; BUCKETS],
-    map: [u32; BUCKETS / 32],
-    /// Head of the list of *far* entries: keys more than [`NEAR_KEYS`] above the last popped
-    /// key when they were pushed (the ends of corridor walks), unsorted.
+    /// First and last entry of each FIFO class (`NIL` when empty).
+    heads: [u32; CLASSES],
+    tails: [u32; CLASSES],
+    /// The key of each FIFO's head entry (`u32::MAX` when empty).
+    head_keys: [u32; CLASSES],
+    /// Head of the far list (sorted by key, `NIL` when empty) and its key (`u32::MAX`).
     far: u32,
-    /// The smallest key in the far list (`u32::MAX` when it is empty).
-    far_min: u32,
+    far_key: u32,
 }
 
-/// Keys at most this far above the last popped key go to the buckets (a child of the popped
-/// cell is at most `2 · DIAGONAL_COST` above it); farther ones to the far list.
-const NEAR_KEYS: u32 = 2 * DIAGONAL_COST;
-
-impl<'a> BucketQueue<'a> {
+impl<'a> ClassQueue<'a> {
     fn new(pool: &'a mut [OpenEntry], first_key: u32) -> (Self, QueueState) {
         (
             Self {
                 pool,
-                heads: [NIL; BUCKETS],
-                map: [0; BUCKETS / 32],
+                heads: [NIL; CLASSES],
+                tails: [NIL; CLASSES],
+                head_keys: [u32::MAX; CLASSES],
                 far: NIL,
-                far_min: u32::MAX,
+                far_key: u32::MAX,
             },
             QueueState {
-                summary: 0,
+                stack: NIL,
                 last: first_key,
                 bump: 0,
                 free: NIL,
@@ -852,181 +881,147 @@ impl<'a> BucketQueue<'a> {
         )
     }
 
+    /// A free slot of the pool, taken off the free list or the unused end; `None` when full.
+    #[inline(always)]
+    fn alloc(&mut self, s: &mut QueueState) -> Option<u32> {
+        if s.free != NIL {
+            let slot = s.free;
+            s.free = self.pool.get(slot as usize)?.next;
+            Some(slot)
+        } else if (s.bump as usize) < self.pool.len() {
+            s.bump += 1;
+            Some(s.bump - 1)
+        } else {
+            None
+        }
+    }
+
     /// Insert; `false` when the pool is full. `key` must not be below `s.last`.
     #[inline(always)]
     fn push(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
-        let slot = if s.free != NIL { s.free } else { s.bump };
-        let Some(entry) = self.pool.get_mut(slot as usize) else {
+        let r = key.wrapping_sub(s.last);
+        if r == 0 {
+            let Some(slot) = self.alloc(s) else {
+                return false;
+            };
+            if let Some(e) = self.pool.get_mut(slot as usize) {
+                *e = OpenEntry {
+                    f: key,
+                    node,
+                    next: s.stack,
+                };
+            }
+            s.stack = slot;
+            return true;
+        }
+        let Some(c) = reduced_cost_class(r) else {
+            return self.push_far(s, key, node);
+        };
+        let Some(slot) = self.alloc(s) else {
             return false;
         };
-        if s.free != NIL {
-            s.free = entry.next;
-        } else {
-            s.bump += 1;
+        if let Some(e) = self.pool.get_mut(slot as usize) {
+            *e = OpenEntry {
+                f: key,
+                node,
+                next: NIL,
+            };
         }
-        let b = (key >> 5) as usize % BUCKETS;
-        self.map[b / 32] |= 1 << (b % 32);
-        s.summary |= 1 << (b / 32);
-        *entry = OpenEntry {
-            f: key,
-            node,
-            next: self.heads[b],
-        };
-        self.heads[b] = slot;
+        let tail = self.tails[c];
+        match self.pool.get_mut(tail as usize) {
+            Some(t) => t.next = slot,
+            None => {
+                self.heads[c] = slot;
+                self.head_keys[c] = key;
+            }
+        }
+        self.tails[c] = slot;
         true
     }
 
-    /// Insert a key that may lie beyond the buckets' window (more than [`NEAR_KEYS`] above the
-    /// last popped key): such an entry waits in the far list until the queue gets near it.
-    /// `false` when the pool is full. `key` must not be below `s.last`.
+    /// Insert any key not below `s.last` into the far list, sorted (before the entries of an
+    /// equal key); `false` when the pool is full.
     #[inline(never)]
     fn push_far(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
-        if key.wrapping_sub(s.last) <= NEAR_KEYS {
-            return self.push(s, key, node);
-        }
-        let slot = if s.free != NIL { s.free } else { s.bump };
-        let Some(entry) = self.pool.get_mut(slot as usize) else {
+        let Some(slot) = self.alloc(s) else {
             return false;
         };
-        if s.free != NIL {
-            s.free = entry.next;
-        } else {
-            s.bump += 1;
-        }
-        *entry = OpenEntry {
-            f: key,
-            node,
-            next: self.far,
-        };
-        self.far = slot;
-        self.far_min = self.far_min.min(key);
-        true
-    }
-
-    /// Move the far entries within [`NEAR_KEYS`] of the last popped key into the buckets; when
-    /// the buckets are empty, first move the last popped key up to the smallest far key.
-    #[cold]
-    #[inline(never)]
-    fn migrate(&mut self, s: &mut QueueState) {
-        if s.summary == 0 && self.far != NIL {
-            s.last = self.far_min;
-        }
-        let (mut kept, mut kept_min, mut slot) = (NIL, u32::MAX, self.far);
-        while let Some(e) = self.pool.get_mut(slot as usize) {
-            let (key, next) = (e.f, e.next);
-            if key.wrapping_sub(s.last) <= NEAR_KEYS {
-                let b = (key >> 5) as usize % BUCKETS;
-                e.next = self.heads[b];
-                self.heads[b] = slot;
-                self.map[b / 32] |= 1 << (b % 32);
-                s.summary |= 1 << (b / 32);
-            } else {
-                e.next = kept;
-                kept = slot;
-                kept_min = kept_min.min(key);
+        let (mut prev, mut at) = (NIL, self.far);
+        while let Some(e) = self.pool.get(at as usize) {
+            if e.f >= key {
+                break;
             }
-            slot = next;
+            (prev, at) = (at, e.next);
         }
-        self.far = kept;
-        self.far_min = kept_min;
-    }
-
-    /// The first non-empty bucket at or after `from`, circularly: one word of the map and the
-    /// summary of the words.
-    #[inline(never)]
-    fn next_bucket(&self, summary: u32, from: usize) -> Option<usize> {
-        let first = (from / 32) % (BUCKETS / 32);
-        let masked = self.map[first] & (u32::MAX << (from % 32));
-        if masked != 0 {
-            return Some(first * 32 + masked.trailing_zeros() as usize);
+        if let Some(e) = self.pool.get_mut(slot as usize) {
+            *e = OpenEntry {
+                f: key,
+                node,
+                next: at,
+            };
         }
-        // Later words, else wrap around (which may come back to the low bits of `first`).
-        let later = summary & (u32::MAX << 1 << first);
-        let w = if later != 0 {
-            later.trailing_zeros() as usize
-        } else if summary != 0 {
-            summary.trailing_zeros() as usize
-        } else {
-            return None;
-        };
-        let bits = *self.map.get(w)?;
-        Some(w * 32 + bits.trailing_zeros() as usize)
+        match self.pool.get_mut(prev as usize) {
+            Some(p) => p.next = slot,
+            None => {
+                self.far = slot;
+                self.far_key = key;
+            }
+        }
+        true
     }
 
     /// Remove an entry of the smallest key: `(key, node)`.
     #[inline(always)]
     fn pop(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
-        if self.far_min.wrapping_sub(s.last) <= NEAR_KEYS {
-            self.migrate(s);
-        }
-        let mut b = (s.last >> 5) as usize % BUCKETS;
-        let mut head = self.heads[b];
-        if head == NIL {
-            if s.summary == 0 {
-                // Only far entries left (or none): jump to the smallest.
-                if self.far == NIL {
-                    return None;
-                }
-                self.migrate(s);
-                b = (s.last >> 5) as usize % BUCKETS;
-                head = self.heads[b];
-            } else {
-                b = self.next_bucket(s.summary, b)? % BUCKETS;
-                head = self.heads[b];
-            }
-        }
-        let first = self.pool.get_mut(head as usize)?;
-        if first.next == NIL || first.f == s.last {
-            // The head is the smallest: alone in its bucket, or equal to the last key popped.
-            let (f, node, next) = (first.f, first.node, first.next);
-            first.next = s.free;
-            s.free = head;
-            s.last = f;
-            self.heads[b] = next;
-            if next == NIL {
-                self.map[b / 32] &= !(1 << (b % 32));
-                if self.map[b / 32] == 0 {
-                    s.summary &= !(1 << (b / 32));
-                }
-            }
+        if s.stack != NIL {
+            // Its key is the last popped key: nothing is smaller.
+            let slot = s.stack;
+            let e = self.pool.get_mut(slot as usize)?;
+            let (f, node) = (e.f, e.node);
+            s.stack = e.next;
+            e.next = s.free;
+            s.free = slot;
             return Some((f, node));
         }
-        let first = *first;
-        let (mut best, mut best_f, mut best_next) = (head, first.f, first.next);
-        let mut before_best = NIL;
-        {
-            // Scan the bucket for the first entry of the smallest key.
-            let (mut prev, mut slot) = (head, first.next);
-            while let Some(e) = self.pool.get(slot as usize) {
-                if e.f < best_f {
-                    (best, best_f, best_next, before_best) = (slot, e.f, e.next, prev);
-                }
-                prev = slot;
-                slot = e.next;
+        let k = &self.head_keys;
+        let (mut c, mut key) = (0, k[0]);
+        for (i, &ki) in k.iter().enumerate().skip(1) {
+            if ki < key {
+                (c, key) = (i, ki);
             }
         }
-        let node = match self.pool.get_mut(best as usize) {
-            Some(e) => {
-                e.next = s.free;
-                e.node
-            }
-            None => return None,
-        };
-        s.free = best;
-        s.last = best_f;
-        match self.pool.get_mut(before_best as usize) {
-            Some(e) => e.next = best_next,
+        if self.far_key <= key {
+            return self.pop_far(s);
+        }
+        let slot = self.heads[c];
+        let e = self.pool.get_mut(slot as usize)?;
+        let (node, next) = (e.node, e.next);
+        e.next = s.free;
+        s.free = slot;
+        s.last = key;
+        self.heads[c] = next;
+        match self.pool.get(next as usize) {
+            Some(n) => self.head_keys[c] = n.f,
             None => {
-                self.heads[b] = best_next;
-                if best_next == NIL {
-                    self.map[b / 32] &= !(1 << (b % 32));
-                    if self.map[b / 32] == 0 {
-                        s.summary &= !(1 << (b / 32));
-                    }
-                }
+                self.tails[c] = NIL;
+                self.head_keys[c] = u32::MAX;
             }
         }
-        Some((best_f, node))
+        Some((key, node))
+    }
+
+    /// Remove the head of the far list (`None` when it is empty).
+    #[inline(never)]
+    fn pop_far(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
+        let slot = self.far;
+        let e = self.pool.get_mut(slot as usize)?;
+        let (f, node, next) = (e.f, e.node, e.next);
+        e.next = s.free;
+        s.free = slot;
+        s.last = f;
+        self.far = next;
+        self.far_key = self.pool.get(next as usize).map_or(u32::MAX, |n| n.f);
+        Some((f, node))
     }
 
     /// The pool is full: drop the entries of cells closed meanwhile (nibble not 0 in
@@ -1048,40 +1043,18 @@ impl<'a> BucketQueue<'a> {
                 (n >> 16) as usize * width + ((n >> 4) & 0xFFF) as usize,
             ) != 0
         });
-        (freed >= (self.pool.len() / 16).max(1) && self.push_far(&mut s, key, node)).then_some(s)
+        (freed >= (self.pool.len() / 16).max(1) && self.push(&mut s, key, node)).then_some(s)
     }
 
-    /// Drop every entry for which `stale(node)` holds from every bucket and the far list.
-    /// Returns the new state and how many slots were freed. O(entries); used only when the
-    /// pool is full.
-    #[cold]
-    #[inline(never)]
-    fn collect(&mut self, mut s: QueueState, stale: impl Fn(u32) -> bool) -> (QueueState, usize) {
-        let mut freed = 0;
-        for b in 0..BUCKETS {
-            let (mut head, mut slot) = (NIL, self.heads[b]);
-            while let Some(e) = self.pool.get_mut(slot as usize) {
-                let next = e.next;
-                if stale(e.node) {
-                    e.next = s.free;
-                    s.free = slot;
-                    freed += 1;
-                } else {
-                    e.next = head;
-                    head = slot;
-                }
-                slot = next;
-            }
-            self.heads[b] = head;
-            if head == NIL {
-                self.map[b / 32] &= !(1 << (b % 32));
-                if self.map[b / 32] == 0 {
-                    s.summary &= !(1 << (b / 32));
-                }
-            }
-        }
-        // The far list too.
-        let (mut kept, mut kept_min, mut slot) = (NIL, u32::MAX, self.far);
+    /// Drop the entries for which `stale(node)` holds from the list starting at `head`,
+    /// keeping the others in order. Returns the new head, the new tail and the slots freed.
+    fn filter_list(
+        &mut self,
+        s: &mut QueueState,
+        head: u32,
+        stale: &impl Fn(u32) -> bool,
+    ) -> (u32, u32, usize) {
+        let (mut first, mut tail, mut slot, mut freed) = (NIL, NIL, head, 0);
         while let Some(e) = self.pool.get_mut(slot as usize) {
             let next = e.next;
             if stale(e.node) {
@@ -1089,14 +1062,38 @@ impl<'a> BucketQueue<'a> {
                 s.free = slot;
                 freed += 1;
             } else {
-                e.next = kept;
-                kept = slot;
-                kept_min = kept_min.min(e.f);
+                e.next = NIL;
+                match self.pool.get_mut(tail as usize) {
+                    Some(t) => t.next = slot,
+                    None => first = slot,
+                }
+                tail = slot;
             }
             slot = next;
         }
-        self.far = kept;
-        self.far_min = kept_min;
+        (first, tail, freed)
+    }
+
+    /// Drop every entry for which `stale(node)` holds from the stack, the FIFOs and the far
+    /// list (each keeps its order). Returns the new state and how many slots were freed.
+    /// O(entries); used only when the pool is full.
+    #[cold]
+    #[inline(never)]
+    fn collect(&mut self, mut s: QueueState, stale: impl Fn(u32) -> bool) -> (QueueState, usize) {
+        let stack_head = s.stack;
+        let (stack, _, mut freed) = self.filter_list(&mut s, stack_head, &stale);
+        s.stack = stack;
+        for c in 0..CLASSES {
+            let (head, tail, n) = self.filter_list(&mut s, self.heads[c], &stale);
+            freed += n;
+            self.heads[c] = head;
+            self.tails[c] = tail;
+            self.head_keys[c] = self.pool.get(head as usize).map_or(u32::MAX, |e| e.f);
+        }
+        let (far, _, n) = self.filter_list(&mut s, self.far, &stale);
+        freed += n;
+        self.far = far;
+        self.far_key = self.pool.get(far as usize).map_or(u32::MAX, |e| e.f);
         (s, freed)
     }
 }
@@ -1878,7 +1875,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
         };
         let (sx, sy) = ((start % width) as u32, (start / width) as u32);
-        let (mut open, mut state) = BucketQueue::new(&mut self.queue[..], h(sx, sy));
+        let (mut open, mut state) = ClassQueue::new(&mut self.queue[..], h(sx, sy));
         let full = PlanError::QueueFull {
             capacity: open.pool.len() as u32,
         };
