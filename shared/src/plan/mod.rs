@@ -788,6 +788,7 @@ const NIL: u32 = u32::MAX;
 /// [`STRAIGHT_COST`], D = [`DIAGONAL_COST`]). A child's key is its parent's plus one of these
 /// (or plus 0), see [`ClassQueue`].
 const REDUCED_COSTS: [u32; CLASSES] = [
+    0,
     2 * STRAIGHT_COST - DIAGONAL_COST,
     2 * DIAGONAL_COST - 2 * STRAIGHT_COST,
     DIAGONAL_COST,
@@ -795,7 +796,7 @@ const REDUCED_COSTS: [u32; CLASSES] = [
     2 * DIAGONAL_COST,
 ];
 /// FIFO classes of the open list: one per non-zero reduced cost.
-const CLASSES: usize = 5;
+const CLASSES: usize = 6;
 /// The class of a reduced cost `r` by `r >> 10` (`r < 16 384`), `NO_CLASS` for none; the
 /// five reduced costs fall into five different slots (3, 4, 7, 11, 15).
 const CLASS_BY_KILO: [u8; 16] = {
@@ -821,8 +822,6 @@ fn reduced_cost_class(r: u32) -> Option<usize> {
 /// holds it in registers (it is passed by value to the queue's out-of-line parts).
 #[derive(Clone, Copy)]
 struct QueueState {
-    /// Head of the stack of entries whose key equals `last` (reduced cost 0).
-    stack: u32,
     /// The last key popped (every key in the queue is at least this).
     last: u32,
     /// Entries of the pool ever used (the queue peak).
@@ -873,7 +872,6 @@ impl<'a> ClassQueue<'a> {
                 far_key: u32::MAX,
             },
             QueueState {
-                stack: NIL,
                 last: first_key,
                 bump: 0,
                 free: NIL,
@@ -899,22 +897,7 @@ impl<'a> ClassQueue<'a> {
     /// Insert; `false` when the pool is full. `key` must not be below `s.last`.
     #[inline(always)]
     fn push(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
-        let r = key.wrapping_sub(s.last);
-        if r == 0 {
-            let Some(slot) = self.alloc(s) else {
-                return false;
-            };
-            if let Some(e) = self.pool.get_mut(slot as usize) {
-                *e = OpenEntry {
-                    f: key,
-                    node,
-                    next: s.stack,
-                };
-            }
-            s.stack = slot;
-            return true;
-        }
-        let Some(c) = reduced_cost_class(r) else {
+        let Some(c) = reduced_cost_class(key.wrapping_sub(s.last)) else {
             return self.push_far(s, key, node);
         };
         let Some(slot) = self.alloc(s) else {
@@ -973,25 +956,20 @@ impl<'a> ClassQueue<'a> {
     /// Remove an entry of the smallest key: `(key, node)`.
     #[inline(always)]
     fn pop(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
-        if s.stack != NIL {
-            // Its key is the last popped key: nothing is smaller.
-            let slot = s.stack;
-            let e = self.pool.get_mut(slot as usize)?;
-            let (f, node) = (e.f, e.node);
-            s.stack = e.next;
-            e.next = s.free;
-            s.free = slot;
-            return Some((f, node));
-        }
-        let k = &self.head_keys;
-        let (mut c, mut key) = (0, k[0]);
-        for (i, &ki) in k.iter().enumerate().skip(1) {
-            if ki < key {
-                (c, key) = (i, ki);
+        // Class 0 holds the last popped key: nothing is smaller.
+        let (mut c, mut key) = (0, s.last);
+        if self.heads[0] == NIL {
+            let k = &self.head_keys;
+            key = k[1];
+            c = 1;
+            for (i, &ki) in k.iter().enumerate().skip(2) {
+                if ki < key {
+                    (c, key) = (i, ki);
+                }
             }
-        }
-        if self.far_key <= key {
-            return self.pop_far(s);
+            if self.far_key <= key {
+                return self.pop_far(s);
+            }
         }
         let slot = self.heads[c];
         let e = self.pool.get_mut(slot as usize)?;
@@ -1080,9 +1058,7 @@ impl<'a> ClassQueue<'a> {
     #[cold]
     #[inline(never)]
     fn collect(&mut self, mut s: QueueState, stale: impl Fn(u32) -> bool) -> (QueueState, usize) {
-        let stack_head = s.stack;
-        let (stack, _, mut freed) = self.filter_list(&mut s, stack_head, &stale);
-        s.stack = stack;
+        let mut freed = 0;
         for c in 0..CLASSES {
             let (head, tail, n) = self.filter_list(&mut s, self.heads[c], &stale);
             freed += n;

@@ -1774,7 +1774,7 @@ fn reduced_costs_of_octile_moves_take_six_values() {
                     };
                     let r = (cost + h(cx, cy)) as i64 - h(x, y) as i64;
                     assert!(
-                        r == 0 || REDUCED_COSTS.contains(&(r as u32)),
+                        REDUCED_COSTS.contains(&(r as u32)),
                         "goal ({gx}, {gy}) cell ({x}, {y}) step {k}: r = {r}"
                     );
                     seen.insert(r as u32);
@@ -1782,10 +1782,8 @@ fn reduced_costs_of_octile_moves_take_six_values() {
             }
         }
     }
-    let mut all = std::vec![0];
-    all.extend(REDUCED_COSTS);
-    assert_eq!(seen.into_iter().collect::<Vec<_>>(), all);
-    assert_eq!(REDUCED_COSTS, [3363, 4756, 8119, 11482, 16238]);
+    assert_eq!(seen.into_iter().collect::<Vec<_>>(), REDUCED_COSTS);
+    assert_eq!(REDUCED_COSTS, [0, 3363, 4756, 8119, 11482, 16238]);
     for r in 0..=3 * DIAGONAL_COST {
         let class = REDUCED_COSTS.iter().position(|&v| v == r);
         assert_eq!(reduced_cost_class(r), class, "r = {r}");
