@@ -781,12 +781,13 @@ fn corridor_index(m: u32) -> usize {
 const WALK_GIVE_UP_CREDIT: i32 = -64;
 
 /// End of a list of the open list.
+/// End of a list of the open list.
 const NIL: u32 = u32::MAX;
 
 /// The reduced costs `r = cost + h(child) − h(parent)` of an octile step under the octile
-/// heuristic, other than 0, in increasing order: `2S − D`, `2D − 2S`, `D`, `2S`, `2D` (S =
-/// [`STRAIGHT_COST`], D = [`DIAGONAL_COST`]). A child's key is its parent's plus one of these
-/// (or plus 0), see [`ClassQueue`].
+/// heuristic, in increasing order: 0, `2S − D`, `2D − 2S`, `D`, `2S`, `2D` (S =
+/// [`STRAIGHT_COST`], D = [`DIAGONAL_COST`]); the index is the step's *class*. A child's key is
+/// its parent's plus one of these, see [`ClassQueue`].
 const REDUCED_COSTS: [u32; CLASSES] = [
     0,
     2 * STRAIGHT_COST - DIAGONAL_COST,
@@ -795,10 +796,20 @@ const REDUCED_COSTS: [u32; CLASSES] = [
     2 * STRAIGHT_COST,
     2 * DIAGONAL_COST,
 ];
-/// FIFO classes of the open list: one per non-zero reduced cost.
+/// Classes of reduced cost: 0 (the stack) and one FIFO list per non-zero value.
 const CLASSES: usize = 6;
-/// The class of a reduced cost `r` by `r >> 10` (`r < 16 384`), `NO_CLASS` for none; the
-/// five reduced costs fall into five different slots (3, 4, 7, 11, 15).
+/// [`REDUCED_COSTS`] padded to 8 entries, for class numbers read from 3-bit fields.
+const CLASS_COSTS: [u32; 8] = {
+    let mut t = [0; 8];
+    let mut c = 0;
+    while c < CLASSES {
+        t[c] = REDUCED_COSTS[c];
+        c += 1;
+    }
+    t
+};
+/// The class of a reduced cost `r` by `r >> 10` (`r < 16 384`), `NO_CLASS` for none; the six
+/// reduced costs fall into six different slots (0, 3, 4, 7, 11, 15).
 const CLASS_BY_KILO: [u8; 16] = {
     let mut table = [NO_CLASS; 16];
     let mut c = 0;
@@ -810,18 +821,95 @@ const CLASS_BY_KILO: [u8; 16] = {
 };
 const NO_CLASS: u8 = 0xFF;
 
-/// The FIFO class of reduced cost `r` (`key − last popped key`), `None` when `r` is 0 or not
-/// an octile step's reduced cost.
+/// The class of reduced cost `r` (`key − last popped key`), `None` when `r` is not an octile
+/// step's reduced cost.
 #[inline(always)]
 fn reduced_cost_class(r: u32) -> Option<usize> {
     let c = *CLASS_BY_KILO.get((r >> 10) as usize)? as usize;
     (REDUCED_COSTS.get(c) == Some(&r)).then_some(c)
 }
 
+/// Octile distance for the tables built at compile time (same as [`octile`]).
+const fn octile_const(dx: i32, dy: i32) -> u32 {
+    let (a, b) = (dx.unsigned_abs(), dy.unsigned_abs());
+    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+    DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
+}
+
+/// The *region* of a cell relative to the goal, `(dx, dy)` = cell − goal: the signs of `dx`
+/// and `dy` and `|dx| − |dy|` clamped to `−2 ..= 2`, as `0 .. 45`. The octile heuristic is
+/// linear in `(|dx|, |dy|)` on each side of `|dx| = |dy|`, and a step changes `|dx|` and `|dy|`
+/// by one each at most in a way the signs fix, so the reduced cost of every step from a cell
+/// depends on its region only (checked against `h` for every cell and step in the tests).
+#[inline(always)]
+fn goal_region(dx: i32, dy: i32) -> usize {
+    let d = (dx.unsigned_abs() as i32)
+        .wrapping_sub(dy.unsigned_abs() as i32)
+        .clamp(-2, 2);
+    (((dx.signum() + 1) * 3 + dy.signum() + 1) * 5 + d + 2) as usize
+}
+
+/// Per [`goal_region`]: the class (index into [`REDUCED_COSTS`]) of each step, in bits
+/// `3 (code − 1) ..` for step code `code` (1 ..= 8). 180 bytes of read-only data, built at
+/// compile time from one cell of each region.
+static STEP_CLASSES: [u32; 45] = {
+    let mut table = [0u32; 45];
+    let mut region = 0;
+    while region < 45 {
+        let (sx, sy, d) = (
+            (region / 15) as i32 - 1,
+            ((region / 5) % 3) as i32 - 1,
+            (region % 5) as i32 - 2,
+        );
+        // A cell of the region: |dx|, |dy| in 0..8 with those signs and that clamped difference.
+        let mut found = None;
+        let mut a = 0;
+        while a < 8 && found.is_none() {
+            let mut b = 0;
+            while b < 8 && found.is_none() {
+                let diff = a - b;
+                let dc = if diff < -2 {
+                    -2
+                } else if diff > 2 {
+                    2
+                } else {
+                    diff
+                };
+                if (a == 0) == (sx == 0) && (b == 0) == (sy == 0) && dc == d {
+                    found = Some((a * sx, b * sy));
+                }
+                b += 1;
+            }
+            a += 1;
+        }
+        if let Some((dx, dy)) = found {
+            let mut word = 0u32;
+            let mut k = 0;
+            while k < 8 {
+                let (mx, my) = STEPS[k];
+                let cost = if k >= 4 { DIAGONAL_COST } else { STRAIGHT_COST };
+                let r = cost + octile_const(dx + mx, dy + my) - octile_const(dx, dy);
+                let mut c = 0;
+                while c < CLASSES && REDUCED_COSTS[c] != r {
+                    c += 1;
+                }
+                assert!(c < CLASSES, "not a reduced cost");
+                word |= (c as u32) << (3 * k);
+                k += 1;
+            }
+            table[region] = word;
+        }
+        region += 1;
+    }
+    table
+};
+
 /// The scalar state of a [`ClassQueue`], kept apart from its arrays so that the search loop
 /// holds it in registers (it is passed by value to the queue's out-of-line parts).
 #[derive(Clone, Copy)]
 struct QueueState {
+    /// Head of the stack of entries whose key equals `last` (reduced cost 0).
+    stack: u32,
     /// The last key popped (every key in the queue is at least this).
     last: u32,
     /// Entries of the pool ever used (the queue peak).
@@ -833,8 +921,8 @@ struct QueueState {
 /// The open list of the cell-by-cell A*: lists by *reduced cost* over a fixed pool of entries.
 ///
 /// With the octile heuristic (consistent), a child's key is its parent's plus the reduced cost
-/// `r = cost + h(child) − h(parent)`, which takes only six values: 0 and [`REDUCED_COSTS`]
-/// (checked for every cell and move around goals in the tests). The parent's key is the last
+/// `r = cost + h(child) − h(parent)`, which takes only the six values of [`REDUCED_COSTS`]
+/// (checked for every cell and step around goals in the tests). The parent's key is the last
 /// key popped, and popped keys never decrease, so the children pushed with one `r` arrive with
 /// non-decreasing keys: one FIFO list per non-zero `r` is sorted by construction, its head is
 /// its smallest key. Entries with `r = 0` carry the last popped key itself, the smallest there
@@ -850,11 +938,12 @@ struct QueueState {
 /// [`ClassQueue::collect`] reclaims them when the pool is full.
 struct ClassQueue<'a> {
     pool: &'a mut [OpenEntry],
-    /// First and last entry of each FIFO class (`NIL` when empty).
-    heads: [u32; CLASSES],
-    tails: [u32; CLASSES],
+    /// First and last entry of each FIFO class `1 ..= 5` (`NIL` when empty; index 0 and the
+    /// two past the classes are unused, so that a 3-bit class indexes them).
+    heads: [u32; 8],
+    tails: [u32; 8],
     /// The key of each FIFO's head entry (`u32::MAX` when empty).
-    head_keys: [u32; CLASSES],
+    head_keys: [u32; 8],
     /// Head of the far list (sorted by key, `NIL` when empty) and its key (`u32::MAX`).
     far: u32,
     far_key: u32,
@@ -865,13 +954,14 @@ impl<'a> ClassQueue<'a> {
         (
             Self {
                 pool,
-                heads: [NIL; CLASSES],
-                tails: [NIL; CLASSES],
-                head_keys: [u32::MAX; CLASSES],
+                heads: [NIL; 8],
+                tails: [NIL; 8],
+                head_keys: [u32::MAX; 8],
                 far: NIL,
                 far_key: u32::MAX,
             },
             QueueState {
+                stack: NIL,
                 last: first_key,
                 bump: 0,
                 free: NIL,
@@ -894,12 +984,40 @@ impl<'a> ClassQueue<'a> {
         }
     }
 
-    /// Insert; `false` when the pool is full. `key` must not be below `s.last`.
-    #[inline(always)]
+    /// Insert any key not below `s.last`: on the stack, a FIFO list or the far list by its
+    /// reduced cost; `false` when the pool is full.
+    #[inline(never)]
     fn push(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
-        let Some(c) = reduced_cost_class(key.wrapping_sub(s.last)) else {
-            return self.push_far(s, key, node);
+        match reduced_cost_class(key.wrapping_sub(s.last)) {
+            Some(0) => self.push_stack(s, node),
+            Some(c) => self.push_class(s, c, node),
+            None => self.push_far(s, key, node),
+        }
+    }
+
+    /// Insert with the last popped key (class 0); `false` when the pool is full.
+    #[inline(always)]
+    fn push_stack(&mut self, s: &mut QueueState, node: u32) -> bool {
+        let Some(slot) = self.alloc(s) else {
+            return false;
         };
+        if let Some(e) = self.pool.get_mut(slot as usize) {
+            *e = OpenEntry {
+                f: s.last,
+                node,
+                next: s.stack,
+            };
+        }
+        s.stack = slot;
+        true
+    }
+
+    /// Insert with key `s.last + CLASS_COSTS[class]` at the tail of FIFO `class` (1 ..= 5);
+    /// `false` when the pool is full.
+    #[inline(always)]
+    fn push_class(&mut self, s: &mut QueueState, class: usize, node: u32) -> bool {
+        let c = class & 7;
+        let key = s.last.wrapping_add(CLASS_COSTS[c]);
         let Some(slot) = self.alloc(s) else {
             return false;
         };
@@ -910,8 +1028,7 @@ impl<'a> ClassQueue<'a> {
                 next: NIL,
             };
         }
-        let tail = self.tails[c];
-        match self.pool.get_mut(tail as usize) {
+        match self.pool.get_mut(self.tails[c] as usize) {
             Some(t) => t.next = slot,
             None => {
                 self.heads[c] = slot;
@@ -956,20 +1073,38 @@ impl<'a> ClassQueue<'a> {
     /// Remove an entry of the smallest key: `(key, node)`.
     #[inline(always)]
     fn pop(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
-        // Class 0 holds the last popped key: nothing is smaller.
-        let (mut c, mut key) = (0, s.last);
-        if self.heads[0] == NIL {
-            let k = &self.head_keys;
-            key = k[1];
-            c = 1;
-            for (i, &ki) in k.iter().enumerate().skip(2) {
-                if ki < key {
-                    (c, key) = (i, ki);
-                }
-            }
-            if self.far_key <= key {
-                return self.pop_far(s);
-            }
+        if s.stack != NIL {
+            // Its key is the last popped key: nothing is smaller.
+            let slot = s.stack;
+            let e = self.pool.get_mut(slot as usize)?;
+            let node = e.node;
+            s.stack = e.next;
+            e.next = s.free;
+            s.free = slot;
+            return Some((s.last, node));
+        }
+        self.pop_fifo(s)
+    }
+
+    /// Remove the smallest of the FIFO heads and the far list's head (the stack is empty).
+    #[inline(never)]
+    fn pop_fifo(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
+        let k = &self.head_keys;
+        let (mut c, mut key) = (1, k[1]);
+        if k[2] < key {
+            (c, key) = (2, k[2]);
+        }
+        if k[3] < key {
+            (c, key) = (3, k[3]);
+        }
+        if k[4] < key {
+            (c, key) = (4, k[4]);
+        }
+        if k[5] < key {
+            (c, key) = (5, k[5]);
+        }
+        if self.far_key <= key {
+            return self.pop_far(s);
         }
         let slot = self.heads[c];
         let e = self.pool.get_mut(slot as usize)?;
@@ -989,7 +1124,7 @@ impl<'a> ClassQueue<'a> {
     }
 
     /// Remove the head of the far list (`None` when it is empty).
-    #[inline(never)]
+    #[inline(always)]
     fn pop_far(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
         let slot = self.far;
         let e = self.pool.get_mut(slot as usize)?;
@@ -1058,8 +1193,10 @@ impl<'a> ClassQueue<'a> {
     #[cold]
     #[inline(never)]
     fn collect(&mut self, mut s: QueueState, stale: impl Fn(u32) -> bool) -> (QueueState, usize) {
-        let mut freed = 0;
-        for c in 0..CLASSES {
+        let stack_head = s.stack;
+        let (stack, _, mut freed) = self.filter_list(&mut s, stack_head, &stale);
+        s.stack = stack;
+        for c in 1..CLASSES {
             let (head, tail, n) = self.filter_list(&mut s, self.heads[c], &stale);
             freed += n;
             self.heads[c] = head;
@@ -1864,17 +2001,19 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         let interior = Interior::new(geometry);
 
-        // A target whose key equals the key just popped is the next pop anyway (nothing in the
-        // queue is below it): one such target skips the queue and is expanded next
-        // (`next_node`, NIL when none).
-        // (`next_node`, NIL when none; its key is the current `f`, its `g` is `next_g`).
-        let (mut f, mut next_g, mut next_node) = (0u32, 0u32, NIL);
+        // A target whose key equals the key just popped (class 0) is the next pop anyway
+        // (nothing in the queue is below it): one such target skips the queue and is expanded
+        // next (`next_node`, NIL when none). The key of the cell being expanded is always
+        // `state.last`; `g` is not carried: it is `state.last − h` where needed (at the goal
+        // `h` is 0).
+        let mut next_node = NIL;
+        let (gxi, gyi) = (gx as i32, gy as i32);
         // Corridor walks start after arrival codes up to this one (S; 0 once they have been
         // given up on this map), with this balance of cells closed minus walks started.
         let (mut walk_codes, mut walk_credit) = (S, 0i32);
         loop {
             // Close the cell: its nibble gets the arrival step (it was 0).
-            let (node, x, y, index, g) = if next_node != NIL {
+            let (node, x, y, index) = if next_node != NIL {
                 // A target of the cell just expanded: not closed (its nibble was 0 then).
                 let node = next_node;
                 next_node = NIL;
@@ -1883,10 +2022,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 if let Some(word) = scratch.get_mut(index >> 3) {
                     *word |= (node & 0xF) << ((index & 7) * 4);
                 }
-                (node, x, y, index, next_g)
+                (node, x, y, index)
             } else {
                 let mut found = None;
-                while let Some((key, node)) = open.pop(&mut state) {
+                while let Some((_, node)) = open.pop(&mut state) {
                     let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
                     let index = y * width + x;
                     let Some(word) = scratch.get_mut(index >> 3) else {
@@ -1895,9 +2034,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     let shift = (index & 7) * 4;
                     if (*word >> shift) & 0xF == 0 {
                         *word |= (node & 0xF) << shift;
-                        // Queue entries do not store g: f = g + h exactly.
-                        f = key;
-                        found = Some((node, x, y, index, key.wrapping_sub(h(x as u32, y as u32))));
+                        found = Some((node, x, y, index));
                         break;
                     }
                     // Otherwise already closed by a cheaper entry.
@@ -1911,10 +2048,11 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             expanded += 1;
             if index == goal {
                 self.queue_peak = state.bump;
+                // h(goal) = 0: the key is the cost.
                 return Ok(Search {
                     found: true,
                     expanded,
-                    cost: g,
+                    cost: state.last,
                 });
             }
 
@@ -1926,20 +2064,20 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             // neighbours after a side step; the two sides and the diagonal after a diagonal
             // step; all eight from the start.
             let base = node & !0xF;
-            // Push `child` (`y << 16 | x << 4 | code`) with `key` and `g`, or keep it for the
-            // immediate expansion when its key is the one just popped.
-            macro_rules! push {
-                ($push:ident, $key:expr, $child_g:expr, $child:expr) => {{
-                    let (key, child_g, child) = ($key, $child_g, $child);
-                    if key == f && next_node == NIL {
-                        (next_g, next_node) = (child_g, child);
-                    } else if !open.$push(&mut state, key, child) {
-                        match open.reclaim_and_push(state, scratch, width, key, child) {
-                            Some(after) => state = after,
-                            None => {
-                                self.queue_peak = state.bump;
-                                return Err(full);
-                            }
+            // The class of each step's reduced cost (its key is `state.last` plus the class's
+            // reduced cost), 3 bits per step code.
+            let classes = STEP_CLASSES
+                .get(goal_region(x as i32 - gxi, y as i32 - gyi))
+                .copied()
+                .unwrap_or(0);
+            // The pool is full: reclaim and push `(key, child)`, or end with QueueFull.
+            macro_rules! reclaim {
+                ($key:expr, $child:expr) => {{
+                    match open.reclaim_and_push(state, scratch, width, $key, $child) {
+                        Some(after) => state = after,
+                        None => {
+                            self.queue_peak = state.bump;
+                            return Err(full);
                         }
                     }
                 }};
@@ -1949,17 +2087,16 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     if m & (1 << $z) != 0 {
                         let (dx, dy) = STEPS[$code as usize - 1];
                         let child = base.wrapping_add(((dy << 16) + (dx << 4)) as u32 + $code);
-                        // Plain adds: keys are u32 (see "Complexity" in the module docs).
-                        let child_g = g.wrapping_add(if $code >= NE {
-                            DIAGONAL_COST
-                        } else {
-                            STRAIGHT_COST
-                        });
-                        let key = child_g.wrapping_add(h(
-                            (x as u32).wrapping_add(dx as u32),
-                            (y as u32).wrapping_add(dy as u32),
-                        ));
-                        push!(push, key, child_g, child);
+                        let class = ((classes >> (3 * ($code - 1))) & 7) as usize;
+                        if class != 0 {
+                            if !open.push_class(&mut state, class, child) {
+                                reclaim!(state.last.wrapping_add(CLASS_COSTS[class]), child);
+                            }
+                        } else if next_node == NIL {
+                            next_node = child;
+                        } else if !open.push_stack(&mut state, child) {
+                            reclaim!(state.last, child);
+                        }
                     }
                 }};
             }
@@ -1980,9 +2117,15 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     walk_corridor(scratch, interior, goal, index, node, rest);
                 expanded += closed;
                 if end != NIL {
+                    // Plain adds: keys are u32 (see "Complexity" in the module docs).
+                    let g = state.last.wrapping_sub(h(x as u32, y as u32));
                     let wg = g.wrapping_add(steps.wrapping_mul(STRAIGHT_COST));
                     let key = wg.wrapping_add(h((end >> 4) & 0xFFF, end >> 16));
-                    push!(push_far, key, wg, end);
+                    if key == state.last && next_node == NIL {
+                        next_node = end;
+                    } else if !open.push_far(&mut state, key, end) {
+                        reclaim!(key, end);
+                    }
                 }
                 // Walks that close (nearly) nothing cost more than the arms' pushes.
                 walk_credit += closed as i32 - 1;

@@ -1739,8 +1739,9 @@ proptest! {
 
 /// Every move from every cell of a 13 × 11 grid, around goals in the corners, on the edges, in
 /// the middle and off the centre (same row, column and diagonal as many cells): the reduced
-/// cost `cost + h(child) − h(parent)` is always 0 or one of [`REDUCED_COSTS`], each of the six
-/// values occurs, and [`reduced_cost_class`] names exactly the five non-zero ones.
+/// cost `cost + h(child) − h(parent)` is always one of the six [`REDUCED_COSTS`] (0 included),
+/// each occurs, [`STEP_CLASSES`] of the cell's [`goal_region`] names it for every step, and
+/// [`reduced_cost_class`] recognises exactly the six values.
 #[test]
 fn reduced_costs_of_octile_moves_take_six_values() {
     let (w, hgt) = (13i32, 11i32);
@@ -1778,6 +1779,13 @@ fn reduced_costs_of_octile_moves_take_six_values() {
                         "goal ({gx}, {gy}) cell ({x}, {y}) step {k}: r = {r}"
                     );
                     seen.insert(r as u32);
+                    // The search's table gives the same class.
+                    let classes = STEP_CLASSES[goal_region(x - gx, y - gy)];
+                    let class = (classes >> (3 * k)) & 7;
+                    assert_eq!(
+                        REDUCED_COSTS[class as usize] as i64, r,
+                        "goal ({gx}, {gy}) cell ({x}, {y}) step {k}"
+                    );
                 }
             }
         }
