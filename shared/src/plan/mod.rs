@@ -916,6 +916,8 @@ struct QueueState {
     bump: u32,
     /// Head of the list of freed entries.
     free: u32,
+    /// The FIFO class of the last pop from a FIFO (1 ..= 5): its head is tried first.
+    class: u32,
 }
 
 /// The open list of the cell-by-cell A*: lists by *reduced cost* over a fixed pool of entries.
@@ -965,6 +967,7 @@ impl<'a> ClassQueue<'a> {
                 last: first_key,
                 bump: 0,
                 free: NIL,
+                class: 1,
             },
         )
     }
@@ -1070,25 +1073,58 @@ impl<'a> ClassQueue<'a> {
         true
     }
 
-    /// Remove an entry of the smallest key: `(key, node)`.
+    /// Remove an entry of the smallest key and return its node (`NIL` when the queue is
+    /// empty); its key is then `s.last`.
     #[inline(always)]
-    fn pop(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
+    fn pop(&mut self, s: &mut QueueState) -> u32 {
         if s.stack != NIL {
             // Its key is the last popped key: nothing is smaller.
             let slot = s.stack;
-            let e = self.pool.get_mut(slot as usize)?;
+            let Some(e) = self.pool.get_mut(slot as usize) else {
+                return NIL;
+            };
             let node = e.node;
             s.stack = e.next;
             e.next = s.free;
             s.free = slot;
-            return Some((s.last, node));
+            return node;
+        }
+        // The FIFO popped last, when its head has the last popped key (runs of equal keys).
+        let c = (s.class & 7) as usize;
+        if self.head_keys[c] == s.last {
+            return self.take(s, c);
         }
         self.pop_fifo(s)
     }
 
-    /// Remove the smallest of the FIFO heads and the far list's head (the stack is empty).
+    /// Remove the head of FIFO `c` (1 ..= 5, not empty) and return its node.
+    #[inline(always)]
+    fn take(&mut self, s: &mut QueueState, c: usize) -> u32 {
+        let c = c & 7;
+        let slot = self.heads[c];
+        let Some(e) = self.pool.get_mut(slot as usize) else {
+            return NIL;
+        };
+        let (key, node, next) = (e.f, e.node, e.next);
+        e.next = s.free;
+        s.free = slot;
+        s.last = key;
+        s.class = c as u32;
+        self.heads[c] = next;
+        match self.pool.get(next as usize) {
+            Some(n) => self.head_keys[c] = n.f,
+            None => {
+                self.tails[c] = NIL;
+                self.head_keys[c] = u32::MAX;
+            }
+        }
+        node
+    }
+
+    /// Remove the smallest of the FIFO heads and the far list's head (the stack is empty) and
+    /// return its node (`NIL` when all are empty).
     #[inline(never)]
-    fn pop_fifo(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
+    fn pop_fifo(&mut self, s: &mut QueueState) -> u32 {
         let k = &self.head_keys;
         let (mut c, mut key) = (1, k[1]);
         if k[2] < key {
@@ -1106,35 +1142,23 @@ impl<'a> ClassQueue<'a> {
         if self.far_key <= key {
             return self.pop_far(s);
         }
-        let slot = self.heads[c];
-        let e = self.pool.get_mut(slot as usize)?;
-        let (node, next) = (e.node, e.next);
-        e.next = s.free;
-        s.free = slot;
-        s.last = key;
-        self.heads[c] = next;
-        match self.pool.get(next as usize) {
-            Some(n) => self.head_keys[c] = n.f,
-            None => {
-                self.tails[c] = NIL;
-                self.head_keys[c] = u32::MAX;
-            }
-        }
-        Some((key, node))
+        self.take(s, c)
     }
 
-    /// Remove the head of the far list (`None` when it is empty).
+    /// Remove the head of the far list and return its node (`NIL` when it is empty).
     #[inline(always)]
-    fn pop_far(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
+    fn pop_far(&mut self, s: &mut QueueState) -> u32 {
         let slot = self.far;
-        let e = self.pool.get_mut(slot as usize)?;
+        let Some(e) = self.pool.get_mut(slot as usize) else {
+            return NIL;
+        };
         let (f, node, next) = (e.f, e.node, e.next);
         e.next = s.free;
         s.free = slot;
         s.last = f;
         self.far = next;
         self.far_key = self.pool.get(next as usize).map_or(u32::MAX, |n| n.f);
-        Some((f, node))
+        node
     }
 
     /// The pool is full: drop the entries of cells closed meanwhile (nibble not 0 in
@@ -2025,7 +2049,11 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 (node, x, y, index)
             } else {
                 let mut found = None;
-                while let Some((_, node)) = open.pop(&mut state) {
+                loop {
+                    let node = open.pop(&mut state);
+                    if node == NIL {
+                        break;
+                    }
                     let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
                     let index = y * width + x;
                     let Some(word) = scratch.get_mut(index >> 3) else {
