@@ -848,20 +848,16 @@ const REGIONS: usize = 128;
 /// `h` for every cell and step around many goals in the tests). About 20 instructions.
 #[inline(always)]
 fn goal_region(dx: i32, dy: i32) -> usize {
-    let d = (dx.unsigned_abs() as i32).wrapping_sub(dy.unsigned_abs() as i32);
-    let d = if d < -4 {
-        -4
-    } else if d > 3 {
-        3
-    } else {
-        d
-    };
+    // |v| without a branch: (v ^ s) - s with s = v >> 31.
+    let (sx, sy) = (dx >> 31, dy >> 31);
+    let d = ((dx ^ sx).wrapping_sub(sx)).wrapping_sub((dy ^ sy).wrapping_sub(sy));
+    let d = d.clamp(-4, 3);
     let (ux, uy) = (dx as u32, dy as u32);
     let signs = (ux >> 31)
         | (ux.wrapping_neg() >> 31) << 1
         | (uy >> 31) << 2
         | (uy.wrapping_neg() >> 31) << 3;
-    ((d + 4) as u32 | signs << 3) as usize
+    (((d + 4) as u32 | signs << 3) & (REGIONS as u32 - 1)) as usize
 }
 
 /// Per [`goal_region`]: the class (index into [`REDUCED_COSTS`]) of each step, in bits
