@@ -987,19 +987,19 @@ impl<'a> ClassQueue<'a> {
         )
     }
 
-    /// Take a free slot of the pool (off the free list, else from the unused end) and write
-    /// `entry` into it; `None` when the pool is full.
+    /// A free slot of the pool, taken off the free list or the unused end; `None` when full.
     #[inline(always)]
-    fn alloc(&mut self, s: &mut QueueState, entry: OpenEntry) -> Option<u32> {
-        let slot = if s.free != NIL { s.free } else { s.bump };
-        let e = self.pool.get_mut(slot as usize)?;
+    fn alloc(&mut self, s: &mut QueueState) -> Option<u32> {
         if s.free != NIL {
-            s.free = e.next;
-        } else {
+            let slot = s.free;
+            s.free = self.pool.get(slot as usize)?.next;
+            Some(slot)
+        } else if (s.bump as usize) < self.pool.len() {
             s.bump += 1;
+            Some(s.bump - 1)
+        } else {
+            None
         }
-        *e = entry;
-        Some(slot)
     }
 
     /// Insert any key not below `s.last`: on the stack, a FIFO list or the far list by its
@@ -1016,14 +1016,16 @@ impl<'a> ClassQueue<'a> {
     /// Insert with the last popped key (class 0); `false` when the pool is full.
     #[inline(always)]
     fn push_stack(&mut self, s: &mut QueueState, node: u32) -> bool {
-        let entry = OpenEntry {
-            f: s.last,
-            node,
-            next: s.stack,
-        };
-        let Some(slot) = self.alloc(s, entry) else {
+        let Some(slot) = self.alloc(s) else {
             return false;
         };
+        if let Some(e) = self.pool.get_mut(slot as usize) {
+            *e = OpenEntry {
+                f: s.last,
+                node,
+                next: s.stack,
+            };
+        }
         s.stack = slot;
         true
     }
@@ -1034,14 +1036,16 @@ impl<'a> ClassQueue<'a> {
     fn push_class(&mut self, s: &mut QueueState, class: usize, node: u32) -> bool {
         let c = class & 7;
         let key = s.last.wrapping_add(CLASS_COSTS[c]);
-        let entry = OpenEntry {
-            f: key,
-            node,
-            next: NIL,
-        };
-        let Some(slot) = self.alloc(s, entry) else {
+        let Some(slot) = self.alloc(s) else {
             return false;
         };
+        if let Some(e) = self.pool.get_mut(slot as usize) {
+            *e = OpenEntry {
+                f: key,
+                node,
+                next: NIL,
+            };
+        }
         match self.pool.get_mut(self.tails[c] as usize) {
             Some(t) => t.next = slot,
             None => {
@@ -1057,6 +1061,9 @@ impl<'a> ClassQueue<'a> {
     /// equal key); `false` when the pool is full.
     #[inline(never)]
     fn push_far(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
+        let Some(slot) = self.alloc(s) else {
+            return false;
+        };
         let (mut prev, mut at) = (NIL, self.far);
         while let Some(e) = self.pool.get(at as usize) {
             if e.f >= key {
@@ -1064,14 +1071,13 @@ impl<'a> ClassQueue<'a> {
             }
             (prev, at) = (at, e.next);
         }
-        let entry = OpenEntry {
-            f: key,
-            node,
-            next: at,
-        };
-        let Some(slot) = self.alloc(s, entry) else {
-            return false;
-        };
+        if let Some(e) = self.pool.get_mut(slot as usize) {
+            *e = OpenEntry {
+                f: key,
+                node,
+                next: at,
+            };
+        }
         match self.pool.get_mut(prev as usize) {
             Some(p) => p.next = slot,
             None => {
