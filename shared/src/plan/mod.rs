@@ -63,15 +63,16 @@
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
 //! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
 //! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (12 288 bytes), plus a few hundred bytes
-//! of bit sets on the stack during a jump point search (about 2.1 KB of bucket heads in the
-//! cell-by-cell A*). Nothing else is allocated; the grid itself is only read. The scalar BFS and
-//! the cell-by-cell A* share a constant 4 KB table (`NIBBLE_WINDOWS`), the corridor walks read a
-//! 512-byte one, `copy_map` a 1 KB one (read-only data: flash on the MCU).
+//! of bit sets on the stack during a jump point search (about 100 bytes of list heads, tails
+//! and head keys in the cell-by-cell A*). Nothing else is allocated; the grid itself is only
+//! read. The scalar BFS and the cell-by-cell A* share a constant 4 KB table
+//! (`NIBBLE_WINDOWS`), the corridor walks read a 512-byte one, the A* step classes another
+//! 512-byte one (`STEP_CLASSES`), `copy_map` a 1 KB one (read-only data: flash on the MCU).
 //! [`Planner::queue_peak`] tells how much of the queue a search used. Measured on the 300 × 300
 //! benchmark grids and the bundled worlds: the layered BFS needs no queue entries (its
 //! `queue_peak` is the most frontier (row, word) pairs of one layer: at most 307); the scalar
 //! BFS (mazes) 13; A* by jump points (open list plus records) 3 (open floor), 9 (corridor), 18
-//! (office), 40 (pillars); cell by cell (20 % random obstacles, a maze of 1-cell corridors) 782
+//! (office), 40 (pillars); cell by cell (20 % random obstacles, a maze of 1-cell corridors) 766
 //! and 11. So 1 024 entries cover every benchmark case.
 //!
 //! ## A*: jump point search without a g-table
@@ -99,9 +100,9 @@
 //! deletion*: a jump point may be pushed once per scan that finds it, and only its first pop
 //! counts: the consistent octile heuristic makes that pop's cost the best over the jump point
 //! graph, so the pop writes the arrival step into the nibble and later entries are skipped.
-//! `g` is not stored: it is `f − h(cell)`. (Jump steps are longer than 2 cells, so the bucket
-//! queue of the cell-by-cell search, which relies on keys within `2 · DIAGONAL_COST` of the
-//! last pop, does not apply; the heap holds few entries.)
+//! `g` is not stored: it is `f − h(cell)`. (Jump steps are longer than one cell, so the queue
+//! of the cell-by-cell search, which relies on the six reduced costs of single steps, does not
+//! apply; the heap holds few entries.)
 //!
 //! Every closed jump point also takes a *record* from the back of the queue: its cell and step
 //! and the record of the jump point it was reached from. When the goal is closed, the records
@@ -146,16 +147,21 @@
 //! obstacles the queue sees 0.84 pushes per expanded cell (1.46 when only the parent's own
 //! moves were pruned, without the immediate expansion below).
 //!
-//! *Immediate expansion.* A target whose key equals the key just popped would be the next pop
-//! (nothing in the queue is smaller; ties pop the last pushed first): the first such target
-//! skips the queue and is expanded next, with its `g` carried over (no closed test, no `h`).
+//! *Immediate expansion.* A target whose key equals the key just popped (reduced cost 0, see
+//! below) would be the next pop (nothing in the queue is smaller; ties pop the last pushed
+//! first): the first such target skips the queue and is expanded next (no closed test).
 //!
 //! *Hot loop.* The popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
 //! nibbles of a row, two 32-bit scratch reads each) and turned by a 4 KB table into an 18-bit
 //! mask ("nibble 0" and "not blocked" per cell); one arm per arrival step tests its candidate
 //! targets in that mask and pushes each with constant offsets (`y << 16 | x << 4 | code`
 //! entries: a neighbour's entry is the cell's plus a constant).
-//! Cells on the map border read their neighbours one by one.
+//! Cells on the map border read their neighbours one by one. Neither `h` nor `g` is computed
+//! per cell: the cell's *goal region* (signs of `dx`, `dy` and `|dx| − |dy|` saturated to
+//! `−4 ..= 3`, about 20 instructions) picks a word of `STEP_CLASSES` that gives every step's
+//! reduced-cost class (3 bits per step), i.e. the list it goes to and its key, the last popped
+//! key plus that reduced cost. `g` is needed only where a corridor walk ends (`f − h`) and at
+//! the goal, where `h = 0` makes the key the cost.
 //!
 //! *Corridors.* A cell with at most two *legal* neighbours (8 moves, no corner cutting; then
 //! both are side neighbours, since a legal diagonal brings its two side cells with it) is a
@@ -177,24 +183,36 @@
 //! skips is blocked or the previous chain cell. Chains are walked whole from one end (a walk
 //! from the other end finds its first cell closed), except at the goal. The walk's end may lie
 //! far above the last popped key (a long chain away from the goal raises `f` by up to
-//! `2 · STRAIGHT_COST` per cell), beyond the buckets' window: such entries wait in an unsorted
-//! *far list* with its smallest key, and move into the buckets when the last popped key comes
-//! within `2 · DIAGONAL_COST` of it (one comparison per pop). Walks that close almost nothing
+//! `2 · STRAIGHT_COST` per cell), and its key is the last popped one plus a sum of reduced
+//! costs, not one of them: walk ends go to a *far list* kept sorted by key (its head is
+//! compared once per pop that does not come off the stack). Walks that close almost nothing
 //! (20 % random obstacles: 0.15 cells per walk) are given up for the rest of the search once
 //! 64 more walks than walked cells have been started. In the 300 × 300 maze the search closes
 //! the same cells but pops only 2 760 of them (6.0 M → 3.7 M Cortex-M4 instructions). Property
 //! tests compare the cost with `pathfinding` on random mazes with loops and holes and on maps
 //! carved from random 1-cell runs.
 //!
-//! *Bucket queue* (see `BucketQueue` in the source): with a consistent heuristic a pushed `f` is
-//! never below the last popped `f` and never more than `2 · DIAGONAL_COST` above it, so 512
-//! circular buckets of 32 key values hold every key value in one bucket. A push links the entry
-//! at the head of its bucket, O(1). A pop scans the bucket of the last popped key, or the next
-//! non-empty one (a 512-bit map with a 16-bit summary: two trailing-zero counts), for its first
-//! entry of smallest `f`; octile keys are sparse (steps cost thousands), so buckets hold one or
-//! two entries, and an entry equal to the last popped key ends the scan at once. Ties on `f` pop
-//! the last pushed entry first (the deeper entries). The queue's scalar state is a separate
-//! `Copy` value so that the loop keeps it in registers.
+//! *Queue by reduced-cost class* (see `ClassQueue` in the source): with the octile heuristic a
+//! child's key is its parent's plus the *reduced cost* `r = cost + h(child) − h(parent)`, and
+//! for octile steps `r` takes six values only: 0, `2S − D` = 3 363, `2D − 2S` = 4 756, `D` =
+//! 8 119, `2S` = 11 482 and `2D` = 16 238 (S = [`STRAIGHT_COST`], D = [`DIAGONAL_COST`]; a
+//! test checks every cell and step around goals in corners, on edges and in the middle). The
+//! parent's key is the last popped key, and popped keys never decrease (consistent
+//! heuristic), so the children pushed with one `r` come with non-decreasing keys: one FIFO list
+//! per non-zero `r` is sorted by construction, and its head is its smallest key. Children with
+//! `r = 0` carry the last popped key itself, the smallest there is: they go on a LIFO stack that
+//! is popped first while it is not empty (ties pop the last pushed first, the deeper entries,
+//! which on open floors keeps the search on one line). So a push is O(1) (a link at the
+//! stack's head or a list's tail, key = last popped key + `r`), and a pop takes the stack's
+//! head, else the head of the list popped last when its key is still the last popped key
+//! (runs of equal keys: 84 % of the list pops in a QEMU profile of the benchmarks), else the
+//! smallest of the five list heads (their keys are kept in an array; ties go to the smallest
+//! `r`) and of the far list's head. The queue is exact: every entry is at least the last popped key, the
+//! stack holds only that key, each list's head is its smallest key. The queue's scalar state
+//! (stack head, last key, free list, peak, last list) is a separate `Copy` value so that the
+//! loop keeps it in registers. (Before: a 512-bucket queue with a 512-bit map and a summary
+//! word, 2.1 KB on the stack; the class queue takes 7.55 M → 6.70 M instructions on 20 %
+//! random obstacles together with the step-class table.)
 //!
 //! When the pool of entries is full, the queue first *reclaims* the entries of cells closed
 //! since they were pushed (one pass over all lists) and carries on; only when that frees less
@@ -297,10 +315,10 @@
 //! Keys are `u32`: a path may cost at most `u32::MAX` (more than 529 000 diagonal steps, which
 //! only grids above about 727 × 727 cells can hold); beyond that the cell-by-cell search's keys
 //! wrap and its result is undefined (but it does not panic).
-//! Cell-by-cell A*: at most 8 pushes per expanded cell (typically fewer than one), each O(1),
-//! pops O(bucket size) (plus O(far list) when far entries move into the buckets); about 260
-//! Cortex-M4 instructions per popped cell and about 100 (x86-64, measured) per corridor cell
-//! walked (7.5 M on 20 % random obstacles, 3.7 M in the maze, 300 × 300). Rebuilding the path
+//! Cell-by-cell A*: at most 8 pushes per expanded cell (typically fewer than one), each O(1)
+//! (a walk's end: O(far list), a few entries), pops O(1); about 232 Cortex-M4 instructions per
+//! expanded cell and about 100 (x86-64, measured) per corridor cell walked (6.7 M on 20 %
+//! random obstacles, 3.8 M in the maze, 300 × 300). Rebuilding the path
 //! walks the records and the steps back from the goal: `O(path cells)`, plus, for the
 //! any-angle planner, one line-of-sight test per straight run not starting at the anchor and a
 //! bisection in the runs where a shortcut ends (`O(runs × log(run) × segment length)`); a side-step turn with a
@@ -385,7 +403,7 @@ pub const SCRATCH_WORDS_400: usize = scratch_words_for_cells(400 * 400);
 
 /// The usual planner for the seed's 300 × 300 grid: 45 000 bytes of scratch, 3 072 queue
 /// entries (36 864 bytes; jump point search uses at most 40 of them on the bundled worlds, the
-/// cell-by-cell A* 782 on 20 % random obstacles) and the 4 096-byte vertex buffer: about 86 KB
+/// cell-by-cell A* 766 on 20 % random obstacles) and the 4 096-byte vertex buffer: about 86 KB
 /// in all.
 pub type Planner300 = Planner<SCRATCH_WORDS_300, 3072>;
 
@@ -519,7 +537,7 @@ struct OpenEntry {
     f: u32,
     /// `cell_index << 4 | step code` (A*), `cell_index` (BFS).
     node: u32,
-    /// Next entry of the same radix bucket (A*), unused by BFS.
+    /// Next entry of the same list (A*), unused by BFS.
     next: u32,
 }
 
@@ -1998,7 +2016,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
     }
 
-    /// Cell-by-cell A* with the octile heuristic, a lazy-deletion bucket queue and the
+    /// Cell-by-cell A* with the octile heuristic, a lazy-deletion queue by reduced-cost class
+    /// ([`ClassQueue`]) and the
     /// *arrival pruning* of successors (see the module docs): a closed cell pushes only the
     /// neighbours that no other cell covers with a key no larger. The scratch must hold the map
     /// ([`Planner::copy_map`]).
