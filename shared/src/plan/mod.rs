@@ -207,12 +207,12 @@
 //! head, else the head of the list popped last when its key is still the last popped key
 //! (runs of equal keys: 84 % of the list pops in a QEMU profile of the benchmarks), else the
 //! smallest of the five list heads (their keys are kept in an array; ties go to the smallest
-//! `r`) and of the far list's head. The queue is exact: every entry is at least the last popped key, the
-//! stack holds only that key, each list's head is its smallest key. The queue's scalar state
-//! (stack head, last key, free list, peak, last list) is a separate `Copy` value so that the
-//! loop keeps it in registers. (Before: a 512-bucket queue with a 512-bit map and a summary
-//! word, 2.1 KB on the stack; the class queue takes 7.55 M → 6.70 M instructions on 20 %
-//! random obstacles together with the step-class table.)
+//! `r`) and of the far list's head. The queue is exact: every entry is at least the last
+//! popped key, the stack holds only that key, each list's head is its smallest key, the far
+//! list is sorted. The queue's scalar state (stack head, last key, free list, peak, last list)
+//! is a separate `Copy` value so that the loop keeps it in registers. (Before: a 512-bucket
+//! queue with a 512-bit map and a summary word, 2.1 KB on the stack; with the step-class table
+//! the class queue takes 20 % random obstacles from 7.55 M to 6.70 M instructions.)
 //!
 //! When the pool of entries is full, the queue first *reclaims* the entries of cells closed
 //! since they were pushed (one pass over all lists) and carries on; only when that frees less
