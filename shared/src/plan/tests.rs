@@ -1825,7 +1825,7 @@ fn class_queue_pops_keys_in_order_like_a_reference() {
                     k => REDUCED_COSTS[(k - 2) as usize],
                 };
                 let key = last + r;
-                let ok = if next_random(&mut state) % 4 == 0 {
+                let ok = if next_random(&mut state).is_multiple_of(4) {
                     q.push_far(&mut s, key, next_node)
                 } else {
                     q.push(&mut s, key, next_node)
