@@ -65,16 +65,17 @@
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
 //! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
 //! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (12 288 bytes), plus a few hundred bytes
-//! of bit sets on the stack during a jump point search (about 2.1 KB of bucket heads in the
-//! cell-by-cell A*). Nothing else is allocated; the grid itself is only read. The scalar BFS and
-//! the cell-by-cell A* share a constant 4 KB table (`NIBBLE_WINDOWS`), the corridor walks read a
-//! 512-byte one, `copy_map` a 1 KB one (read-only data: flash on the MCU).
+//! of bit sets on the stack during a jump point search (about 100 bytes of list heads, tails
+//! and head keys in the cell-by-cell A*). Nothing else is allocated; the grid itself is only
+//! read. The scalar BFS and the cell-by-cell A* share a constant 4 KB table
+//! (`NIBBLE_WINDOWS`), the corridor walks read a 512-byte one, the A* step classes another
+//! 512-byte one (`STEP_CLASSES`), `copy_map` a 1 KB one (read-only data: flash on the MCU).
 //! [`Planner::queue_peak`] tells how much of the queue a search used. Measured on the 300 × 300
 //! benchmark grids and the bundled worlds: the layered BFS needs no queue entries (its
 //! `queue_peak` is the most frontier (row, word) pairs of one layer: at most 307); the scalar
 //! BFS (mazes) 13; A* by jump points (open list plus records) 3 (open floor), 9 (corridor), 18
 //! (office), 40 (pillars); BFS by jump points 3, 9, 20, 24; cell by cell (20 % random
-//! obstacles, a maze of 1-cell corridors) 782 and 11. So 1 024 entries cover every benchmark
+//! obstacles, a maze of 1-cell corridors) 766 and 11. So 1 024 entries cover every benchmark
 //! case.
 //!
 //! ## A*: jump point search without a g-table
@@ -102,9 +103,9 @@
 //! deletion*: a jump point may be pushed once per scan that finds it, and only its first pop
 //! counts: the consistent octile heuristic makes that pop's cost the best over the jump point
 //! graph, so the pop writes the arrival step into the nibble and later entries are skipped.
-//! `g` is not stored: it is `f − h(cell)`. (Jump steps are longer than 2 cells, so the bucket
-//! queue of the cell-by-cell search, which relies on keys within `2 · DIAGONAL_COST` of the
-//! last pop, does not apply; the heap holds few entries.)
+//! `g` is not stored: it is `f − h(cell)`. (Jump steps are longer than one cell, so the queue
+//! of the cell-by-cell search, which relies on the six reduced costs of single steps, does not
+//! apply; the heap holds few entries.)
 //!
 //! Every closed jump point also takes a *record* from the back of the queue: its cell and step
 //! and the record of the jump point it was reached from. When the goal is closed, the records
@@ -185,16 +186,21 @@
 //! obstacles the queue sees 0.84 pushes per expanded cell (1.46 when only the parent's own
 //! moves were pruned, without the immediate expansion below).
 //!
-//! *Immediate expansion.* A target whose key equals the key just popped would be the next pop
-//! (nothing in the queue is smaller; ties pop the last pushed first): the first such target
-//! skips the queue and is expanded next, with its `g` carried over (no closed test, no `h`).
+//! *Immediate expansion.* A target whose key equals the key just popped (reduced cost 0, see
+//! below) would be the next pop (nothing in the queue is smaller; ties pop the last pushed
+//! first): the first such target skips the queue and is expanded next (no closed test).
 //!
 //! *Hot loop.* The popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
 //! nibbles of a row, two 32-bit scratch reads each) and turned by a 4 KB table into an 18-bit
 //! mask ("nibble 0" and "not blocked" per cell); one arm per arrival step tests its candidate
 //! targets in that mask and pushes each with constant offsets (`y << 16 | x << 4 | code`
 //! entries: a neighbour's entry is the cell's plus a constant).
-//! Cells on the map border read their neighbours one by one.
+//! Cells on the map border read their neighbours one by one. Neither `h` nor `g` is computed
+//! per cell: the cell's *goal region* (signs of `dx`, `dy` and `|dx| − |dy|` saturated to
+//! `−4 ..= 3`, about 20 instructions) picks a word of `STEP_CLASSES` that gives every step's
+//! reduced-cost class (3 bits per step), i.e. the list it goes to and its key, the last popped
+//! key plus that reduced cost. `g` is needed only where a corridor walk ends (`f − h`) and at
+//! the goal, where `h = 0` makes the key the cost.
 //!
 //! *Corridors.* A cell with at most two *legal* neighbours (8 moves, no corner cutting; then
 //! both are side neighbours, since a legal diagonal brings its two side cells with it) is a
@@ -216,24 +222,36 @@
 //! skips is blocked or the previous chain cell. Chains are walked whole from one end (a walk
 //! from the other end finds its first cell closed), except at the goal. The walk's end may lie
 //! far above the last popped key (a long chain away from the goal raises `f` by up to
-//! `2 · STRAIGHT_COST` per cell), beyond the buckets' window: such entries wait in an unsorted
-//! *far list* with its smallest key, and move into the buckets when the last popped key comes
-//! within `2 · DIAGONAL_COST` of it (one comparison per pop). Walks that close almost nothing
+//! `2 · STRAIGHT_COST` per cell), and its key is the last popped one plus a sum of reduced
+//! costs, not one of them: walk ends go to a *far list* kept sorted by key (its head is
+//! compared once per pop that does not come off the stack). Walks that close almost nothing
 //! (20 % random obstacles: 0.15 cells per walk) are given up for the rest of the search once
 //! 64 more walks than walked cells have been started. In the 300 × 300 maze the search closes
 //! the same cells but pops only 2 760 of them (6.0 M → 3.7 M Cortex-M4 instructions). Property
 //! tests compare the cost with `pathfinding` on random mazes with loops and holes and on maps
 //! carved from random 1-cell runs.
 //!
-//! *Bucket queue* (see `BucketQueue` in the source): with a consistent heuristic a pushed `f` is
-//! never below the last popped `f` and never more than `2 · DIAGONAL_COST` above it, so 512
-//! circular buckets of 32 key values hold every key value in one bucket. A push links the entry
-//! at the head of its bucket, O(1). A pop scans the bucket of the last popped key, or the next
-//! non-empty one (a 512-bit map with a 16-bit summary: two trailing-zero counts), for its first
-//! entry of smallest `f`; octile keys are sparse (steps cost thousands), so buckets hold one or
-//! two entries, and an entry equal to the last popped key ends the scan at once. Ties on `f` pop
-//! the last pushed entry first (the deeper entries). The queue's scalar state is a separate
-//! `Copy` value so that the loop keeps it in registers.
+//! *Queue by reduced-cost class* (see `ClassQueue` in the source): with the octile heuristic a
+//! child's key is its parent's plus the *reduced cost* `r = cost + h(child) − h(parent)`, and
+//! for octile steps `r` takes six values only: 0, `2S − D` = 3 363, `2D − 2S` = 4 756, `D` =
+//! 8 119, `2S` = 11 482 and `2D` = 16 238 (S = [`STRAIGHT_COST`], D = [`DIAGONAL_COST`]; a
+//! test checks every cell and step around goals in corners, on edges and in the middle). The
+//! parent's key is the last popped key, and popped keys never decrease (consistent
+//! heuristic), so the children pushed with one `r` come with non-decreasing keys: one FIFO list
+//! per non-zero `r` is sorted by construction, and its head is its smallest key. Children with
+//! `r = 0` carry the last popped key itself, the smallest there is: they go on a LIFO stack that
+//! is popped first while it is not empty (ties pop the last pushed first, the deeper entries,
+//! which on open floors keeps the search on one line). So a push is O(1) (a link at the
+//! stack's head or a list's tail, key = last popped key + `r`), and a pop takes the stack's
+//! head, else the head of the list popped last when its key is still the last popped key
+//! (runs of equal keys: 84 % of the list pops in a QEMU profile of the benchmarks), else the
+//! smallest of the five list heads (their keys are kept in an array; ties go to the smallest
+//! `r`) and of the far list's head. The queue is exact: every entry is at least the last
+//! popped key, the stack holds only that key, each list's head is its smallest key, the far
+//! list is sorted. The queue's scalar state (stack head, last key, free list, peak, last list)
+//! is a separate `Copy` value so that the loop keeps it in registers. (Before: a 512-bucket
+//! queue with a 512-bit map and a summary word, 2.1 KB on the stack; with the step-class table
+//! the class queue takes 20 % random obstacles from 7.55 M to 6.70 M instructions.)
 //!
 //! When the pool of entries is full, the queue first *reclaims* the entries of cells closed
 //! since they were pushed (one pass over all lists) and carries on; only when that frees less
@@ -344,10 +362,10 @@
 //! Keys are `u32`: a path may cost at most `u32::MAX` (more than 529 000 diagonal steps, which
 //! only grids above about 727 × 727 cells can hold); beyond that the cell-by-cell search's keys
 //! wrap and its result is undefined (but it does not panic).
-//! Cell-by-cell A*: at most 8 pushes per expanded cell (typically fewer than one), each O(1),
-//! pops O(bucket size) (plus O(far list) when far entries move into the buckets); about 260
-//! Cortex-M4 instructions per popped cell and about 100 (x86-64, measured) per corridor cell
-//! walked (7.5 M on 20 % random obstacles, 3.7 M in the maze, 300 × 300). Rebuilding the path
+//! Cell-by-cell A*: at most 8 pushes per expanded cell (typically fewer than one), each O(1)
+//! (a walk's end: O(far list), a few entries), pops O(1); about 232 Cortex-M4 instructions per
+//! expanded cell and about 100 (x86-64, measured) per corridor cell walked (6.7 M on 20 %
+//! random obstacles, 3.8 M in the maze, 300 × 300). Rebuilding the path
 //! walks the records and the steps back from the goal: `O(path cells)`, plus, for the
 //! any-angle planner, one line-of-sight test per straight run not starting at the anchor and a
 //! bisection in the runs where a shortcut ends (`O(runs × log(run) × segment length)`); a side-step turn with a
@@ -432,7 +450,7 @@ pub const SCRATCH_WORDS_400: usize = scratch_words_for_cells(400 * 400);
 
 /// The usual planner for the seed's 300 × 300 grid: 45 000 bytes of scratch, 3 072 queue
 /// entries (36 864 bytes; jump point search uses at most 40 of them on the bundled worlds, the
-/// cell-by-cell A* 782 on 20 % random obstacles) and the 4 096-byte vertex buffer: about 86 KB
+/// cell-by-cell A* 766 on 20 % random obstacles) and the 4 096-byte vertex buffer: about 86 KB
 /// in all.
 pub type Planner300 = Planner<SCRATCH_WORDS_300, 3072>;
 
@@ -567,7 +585,7 @@ struct OpenEntry {
     f: u32,
     /// `cell_index << 4 | step code` (A*), `cell_index` (BFS).
     node: u32,
-    /// Next entry of the same radix bucket (A*), unused by BFS.
+    /// Next entry of the same list (A*), unused by BFS.
     next: u32,
 }
 
@@ -828,253 +846,400 @@ fn corridor_index(m: u32) -> usize {
 /// walk about 0.15 cells per walk, a maze of 1-cell corridors dozens).
 const WALK_GIVE_UP_CREDIT: i32 = -64;
 
-/// End of a bucket list.
+/// End of a list of the open list.
+/// End of a list of the open list.
 const NIL: u32 = u32::MAX;
-/// Buckets of the open list (`(f >> 5) % 512`): they span 16 384 key values, more than the
-/// 16 238 by which a pushed `f` can exceed the last popped one (see [`BucketQueue`]).
-const BUCKETS: usize = 512;
 
-/// The scalar state of a [`BucketQueue`], kept apart from its arrays so that the search loop
+/// The reduced costs `r = cost + h(child) − h(parent)` of an octile step under the octile
+/// heuristic, in increasing order: 0, `2S − D`, `2D − 2S`, `D`, `2S`, `2D` (S =
+/// [`STRAIGHT_COST`], D = [`DIAGONAL_COST`]); the index is the step's *class*. A child's key is
+/// its parent's plus one of these, see [`ClassQueue`].
+const REDUCED_COSTS: [u32; CLASSES] = [
+    0,
+    2 * STRAIGHT_COST - DIAGONAL_COST,
+    2 * DIAGONAL_COST - 2 * STRAIGHT_COST,
+    DIAGONAL_COST,
+    2 * STRAIGHT_COST,
+    2 * DIAGONAL_COST,
+];
+/// Classes of reduced cost: 0 (the stack) and one FIFO list per non-zero value.
+const CLASSES: usize = 6;
+/// [`REDUCED_COSTS`] padded to 8 entries, for class numbers read from 3-bit fields.
+const CLASS_COSTS: [u32; 8] = {
+    let mut t = [0; 8];
+    let mut c = 0;
+    while c < CLASSES {
+        t[c] = REDUCED_COSTS[c];
+        c += 1;
+    }
+    t
+};
+/// The class of a reduced cost `r` by `r >> 10` (`r < 16 384`), `NO_CLASS` for none; the six
+/// reduced costs fall into six different slots (0, 3, 4, 7, 11, 15).
+const CLASS_BY_KILO: [u8; 16] = {
+    let mut table = [NO_CLASS; 16];
+    let mut c = 0;
+    while c < CLASSES {
+        table[(REDUCED_COSTS[c] >> 10) as usize] = c as u8;
+        c += 1;
+    }
+    table
+};
+const NO_CLASS: u8 = 0xFF;
+
+/// The class of reduced cost `r` (`key − last popped key`), `None` when `r` is not an octile
+/// step's reduced cost.
+#[inline(always)]
+fn reduced_cost_class(r: u32) -> Option<usize> {
+    let c = *CLASS_BY_KILO.get((r >> 10) as usize)? as usize;
+    (REDUCED_COSTS.get(c) == Some(&r)).then_some(c)
+}
+
+/// Octile distance for the tables built at compile time (same as [`octile`]).
+const fn octile_const(dx: i32, dy: i32) -> u32 {
+    let (a, b) = (dx.unsigned_abs(), dy.unsigned_abs());
+    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+    DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
+}
+
+/// Regions of [`goal_region`].
+const REGIONS: usize = 128;
+
+/// The *region* of a cell relative to the goal, `(dx, dy)` = cell − goal, as `0 .. 128`:
+/// `|dx| − |dy|` clamped to `−4 ..= 3` (one saturation) plus 4 in bits 0..3, then "`dx` < 0",
+/// "`dx` > 0", "`dy` < 0", "`dy` > 0" in bits 3, 4, 5, 6. The octile heuristic is linear in
+/// `(|dx|, |dy|)` on each side of `|dx| = |dy|`, a step changes `|dx|` and `|dy|` by at most
+/// one each in a way the signs fix, and it crosses that line only from `|dx| − |dy| = ±1`; so
+/// the reduced cost of every step from a cell depends on its region only (checked against
+/// `h` for every cell and step around many goals in the tests). About 20 instructions.
+#[inline(always)]
+fn goal_region(dx: i32, dy: i32) -> usize {
+    // |v| without a branch: (v ^ s) - s with s = v >> 31.
+    let (sx, sy) = (dx >> 31, dy >> 31);
+    let d = ((dx ^ sx).wrapping_sub(sx)).wrapping_sub((dy ^ sy).wrapping_sub(sy));
+    let d = d.clamp(-4, 3);
+    let (ux, uy) = (dx as u32, dy as u32);
+    let signs = (ux >> 31)
+        | (ux.wrapping_neg() >> 31) << 1
+        | (uy >> 31) << 2
+        | (uy.wrapping_neg() >> 31) << 3;
+    (((d + 4) as u32 | signs << 3) & (REGIONS as u32 - 1)) as usize
+}
+
+/// Per [`goal_region`]: the class (index into [`REDUCED_COSTS`]) of each step, in bits
+/// `3 (code − 1) ..` for step code `code` (1 ..= 8). 512 bytes of read-only data, built at
+/// compile time from one cell of each region (0 for the sign patterns that cannot occur).
+static STEP_CLASSES: [u32; REGIONS] = {
+    let mut table = [0u32; REGIONS];
+    let mut region = 0;
+    while region < REGIONS {
+        let d = (region & 7) as i32 - 4;
+        let (nx, px, ny, py) = (
+            region >> 3 & 1 == 1,
+            region >> 4 & 1 == 1,
+            region >> 5 & 1 == 1,
+            region >> 6 & 1 == 1,
+        );
+        let (sx, sy) = (px as i32 - nx as i32, py as i32 - ny as i32);
+        // A cell of the region: |dx|, |dy| in 0..12 with those signs and that clamped
+        // difference (none when both sign bits of a coordinate are set).
+        let mut found = None;
+        let mut a = 0;
+        while a < 12 && found.is_none() && !(nx && px) && !(ny && py) {
+            let mut b = 0;
+            while b < 12 && found.is_none() {
+                let diff = a - b;
+                let dc = if diff < -4 {
+                    -4
+                } else if diff > 3 {
+                    3
+                } else {
+                    diff
+                };
+                if (a == 0) == (sx == 0) && (b == 0) == (sy == 0) && dc == d {
+                    found = Some((a * sx, b * sy));
+                }
+                b += 1;
+            }
+            a += 1;
+        }
+        if let Some((dx, dy)) = found {
+            let mut word = 0u32;
+            let mut k = 0;
+            while k < 8 {
+                let (mx, my) = STEPS[k];
+                let cost = if k >= 4 { DIAGONAL_COST } else { STRAIGHT_COST };
+                let r = cost + octile_const(dx + mx, dy + my) - octile_const(dx, dy);
+                let mut c = 0;
+                while c < CLASSES && REDUCED_COSTS[c] != r {
+                    c += 1;
+                }
+                assert!(c < CLASSES, "not a reduced cost");
+                word |= (c as u32) << (3 * k);
+                k += 1;
+            }
+            table[region] = word;
+        }
+        region += 1;
+    }
+    table
+};
+
+/// The scalar state of a [`ClassQueue`], kept apart from its arrays so that the search loop
 /// holds it in registers (it is passed by value to the queue's out-of-line parts).
 #[derive(Clone, Copy)]
 struct QueueState {
-    /// Bit `w` set when word `w` of the bucket map is not 0.
-    summary: u32,
+    /// Head of the stack of entries whose key equals `last` (reduced cost 0).
+    stack: u32,
     /// The last key popped (every key in the queue is at least this).
     last: u32,
     /// Entries of the pool ever used (the queue peak).
     bump: u32,
     /// Head of the list of freed entries.
     free: u32,
+    /// The FIFO class of the last pop from a FIFO (1 ..= 5): its head is tried first.
+    class: u32,
 }
 
-/// The open list of A*: a bucket queue over a fixed pool of entries.
+/// The open list of the cell-by-cell A*: lists by *reduced cost* over a fixed pool of entries.
 ///
-/// With a consistent heuristic, a child's `f` exceeds its parent's by at most twice the step
-/// cost (`0 ≤ Δf = cost + Δh ≤ 2 · DIAGONAL_COST = 16 238`), and the parent's `f` is the last
-/// key popped. So every key in the queue lies in the window `[last, last + 16 238]`, and a
-/// circular array of 512 buckets of 32 key values each (`(f >> 5) % 512`) holds each key value
-/// in one bucket only. A push links an entry at the head of its bucket's list, O(1). A pop
-/// takes the first entry of smallest `f` in the bucket of the last popped key, or, when that is
-/// empty, in the next non-empty bucket, found in a 512-bit map with a 16-bit summary (two
-/// trailing-zero counts). Octile keys are sparse (steps cost thousands), so a bucket rarely
-/// holds more than a few entries; an entry whose `f` equals the last popped key ends the scan at
-/// once (nothing can be smaller), which keeps runs of equal keys O(1) per pop.
+/// With the octile heuristic (consistent), a child's key is its parent's plus the reduced cost
+/// `r = cost + h(child) − h(parent)`, which takes only the six values of [`REDUCED_COSTS`]
+/// (checked for every cell and step around goals in the tests). The parent's key is the last
+/// key popped, and popped keys never decrease, so the children pushed with one `r` arrive with
+/// non-decreasing keys: one FIFO list per non-zero `r` is sorted by construction, its head is
+/// its smallest key. Entries with `r = 0` carry the last popped key itself, the smallest there
+/// is: they go on a LIFO *stack*, popped first while it is not empty (ties pop the last pushed
+/// first: the deeper entries, which on open floors keeps the search on one straight line). So
+/// a push is O(1) (a link at the stack's head or a FIFO's tail), and a pop takes the stack's
+/// head or the smallest of the five FIFO heads (their keys are kept in an array; ties go to
+/// the smallest `r`, i.e. the latest parent). Keys that are not the last popped key plus one of
+/// the six values (the ends of corridor walks) go to the *far list*, kept sorted by key
+/// (insertion walks it; it holds a few entries), whose head is the sixth candidate of a pop.
 ///
-/// Ties (equal `f`) pop the last pushed entry first: the children of the cell just expanded,
-/// i.e. the deeper entries (larger `g`), which on open floors keeps the search on one straight
-/// line instead of flooding every cell of equal `f`. Entries of cells closed meanwhile stay in
-/// the lists (lazy deletion) until popped, or until [`BucketQueue::collect`] reclaims them when
-/// the pool is full.
-struct BucketQueue<'a> {
+/// Entries of cells closed meanwhile stay in the lists (lazy deletion) until popped, or until
+/// [`ClassQueue::collect`] reclaims them when the pool is full.
+struct ClassQueue<'a> {
     pool: &'a mut [OpenEntry],
-    heads: [u32; BUCKETS],
-    map: [u32; BUCKETS / 32],
-    /// Head of the list of *far* entries: keys more than [`NEAR_KEYS`] above the last popped
-    /// key when they were pushed (the ends of corridor walks), unsorted.
+    /// First and last entry of each FIFO class `1 ..= 5` (`NIL` when empty; index 0 and the
+    /// two past the classes are unused, so that a 3-bit class indexes them).
+    heads: [u32; 8],
+    tails: [u32; 8],
+    /// The key of each FIFO's head entry (`u32::MAX` when empty).
+    head_keys: [u32; 8],
+    /// Head of the far list (sorted by key, `NIL` when empty) and its key (`u32::MAX`).
     far: u32,
-    /// The smallest key in the far list (`u32::MAX` when it is empty).
-    far_min: u32,
+    far_key: u32,
 }
 
-/// Keys at most this far above the last popped key go to the buckets (a child of the popped
-/// cell is at most `2 · DIAGONAL_COST` above it); farther ones to the far list.
-const NEAR_KEYS: u32 = 2 * DIAGONAL_COST;
-
-impl<'a> BucketQueue<'a> {
+impl<'a> ClassQueue<'a> {
     fn new(pool: &'a mut [OpenEntry], first_key: u32) -> (Self, QueueState) {
         (
             Self {
                 pool,
-                heads: [NIL; BUCKETS],
-                map: [0; BUCKETS / 32],
+                heads: [NIL; 8],
+                tails: [NIL; 8],
+                head_keys: [u32::MAX; 8],
                 far: NIL,
-                far_min: u32::MAX,
+                far_key: u32::MAX,
             },
             QueueState {
-                summary: 0,
+                stack: NIL,
                 last: first_key,
                 bump: 0,
                 free: NIL,
+                class: 1,
             },
         )
     }
 
-    /// Insert; `false` when the pool is full. `key` must not be below `s.last`.
+    /// A free slot of the pool, taken off the free list or the unused end; `None` when full.
     #[inline(always)]
+    fn alloc(&mut self, s: &mut QueueState) -> Option<u32> {
+        if s.free != NIL {
+            let slot = s.free;
+            s.free = self.pool.get(slot as usize)?.next;
+            Some(slot)
+        } else if (s.bump as usize) < self.pool.len() {
+            s.bump += 1;
+            Some(s.bump - 1)
+        } else {
+            None
+        }
+    }
+
+    /// Insert any key not below `s.last`: on the stack, a FIFO list or the far list by its
+    /// reduced cost; `false` when the pool is full.
+    #[inline(never)]
     fn push(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
-        let slot = if s.free != NIL { s.free } else { s.bump };
-        let Some(entry) = self.pool.get_mut(slot as usize) else {
+        match reduced_cost_class(key.wrapping_sub(s.last)) {
+            Some(0) => self.push_stack(s, node),
+            Some(c) => self.push_class(s, c, node),
+            None => self.push_far(s, key, node),
+        }
+    }
+
+    /// Insert with the last popped key (class 0); `false` when the pool is full.
+    #[inline(always)]
+    fn push_stack(&mut self, s: &mut QueueState, node: u32) -> bool {
+        let Some(slot) = self.alloc(s) else {
             return false;
         };
-        if s.free != NIL {
-            s.free = entry.next;
-        } else {
-            s.bump += 1;
+        if let Some(e) = self.pool.get_mut(slot as usize) {
+            *e = OpenEntry {
+                f: s.last,
+                node,
+                next: s.stack,
+            };
         }
-        let b = (key >> 5) as usize % BUCKETS;
-        self.map[b / 32] |= 1 << (b % 32);
-        s.summary |= 1 << (b / 32);
-        *entry = OpenEntry {
-            f: key,
-            node,
-            next: self.heads[b],
-        };
-        self.heads[b] = slot;
+        s.stack = slot;
         true
     }
 
-    /// Insert a key that may lie beyond the buckets' window (more than [`NEAR_KEYS`] above the
-    /// last popped key): such an entry waits in the far list until the queue gets near it.
-    /// `false` when the pool is full. `key` must not be below `s.last`.
+    /// Insert with key `s.last + CLASS_COSTS[class]` at the tail of FIFO `class` (1 ..= 5);
+    /// `false` when the pool is full.
+    #[inline(always)]
+    fn push_class(&mut self, s: &mut QueueState, class: usize, node: u32) -> bool {
+        let c = class & 7;
+        let key = s.last.wrapping_add(CLASS_COSTS[c]);
+        let Some(slot) = self.alloc(s) else {
+            return false;
+        };
+        if let Some(e) = self.pool.get_mut(slot as usize) {
+            *e = OpenEntry {
+                f: key,
+                node,
+                next: NIL,
+            };
+        }
+        match self.pool.get_mut(self.tails[c] as usize) {
+            Some(t) => t.next = slot,
+            None => {
+                self.heads[c] = slot;
+                self.head_keys[c] = key;
+            }
+        }
+        self.tails[c] = slot;
+        true
+    }
+
+    /// Insert any key not below `s.last` into the far list, sorted (before the entries of an
+    /// equal key); `false` when the pool is full.
     #[inline(never)]
     fn push_far(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
-        if key.wrapping_sub(s.last) <= NEAR_KEYS {
-            return self.push(s, key, node);
-        }
-        let slot = if s.free != NIL { s.free } else { s.bump };
-        let Some(entry) = self.pool.get_mut(slot as usize) else {
+        let Some(slot) = self.alloc(s) else {
             return false;
         };
-        if s.free != NIL {
-            s.free = entry.next;
-        } else {
-            s.bump += 1;
+        let (mut prev, mut at) = (NIL, self.far);
+        while let Some(e) = self.pool.get(at as usize) {
+            if e.f >= key {
+                break;
+            }
+            (prev, at) = (at, e.next);
         }
-        *entry = OpenEntry {
-            f: key,
-            node,
-            next: self.far,
-        };
-        self.far = slot;
-        self.far_min = self.far_min.min(key);
+        if let Some(e) = self.pool.get_mut(slot as usize) {
+            *e = OpenEntry {
+                f: key,
+                node,
+                next: at,
+            };
+        }
+        match self.pool.get_mut(prev as usize) {
+            Some(p) => p.next = slot,
+            None => {
+                self.far = slot;
+                self.far_key = key;
+            }
+        }
         true
     }
 
-    /// Move the far entries within [`NEAR_KEYS`] of the last popped key into the buckets; when
-    /// the buckets are empty, first move the last popped key up to the smallest far key.
-    #[cold]
-    #[inline(never)]
-    fn migrate(&mut self, s: &mut QueueState) {
-        if s.summary == 0 && self.far != NIL {
-            s.last = self.far_min;
-        }
-        let (mut kept, mut kept_min, mut slot) = (NIL, u32::MAX, self.far);
-        while let Some(e) = self.pool.get_mut(slot as usize) {
-            let (key, next) = (e.f, e.next);
-            if key.wrapping_sub(s.last) <= NEAR_KEYS {
-                let b = (key >> 5) as usize % BUCKETS;
-                e.next = self.heads[b];
-                self.heads[b] = slot;
-                self.map[b / 32] |= 1 << (b % 32);
-                s.summary |= 1 << (b / 32);
-            } else {
-                e.next = kept;
-                kept = slot;
-                kept_min = kept_min.min(key);
-            }
-            slot = next;
-        }
-        self.far = kept;
-        self.far_min = kept_min;
-    }
-
-    /// The first non-empty bucket at or after `from`, circularly: one word of the map and the
-    /// summary of the words.
-    #[inline(never)]
-    fn next_bucket(&self, summary: u32, from: usize) -> Option<usize> {
-        let first = (from / 32) % (BUCKETS / 32);
-        let masked = self.map[first] & (u32::MAX << (from % 32));
-        if masked != 0 {
-            return Some(first * 32 + masked.trailing_zeros() as usize);
-        }
-        // Later words, else wrap around (which may come back to the low bits of `first`).
-        let later = summary & (u32::MAX << 1 << first);
-        let w = if later != 0 {
-            later.trailing_zeros() as usize
-        } else if summary != 0 {
-            summary.trailing_zeros() as usize
-        } else {
-            return None;
-        };
-        let bits = *self.map.get(w)?;
-        Some(w * 32 + bits.trailing_zeros() as usize)
-    }
-
-    /// Remove an entry of the smallest key: `(key, node)`.
+    /// Remove an entry of the smallest key and return its node (`NIL` when the queue is
+    /// empty); its key is then `s.last`.
     #[inline(always)]
-    fn pop(&mut self, s: &mut QueueState) -> Option<(u32, u32)> {
-        if self.far_min.wrapping_sub(s.last) <= NEAR_KEYS {
-            self.migrate(s);
+    fn pop(&mut self, s: &mut QueueState) -> u32 {
+        if s.stack != NIL {
+            // Its key is the last popped key: nothing is smaller.
+            let slot = s.stack;
+            let Some(e) = self.pool.get_mut(slot as usize) else {
+                return NIL;
+            };
+            let node = e.node;
+            s.stack = e.next;
+            e.next = s.free;
+            s.free = slot;
+            return node;
         }
-        let mut b = (s.last >> 5) as usize % BUCKETS;
-        let mut head = self.heads[b];
-        if head == NIL {
-            if s.summary == 0 {
-                // Only far entries left (or none): jump to the smallest.
-                if self.far == NIL {
-                    return None;
-                }
-                self.migrate(s);
-                b = (s.last >> 5) as usize % BUCKETS;
-                head = self.heads[b];
-            } else {
-                b = self.next_bucket(s.summary, b)? % BUCKETS;
-                head = self.heads[b];
-            }
+        // The FIFO popped last, when its head has the last popped key (runs of equal keys).
+        let c = (s.class & 7) as usize;
+        if self.head_keys[c] == s.last {
+            return self.take(s, c);
         }
-        let first = self.pool.get_mut(head as usize)?;
-        if first.next == NIL || first.f == s.last {
-            // The head is the smallest: alone in its bucket, or equal to the last key popped.
-            let (f, node, next) = (first.f, first.node, first.next);
-            first.next = s.free;
-            s.free = head;
-            s.last = f;
-            self.heads[b] = next;
-            if next == NIL {
-                self.map[b / 32] &= !(1 << (b % 32));
-                if self.map[b / 32] == 0 {
-                    s.summary &= !(1 << (b / 32));
-                }
-            }
-            return Some((f, node));
-        }
-        let first = *first;
-        let (mut best, mut best_f, mut best_next) = (head, first.f, first.next);
-        let mut before_best = NIL;
-        {
-            // Scan the bucket for the first entry of the smallest key.
-            let (mut prev, mut slot) = (head, first.next);
-            while let Some(e) = self.pool.get(slot as usize) {
-                if e.f < best_f {
-                    (best, best_f, best_next, before_best) = (slot, e.f, e.next, prev);
-                }
-                prev = slot;
-                slot = e.next;
-            }
-        }
-        let node = match self.pool.get_mut(best as usize) {
-            Some(e) => {
-                e.next = s.free;
-                e.node
-            }
-            None => return None,
+        self.pop_fifo(s)
+    }
+
+    /// Remove the head of FIFO `c` (1 ..= 5, not empty) and return its node.
+    #[inline(always)]
+    fn take(&mut self, s: &mut QueueState, c: usize) -> u32 {
+        let c = c & 7;
+        let slot = self.heads[c];
+        let Some(e) = self.pool.get_mut(slot as usize) else {
+            return NIL;
         };
-        s.free = best;
-        s.last = best_f;
-        match self.pool.get_mut(before_best as usize) {
-            Some(e) => e.next = best_next,
+        let (key, node, next) = (e.f, e.node, e.next);
+        e.next = s.free;
+        s.free = slot;
+        s.last = key;
+        s.class = c as u32;
+        self.heads[c] = next;
+        match self.pool.get(next as usize) {
+            Some(n) => self.head_keys[c] = n.f,
             None => {
-                self.heads[b] = best_next;
-                if best_next == NIL {
-                    self.map[b / 32] &= !(1 << (b % 32));
-                    if self.map[b / 32] == 0 {
-                        s.summary &= !(1 << (b / 32));
-                    }
-                }
+                self.tails[c] = NIL;
+                self.head_keys[c] = u32::MAX;
             }
         }
-        Some((best_f, node))
+        node
+    }
+
+    /// Remove the smallest of the FIFO heads and the far list's head (the stack is empty) and
+    /// return its node (`NIL` when all are empty).
+    #[inline(never)]
+    fn pop_fifo(&mut self, s: &mut QueueState) -> u32 {
+        let k = &self.head_keys;
+        let (mut c, mut key) = (1, k[1]);
+        if k[2] < key {
+            (c, key) = (2, k[2]);
+        }
+        if k[3] < key {
+            (c, key) = (3, k[3]);
+        }
+        if k[4] < key {
+            (c, key) = (4, k[4]);
+        }
+        if k[5] < key {
+            (c, key) = (5, k[5]);
+        }
+        if self.far_key <= key {
+            return self.pop_far(s);
+        }
+        self.take(s, c)
+    }
+
+    /// Remove the head of the far list and return its node (`NIL` when it is empty).
+    #[inline(always)]
+    fn pop_far(&mut self, s: &mut QueueState) -> u32 {
+        let slot = self.far;
+        let Some(e) = self.pool.get_mut(slot as usize) else {
+            return NIL;
+        };
+        let (f, node, next) = (e.f, e.node, e.next);
+        e.next = s.free;
+        s.free = slot;
+        s.last = f;
+        self.far = next;
+        self.far_key = self.pool.get(next as usize).map_or(u32::MAX, |n| n.f);
+        node
     }
 
     /// The pool is full: drop the entries of cells closed meanwhile (nibble not 0 in
@@ -1096,40 +1261,18 @@ impl<'a> BucketQueue<'a> {
                 (n >> 16) as usize * width + ((n >> 4) & 0xFFF) as usize,
             ) != 0
         });
-        (freed >= (self.pool.len() / 16).max(1) && self.push_far(&mut s, key, node)).then_some(s)
+        (freed >= (self.pool.len() / 16).max(1) && self.push(&mut s, key, node)).then_some(s)
     }
 
-    /// Drop every entry for which `stale(node)` holds from every bucket and the far list.
-    /// Returns the new state and how many slots were freed. O(entries); used only when the
-    /// pool is full.
-    #[cold]
-    #[inline(never)]
-    fn collect(&mut self, mut s: QueueState, stale: impl Fn(u32) -> bool) -> (QueueState, usize) {
-        let mut freed = 0;
-        for b in 0..BUCKETS {
-            let (mut head, mut slot) = (NIL, self.heads[b]);
-            while let Some(e) = self.pool.get_mut(slot as usize) {
-                let next = e.next;
-                if stale(e.node) {
-                    e.next = s.free;
-                    s.free = slot;
-                    freed += 1;
-                } else {
-                    e.next = head;
-                    head = slot;
-                }
-                slot = next;
-            }
-            self.heads[b] = head;
-            if head == NIL {
-                self.map[b / 32] &= !(1 << (b % 32));
-                if self.map[b / 32] == 0 {
-                    s.summary &= !(1 << (b / 32));
-                }
-            }
-        }
-        // The far list too.
-        let (mut kept, mut kept_min, mut slot) = (NIL, u32::MAX, self.far);
+    /// Drop the entries for which `stale(node)` holds from the list starting at `head`,
+    /// keeping the others in order. Returns the new head, the new tail and the slots freed.
+    fn filter_list(
+        &mut self,
+        s: &mut QueueState,
+        head: u32,
+        stale: &impl Fn(u32) -> bool,
+    ) -> (u32, u32, usize) {
+        let (mut first, mut tail, mut slot, mut freed) = (NIL, NIL, head, 0);
         while let Some(e) = self.pool.get_mut(slot as usize) {
             let next = e.next;
             if stale(e.node) {
@@ -1137,14 +1280,38 @@ impl<'a> BucketQueue<'a> {
                 s.free = slot;
                 freed += 1;
             } else {
-                e.next = kept;
-                kept = slot;
-                kept_min = kept_min.min(e.f);
+                e.next = NIL;
+                match self.pool.get_mut(tail as usize) {
+                    Some(t) => t.next = slot,
+                    None => first = slot,
+                }
+                tail = slot;
             }
             slot = next;
         }
-        self.far = kept;
-        self.far_min = kept_min;
+        (first, tail, freed)
+    }
+
+    /// Drop every entry for which `stale(node)` holds from the stack, the FIFOs and the far
+    /// list (each keeps its order). Returns the new state and how many slots were freed.
+    /// O(entries); used only when the pool is full.
+    #[cold]
+    #[inline(never)]
+    fn collect(&mut self, mut s: QueueState, stale: impl Fn(u32) -> bool) -> (QueueState, usize) {
+        let stack_head = s.stack;
+        let (stack, _, mut freed) = self.filter_list(&mut s, stack_head, &stale);
+        s.stack = stack;
+        for c in 1..CLASSES {
+            let (head, tail, n) = self.filter_list(&mut s, self.heads[c], &stale);
+            freed += n;
+            self.heads[c] = head;
+            self.tails[c] = tail;
+            self.head_keys[c] = self.pool.get(head as usize).map_or(u32::MAX, |e| e.f);
+        }
+        let (far, _, n) = self.filter_list(&mut s, self.far, &stale);
+        freed += n;
+        self.far = far;
+        self.far_key = self.pool.get(far as usize).map_or(u32::MAX, |e| e.f);
         (s, freed)
     }
 }
@@ -1945,7 +2112,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
     }
 
-    /// Cell-by-cell A* with the octile heuristic, a lazy-deletion bucket queue and the
+    /// Cell-by-cell A* with the octile heuristic, a lazy-deletion queue by reduced-cost class
+    /// ([`ClassQueue`]) and the
     /// *arrival pruning* of successors (see the module docs): a closed cell pushes only the
     /// neighbours that no other cell covers with a key no larger. The scratch must hold the map
     /// ([`Planner::copy_map`]).
@@ -1974,7 +2142,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
         };
         let (sx, sy) = ((start % width) as u32, (start / width) as u32);
-        let (mut open, mut state) = BucketQueue::new(&mut self.queue[..], h(sx, sy));
+        let (mut open, mut state) = ClassQueue::new(&mut self.queue[..], h(sx, sy));
         let full = PlanError::QueueFull {
             capacity: open.pool.len() as u32,
         };
@@ -1987,17 +2155,19 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
         let interior = Interior::new(geometry);
 
-        // A target whose key equals the key just popped is the next pop anyway (nothing in the
-        // queue is below it): one such target skips the queue and is expanded next
-        // (`next_node`, NIL when none).
-        // (`next_node`, NIL when none; its key is the current `f`, its `g` is `next_g`).
-        let (mut f, mut next_g, mut next_node) = (0u32, 0u32, NIL);
+        // A target whose key equals the key just popped (class 0) is the next pop anyway
+        // (nothing in the queue is below it): one such target skips the queue and is expanded
+        // next (`next_node`, NIL when none). The key of the cell being expanded is always
+        // `state.last`; `g` is not carried: it is `state.last − h` where needed (at the goal
+        // `h` is 0).
+        let mut next_node = NIL;
+        let (gxi, gyi) = (gx as i32, gy as i32);
         // Corridor walks start after arrival codes up to this one (S; 0 once they have been
         // given up on this map), with this balance of cells closed minus walks started.
         let (mut walk_codes, mut walk_credit) = (S, 0i32);
         loop {
             // Close the cell: its nibble gets the arrival step (it was 0).
-            let (node, x, y, index, g) = if next_node != NIL {
+            let (node, x, y, index) = if next_node != NIL {
                 // A target of the cell just expanded: not closed (its nibble was 0 then).
                 let node = next_node;
                 next_node = NIL;
@@ -2006,10 +2176,14 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 if let Some(word) = scratch.get_mut(index >> 3) {
                     *word |= (node & 0xF) << ((index & 7) * 4);
                 }
-                (node, x, y, index, next_g)
+                (node, x, y, index)
             } else {
                 let mut found = None;
-                while let Some((key, node)) = open.pop(&mut state) {
+                loop {
+                    let node = open.pop(&mut state);
+                    if node == NIL {
+                        break;
+                    }
                     let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
                     let index = y * width + x;
                     let Some(word) = scratch.get_mut(index >> 3) else {
@@ -2018,9 +2192,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     let shift = (index & 7) * 4;
                     if (*word >> shift) & 0xF == 0 {
                         *word |= (node & 0xF) << shift;
-                        // Queue entries do not store g: f = g + h exactly.
-                        f = key;
-                        found = Some((node, x, y, index, key.wrapping_sub(h(x as u32, y as u32))));
+                        found = Some((node, x, y, index));
                         break;
                     }
                     // Otherwise already closed by a cheaper entry.
@@ -2034,10 +2206,11 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             expanded += 1;
             if index == goal {
                 self.queue_peak = state.bump;
+                // h(goal) = 0: the key is the cost.
                 return Ok(Search {
                     found: true,
                     expanded,
-                    cost: g,
+                    cost: state.last,
                 });
             }
 
@@ -2049,20 +2222,20 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             // neighbours after a side step; the two sides and the diagonal after a diagonal
             // step; all eight from the start.
             let base = node & !0xF;
-            // Push `child` (`y << 16 | x << 4 | code`) with `key` and `g`, or keep it for the
-            // immediate expansion when its key is the one just popped.
-            macro_rules! push {
-                ($push:ident, $key:expr, $child_g:expr, $child:expr) => {{
-                    let (key, child_g, child) = ($key, $child_g, $child);
-                    if key == f && next_node == NIL {
-                        (next_g, next_node) = (child_g, child);
-                    } else if !open.$push(&mut state, key, child) {
-                        match open.reclaim_and_push(state, scratch, width, key, child) {
-                            Some(after) => state = after,
-                            None => {
-                                self.queue_peak = state.bump;
-                                return Err(full);
-                            }
+            // The class of each step's reduced cost (its key is `state.last` plus the class's
+            // reduced cost), 3 bits per step code.
+            let classes = STEP_CLASSES
+                .get(goal_region(x as i32 - gxi, y as i32 - gyi))
+                .copied()
+                .unwrap_or(0);
+            // The pool is full: reclaim and push `(key, child)`, or end with QueueFull.
+            macro_rules! reclaim {
+                ($key:expr, $child:expr) => {{
+                    match open.reclaim_and_push(state, scratch, width, $key, $child) {
+                        Some(after) => state = after,
+                        None => {
+                            self.queue_peak = state.bump;
+                            return Err(full);
                         }
                     }
                 }};
@@ -2072,17 +2245,16 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     if m & (1 << $z) != 0 {
                         let (dx, dy) = STEPS[$code as usize - 1];
                         let child = base.wrapping_add(((dy << 16) + (dx << 4)) as u32 + $code);
-                        // Plain adds: keys are u32 (see "Complexity" in the module docs).
-                        let child_g = g.wrapping_add(if $code >= NE {
-                            DIAGONAL_COST
-                        } else {
-                            STRAIGHT_COST
-                        });
-                        let key = child_g.wrapping_add(h(
-                            (x as u32).wrapping_add(dx as u32),
-                            (y as u32).wrapping_add(dy as u32),
-                        ));
-                        push!(push, key, child_g, child);
+                        let class = ((classes >> (3 * ($code - 1))) & 7) as usize;
+                        if class != 0 {
+                            if !open.push_class(&mut state, class, child) {
+                                reclaim!(state.last.wrapping_add(CLASS_COSTS[class]), child);
+                            }
+                        } else if next_node == NIL {
+                            next_node = child;
+                        } else if !open.push_stack(&mut state, child) {
+                            reclaim!(state.last, child);
+                        }
                     }
                 }};
             }
@@ -2103,9 +2275,15 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     walk_corridor(scratch, interior, goal, index, node, rest);
                 expanded += closed;
                 if end != NIL {
+                    // Plain adds: keys are u32 (see "Complexity" in the module docs).
+                    let g = state.last.wrapping_sub(h(x as u32, y as u32));
                     let wg = g.wrapping_add(steps.wrapping_mul(STRAIGHT_COST));
                     let key = wg.wrapping_add(h((end >> 4) & 0xFFF, end >> 16));
-                    push!(push_far, key, wg, end);
+                    if key == state.last && next_node == NIL {
+                        next_node = end;
+                    } else if !open.push_far(&mut state, key, end) {
+                        reclaim!(key, end);
+                    }
                 }
                 // Walks that close (nearly) nothing cost more than the arms' pushes.
                 walk_credit += closed as i32 - 1;

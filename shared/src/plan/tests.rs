@@ -1933,3 +1933,209 @@ proptest! {
         check_bfs(&mut *p, &g, s, t)?;
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// The open list of the cell-by-cell A* by reduced-cost class.
+
+/// Every move from every cell of a 13 × 11 grid, around goals in the corners, on the edges, in
+/// the middle and off the centre (same row, column and diagonal as many cells): the reduced
+/// cost `cost + h(child) − h(parent)` is always one of the six [`REDUCED_COSTS`] (0 included),
+/// each occurs, [`STEP_CLASSES`] of the cell's [`goal_region`] names it for every step, and
+/// [`reduced_cost_class`] recognises exactly the six values.
+#[test]
+fn reduced_costs_of_octile_moves_take_six_values() {
+    let (w, hgt) = (13i32, 11i32);
+    let mut seen = std::collections::BTreeSet::new();
+    let goals = [
+        (0, 0),
+        (12, 0),
+        (0, 10),
+        (12, 10),
+        (6, 5),
+        (6, 0),
+        (0, 5),
+        (12, 7),
+        (3, 10),
+        (2, 8),
+        (9, 1),
+    ];
+    for &(gx, gy) in &goals {
+        let h = |x: i32, y: i32| octile(x.abs_diff(gx), y.abs_diff(gy));
+        for y in 0..hgt {
+            for x in 0..w {
+                for (k, &(dx, dy)) in STEPS.iter().enumerate() {
+                    let (cx, cy) = (x + dx, y + dy);
+                    if !(0..w).contains(&cx) || !(0..hgt).contains(&cy) {
+                        continue;
+                    }
+                    let cost = if k + 1 >= NE as usize {
+                        DIAGONAL_COST
+                    } else {
+                        STRAIGHT_COST
+                    };
+                    let r = (cost + h(cx, cy)) as i64 - h(x, y) as i64;
+                    assert!(
+                        REDUCED_COSTS.contains(&(r as u32)),
+                        "goal ({gx}, {gy}) cell ({x}, {y}) step {k}: r = {r}"
+                    );
+                    seen.insert(r as u32);
+                    // The search's table gives the same class.
+                    let classes = STEP_CLASSES[goal_region(x - gx, y - gy)];
+                    let class = (classes >> (3 * k)) & 7;
+                    assert_eq!(
+                        REDUCED_COSTS[class as usize] as i64, r,
+                        "goal ({gx}, {gy}) cell ({x}, {y}) step {k}"
+                    );
+                }
+            }
+        }
+    }
+    assert_eq!(seen.into_iter().collect::<Vec<_>>(), REDUCED_COSTS);
+    assert_eq!(REDUCED_COSTS, [0, 3363, 4756, 8119, 11482, 16238]);
+    for r in 0..=3 * DIAGONAL_COST {
+        let class = REDUCED_COSTS.iter().position(|&v| v == r);
+        assert_eq!(reduced_cost_class(r), class, "r = {r}");
+    }
+    assert_eq!(reduced_cost_class(u32::MAX), None);
+}
+
+/// The queue alone against a reference (an ordered set of `(key, node)`): random
+/// interleavings of pushes (keys the last popped key plus 0 or a reduced cost, or any larger
+/// key, also through the far list), pops and reclaims (`collect` of a random subset of nodes)
+/// pop the reference's smallest key every time, each live node exactly once; a push is refused
+/// exactly when the 64 entries are all live.
+#[test]
+fn class_queue_pops_keys_in_order_like_a_reference() {
+    use std::collections::BTreeSet;
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    for round in 0..500 {
+        let mut pool = std::vec![OpenEntry::ZERO; 64];
+        let first = (next_random(&mut state) % 100_000) as u32;
+        let (mut q, mut s) = ClassQueue::new(&mut pool, first);
+        let mut reference = BTreeSet::new();
+        let mut next_node = 0u32;
+        let mut last = first;
+        let steps = 20 + next_random(&mut state) % 400;
+        for _ in 0..steps {
+            let roll = next_random(&mut state) % 100;
+            if roll < 55 {
+                let r = match next_random(&mut state) % 8 {
+                    0 | 1 => 0,
+                    7 => 1 + (next_random(&mut state) % 40_000) as u32,
+                    k => REDUCED_COSTS[(k - 2) as usize],
+                };
+                let key = last + r;
+                let ok = if next_random(&mut state).is_multiple_of(4) {
+                    q.push_far(&mut s, key, next_node)
+                } else {
+                    q.push(&mut s, key, next_node)
+                };
+                assert_eq!(ok, reference.len() < 64, "round {round}");
+                if ok {
+                    reference.insert((key, next_node));
+                }
+                next_node += 1;
+            } else if roll < 97 {
+                let got = Some(q.pop(&mut s))
+                    .filter(|&n| n != NIL)
+                    .map(|n| (s.last, n));
+                let want = reference.first().map(|&(k, _)| k);
+                assert_eq!(got.map(|(k, _)| k), want, "round {round}");
+                if let Some((k, n)) = got {
+                    assert!(
+                        reference.remove(&(k, n)),
+                        "round {round}: node {n} not live"
+                    );
+                    assert_eq!(s.last, k);
+                    last = k;
+                }
+            } else {
+                let m = 2 + (next_random(&mut state) % 3) as u32;
+                let before = reference.len();
+                let (after, freed) = q.collect(s, |n| n % m == 0);
+                s = after;
+                reference.retain(|&(_, n)| n % m != 0);
+                assert_eq!(freed, before - reference.len(), "round {round}");
+            }
+        }
+        // Drain: the rest comes out in order too.
+        while let Some(&(k, _)) = reference.first() {
+            let n = q.pop(&mut s);
+            let gk = s.last;
+            assert_eq!(gk, k, "round {round}");
+            assert!(reference.remove(&(gk, n)));
+        }
+        assert_eq!(q.pop(&mut s), NIL);
+        assert!(s.bump <= 64);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(1024))]
+
+    /// The cell-by-cell A* alone with a queue of 16 entries: reclaiming stale entries reorders
+    /// the lists (a FIFO keeps its order, so its keys stay sorted), and the search finds the
+    /// optimal cost or reports `QueueFull`, never another cost.
+    #[test]
+    fn cell_by_cell_astar_with_a_tiny_queue_is_exact_or_full((mut g, s, t) in arb_grid()) {
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 16>::new());
+        g.set(s, false);
+        g.set(t, false);
+        if s == t {
+            return Ok(());
+        }
+        p.copy_map(&g);
+        let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
+        let expected = oracle_astar(&g, s, t);
+        match p.astar(&g, si, t, ti) {
+            Ok(search) => {
+                prop_assert_eq!(search.found, expected.is_some());
+                if let Some(cost) = expected {
+                    prop_assert_eq!(search.cost, cost);
+                    p.rebuild_merged(g.geometry(), t);
+                    prop_assert_eq!(steps_and_cost(p.path_cells()).1, cost);
+                    assert_collision_free(&g, p.path_cells());
+                }
+                prop_assert!(p.queue_peak() <= 16);
+            }
+            Err(e) => prop_assert_eq!(e, PlanError::QueueFull { capacity: 16 }),
+        }
+    }
+}
+
+/// A tiny queue does run out and reclaim: corner to corner on 24 × 24 grids with 20 % random
+/// obstacles, a few searches fill all 32 entries and still find the optimal cost (after a
+/// reclaim), most end with `QueueFull`.
+#[test]
+fn tiny_queue_reclaims_and_runs_out_on_random_grids() {
+    let (mut reclaimed, mut full) = (0, 0);
+    for seed in 1..200u64 {
+        let mut g: SmallGrid = random_grid(24, 24, 20, seed);
+        let (s, t) = (Cell::new(0, 0), Cell::new(23, 23));
+        g.set(s, false);
+        g.set(t, false);
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 32>::new());
+        p.copy_map(&g);
+        let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
+        match p.astar(&g, si, t, ti) {
+            Ok(search) => {
+                let expected = oracle_astar(&g, s, t);
+                assert_eq!(search.found, expected.is_some(), "seed {seed}");
+                if let Some(cost) = expected {
+                    assert_eq!(search.cost, cost, "seed {seed}");
+                    if p.queue_peak() == 32 {
+                        reclaimed += 1;
+                    }
+                }
+            }
+            Err(e) => {
+                assert_eq!(e, PlanError::QueueFull { capacity: 32 });
+                full += 1;
+            }
+        }
+    }
+    assert!(
+        reclaimed > 0 && full > 0,
+        "reclaimed {reclaimed}, full {full}"
+    );
+}
