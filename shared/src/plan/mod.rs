@@ -352,8 +352,8 @@
 //! ## Complexity
 //!
 //! Layered BFS: `O(layers × frontier words + reached cells / 32)`; from both ends on the
-//! 300 × 300 open floor (2 × 146 layers, 46 345 cells) 4.0 M Cortex-M4 instructions, 87 per
-//! cell; 20 % random obstacles 6.6 M (53 055 cells, 124 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
+//! 300 × 300 open floor (2 × 146 layers, 46 345 cells) 2.9 M Cortex-M4 instructions, 63 per
+//! cell; 20 % random obstacles 4.9 M (53 055 cells, 92 per cell). Scalar BFS: `O(n)` for `n` cells, about 205 Cortex-M4 instructions per
 //! cell (4.2 M in the 300 × 300 maze). Jump point
 //! search (A*, and BFS on uncluttered maps): each expansion scans up to 8 rays; a row scan costs `O(length / 32)` word operations,
 //! a column scan `O(length)` 3-bit reads, a diagonal run `O(rows × columns / 32)`; on the
