@@ -912,7 +912,12 @@ impl Layers<'_> {
                             & (p1 ^ self.x1)
                             & (side ^ side_masks::<SIDE>().0)
                             & edges;
-                        self.edge::<ODD, SIDE>(free, y, w, f);
+                        if f & 1 != 0 {
+                            self.edge_before::<ODD, SIDE>(free, y, w);
+                        }
+                        if f >> 31 != 0 {
+                            self.edge_after::<ODD, SIDE>(free, y, w);
+                        }
                     }
                     continue;
                 }
@@ -980,7 +985,7 @@ impl Layers<'_> {
     }
 
     /// Expand the frontier of row `y` in word `w` into the rows below, level and above (moves
-    /// out of the word: [`Layers::edge`]).
+    /// out of the word: [`Layers::edge_before`], [`Layers::edge_after`]).
     #[inline(never)]
     fn single<const ODD: bool, const SIDE: u8>(
         &mut self,
@@ -1044,7 +1049,7 @@ impl Layers<'_> {
 
     /// Expand the frontier of rows `y0 ..= y1` in word `w`: targets row by row from `y0 - 1`
     /// to `y1 + 1`, each from the three source rows below, level and above, sliding up the
-    /// column (moves out of the word: [`Layers::edge`]).
+    /// column (moves out of the word: [`Layers::edge_before`], [`Layers::edge_after`]).
     // Not inlined: in its own function the window keeps more of its state in registers (1-2 %
     // fewer MCU instructions).
     #[inline(never)]
@@ -1187,27 +1192,38 @@ impl Layers<'_> {
         }
     }
 
-    /// The moves out of word `w` from the frontier `f` of row `y` at the word's edge cells
-    /// (bit 0 to bit 31 of the word before, bit 31 to bit 0 of the word after), into rows
-    /// `y - 1 ..= y + 1`, with the same rule: target free and not reached; for a diagonal both
-    /// side cells free. Rare (one pair of cells per 32 columns), so cell by cell.
+    /// The moves out of word `w` from its frontier cell at bit 0 in row `y` to bit 31 of the
+    /// word before, into rows `y - 1 ..= y + 1`, with the same rule: target free and not
+    /// reached; for a diagonal both side cells free. Rare (one pair of cells per 32 columns),
+    /// so cell by cell; one function per direction, so that its four arguments stay in
+    /// registers.
     #[inline(never)]
-    fn edge<const ODD: bool, const SIDE: u8>(
+    fn edge_before<const ODD: bool, const SIDE: u8>(
         &mut self,
         free: &impl FreeBits,
         y: usize,
         w: usize,
-        f: u32,
     ) {
-        if w > 0 && f & 1 != 0 {
+        if w > 0 {
             self.edge_side::<ODD, SIDE>(free, y, w, 0, w - 1, 31);
         }
-        if w + 1 < self.layout.row_words && f >> 31 != 0 {
+    }
+
+    /// [`Layers::edge_before`] the other way: from bit 31 of word `w` to bit 0 of the word
+    /// after.
+    #[inline(never)]
+    fn edge_after<const ODD: bool, const SIDE: u8>(
+        &mut self,
+        free: &impl FreeBits,
+        y: usize,
+        w: usize,
+    ) {
+        if w + 1 < self.layout.row_words {
             self.edge_side::<ODD, SIDE>(free, y, w, 31, w + 1, 0);
         }
     }
 
-    /// One side of [`Layers::edge`]: from bit `src_bit` of word `w` in row `y` to bit
+    /// One side of [`Layers::edge_before`] or [`Layers::edge_after`]: from bit `src_bit` of word `w` in row `y` to bit
     /// `dst_bit` of word `dst_w` in rows `y - 1 ..= y + 1`.
     #[inline(always)]
     fn edge_side<const ODD: bool, const SIDE: u8>(
