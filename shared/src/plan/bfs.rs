@@ -1107,9 +1107,10 @@ impl Layers<'_> {
         let mut met = 0u32; // cells of the other side reached
         let mut bit = 1u32; // `1 << (t - first)`
         let end = 1u32 << (last - first); // the last target's bit
-                                          // A row of the window: frontier `f`, free `m`, codes `c0`, `c1`, side `cs`, and its
-                                          // words (to mark new cells). Row 0: the first target; the row below it has no frontier
-                                          // and no free cell (a diagonal move needs both side cells free).
+
+        // A row of the window: frontier `f`, free `m`, codes `c0`, `c1`, side `cs`, and its
+        // words (to mark new cells). Row 0: the first target; the row below it has no frontier
+        // and no free cell (a diagonal move needs both side cells free).
         macro_rules! row {
             ($item:expr) => {{
                 let (((r0, r1), rs), m) = $item;

@@ -681,9 +681,9 @@ const fn step_code(dx: i32, dy: i32) -> u32 {
     }
 }
 
-/// Octile distance in A* cost units.
+/// Octile distance in A* cost units (also used by the tables built at compile time).
 #[inline(always)]
-fn octile(dx: u32, dy: u32) -> u32 {
+const fn octile(dx: u32, dy: u32) -> u32 {
     let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
     DIAGONAL_COST
         .saturating_mul(lo)
@@ -895,13 +895,6 @@ fn reduced_cost_class(r: u32) -> Option<usize> {
     (REDUCED_COSTS.get(c) == Some(&r)).then_some(c)
 }
 
-/// Octile distance for the tables built at compile time (same as [`octile`]).
-const fn octile_const(dx: i32, dy: i32) -> u32 {
-    let (a, b) = (dx.unsigned_abs(), dy.unsigned_abs());
-    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-    DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
-}
-
 /// Regions of [`goal_region`].
 const REGIONS: usize = 128;
 
@@ -969,7 +962,8 @@ static STEP_CLASSES: [u32; REGIONS] = {
             while k < 8 {
                 let (mx, my) = STEPS[k];
                 let cost = if k >= 4 { DIAGONAL_COST } else { STRAIGHT_COST };
-                let r = cost + octile_const(dx + mx, dy + my) - octile_const(dx, dy);
+                let r = cost + octile((dx + mx).unsigned_abs(), (dy + my).unsigned_abs())
+                    - octile(dx.unsigned_abs(), dy.unsigned_abs());
                 let mut c = 0;
                 while c < CLASSES && REDUCED_COSTS[c] != r {
                     c += 1;
