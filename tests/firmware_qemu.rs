@@ -355,7 +355,8 @@ fn random_case_on_a_large_stack() -> (Grid300, Cell, Cell) {
 
 /// Measure every planner on the three 300 x 300 grids, print a Markdown table, then check the
 /// 5 M instruction budget. Ignored by default (it reports a budget the planners do not all meet
-/// yet); `cargo xtask mcu-bench` runs it.
+/// yet); `cargo xtask mcu-bench` runs it. `TWIL_MCU_BENCH_ONLY=random:astar` (grid and planner
+/// name prefixes, either may be empty) runs only the matching cases, e.g. under a QEMU trace.
 #[test]
 #[ignore = "measurement: run with `cargo xtask mcu-bench`"]
 fn mcu_bench() {
@@ -373,8 +374,13 @@ fn mcu_bench() {
     println!();
     println!("| grid 300x300 | planner | status | expanded | queue peak | MCU instructions | per expanded cell | budget 5 M |");
     println!("|---|---|---|---:|---:|---:|---:|---|");
+    let only = std::env::var("TWIL_MCU_BENCH_ONLY").unwrap_or_default();
+    let (only_grid, only_planner) = only.split_once(':').unwrap_or((only.as_str(), ""));
     let mut over = Vec::new();
     for (name, (grid, start, goal)) in &cases {
+        if !name.starts_with(only_grid) {
+            continue;
+        }
         remote.call(Request::ClearMap).expect("clear");
         remote
             .call(Request::SetParams(MapParams::default()))
@@ -384,6 +390,9 @@ fn mcu_bench() {
         let (start, goal) = (g.center_of(*start), g.center_of(*goal));
         for kind in [PlannerKind::Bfs, PlannerKind::AStar, PlannerKind::AnyAngle] {
             let kind_name = host_plan::planner_name(kind);
+            if !kind_name.starts_with(only_planner) {
+                continue;
+            }
             let reply = remote
                 .request(Request::Plan { kind, start, goal })
                 .expect("link");
