@@ -767,6 +767,240 @@ impl Interior {
     }
 }
 
+/// The nibble scratch as the cell-by-cell A* and its corridor walks read it. Two layouts with
+/// the same contents and the same search on top ([`Flat`], [`Framed`]): a search gives the same
+/// result, expansions and path in either.
+trait CellMap {
+    /// Scratch index of cell `(x, y)` (a cell of the map).
+    fn index(&self, x: usize, y: usize) -> usize;
+    /// Index step of one row up.
+    fn row_step(&self) -> usize;
+    /// The nibble at `index` ([`BLOCKED`] beyond the scratch).
+    fn nibble(&self, index: usize) -> u32;
+    /// OR `code` into the nibble at `index` (a nibble known to be 0).
+    fn mark(&mut self, index: usize, code: u32);
+    /// Close the cell at `index` with `code` if its nibble is 0 (free, not closed); whether it
+    /// was.
+    fn close(&mut self, index: usize, code: u32) -> bool;
+    /// Whether cell `(x, y)` at `index` is an interior cell: its 3 × 3 neighbourhood lies on
+    /// the map (corridor walks stop at the others, in both layouts).
+    fn interior(&self, index: usize, x: usize, y: usize) -> bool;
+    /// The 3 × 3 neighbourhood of an interior cell as three 12-bit windows (row above, same
+    /// row, row below), column `x - 1` in bits 0..4 of each.
+    fn interior_windows(&self, index: usize) -> (u32, u32, u32);
+    /// The same for any cell of the map (off-map cells read as [`BLOCKED`]).
+    fn windows(&self, index: usize, x: usize, y: usize) -> (u32, u32, u32);
+}
+
+/// The flat layout: one nibble per cell, row-major like the grid (as the scalar BFS and jump
+/// point search use the scratch). Cells on the map border read their neighbours one by one.
+struct Flat<'a> {
+    scratch: &'a mut [u32],
+    interior: Interior,
+}
+
+impl CellMap for Flat<'_> {
+    #[inline(always)]
+    fn index(&self, x: usize, y: usize) -> usize {
+        y * self.interior.width + x
+    }
+    #[inline(always)]
+    fn row_step(&self) -> usize {
+        self.interior.width
+    }
+    #[inline(always)]
+    fn nibble(&self, index: usize) -> u32 {
+        nibble(self.scratch, index)
+    }
+    #[inline(always)]
+    fn mark(&mut self, index: usize, code: u32) {
+        if let Some(word) = self.scratch.get_mut(index >> 3) {
+            *word |= code << ((index & 7) * 4);
+        }
+    }
+    #[inline(always)]
+    fn close(&mut self, index: usize, code: u32) -> bool {
+        let Some(word) = self.scratch.get_mut(index >> 3) else {
+            return false;
+        };
+        let shift = (index & 7) * 4;
+        let open = (*word >> shift) & 0xF == 0;
+        if open {
+            *word |= code << shift;
+        }
+        open
+    }
+    #[inline(always)]
+    fn interior(&self, index: usize, x: usize, _y: usize) -> bool {
+        self.interior.contains(index, x)
+    }
+    #[inline(always)]
+    fn interior_windows(&self, index: usize) -> (u32, u32, u32) {
+        let width = self.interior.width;
+        (
+            nibble_window(self.scratch, index + width - 1),
+            nibble_window(self.scratch, index - 1),
+            nibble_window(self.scratch, index - width - 1),
+        )
+    }
+    #[inline(always)]
+    fn windows(&self, index: usize, x: usize, y: usize) -> (u32, u32, u32) {
+        self.interior.neighbourhood(self.scratch, index, x, || y)
+    }
+}
+
+/// Words of the [`Framed`] layout's view of the MCU-sized scratch: `2^14` words a mask can
+/// index, plus one so that the second word of a window needs no bounds test either.
+const FRAMED_WORDS: usize = (1 << 14) + 1;
+
+/// The framed layout: rows padded to whole words with at least one [`BLOCKED`] nibble (the
+/// row stride is `width + 1` rounded up to 8 nibbles), cell `(x, y)` at nibble `(y + 1) ·
+/// stride + x + 1`, and a row of blocked nibbles below and above the map. So every cell, on
+/// the border too, has its 3 × 3 neighbourhood in three windows at the same shift in three
+/// words a row apart, and the words are indexed through a mask (the view is `WORDS` words,
+/// `WORDS − 1` a power of two) instead of bounds tests. 300 × 300 cells take 304 / 8 × 302 =
+/// 11 477 words.
+struct Framed<'a, const WORDS: usize> {
+    words: &'a mut [u32; WORDS],
+    /// Row stride, nibbles (a multiple of 8) and words.
+    stride: usize,
+    row_words: usize,
+    width: usize,
+    height: usize,
+}
+
+impl<'a, const WORDS: usize> Framed<'a, WORDS> {
+    /// Word indices are masked with this (`WORDS − 2`: `WORDS − 1` is a power of two).
+    const MASK: usize = {
+        assert!(WORDS > 2 && (WORDS - 1).is_power_of_two());
+        WORDS - 2
+    };
+
+    /// Scratch words the layout needs for `geometry`: the rows, the frame rows and one more
+    /// blocked word (the north-east neighbour of the last cell when `width + 1` is a multiple
+    /// of 8 lies just past the upper frame row).
+    const fn words_for(geometry: &GridGeometry) -> usize {
+        let row_words = (geometry.width() as usize + 1).div_ceil(8);
+        row_words * (geometry.height() as usize + 2) + 1
+    }
+
+    /// The layout over the first `WORDS` words of `scratch`, when they hold the framed map of
+    /// `geometry` (`None`: use [`Flat`]).
+    fn new(scratch: &'a mut [u32], geometry: &GridGeometry) -> Option<Self> {
+        if Self::words_for(geometry) > Self::MASK + 1 {
+            return None;
+        }
+        let words = scratch.first_chunk_mut::<WORDS>()?;
+        let row_words = (geometry.width() as usize + 1).div_ceil(8);
+        Some(Self {
+            words,
+            stride: row_words * 8,
+            row_words,
+            width: geometry.width() as usize,
+            height: geometry.height() as usize,
+        })
+    }
+
+    /// Copy the map into the layout: occupied cells and the frame [`BLOCKED`], free cells 0.
+    fn copy_map<const GW: usize>(&mut self, grid: &Grid<GW>) {
+        let bits = grid.words();
+        // 32 bits of the grid from bit `at` on (past its end: set).
+        let bits_at = |at: usize| -> u32 {
+            let (w, shift) = (at / 32, (at % 32) as u32);
+            let lo = bits.get(w).copied().unwrap_or(u32::MAX);
+            let hi = bits.get(w + 1).copied().unwrap_or(u32::MAX);
+            ((u64::from(hi) << 32 | u64::from(lo)) >> shift) as u32
+        };
+        let (width, row_words) = (self.width, self.row_words);
+        let frame_rows = [0, self.height + 1];
+        for y in frame_rows {
+            for w in 0..row_words {
+                self.words[(y * row_words + w) & Self::MASK] = u32::MAX;
+            }
+        }
+        self.words[((self.height + 2) * row_words) & Self::MASK] = u32::MAX;
+        for y in 0..self.height {
+            let row = (y + 1) * row_words;
+            // Nibble n of the row is cell x = n − 1: 32 nibbles (four words) per read of 32 bits.
+            for n0 in (0..self.stride).step_by(32) {
+                let mut cells = if n0 == 0 {
+                    bits_at(y * width) << 1 | 1
+                } else {
+                    bits_at(y * width + n0 - 1)
+                };
+                // Nibbles past the row's last cell (x ≥ width): padding, blocked.
+                let valid = (width + 1).saturating_sub(n0);
+                if valid < 32 {
+                    cells |= u32::MAX << valid;
+                }
+                for k in 0..4 {
+                    let w = n0 / 8 + k;
+                    if w < row_words {
+                        self.words[(row + w) & Self::MASK] =
+                            BLOCKED_NIBBLES[((cells >> (8 * k)) & 0xFF) as usize];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Nibbles `j ..= j + 2` in bits 0..12 (higher bits: garbage), `j` not past the map.
+    #[inline(always)]
+    fn window_at(&self, w: usize, shift: u32) -> u32 {
+        let w = w & Self::MASK;
+        let (lo, hi) = (self.words[w], self.words[w + 1]);
+        (lo >> shift) | ((hi << 1) << (31 - shift))
+    }
+}
+
+impl<const WORDS: usize> CellMap for Framed<'_, WORDS> {
+    #[inline(always)]
+    fn index(&self, x: usize, y: usize) -> usize {
+        (y + 1) * self.stride + x + 1
+    }
+    #[inline(always)]
+    fn row_step(&self) -> usize {
+        self.stride
+    }
+    #[inline(always)]
+    fn nibble(&self, index: usize) -> u32 {
+        (self.words[(index >> 3) & Self::MASK] >> ((index & 7) * 4)) & 0xF
+    }
+    #[inline(always)]
+    fn mark(&mut self, index: usize, code: u32) {
+        self.words[(index >> 3) & Self::MASK] |= code << ((index & 7) * 4);
+    }
+    #[inline(always)]
+    fn close(&mut self, index: usize, code: u32) -> bool {
+        let word = &mut self.words[(index >> 3) & Self::MASK];
+        let shift = (index & 7) * 4;
+        let open = (*word >> shift) & 0xF == 0;
+        if open {
+            *word |= code << shift;
+        }
+        open
+    }
+    #[inline(always)]
+    fn interior(&self, _index: usize, x: usize, y: usize) -> bool {
+        x.wrapping_sub(1) < self.width.wrapping_sub(2)
+            && y.wrapping_sub(1) < self.height.wrapping_sub(2)
+    }
+    #[inline(always)]
+    fn interior_windows(&self, index: usize) -> (u32, u32, u32) {
+        let j = index.wrapping_sub(1);
+        let (w, shift) = (j >> 3, ((j & 7) * 4) as u32);
+        (
+            self.window_at(w.wrapping_add(self.row_words), shift) & 0xFFF,
+            self.window_at(w, shift) & 0xFFF,
+            self.window_at(w.wrapping_sub(self.row_words), shift) & 0xFFF,
+        )
+    }
+    #[inline(always)]
+    fn windows(&self, index: usize, _x: usize, _y: usize) -> (u32, u32, u32) {
+        self.interior_windows(index)
+    }
+}
+
 /// For each 12-bit window of three nibbles (a row of a 3 × 3 neighbourhood, for the scalar BFS
 /// and the cell-by-cell A*): bit `k` (k = 0, 1, 2) set when nibble `k` is 0 (free, not reached
 /// or closed), bit `3 + k` when it is not [`BLOCKED`]. 4 KB of read-only data, built at compile
@@ -1236,25 +1470,18 @@ impl<'a> ClassQueue<'a> {
         node
     }
 
-    /// The pool is full: drop the entries of cells closed meanwhile (nibble not 0 in
-    /// `scratch`, row width `width`) and push `(key, node)`; `None` (queue full) when that
+    /// The pool is full: drop the entries of cells closed meanwhile (`closed(node)`) and push `(key, node)`; `None` (queue full) when that
     /// frees less than 1/16 of the pool (no thrashing) or the push still fails.
     #[cold]
     #[inline(never)]
     fn reclaim_and_push(
         &mut self,
         s: QueueState,
-        scratch: &[u32],
-        width: usize,
+        closed: impl Fn(u32) -> bool,
         key: u32,
         node: u32,
     ) -> Option<QueueState> {
-        let (mut s, freed) = self.collect(s, |n| {
-            nibble(
-                scratch,
-                (n >> 16) as usize * width + ((n >> 4) & 0xFFF) as usize,
-            ) != 0
-        });
+        let (mut s, freed) = self.collect(s, closed);
         (freed >= (self.pool.len() / 16).max(1) && self.push(&mut s, key, node)).then_some(s)
     }
 
@@ -1317,17 +1544,16 @@ impl<'a> ClassQueue<'a> {
 /// cell), the number of steps to it and the number of cells closed. Out of line so that the
 /// search loop's registers are not spent on it.
 #[inline(never)]
-fn walk_corridor(
-    scratch: &mut [u32],
-    interior: Interior,
+fn walk_corridor<M: CellMap>(
+    map: &mut M,
     goal: usize,
     mut wi: usize,
     mut wnode: u32,
     mut rest: u32,
 ) -> (u32, u32, u32) {
-    let width = interior.width;
+    let row = map.row_step();
     // Index and entry steps of the side codes E, N, W, S.
-    let index_step = [1, width, usize::MAX, width.wrapping_neg()];
+    let index_step = [1, row, usize::MAX, row.wrapping_neg()];
     const WALK_NODE_STEP: [u32; 4] = [
         1 << 4,
         1 << 16,
@@ -1341,27 +1567,25 @@ fn walk_corridor(
         wi = wi.wrapping_add(index_step[k]);
         wnode = (wnode & !0xF).wrapping_add(WALK_NODE_STEP[k]) | c;
         steps += 1;
-        let wx = (wnode >> 4) & 0xFFF;
-        if wi == goal || !interior.contains(wi, wx as usize) {
+        let (wx, wy) = (((wnode >> 4) & 0xFFF) as usize, (wnode >> 16) as usize);
+        if wi == goal || !map.interior(wi, wx, wy) {
             // Pushed, not walked (a closed cell must not be pushed: it could be expanded at
             // once by the immediate expansion).
-            let end = if nibble(scratch, wi) == 0 { wnode } else { NIL };
+            let end = if map.nibble(wi) == 0 { wnode } else { NIL };
             return (end, steps, closed);
         }
-        let window =
-            |j: usize| u32::from(NIBBLE_WINDOWS[nibble_window(scratch, j) as usize & 0xFFF]);
-        let wc = window(wi - 1);
+        let window = |w: u32| u32::from(NIBBLE_WINDOWS[w as usize & 0xFFF]);
+        let (above, cur, below) = map.interior_windows(wi);
+        let wc = window(cur);
         if wc & 2 == 0 {
             return (NIL, steps, closed); // closed already
         }
-        let wm = window(wi - width - 1) | wc << 6 | window(wi + width - 1) << 12;
+        let wm = window(below) | wc << 6 | window(above) << 12;
         let t = u32::from(CORRIDOR_SIDES[corridor_index(wm)]);
         if t == 0 {
             return (wnode, steps, closed); // not a corridor cell
         }
-        if let Some(word) = scratch.get_mut(wi >> 3) {
-            *word |= c << ((wi & 7) * 4);
-        }
+        map.mark(wi, c);
         closed += 1;
         rest = t & !(1 << ((c + 1) & 3));
     }
@@ -1834,6 +2058,27 @@ pub struct Planner<const SCRATCH_WORDS: usize, const QUEUE: usize> {
     cells: PathCells,
     last: Option<PlanReport>,
     queue_peak: u32,
+    /// Where the last search left each cell's nibble (read by the path rebuild).
+    layout: Layout,
+}
+
+/// Where the nibble of a cell is in the scratch after a search.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Layout {
+    /// Row-major, `width` nibbles a row (jump points, scalar BFS, [`Flat`] A*).
+    Flat,
+    /// [`Framed`] A*: rows of `stride` nibbles, one frame row and column before the map.
+    Framed { stride: usize },
+}
+
+impl Layout {
+    /// The scratch index of `cell` (a cell of the map).
+    fn index(self, geometry: &GridGeometry, cell: Cell) -> usize {
+        match self {
+            Layout::Flat => geometry.index(cell),
+            Layout::Framed { stride } => (cell.y as usize + 1) * stride + cell.x as usize + 1,
+        }
+    }
 }
 
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEUE> {
@@ -1848,6 +2093,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             cells: Vec::new(),
             last: None,
             queue_peak: 0,
+            layout: Layout::Flat,
         }
     }
 
@@ -1921,6 +2167,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         self.cells.clear();
         self.last = None;
         self.queue_peak = 0;
+        self.layout = Layout::Flat;
         let geometry = *grid.geometry();
         self.check_scratch(&geometry)?;
         let inside = |c: Cell| geometry.contains_xy(c.x as i32, c.y as i32);
@@ -1952,8 +2199,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 .get_mut(..used_words)
                 .unwrap_or(&mut [])
                 .fill(0),
-            PlannerKind::Bfs => {} // sets up its own bit planes
-            _ => self.copy_map(grid),
+            // The layered BFS sets up its own bit planes, cell-by-cell A* its copy of the map.
+            _ => {}
         }
         let start_index = geometry.index(start);
         let goal_index = geometry.index(goal);
@@ -2005,7 +2252,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                             // Cluttered map (JPS scans more than it saves) or the queue ran
                             // out of entries for jump points and their records: cell-by-cell
                             // A*, which also reclaims stale entries more finely.
-                            self.copy_map(grid);
                             let plain = self.astar(grid, start_index, goal, goal_index)?;
                             Search {
                                 expanded: plain.expanded.saturating_add(jps_expanded),
@@ -2106,17 +2352,9 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         }
     }
 
-    /// Cell-by-cell A* with the octile heuristic, a lazy-deletion queue by reduced-cost class
-    /// ([`ClassQueue`]) and the
-    /// *arrival pruning* of successors (see the module docs): a closed cell pushes only the
-    /// neighbours that no other cell covers with a key no larger. The scratch must hold the map
-    /// ([`Planner::copy_map`]).
-    ///
-    /// Hot loop: the popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
-    /// nibbles of a row from two scratch words) and turned by [`NIBBLE_WINDOWS`] into an 18-bit
-    /// mask ("nibble 0" and "not blocked" per cell); one arm per arrival step tests its
-    /// candidate targets in the mask and pushes them with constant offsets. Cells on the map
-    /// border read their neighbours one by one.
+    /// Cell-by-cell A* (see [`astar_search`]) on a copy of the map, in the [`Framed`] layout
+    /// when it fits the first [`FRAMED_WORDS`] words of the scratch, else the [`Flat`] one.
+    /// `start`, `goal`: flat cell indices.
     fn astar<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
@@ -2124,242 +2362,51 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         goal_cell: Cell,
         goal: usize,
     ) -> Result<Search, PlanError> {
-        let geometry = grid.geometry();
+        self.astar_in::<GW, FRAMED_WORDS>(grid, start, goal_cell, goal, true)
+    }
+
+    /// [`Planner::astar`] with a framed view of `WORDS` words (`WORDS − 1` a power of two), or
+    /// in the flat layout when `framed` is false or the framed map does not fit.
+    fn astar_in<const GW: usize, const WORDS: usize>(
+        &mut self,
+        grid: &Grid<GW>,
+        start: usize,
+        goal_cell: Cell,
+        goal: usize,
+        framed: bool,
+    ) -> Result<Search, PlanError> {
+        let geometry = *grid.geometry();
         let width = geometry.width() as usize;
-        let (gx, gy) = (goal_cell.x as u32, goal_cell.y as u32);
+        let start_xy = ((start % width) as u32, (start / width) as u32);
+        let goal_xy = (goal_cell.x as u32, goal_cell.y as u32);
+        let _ = goal;
+        if framed {
+            if let Some(mut map) = Framed::<WORDS>::new(&mut self.scratch, &geometry) {
+                map.copy_map(grid);
+                self.layout = Layout::Framed { stride: map.stride };
+                return astar_search(
+                    &mut map,
+                    &mut self.queue,
+                    start_xy,
+                    goal_xy,
+                    &mut self.queue_peak,
+                );
+            }
+        }
+        self.copy_map(grid);
+        self.layout = Layout::Flat;
         let used_words = scratch_words_for_cells(geometry.cell_count());
-        let scratch = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
-        // Octile distance to the goal; sides are at most 4096 cells, so no overflow.
-        let h = |x: u32, y: u32| {
-            let (dx, dy) = (x.abs_diff(gx), y.abs_diff(gy));
-            let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
-            DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
+        let mut map = Flat {
+            scratch: self.scratch.get_mut(..used_words).unwrap_or(&mut []),
+            interior: Interior::new(&geometry),
         };
-        let (sx, sy) = ((start % width) as u32, (start / width) as u32);
-        let (mut open, mut state) = ClassQueue::new(&mut self.queue[..], h(sx, sy));
-        let full = PlanError::QueueFull {
-            capacity: open.pool.len() as u32,
-        };
-        let mut expanded = 0u32;
-
-        // Entries carry `y << 16 | x << 4 | step code` (sides are at most 4096 cells), so the
-        // loop never divides, and a neighbour's entry is the cell's plus a constant.
-        if !open.push(&mut state, h(sx, sy), (sy << 16) | (sx << 4) | CODE_START) {
-            return Err(full);
-        }
-        let interior = Interior::new(geometry);
-
-        // A target whose key equals the key just popped (class 0) is the next pop anyway
-        // (nothing in the queue is below it): one such target skips the queue and is expanded
-        // next (`next_node`, NIL when none). The key of the cell being expanded is always
-        // `state.last`; `g` is not carried: it is `state.last − h` where needed (at the goal
-        // `h` is 0).
-        let mut next_node = NIL;
-        let (gxi, gyi) = (gx as i32, gy as i32);
-        // Corridor walks start after arrival codes up to this one (S; 0 once they have been
-        // given up on this map), with this balance of cells closed minus walks started.
-        let (mut walk_codes, mut walk_credit) = (S, 0i32);
-        loop {
-            // Close the cell: its nibble gets the arrival step (it was 0).
-            let (node, x, y, index) = if next_node != NIL {
-                // A target of the cell just expanded: not closed (its nibble was 0 then).
-                let node = next_node;
-                next_node = NIL;
-                let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
-                let index = y * width + x;
-                if let Some(word) = scratch.get_mut(index >> 3) {
-                    *word |= (node & 0xF) << ((index & 7) * 4);
-                }
-                (node, x, y, index)
-            } else {
-                let mut found = None;
-                loop {
-                    let node = open.pop(&mut state);
-                    if node == NIL {
-                        break;
-                    }
-                    let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
-                    let index = y * width + x;
-                    let Some(word) = scratch.get_mut(index >> 3) else {
-                        continue;
-                    };
-                    let shift = (index & 7) * 4;
-                    if (*word >> shift) & 0xF == 0 {
-                        *word |= (node & 0xF) << shift;
-                        found = Some((node, x, y, index));
-                        break;
-                    }
-                    // Otherwise already closed by a cheaper entry.
-                }
-                match found {
-                    Some(entry) => entry,
-                    None => break,
-                }
-            };
-            let code = node & 0xF;
-            expanded += 1;
-            if index == goal {
-                self.queue_peak = state.bump;
-                // h(goal) = 0: the key is the cost.
-                return Ok(Search {
-                    found: true,
-                    expanded,
-                    cost: state.last,
-                });
-            }
-
-            let (above, cur, below) = interior.neighbourhood(scratch, index, x, || y);
-            let window = |w: u32| u32::from(NIBBLE_WINDOWS[(w & 0xFFF) as usize]);
-            let m = window(below) | window(cur) << 6 | window(above) << 12;
-            // The targets by arrival step (arrival pruning, see the module docs), each tested
-            // and pushed with constant offsets: straight on, plus the forced side and diagonal
-            // neighbours after a side step; the two sides and the diagonal after a diagonal
-            // step; all eight from the start.
-            let base = node & !0xF;
-            // The class of each step's reduced cost (its key is `state.last` plus the class's
-            // reduced cost), 3 bits per step code.
-            let classes = STEP_CLASSES
-                .get(goal_region(x as i32 - gxi, y as i32 - gyi))
-                .copied()
-                .unwrap_or(0);
-            // The pool is full: reclaim and push `(key, child)`, or end with QueueFull.
-            macro_rules! reclaim {
-                ($key:expr, $child:expr) => {{
-                    match open.reclaim_and_push(state, scratch, width, $key, $child) {
-                        Some(after) => state = after,
-                        None => {
-                            self.queue_peak = state.bump;
-                            return Err(full);
-                        }
-                    }
-                }};
-            }
-            macro_rules! visit {
-                ($z:expr, $code:expr) => {{
-                    if m & (1 << $z) != 0 {
-                        let (dx, dy) = STEPS[$code as usize - 1];
-                        let child = base.wrapping_add(((dy << 16) + (dx << 4)) as u32 + $code);
-                        let class = ((classes >> (3 * ($code - 1))) & 7) as usize;
-                        if class != 0 {
-                            if !open.push_class(&mut state, class, child) {
-                                reclaim!(state.last.wrapping_add(CLASS_COSTS[class]), child);
-                            }
-                        } else if next_node == NIL {
-                            next_node = child;
-                        } else if !open.push_stack(&mut state, child) {
-                            reclaim!(state.last, child);
-                        }
-                    }
-                }};
-            }
-            // Corridor contraction (see "Corridors" in the module docs): a cell with one or
-            // two legal neighbours, reached by a side step, has at most one continuation. Walk
-            // along the chain of such cells, closing each with its step, up to the first cell
-            // that is not one (pushed), the goal or a cell on the map border (pushed), a dead
-            // end (closed, nothing pushed) or a closed cell (nothing pushed).
-            let sides = if code <= walk_codes {
-                u32::from(CORRIDOR_SIDES[corridor_index(m)])
-            } else {
-                0
-            };
-            if sides != 0 {
-                // Side bit `code - 1`; the side behind a step of code `c` is bit `(c + 1) & 3`.
-                let rest = sides & !(1 << ((code + 1) & 3));
-                let (end, steps, closed) =
-                    walk_corridor(scratch, interior, goal, index, node, rest);
-                expanded += closed;
-                if end != NIL {
-                    // Plain adds: keys are u32 (see "Complexity" in the module docs).
-                    let g = state.last.wrapping_sub(h(x as u32, y as u32));
-                    let wg = g.wrapping_add(steps.wrapping_mul(STRAIGHT_COST));
-                    let key = wg.wrapping_add(h((end >> 4) & 0xFFF, end >> 16));
-                    if key == state.last && next_node == NIL {
-                        next_node = end;
-                    } else if !open.push_far(&mut state, key, end) {
-                        reclaim!(key, end);
-                    }
-                }
-                // Walks that close (nearly) nothing cost more than the arms' pushes.
-                walk_credit += closed as i32 - 1;
-                if walk_credit < WALK_GIVE_UP_CREDIT {
-                    walk_codes = 0;
-                }
-                continue;
-            }
-            macro_rules! diagonal {
-                ($z:expr, $code:expr, $o1:expr, $o2:expr) => {{
-                    if m & ((1 << $o1) | (1 << $o2)) == (1 << $o1) | (1 << $o2) {
-                        visit!($z, $code);
-                    }
-                }};
-            }
-            macro_rules! forced {
-                ($o_back:expr, $z:expr, $code:expr, $zd:expr, $dcode:expr, $o1:expr, $o2:expr) => {{
-                    if m & (1 << $o_back) == 0 {
-                        visit!($z, $code);
-                        diagonal!($zd, $dcode, $o1, $o2);
-                    }
-                }};
-            }
-            match code {
-                E => {
-                    visit!(Z_E, E);
-                    forced!(O_NW, Z_N, N, Z_NE, NE, O_N, O_E);
-                    forced!(O_SW, Z_S, S, Z_SE, SE, O_S, O_E);
-                }
-                W => {
-                    visit!(Z_W, W);
-                    forced!(O_NE, Z_N, N, Z_NW, NW, O_N, O_W);
-                    forced!(O_SE, Z_S, S, Z_SW, SW, O_S, O_W);
-                }
-                N => {
-                    visit!(Z_N, N);
-                    forced!(O_SE, Z_E, E, Z_NE, NE, O_E, O_N);
-                    forced!(O_SW, Z_W, W, Z_NW, NW, O_W, O_N);
-                }
-                S => {
-                    visit!(Z_S, S);
-                    forced!(O_NE, Z_E, E, Z_SE, SE, O_E, O_S);
-                    forced!(O_NW, Z_W, W, Z_SW, SW, O_W, O_S);
-                }
-                NE => {
-                    visit!(Z_E, E);
-                    visit!(Z_N, N);
-                    diagonal!(Z_NE, NE, O_N, O_E);
-                }
-                NW => {
-                    visit!(Z_W, W);
-                    visit!(Z_N, N);
-                    diagonal!(Z_NW, NW, O_N, O_W);
-                }
-                SW => {
-                    visit!(Z_W, W);
-                    visit!(Z_S, S);
-                    diagonal!(Z_SW, SW, O_S, O_W);
-                }
-                SE => {
-                    visit!(Z_E, E);
-                    visit!(Z_S, S);
-                    diagonal!(Z_SE, SE, O_S, O_E);
-                }
-                _ => {
-                    visit!(Z_E, E);
-                    visit!(Z_N, N);
-                    visit!(Z_W, W);
-                    visit!(Z_S, S);
-                    diagonal!(Z_NE, NE, O_N, O_E);
-                    diagonal!(Z_NW, NW, O_N, O_W);
-                    diagonal!(Z_SW, SW, O_S, O_W);
-                    diagonal!(Z_SE, SE, O_S, O_E);
-                }
-            }
-        }
-        self.queue_peak = state.bump;
-        Ok(Search {
-            found: false,
-            expanded,
-            cost: 0,
-        })
+        astar_search(
+            &mut map,
+            &mut self.queue,
+            start_xy,
+            goal_xy,
+            &mut self.queue_peak,
+        )
     }
 
     /// A* by Jump Point Search (no corner cutting) with the octile heuristic and a
@@ -2652,7 +2699,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     /// The parent of `cell` by its nibble, or `None` at the start (or on a corrupt code).
     #[inline]
     fn parent(&self, geometry: &GridGeometry, cell: Cell) -> Option<(Cell, u32)> {
-        let code = nibble(&self.scratch, geometry.index(cell));
+        let code = nibble(&self.scratch, self.layout.index(geometry, cell));
         let &(dx, dy) = STEPS.get((code as usize).wrapping_sub(1))?;
         let parent = geometry.cell_xy(cell.x as i32 - dx, cell.y as i32 - dy)?;
         Some((parent, code))
@@ -2794,6 +2841,251 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         self.cells.reverse();
         (length, steps, fits)
     }
+}
+
+/// Cell-by-cell A* with the octile heuristic, a lazy-deletion queue by reduced-cost class
+/// ([`ClassQueue`]) and the
+/// *arrival pruning* of successors (see the module docs): a closed cell pushes only the
+/// neighbours that no other cell covers with a key no larger. The scratch must hold the map
+/// ([`Planner::copy_map`]).
+///
+/// Hot loop: the popped cell's 3 × 3 neighbourhood is read as three 12-bit windows (three
+/// nibbles of a row from two scratch words) and turned by [`NIBBLE_WINDOWS`] into an 18-bit
+/// mask ("nibble 0" and "not blocked" per cell); one arm per arrival step tests its
+/// candidate targets in the mask and pushes them with constant offsets. Cells on the map
+/// border read their neighbours one by one.
+fn astar_search<M: CellMap>(
+    map: &mut M,
+    pool: &mut [OpenEntry],
+    (sx, sy): (u32, u32),
+    (gx, gy): (u32, u32),
+    peak: &mut u32,
+) -> Result<Search, PlanError> {
+    // Octile distance to the goal; sides are at most 4096 cells, so no overflow.
+    let h = |x: u32, y: u32| {
+        let (dx, dy) = (x.abs_diff(gx), y.abs_diff(gy));
+        let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
+        DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
+    };
+    let goal = map.index(gx as usize, gy as usize);
+    let (mut open, mut state) = ClassQueue::new(pool, h(sx, sy));
+    let full = PlanError::QueueFull {
+        capacity: open.pool.len() as u32,
+    };
+    let mut expanded = 0u32;
+
+    // Entries carry `y << 16 | x << 4 | step code` (sides are at most 4096 cells), so the
+    // loop never divides, and a neighbour's entry is the cell's plus a constant.
+    if !open.push(&mut state, h(sx, sy), (sy << 16) | (sx << 4) | CODE_START) {
+        return Err(full);
+    }
+
+    // A target whose key equals the key just popped (class 0) is the next pop anyway
+    // (nothing in the queue is below it): one such target skips the queue and is expanded
+    // next (`next_node`, NIL when none). The key of the cell being expanded is always
+    // `state.last`; `g` is not carried: it is `state.last − h` where needed (at the goal
+    // `h` is 0).
+    let mut next_node = NIL;
+    let (gxi, gyi) = (gx as i32, gy as i32);
+    // Corridor walks start after arrival codes up to this one (S; 0 once they have been
+    // given up on this map), with this balance of cells closed minus walks started.
+    let (mut walk_codes, mut walk_credit) = (S, 0i32);
+    loop {
+        // Close the cell: its nibble gets the arrival step (it was 0).
+        let (node, x, y, index) = if next_node != NIL {
+            // A target of the cell just expanded: not closed (its nibble was 0 then).
+            let node = next_node;
+            next_node = NIL;
+            let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
+            let index = map.index(x, y);
+            map.mark(index, node & 0xF);
+            (node, x, y, index)
+        } else {
+            let mut found = None;
+            loop {
+                let node = open.pop(&mut state);
+                if node == NIL {
+                    break;
+                }
+                let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
+                let index = map.index(x, y);
+                if map.close(index, node & 0xF) {
+                    found = Some((node, x, y, index));
+                    break;
+                }
+                // Otherwise already closed by a cheaper entry.
+            }
+            match found {
+                Some(entry) => entry,
+                None => break,
+            }
+        };
+        let code = node & 0xF;
+        expanded += 1;
+        if index == goal {
+            *peak = state.bump;
+            // h(goal) = 0: the key is the cost.
+            return Ok(Search {
+                found: true,
+                expanded,
+                cost: state.last,
+            });
+        }
+
+        let (above, cur, below) = map.windows(index, x, y);
+        let window = |w: u32| u32::from(NIBBLE_WINDOWS[(w & 0xFFF) as usize]);
+        let m = window(below) | window(cur) << 6 | window(above) << 12;
+        // The targets by arrival step (arrival pruning, see the module docs), each tested
+        // and pushed with constant offsets: straight on, plus the forced side and diagonal
+        // neighbours after a side step; the two sides and the diagonal after a diagonal
+        // step; all eight from the start.
+        let base = node & !0xF;
+        // The class of each step's reduced cost (its key is `state.last` plus the class's
+        // reduced cost), 3 bits per step code.
+        let classes = STEP_CLASSES
+            .get(goal_region(x as i32 - gxi, y as i32 - gyi))
+            .copied()
+            .unwrap_or(0);
+        // The pool is full: reclaim and push `(key, child)`, or end with QueueFull.
+        macro_rules! reclaim {
+            ($key:expr, $child:expr) => {{
+                let closed = |n: u32| {
+                    map.nibble(map.index(((n >> 4) & 0xFFF) as usize, (n >> 16) as usize)) != 0
+                };
+                match open.reclaim_and_push(state, closed, $key, $child) {
+                    Some(after) => state = after,
+                    None => {
+                        *peak = state.bump;
+                        return Err(full);
+                    }
+                }
+            }};
+        }
+        macro_rules! visit {
+            ($z:expr, $code:expr) => {{
+                if m & (1 << $z) != 0 {
+                    let (dx, dy) = STEPS[$code as usize - 1];
+                    let child = base.wrapping_add(((dy << 16) + (dx << 4)) as u32 + $code);
+                    let class = ((classes >> (3 * ($code - 1))) & 7) as usize;
+                    if class != 0 {
+                        if !open.push_class(&mut state, class, child) {
+                            reclaim!(state.last.wrapping_add(CLASS_COSTS[class]), child);
+                        }
+                    } else if next_node == NIL {
+                        next_node = child;
+                    } else if !open.push_stack(&mut state, child) {
+                        reclaim!(state.last, child);
+                    }
+                }
+            }};
+        }
+        // Corridor contraction (see "Corridors" in the module docs): a cell with one or
+        // two legal neighbours, reached by a side step, has at most one continuation. Walk
+        // along the chain of such cells, closing each with its step, up to the first cell
+        // that is not one (pushed), the goal or a cell on the map border (pushed), a dead
+        // end (closed, nothing pushed) or a closed cell (nothing pushed).
+        let sides = if code <= walk_codes {
+            u32::from(CORRIDOR_SIDES[corridor_index(m)])
+        } else {
+            0
+        };
+        if sides != 0 {
+            // Side bit `code - 1`; the side behind a step of code `c` is bit `(c + 1) & 3`.
+            let rest = sides & !(1 << ((code + 1) & 3));
+            let (end, steps, closed) = walk_corridor(map, goal, index, node, rest);
+            expanded += closed;
+            if end != NIL {
+                // Plain adds: keys are u32 (see "Complexity" in the module docs).
+                let g = state.last.wrapping_sub(h(x as u32, y as u32));
+                let wg = g.wrapping_add(steps.wrapping_mul(STRAIGHT_COST));
+                let key = wg.wrapping_add(h((end >> 4) & 0xFFF, end >> 16));
+                if key == state.last && next_node == NIL {
+                    next_node = end;
+                } else if !open.push_far(&mut state, key, end) {
+                    reclaim!(key, end);
+                }
+            }
+            // Walks that close (nearly) nothing cost more than the arms' pushes.
+            walk_credit += closed as i32 - 1;
+            if walk_credit < WALK_GIVE_UP_CREDIT {
+                walk_codes = 0;
+            }
+            continue;
+        }
+        macro_rules! diagonal {
+            ($z:expr, $code:expr, $o1:expr, $o2:expr) => {{
+                if m & ((1 << $o1) | (1 << $o2)) == (1 << $o1) | (1 << $o2) {
+                    visit!($z, $code);
+                }
+            }};
+        }
+        macro_rules! forced {
+            ($o_back:expr, $z:expr, $code:expr, $zd:expr, $dcode:expr, $o1:expr, $o2:expr) => {{
+                if m & (1 << $o_back) == 0 {
+                    visit!($z, $code);
+                    diagonal!($zd, $dcode, $o1, $o2);
+                }
+            }};
+        }
+        match code {
+            E => {
+                visit!(Z_E, E);
+                forced!(O_NW, Z_N, N, Z_NE, NE, O_N, O_E);
+                forced!(O_SW, Z_S, S, Z_SE, SE, O_S, O_E);
+            }
+            W => {
+                visit!(Z_W, W);
+                forced!(O_NE, Z_N, N, Z_NW, NW, O_N, O_W);
+                forced!(O_SE, Z_S, S, Z_SW, SW, O_S, O_W);
+            }
+            N => {
+                visit!(Z_N, N);
+                forced!(O_SE, Z_E, E, Z_NE, NE, O_E, O_N);
+                forced!(O_SW, Z_W, W, Z_NW, NW, O_W, O_N);
+            }
+            S => {
+                visit!(Z_S, S);
+                forced!(O_NE, Z_E, E, Z_SE, SE, O_E, O_S);
+                forced!(O_NW, Z_W, W, Z_SW, SW, O_W, O_S);
+            }
+            NE => {
+                visit!(Z_E, E);
+                visit!(Z_N, N);
+                diagonal!(Z_NE, NE, O_N, O_E);
+            }
+            NW => {
+                visit!(Z_W, W);
+                visit!(Z_N, N);
+                diagonal!(Z_NW, NW, O_N, O_W);
+            }
+            SW => {
+                visit!(Z_W, W);
+                visit!(Z_S, S);
+                diagonal!(Z_SW, SW, O_S, O_W);
+            }
+            SE => {
+                visit!(Z_E, E);
+                visit!(Z_S, S);
+                diagonal!(Z_SE, SE, O_S, O_E);
+            }
+            _ => {
+                visit!(Z_E, E);
+                visit!(Z_N, N);
+                visit!(Z_W, W);
+                visit!(Z_S, S);
+                diagonal!(Z_NE, NE, O_N, O_E);
+                diagonal!(Z_NW, NW, O_N, O_W);
+                diagonal!(Z_SW, SW, O_S, O_W);
+                diagonal!(Z_SE, SE, O_S, O_E);
+            }
+        }
+    }
+    *peak = state.bump;
+    Ok(Search {
+        found: false,
+        expanded,
+        cost: 0,
+    })
 }
 
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Default for Planner<SCRATCH_WORDS, QUEUE> {
