@@ -902,18 +902,18 @@ impl<'a, const WORDS: usize> Framed<'a, WORDS> {
     }
 
     /// Copy the map into the layout: occupied cells and the frame [`BLOCKED`], free cells 0.
+    /// Per row, 32 cells (four scratch words) per funnel shift of two grid words.
     fn copy_map<const GW: usize>(&mut self, grid: &Grid<GW>) {
         let bits = grid.words();
-        // 32 bits of the grid from bit `at` on (past its end: set).
-        let bits_at = |at: usize| -> u32 {
-            let (w, shift) = (at / 32, (at % 32) as u32);
-            let lo = bits.get(w).copied().unwrap_or(u32::MAX);
-            let hi = bits.get(w + 1).copied().unwrap_or(u32::MAX);
-            ((u64::from(hi) << 32 | u64::from(lo)) >> shift) as u32
+        // Grid word `k − 1` (word 0 and words past the end: all set, i.e. blocked).
+        let word = |k: usize| -> u32 {
+            match k.checked_sub(1) {
+                Some(i) => bits.get(i).copied().unwrap_or(u32::MAX),
+                None => u32::MAX,
+            }
         };
         let (width, row_words) = (self.width, self.row_words);
-        let frame_rows = [0, self.height + 1];
-        for y in frame_rows {
+        for y in [0, self.height + 1] {
             for w in 0..row_words {
                 self.words[(y * row_words + w) & Self::MASK] = u32::MAX;
             }
@@ -921,25 +921,38 @@ impl<'a, const WORDS: usize> Framed<'a, WORDS> {
         self.words[((self.height + 2) * row_words) & Self::MASK] = u32::MAX;
         for y in 0..self.height {
             let row = (y + 1) * row_words;
-            // Nibble n of the row is cell x = n − 1: 32 nibbles (four words) per read of 32 bits.
-            for n0 in (0..self.stride).step_by(32) {
-                let mut cells = if n0 == 0 {
-                    bits_at(y * width) << 1 | 1
-                } else {
-                    bits_at(y * width + n0 - 1)
-                };
-                // Nibbles past the row's last cell (x ≥ width): padding, blocked.
-                let valid = (width + 1).saturating_sub(n0);
+            // Nibble n of the row is cell x = n − 1, grid bit y · width + n − 1; counted from
+            // 32 bits earlier (word 0 is all set), so the left padding of row 0 is no special case.
+            let at = y * width + 31;
+            let (mut k, shift) = (at / 32, (at % 32) as u32);
+            let mut lo = word(k);
+            // Nibbles of this row still to write that are the padding or cells (the rest:
+            // padding on the right).
+            let mut valid = width + 1;
+            for w in (0..row_words).step_by(4) {
+                let hi = word(k + 1);
+                let mut cells = (lo >> shift) | ((hi << 1) << (31 - shift));
+                if w == 0 {
+                    cells |= 1; // the left padding
+                }
                 if valid < 32 {
                     cells |= u32::MAX << valid;
                 }
-                for k in 0..4 {
-                    let w = n0 / 8 + k;
-                    if w < row_words {
-                        self.words[(row + w) & Self::MASK] =
-                            BLOCKED_NIBBLES[((cells >> (8 * k)) & 0xFF) as usize];
+                let nibbles = |j: u32| BLOCKED_NIBBLES[((cells >> (8 * j)) & 0xFF) as usize];
+                let at = row + w;
+                if w + 4 <= row_words {
+                    // Written out: the compiler does not unroll at opt-level "s".
+                    self.words[at & Self::MASK] = nibbles(0);
+                    self.words[(at + 1) & Self::MASK] = nibbles(1);
+                    self.words[(at + 2) & Self::MASK] = nibbles(2);
+                    self.words[(at + 3) & Self::MASK] = nibbles(3);
+                } else {
+                    for j in 0..(row_words - w) as u32 {
+                        self.words[(at + j as usize) & Self::MASK] = nibbles(j);
                     }
                 }
+                valid = valid.saturating_sub(32);
+                (lo, k) = (hi, k + 1);
             }
         }
     }
