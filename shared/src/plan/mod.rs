@@ -902,16 +902,10 @@ impl<'a, const WORDS: usize> Framed<'a, WORDS> {
     }
 
     /// Copy the map into the layout: occupied cells and the frame [`BLOCKED`], free cells 0.
-    /// Per row, 32 cells (four scratch words) per funnel shift of two grid words.
+    /// Per row, 32 cells (four scratch words) per funnel shift of two grid words, then the
+    /// row's padding nibbles are set.
     fn copy_map<const GW: usize>(&mut self, grid: &Grid<GW>) {
         let bits = grid.words();
-        // Grid word `k − 1` (word 0 and words past the end: all set, i.e. blocked).
-        let word = |k: usize| -> u32 {
-            match k.checked_sub(1) {
-                Some(i) => bits.get(i).copied().unwrap_or(u32::MAX),
-                None => u32::MAX,
-            }
-        };
         let (width, row_words) = (self.width, self.row_words);
         for y in [0, self.height + 1] {
             for w in 0..row_words {
@@ -919,40 +913,63 @@ impl<'a, const WORDS: usize> Framed<'a, WORDS> {
             }
         }
         self.words[((self.height + 2) * row_words) & Self::MASK] = u32::MAX;
+        // The nibbles past the row's last cell in its last word (none when `width + 1` is a
+        // multiple of 8: the next row's left padding follows at once).
+        let right_padding = match (width + 1) % 8 {
+            0 => 0,
+            n => u32::MAX << (4 * n),
+        };
         for y in 0..self.height {
             let row = (y + 1) * row_words;
-            // Nibble n of the row is cell x = n − 1, grid bit y · width + n − 1; counted from
-            // 32 bits earlier (word 0 is all set), so the left padding of row 0 is no special case.
+            let Some(dst) = self.words.get_mut(row..row + row_words) else {
+                continue;
+            };
+            // Nibble n of the row is cell x = n − 1, grid bit y · width + n − 1. Counted from
+            // 32 bits earlier, with a word of set bits before the grid's first, that is bit
+            // `at` of the sequence (set word, grid words…, set words).
             let at = y * width + 31;
-            let (mut k, shift) = (at / 32, (at % 32) as u32);
-            let mut lo = word(k);
-            // Nibbles of this row still to write that are the padding or cells (the rest:
-            // padding on the right).
-            let mut valid = width + 1;
-            for w in (0..row_words).step_by(4) {
-                let hi = word(k + 1);
-                let mut cells = (lo >> shift) | ((hi << 1) << (31 - shift));
-                if w == 0 {
-                    cells |= 1; // the left padding
+            let (k, shift) = (at / 32, (at % 32) as u32);
+            let first = match k.checked_sub(1) {
+                Some(i) => bits.get(i).copied().unwrap_or(u32::MAX),
+                None => u32::MAX,
+            };
+            let mut source = core::iter::once(first)
+                .chain(bits.get(k..).unwrap_or(&[]).iter().copied())
+                .chain(core::iter::repeat(u32::MAX));
+            let mut lo = source.next().unwrap_or(u32::MAX);
+            let mut funnel = || {
+                let hi = source.next().unwrap_or(u32::MAX);
+                let cells = (lo >> shift) | ((hi << 1) << (31 - shift));
+                lo = hi;
+                cells
+            };
+            let nibbles =
+                |cells: u32, j: u32| BLOCKED_NIBBLES[((cells >> (8 * j)) & 0xFF) as usize];
+            let mut quads = dst.chunks_exact_mut(4);
+            for quad in &mut quads {
+                let cells = funnel();
+                // Written out: the compiler does not unroll at opt-level "s".
+                if let [a, b, c, d] = quad {
+                    (*a, *b, *c, *d) = (
+                        nibbles(cells, 0),
+                        nibbles(cells, 1),
+                        nibbles(cells, 2),
+                        nibbles(cells, 3),
+                    );
                 }
-                if valid < 32 {
-                    cells |= u32::MAX << valid;
+            }
+            let rest = quads.into_remainder();
+            if !rest.is_empty() {
+                let cells = funnel();
+                for (j, word) in rest.iter_mut().enumerate() {
+                    *word = nibbles(cells, j as u32);
                 }
-                let nibbles = |j: u32| BLOCKED_NIBBLES[((cells >> (8 * j)) & 0xFF) as usize];
-                let at = row + w;
-                if w + 4 <= row_words {
-                    // Written out: the compiler does not unroll at opt-level "s".
-                    self.words[at & Self::MASK] = nibbles(0);
-                    self.words[(at + 1) & Self::MASK] = nibbles(1);
-                    self.words[(at + 2) & Self::MASK] = nibbles(2);
-                    self.words[(at + 3) & Self::MASK] = nibbles(3);
-                } else {
-                    for j in 0..(row_words - w) as u32 {
-                        self.words[(at + j as usize) & Self::MASK] = nibbles(j);
-                    }
-                }
-                valid = valid.saturating_sub(32);
-                (lo, k) = (hi, k + 1);
+            }
+            if let Some(word) = dst.first_mut() {
+                *word |= BLOCKED; // the left padding
+            }
+            if let Some(word) = dst.last_mut() {
+                *word |= right_padding;
             }
         }
     }
