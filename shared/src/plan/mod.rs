@@ -2273,7 +2273,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     search
                 }
                 PlannerKind::AStar | PlannerKind::AnyAngle if !jump_points => {
-                    self.astar(grid, start_index, goal, goal_index)?
+                    self.astar(grid, start_index, goal)?
                 }
                 PlannerKind::AStar | PlannerKind::AnyAngle => {
                     match self.jps(grid, start_index, goal, goal_index) {
@@ -2282,7 +2282,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                             // Cluttered map (JPS scans more than it saves) or the queue ran
                             // out of entries for jump points and their records: cell-by-cell
                             // A*, which also reclaims stale entries more finely.
-                            let plain = self.astar(grid, start_index, goal, goal_index)?;
+                            let plain = self.astar(grid, start_index, goal)?;
                             Search {
                                 expanded: plain.expanded.saturating_add(jps_expanded),
                                 ..plain
@@ -2384,15 +2384,14 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
 
     /// Cell-by-cell A* (see [`astar_search`]) on a copy of the map, in the [`Framed`] layout
     /// when it fits the first [`FRAMED_WORDS`] words of the scratch, else the [`Flat`] one.
-    /// `start`, `goal`: flat cell indices.
+    /// `start`: the flat cell index.
     fn astar<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
         start: usize,
         goal_cell: Cell,
-        goal: usize,
     ) -> Result<Search, PlanError> {
-        self.astar_in::<GW, FRAMED_WORDS>(grid, start, goal_cell, goal, true)
+        self.astar_in::<GW, FRAMED_WORDS>(grid, start, goal_cell, true)
     }
 
     /// [`Planner::astar`] with a framed view of `WORDS` words (`WORDS − 1` a power of two), or
@@ -2402,14 +2401,12 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         grid: &Grid<GW>,
         start: usize,
         goal_cell: Cell,
-        goal: usize,
         framed: bool,
     ) -> Result<Search, PlanError> {
         let geometry = *grid.geometry();
         let width = geometry.width() as usize;
         let start_xy = ((start % width) as u32, (start / width) as u32);
         let goal_xy = (goal_cell.x as u32, goal_cell.y as u32);
-        let _ = goal;
         if framed {
             if let Some(mut map) = Framed::<WORDS>::new(&mut self.scratch, &geometry) {
                 map.copy_map(grid);

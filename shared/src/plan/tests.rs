@@ -948,9 +948,8 @@ proptest! {
         if s == t {
             return Ok(());
         }
-        p.copy_map(&g);
-        let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
-        let search = p.astar(&g, si, t, ti).unwrap();
+        let si = g.geometry().index(s);
+        let search = p.astar(&g, si, t).unwrap();
         let expected = oracle_astar(&g, s, t);
         prop_assert_eq!(search.found, expected.is_some());
         if let Some(cost) = expected {
@@ -1375,9 +1374,8 @@ fn one_cell_wide_grids_match_pathfinding_cell_by_cell_and_by_jump_points() {
         if let Some(cost) = expected {
             assert_eq!(r.cost, cost, "{w}x{h}");
         }
-        p.copy_map(&g);
-        let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
-        let search = p.astar(&g, si, t, ti).unwrap();
+        let si = g.geometry().index(s);
+        let search = p.astar(&g, si, t).unwrap();
         assert_eq!(search.found.then_some(search.cost), expected, "{w}x{h}");
         if let Some(found) = jump_point_search_alone(&mut *p, &g, s, t) {
             assert_eq!(found, expected, "{w}x{h}");
@@ -1541,9 +1539,8 @@ fn corridor_walk_ending_far_above_the_last_key_keeps_the_optimal_cost() {
     g.set(s, false);
     g.set(t, false);
     let mut p = Box::new(SmallPlanner::new());
-    p.copy_map(&g);
-    let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
-    let search = p.astar(&g, si, t, ti).unwrap();
+    let si = g.geometry().index(s);
+    let search = p.astar(&g, si, t).unwrap();
     assert_eq!(Some(search.cost), oracle_astar(&g, s, t));
     assert_eq!(search.cost, 125_317);
     p.rebuild_merged(g.geometry(), t);
@@ -1653,9 +1650,8 @@ fn check_corridor_case(g: &SmallGrid, s: Cell, t: Cell) -> Result<(), TestCaseEr
     let expected = oracle_astar(g, s, t);
     let mut p = Box::new(SmallPlanner::new());
     if s != t {
-        p.copy_map(g);
-        let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
-        let search = p.astar(g, si, t, ti).unwrap();
+        let si = g.geometry().index(s);
+        let search = p.astar(g, si, t).unwrap();
         prop_assert_eq!(search.found.then_some(search.cost), expected);
         if search.found {
             let (_, _, fits) = p.rebuild_merged(g.geometry(), t);
@@ -2084,10 +2080,9 @@ proptest! {
         if s == t {
             return Ok(());
         }
-        p.copy_map(&g);
-        let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
+        let si = g.geometry().index(s);
         let expected = oracle_astar(&g, s, t);
-        match p.astar(&g, si, t, ti) {
+        match p.astar(&g, si, t) {
             Ok(search) => {
                 prop_assert_eq!(search.found, expected.is_some());
                 if let Some(cost) = expected {
@@ -2115,9 +2110,8 @@ fn tiny_queue_reclaims_and_runs_out_on_random_grids() {
         g.set(s, false);
         g.set(t, false);
         let mut p = Box::new(Planner::<{ scratch_words_for_cells(SMALL_CELLS) }, 32>::new());
-        p.copy_map(&g);
-        let (si, ti) = (g.geometry().index(s), g.geometry().index(t));
-        match p.astar(&g, si, t, ti) {
+        let si = g.geometry().index(s);
+        match p.astar(&g, si, t) {
             Ok(search) => {
                 let expected = oracle_astar(&g, s, t);
                 assert_eq!(search.found, expected.is_some(), "seed {seed}");
@@ -2138,4 +2132,97 @@ fn tiny_queue_reclaims_and_runs_out_on_random_grids() {
         reclaimed > 0 && full > 0,
         "reclaimed {reclaimed}, full {full}"
     );
+}
+
+/// Words of the framed view the tests use on small grids (the planner's is 2^14 + 1).
+const SMALL_FRAMED: usize = 1025;
+
+/// The framed copy of the map (rows padded to whole words, a frame of blocked cells): every
+/// cell's nibble is the map's, and every cell's three windows, on the border too, equal the
+/// flat layout's (which reads off-map neighbours as blocked), for all widths around the
+/// multiples of 8 where the padding changes, with garbage in the scratch beforehand.
+#[test]
+fn framed_map_reads_like_the_flat_one() {
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    for w in (1..=40u32).chain([63, 64, 65]) {
+        for h in [1u32, 2, 3, 7, 24] {
+            if (w * h) as usize > SMALL_CELLS {
+                continue;
+            }
+            let seed = next_random(&mut state);
+            let g: SmallGrid = random_grid(w, h, 30, seed);
+            let geometry = *g.geometry();
+            let mut framed_words = std::vec![0xA5A5_A5A5u32; SMALL_FRAMED];
+            let mut framed = Framed::<SMALL_FRAMED>::new(&mut framed_words, &geometry).unwrap();
+            framed.copy_map(&g);
+            let mut p = Box::new(SmallPlanner::new());
+            p.scratch.fill(0x5A5A_5A5A);
+            p.copy_map(&g);
+            let used = scratch_words_for_cells(geometry.cell_count());
+            let flat = Flat {
+                scratch: &mut p.scratch[..used],
+                interior: Interior::new(&geometry),
+            };
+            for y in 0..h as usize {
+                for x in 0..w as usize {
+                    let (fi, ti) = (framed.index(x, y), flat.index(x, y));
+                    assert_eq!(framed.nibble(fi), flat.nibble(ti), "{w}x{h} ({x}, {y})");
+                    let mask = |(a, c, b): (u32, u32, u32)| {
+                        let t = |v: u32| NIBBLE_WINDOWS[(v & 0xFFF) as usize];
+                        (t(a), t(c), t(b))
+                    };
+                    assert_eq!(
+                        mask(framed.windows(fi, x, y)),
+                        mask(flat.windows(ti, x, y)),
+                        "{w}x{h} ({x}, {y})"
+                    );
+                    assert_eq!(framed.interior(fi, x, y), flat.interior(ti, x, y));
+                    if framed.interior(fi, x, y) {
+                        assert_eq!(
+                            mask(framed.interior_windows(fi)),
+                            mask(flat.interior_windows(ti))
+                        );
+                    }
+                }
+            }
+        }
+    }
+    // A map too large for the view is not framed.
+    let g = SmallGrid::new(GridGeometry::new(40, 40, 0.1).unwrap()).unwrap();
+    let mut words = std::vec![0u32; 129];
+    assert!(Framed::<129>::new(&mut words, g.geometry()).is_none());
+    assert!(Framed::<SMALL_FRAMED>::new(&mut words, g.geometry()).is_none());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(1024))]
+
+    /// The cell-by-cell A* in the framed layout and in the flat one: the same search (cost,
+    /// expansions, queue peak) and the same path, both of pathfinding's optimal cost.
+    #[test]
+    fn framed_and_flat_astar_agree((mut g, s, t) in arb_grid()) {
+        g.set(s, false);
+        g.set(t, false);
+        if s == t {
+            return Ok(());
+        }
+        let si = g.geometry().index(s);
+        let mut framed = Box::new(Planner::<SMALL_FRAMED, 4096>::new());
+        let a = framed.astar_in::<_, SMALL_FRAMED>(&g, si, t, true).unwrap();
+        let is_framed = matches!(framed.layout, Layout::Framed { .. });
+        prop_assert!(is_framed);
+        let mut flat = Box::new(SmallPlanner::new());
+        let b = flat.astar_in::<_, SMALL_FRAMED>(&g, si, t, false).unwrap();
+        prop_assert_eq!(flat.layout, Layout::Flat);
+        prop_assert_eq!((a.found, a.cost, a.expanded), (b.found, b.cost, b.expanded));
+        prop_assert_eq!(framed.queue_peak(), flat.queue_peak());
+        prop_assert_eq!(a.found.then_some(a.cost), oracle_astar(&g, s, t));
+        if a.found {
+            framed.rebuild_merged(g.geometry(), t);
+            flat.rebuild_merged(g.geometry(), t);
+            prop_assert_eq!(framed.path_cells(), flat.path_cells());
+            prop_assert_eq!(steps_and_cost(framed.path_cells()).1, a.cost);
+            assert_collision_free(&g, framed.path_cells());
+        }
+    }
 }
