@@ -929,40 +929,45 @@ impl<'a, const WORDS: usize> Framed<'a, WORDS> {
             // `at` of the sequence (set word, grid words…, set words).
             let at = y * width + 31;
             let (k, shift) = (at / 32, (at % 32) as u32);
-            let first = match k.checked_sub(1) {
-                Some(i) => bits.get(i).copied().unwrap_or(u32::MAX),
-                None => u32::MAX,
-            };
-            let mut source = core::iter::once(first)
-                .chain(bits.get(k..).unwrap_or(&[]).iter().copied())
-                .chain(core::iter::repeat(u32::MAX));
-            let mut lo = source.next().unwrap_or(u32::MAX);
-            let mut funnel = || {
-                let hi = source.next().unwrap_or(u32::MAX);
-                let cells = (lo >> shift) | ((hi << 1) << (31 - shift));
-                lo = hi;
-                cells
-            };
             let nibbles =
                 |cells: u32, j: u32| BLOCKED_NIBBLES[((cells >> (8 * j)) & 0xFF) as usize];
-            let mut quads = dst.chunks_exact_mut(4);
-            for quad in &mut quads {
-                let cells = funnel();
-                // Written out: the compiler does not unroll at opt-level "s".
-                if let [a, b, c, d] = quad {
-                    (*a, *b, *c, *d) = (
-                        nibbles(cells, 0),
-                        nibbles(cells, 1),
-                        nibbles(cells, 2),
-                        nibbles(cells, 3),
-                    );
+            let funnel = |lo: u32, hi: u32| (lo >> shift) | ((hi << 1) << (31 - shift));
+            let chunks = row_words.div_ceil(4);
+            // Grid words k − 1 ..= k − 1 + chunks, when they are all on the grid (every row
+            // but the first and the last, usually): a slice, read in pairs without tests.
+            match k.checked_sub(1).and_then(|i| bits.get(i..=i + chunks)) {
+                Some(source) => {
+                    let mut quads = dst.chunks_exact_mut(4);
+                    let mut pairs = source.windows(2);
+                    for (quad, pair) in (&mut quads).zip(&mut pairs) {
+                        if let ([a, b, c, d], &[lo, hi]) = (quad, pair) {
+                            // Written out: the compiler does not unroll at opt-level "s".
+                            let cells = funnel(lo, hi);
+                            (*a, *b, *c, *d) = (
+                                nibbles(cells, 0),
+                                nibbles(cells, 1),
+                                nibbles(cells, 2),
+                                nibbles(cells, 3),
+                            );
+                        }
+                    }
+                    if let Some(&[lo, hi]) = pairs.next() {
+                        let cells = funnel(lo, hi);
+                        for (j, word) in quads.into_remainder().iter_mut().enumerate() {
+                            *word = nibbles(cells, j as u32);
+                        }
+                    }
                 }
-            }
-            let rest = quads.into_remainder();
-            if !rest.is_empty() {
-                let cells = funnel();
-                for (j, word) in rest.iter_mut().enumerate() {
-                    *word = nibbles(cells, j as u32);
+                None => {
+                    // The first or last row: word by word, a set word before and past the grid.
+                    let word = |i: usize| match i.checked_sub(1) {
+                        Some(i) => bits.get(i).copied().unwrap_or(u32::MAX),
+                        None => u32::MAX,
+                    };
+                    for (j, out) in dst.iter_mut().enumerate() {
+                        let cells = funnel(word(k + j / 4), word(k + j / 4 + 1));
+                        *out = nibbles(cells, (j % 4) as u32);
+                    }
                 }
             }
             if let Some(word) = dst.first_mut() {
