@@ -450,8 +450,8 @@ pub const SCRATCH_WORDS_400: usize = scratch_words_for_cells(400 * 400);
 
 /// The usual planner for the seed's 300 × 300 grid: 45 000 bytes of scratch, 3 072 queue
 /// entries (36 864 bytes; jump point search uses at most 40 of them on the bundled worlds, the
-/// cell-by-cell A* 766 on 20 % random obstacles) and the 4 096-byte vertex buffer: about 86 KB
-/// in all.
+/// cell-by-cell A* 766 on 20 % random obstacles), the 12 288-byte vertex buffer and the
+/// cell-by-cell A*'s 2 560-byte goal table: about 97 KB in all.
 pub type Planner300 = Planner<SCRATCH_WORDS_300, 3072>;
 
 /// Which planner to run.
@@ -898,47 +898,79 @@ fn reduced_cost_class(r: u32) -> Option<usize> {
 /// Regions of [`goal_region`].
 const REGIONS: usize = 128;
 
-/// The *region* of a cell relative to the goal, `(dx, dy)` = cell − goal, as `0 .. 128`:
-/// `|dx| − |dy|` clamped to `−4 ..= 3` (one saturation) plus 4 in bits 0..3, then "`dx` < 0",
-/// "`dx` > 0", "`dy` < 0", "`dy` > 0" in bits 3, 4, 5, 6. The octile heuristic is linear in
+/// The *region* of a cell relative to the goal, `(dx, dy)` = cell − goal, as `0 .. 128`: the
+/// *sign code* `3 (sgn dx + 1) + (sgn dy + 1)` (`0 ..= 8`) in bits 0..4 and `|dx| − |dy|`
+/// clamped to `−4 ..= 3`, plus 4, in bits 4..7. The octile heuristic is linear in
 /// `(|dx|, |dy|)` on each side of `|dx| = |dy|`, a step changes `|dx|` and `|dy|` by at most
 /// one each in a way the signs fix, and it crosses that line only from `|dx| − |dy| = ±1`; so
 /// the reduced cost of every step from a cell depends on its region only (checked against
-/// `h` for every cell and step around many goals in the tests). About 20 instructions.
+/// `h` for every cell and step around many goals in the tests). The search computes the same
+/// number from two per-axis table entries ([`goal_axis_entry`], [`axis_region`]) on grids of
+/// at most [`GOAL_AXIS_CELLS`] a side and with this function on larger ones.
 #[inline(always)]
 fn goal_region(dx: i32, dy: i32) -> usize {
-    // |v| without a branch: (v ^ s) - s with s = v >> 31.
-    let (sx, sy) = (dx >> 31, dy >> 31);
-    let d = ((dx ^ sx).wrapping_sub(sx)).wrapping_sub((dy ^ sy).wrapping_sub(sy));
-    let d = d.clamp(-4, 3);
-    let (ux, uy) = (dx as u32, dy as u32);
-    let signs = (ux >> 31)
-        | (ux.wrapping_neg() >> 31) << 1
-        | (uy >> 31) << 2
-        | (uy.wrapping_neg() >> 31) << 3;
-    (((d + 4) as u32 | signs << 3) & (REGIONS as u32 - 1)) as usize
+    let d = (dx.unsigned_abs().wrapping_sub(dy.unsigned_abs()) as i32).clamp(-4, 3) + 4;
+    let code = 3 * (dx.signum() + 1) + dy.signum() + 1;
+    ((code as u32 | (d as u32) << 4) & (REGIONS as u32 - 1)) as usize
 }
+
+/// Grid sides (cells) up to which the cell-by-cell A* takes each cell's [`goal_region`] from
+/// a per-axis table of this many words filled once per search ([`goal_axis_entry`]; 2 KB in
+/// the [`Planner`]); larger grids compute it per cell.
+const GOAL_AXIS_CELLS: usize = 512;
+
+/// Sign code of `i − g`: 0 below, 1 equal, 2 above.
+#[inline(always)]
+const fn axis_sign_code(i: u32, g: u32) -> u32 {
+    (i > g) as u32 + (i >= g) as u32
+}
+
+/// Entry `i` of the per-axis goal table for the goal `(gx, gy)`, `i < GOAL_AXIS_CELLS`: in the
+/// high half the column value `16 (|i − gx| + 4) + 3 sx + 2`, in the low half the row value
+/// `16 |i − gy| + 2 − sy` (`sx`, `sy` the [`axis_sign_code`]s; both below 2^14). The column
+/// value of `x` minus the row value of `y` is `16 (|dx| − |dy| + 4) + 3 sx + sy`: the sign code
+/// in the low nibble (never a borrow: `3 sx + 2 ≥ 2 − sy`) and the unclamped difference above it.
+#[inline(always)]
+const fn goal_axis_entry(i: u32, gx: u32, gy: u32) -> u32 {
+    let col = ((i.abs_diff(gx) + 4) << 4) + 3 * axis_sign_code(i, gx) + 2;
+    let row = (i.abs_diff(gy) << 4) + 2 - axis_sign_code(i, gy);
+    (col << 16) | row
+}
+
+/// The [`goal_region`] of the cell of queue entry `node` (`y << 16 | x << 4 | code`, `x` and
+/// `y` below [`GOAL_AXIS_CELLS`]) from the per-axis table `axis` ([`goal_axis_entry`]): one
+/// subtraction of the two entries' halves (`a − (b << 16)`: the column value of `x` minus the
+/// row value of `y` in the high half, `16 (|dx| − |dy| + 4) + code`, with `|dx| − |dy| + 4` in
+/// `−507 ..= 515`), one saturation (`usat`) and one insert: about 9 Cortex-M4 instructions.
+#[inline(always)]
+fn axis_region(axis: &[u32; GOAL_TABLE_WORDS], node: u32) -> usize {
+    let a = axis[(node >> 4) as usize & (GOAL_AXIS_CELLS - 1)];
+    let b = axis[(node >> 16) as usize & (GOAL_AXIS_CELLS - 1)];
+    let v = a.wrapping_sub(b << 16) as i32;
+    let d = (v >> 20).clamp(0, 7) as u32;
+    (((v as u32 >> 16) & 15) | d << 4) as usize
+}
+
+/// Words of the [`Planner`]'s goal table: the per-axis entries, then a copy of
+/// [`STEP_CLASSES`] (in RAM next to them, the search addresses both from one base).
+const GOAL_TABLE_WORDS: usize = GOAL_AXIS_CELLS + REGIONS;
 
 /// Per [`goal_region`]: the class (index into [`REDUCED_COSTS`]) of each step, in bits
 /// `3 (code − 1) ..` for step code `code` (1 ..= 8). 512 bytes of read-only data, built at
-/// compile time from one cell of each region (0 for the sign patterns that cannot occur).
+/// compile time from one cell of each region (0 for the sign codes 9 ..= 15, which do not
+/// occur).
 static STEP_CLASSES: [u32; REGIONS] = {
     let mut table = [0u32; REGIONS];
     let mut region = 0;
     while region < REGIONS {
-        let d = (region & 7) as i32 - 4;
-        let (nx, px, ny, py) = (
-            region >> 3 & 1 == 1,
-            region >> 4 & 1 == 1,
-            region >> 5 & 1 == 1,
-            region >> 6 & 1 == 1,
-        );
-        let (sx, sy) = (px as i32 - nx as i32, py as i32 - ny as i32);
+        let d = (region >> 4) as i32 - 4;
+        let code = (region & 15) as i32;
+        let (sx, sy) = (code / 3 - 1, code % 3 - 1);
         // A cell of the region: |dx|, |dy| in 0..12 with those signs and that clamped
-        // difference (none when both sign bits of a coordinate are set).
+        // difference.
         let mut found = None;
         let mut a = 0;
-        while a < 12 && found.is_none() && !(nx && px) && !(ny && py) {
+        while a < 12 && found.is_none() && code < 9 {
             let mut b = 0;
             while b < 12 && found.is_none() {
                 let diff = a - b;
@@ -1826,12 +1858,15 @@ struct Search {
 /// (12 bytes each).
 ///
 /// A planner is reusable: every call clears the scratch of the cells it uses. It is large
-/// (`4 × SCRATCH_WORDS + 12 × QUEUE + 4 096` bytes), so keep it in a `static` or a `Box`, not on a
-/// small stack.
+/// (`4 × SCRATCH_WORDS + 12 × QUEUE + 12 288 + 2 560` bytes: the vertex buffer and the
+/// cell-by-cell A*'s goal table), so keep it in a `static` or a `Box`, not on a small stack.
 pub struct Planner<const SCRATCH_WORDS: usize, const QUEUE: usize> {
     scratch: [u32; SCRATCH_WORDS],
     queue: [OpenEntry; QUEUE],
     cells: PathCells,
+    /// The per-axis goal table of the cell-by-cell A* ([`goal_axis_entry`]), refilled by
+    /// every search on a grid of at most [`GOAL_AXIS_CELLS`] a side.
+    goal_axis: [u32; GOAL_TABLE_WORDS],
     last: Option<PlanReport>,
     queue_peak: u32,
 }
@@ -1846,6 +1881,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             scratch: [0; SCRATCH_WORDS],
             queue: [OpenEntry::ZERO; QUEUE],
             cells: Vec::new(),
+            goal_axis: [0; GOAL_TABLE_WORDS],
             last: None,
             queue_peak: 0,
         }
@@ -2124,9 +2160,34 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         goal_cell: Cell,
         goal: usize,
     ) -> Result<Search, PlanError> {
+        self.astar_regions::<GW, true>(grid, start, goal_cell, goal)
+    }
+
+    /// [`Planner::astar`], with `AXIS_TABLE`: the goal regions from the per-axis table
+    /// ([`axis_region`]; on grids larger than [`GOAL_AXIS_CELLS`] a side it runs without), else
+    /// computed per cell ([`goal_region`]; the tests run both on the same maps).
+    fn astar_regions<const GW: usize, const AXIS_TABLE: bool>(
+        &mut self,
+        grid: &Grid<GW>,
+        start: usize,
+        goal_cell: Cell,
+        goal: usize,
+    ) -> Result<Search, PlanError> {
         let geometry = grid.geometry();
         let width = geometry.width() as usize;
         let (gx, gy) = (goal_cell.x as u32, goal_cell.y as u32);
+        if AXIS_TABLE {
+            let side = width.max(geometry.height() as usize);
+            if side > GOAL_AXIS_CELLS {
+                return self.astar_regions::<GW, false>(grid, start, goal_cell, goal);
+            }
+            let (axis, classes) = self.goal_axis.split_at_mut(GOAL_AXIS_CELLS);
+            for (i, entry) in (0u32..).zip(axis.iter_mut().take(side)) {
+                *entry = goal_axis_entry(i, gx, gy);
+            }
+            classes.copy_from_slice(&STEP_CLASSES);
+        }
+        let goal_axis = &self.goal_axis;
         let used_words = scratch_words_for_cells(geometry.cell_count());
         let scratch = self.scratch.get_mut(..used_words).unwrap_or(&mut []);
         // Octile distance to the goal; sides are at most 4096 cells, so no overflow.
@@ -2218,10 +2279,13 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             let base = node & !0xF;
             // The class of each step's reduced cost (its key is `state.last` plus the class's
             // reduced cost), 3 bits per step code.
-            let classes = STEP_CLASSES
-                .get(goal_region(x as i32 - gxi, y as i32 - gyi))
-                .copied()
-                .unwrap_or(0);
+            let classes = if AXIS_TABLE {
+                let region = axis_region(goal_axis, node);
+                goal_axis[GOAL_AXIS_CELLS + region]
+            } else {
+                let region = goal_region(x as i32 - gxi, y as i32 - gyi);
+                STEP_CLASSES.get(region).copied().unwrap_or(0)
+            };
             // The pool is full: reclaim and push `(key, child)`, or end with QueueFull.
             macro_rules! reclaim {
                 ($key:expr, $child:expr) => {{
