@@ -943,8 +943,8 @@ const fn goal_axis_entry(i: u32, gx: u32, gy: u32) -> u32 {
 /// row value of `y` in the high half, `16 (|dx| − |dy| + 4) + code`, with `|dx| − |dy| + 4` in
 /// `−507 ..= 515`), one saturation (`usat`) and one insert: about 9 Cortex-M4 instructions.
 #[inline(always)]
-fn axis_region(axis: &[u32; GOAL_TABLE_WORDS], node: u32) -> usize {
-    let a = axis[(node >> 4) as usize & (GOAL_AXIS_CELLS - 1)];
+fn axis_region(axis: &[u32; GOAL_TABLE_WORDS], x: usize, node: u32) -> usize {
+    let a = axis[x & (GOAL_AXIS_CELLS - 1)];
     let b = axis[(node >> 16) as usize & (GOAL_AXIS_CELLS - 1)];
     let v = a.wrapping_sub(b << 16) as i32;
     let d = (v >> 20).clamp(0, 7) as u32;
@@ -2280,7 +2280,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             // The class of each step's reduced cost (its key is `state.last` plus the class's
             // reduced cost), 3 bits per step code.
             let classes = if AXIS_TABLE {
-                let region = axis_region(goal_axis, node);
+                let region = axis_region(goal_axis, x, node);
                 goal_axis[GOAL_AXIS_CELLS + region]
             } else {
                 let region = goal_region(x as i32 - gxi, y as i32 - gyi);
