@@ -937,11 +937,13 @@ const fn goal_axis_entry(i: u32, gx: u32, gy: u32) -> u32 {
     (col << 16) | row
 }
 
-/// The [`goal_region`] of the cell of queue entry `node` (`y << 16 | x << 4 | code`, `x` and
-/// `y` below [`GOAL_AXIS_CELLS`]) from the per-axis table `axis` ([`goal_axis_entry`]): one
-/// subtraction of the two entries' halves (`a − (b << 16)`: the column value of `x` minus the
-/// row value of `y` in the high half, `16 (|dx| − |dy| + 4) + code`, with `|dx| − |dy| + 4` in
-/// `−507 ..= 515`), one saturation (`usat`) and one insert: about 9 Cortex-M4 instructions.
+/// The [`goal_region`] of the cell of queue entry `node` (`y << 16 | x << 4 | code`; its column
+/// `x` is passed too, as the search holds it already; `x` and `y` below [`GOAL_AXIS_CELLS`])
+/// from the per-axis table `axis` ([`goal_axis_entry`]): one subtraction of the two entries'
+/// halves (`a − (b << 16)`: the column value of `x` minus the row value of `y` in the high half,
+/// `16 (|dx| − |dy| + 4) + sign code`, with `|dx| − |dy| + 4` in `−507 ..= 515`), one
+/// saturation (`usat`) and one insert. With the loads of the two entries and of the step
+/// classes about 11 Cortex-M4 instructions (`STEP_CLASSES` sits at the end of the same table).
 #[inline(always)]
 fn axis_region(axis: &[u32; GOAL_TABLE_WORDS], x: usize, node: u32) -> usize {
     let a = axis[x & (GOAL_AXIS_CELLS - 1)];

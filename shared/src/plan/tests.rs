@@ -2060,7 +2060,7 @@ fn reduced_costs_of_octile_moves_take_six_values() {
                     let region = goal_region(x - gx, y - gy);
                     let table = goal_table(gx as u32, gy as u32);
                     let node = (y as u32) << 16 | (x as u32) << 4 | (k as u32 + 1);
-                    assert_eq!(axis_region(&table, node), region, "({x}, {y})");
+                    assert_eq!(axis_region(&table, x as usize, node), region, "({x}, {y})");
                     assert_eq!(table[GOAL_AXIS_CELLS + region], STEP_CLASSES[region]);
                     let classes = STEP_CLASSES[region];
                     let class = (classes >> (3 * k)) & 7;
@@ -2128,7 +2128,7 @@ fn goal_axis_table_gives_every_cells_goal_region() {
                 let node = y << 16 | x << 4 | (x ^ y) & 15;
                 let region = goal_region(x as i32 - gx as i32, y as i32 - gy as i32);
                 assert_eq!(
-                    axis_region(&table, node),
+                    axis_region(&table, x as usize, node),
                     region,
                     "goal ({gx}, {gy}) cell ({x}, {y})"
                 );
