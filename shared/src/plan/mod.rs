@@ -64,10 +64,11 @@
 //!
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
 //! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
-//! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (12 288 bytes), plus a few hundred bytes
-//! of bit sets on the stack during a jump point search (about 100 bytes of list heads, tails
-//! and head keys in the cell-by-cell A*). Nothing else is allocated; the grid itself is only
-//! read. The scalar BFS and the cell-by-cell A* share a constant 4 KB table
+//! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (12 288 bytes), plus the cell-by-cell
+//! A*'s goal table (2 560 bytes: per-axis words and a copy of `STEP_CLASSES`), plus a few
+//! hundred bytes of bit sets on the stack during a jump point search (about 100 bytes of list
+//! heads, tails and head keys in the cell-by-cell A*). Nothing else is allocated; the grid
+//! itself is only read. The scalar BFS and the cell-by-cell A* share a constant 4 KB table
 //! (`NIBBLE_WINDOWS`), the corridor walks read a 512-byte one, the A* step classes another
 //! 512-byte one (`STEP_CLASSES`), `copy_map` a 1 KB one (read-only data: flash on the MCU).
 //! [`Planner::queue_peak`] tells how much of the queue a search used. Measured on the 300 × 300
@@ -197,7 +198,9 @@
 //! entries: a neighbour's entry is the cell's plus a constant).
 //! Cells on the map border read their neighbours one by one. Neither `h` nor `g` is computed
 //! per cell: the cell's *goal region* (signs of `dx`, `dy` and `|dx| − |dy|` saturated to
-//! `−4 ..= 3`, about 20 instructions) picks a word of `STEP_CLASSES` that gives every step's
+//! `−4 ..= 3`; on grids of at most 512 a side from two words of a per-axis table filled per
+//! search, one subtraction and one saturation, about 11 instructions with the loads, see
+//! `goal_axis_entry`) picks a word of `STEP_CLASSES` that gives every step's
 //! reduced-cost class (3 bits per step), i.e. the list it goes to and its key, the last popped
 //! key plus that reduced cost. `g` is needed only where a corridor walk ends (`f − h`) and at
 //! the goal, where `h = 0` makes the key the cost.
@@ -928,8 +931,9 @@ const fn axis_sign_code(i: u32, g: u32) -> u32 {
 /// Entry `i` of the per-axis goal table for the goal `(gx, gy)`, `i < GOAL_AXIS_CELLS`: in the
 /// high half the column value `16 (|i − gx| + 4) + 3 sx + 2`, in the low half the row value
 /// `16 |i − gy| + 2 − sy` (`sx`, `sy` the [`axis_sign_code`]s; both below 2^14). The column
-/// value of `x` minus the row value of `y` is `16 (|dx| − |dy| + 4) + 3 sx + sy`: the sign code
-/// in the low nibble (never a borrow: `3 sx + 2 ≥ 2 − sy`) and the unclamped difference above it.
+/// value of `x` minus the row value of `y` is `16 (|dx| − |dy| + 4) + 3 sx + sy`: the sign
+/// code in the low nibble (never a borrow: `3 sx + 2 ≥ 2 − sy`) and the unclamped difference
+/// above it.
 #[inline(always)]
 const fn goal_axis_entry(i: u32, gx: u32, gy: u32) -> u32 {
     let col = ((i.abs_diff(gx) + 4) << 4) + 3 * axis_sign_code(i, gx) + 2;
