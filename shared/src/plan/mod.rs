@@ -64,10 +64,11 @@
 //!
 //! For the seed's 300 × 300 grid that is **45 000 bytes** of scratch (`SCRATCH_WORDS = 11 250`,
 //! [`SCRATCH_WORDS_300`]), plus the queue, 12 bytes per entry (`QUEUE = 3072` → 36 864 bytes),
-//! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (12 288 bytes), plus a few hundred bytes
-//! of bit sets on the stack during a jump point search (about 100 bytes of list heads, tails
-//! and head keys in the cell-by-cell A*). Nothing else is allocated; the grid itself is only
-//! read. The scalar BFS and the cell-by-cell A* share a constant 4 KB table
+//! plus the vertex buffer of [`MAX_PATH_POINTS`] cells (12 288 bytes), plus the cell-by-cell
+//! A*'s goal table (2 560 bytes: per-axis words and a copy of `STEP_CLASSES`), plus a few
+//! hundred bytes of bit sets on the stack during a jump point search (about 100 bytes of list
+//! heads, tails and head keys in the cell-by-cell A*). Nothing else is allocated; the grid
+//! itself is only read. The scalar BFS and the cell-by-cell A* share a constant 4 KB table
 //! (`NIBBLE_WINDOWS`), the corridor walks read a 512-byte one, the A* step classes another
 //! 512-byte one (`STEP_CLASSES`), `copy_map` a 1 KB one (read-only data: flash on the MCU).
 //! [`Planner::queue_peak`] tells how much of the queue a search used. Measured on the 300 × 300
@@ -197,7 +198,9 @@
 //! entries: a neighbour's entry is the cell's plus a constant).
 //! Cells on the map border read their neighbours one by one. Neither `h` nor `g` is computed
 //! per cell: the cell's *goal region* (signs of `dx`, `dy` and `|dx| − |dy|` saturated to
-//! `−4 ..= 3`, about 20 instructions) picks a word of `STEP_CLASSES` that gives every step's
+//! `−4 ..= 3`; on grids of at most 512 a side from two words of a per-axis table filled per
+//! search, one subtraction and one saturation, about 11 instructions with the loads, see
+//! `goal_axis_entry`) picks a word of `STEP_CLASSES` that gives every step's
 //! reduced-cost class (3 bits per step), i.e. the list it goes to and its key, the last popped
 //! key plus that reduced cost. `g` is needed only where a corridor walk ends (`f − h`) and at
 //! the goal, where `h = 0` makes the key the cost.
@@ -450,8 +453,8 @@ pub const SCRATCH_WORDS_400: usize = scratch_words_for_cells(400 * 400);
 
 /// The usual planner for the seed's 300 × 300 grid: 45 000 bytes of scratch, 3 072 queue
 /// entries (36 864 bytes; jump point search uses at most 40 of them on the bundled worlds, the
-/// cell-by-cell A* 766 on 20 % random obstacles) and the 4 096-byte vertex buffer: about 86 KB
-/// in all.
+/// cell-by-cell A* 766 on 20 % random obstacles), the 12 288-byte vertex buffer and the
+/// cell-by-cell A*'s 2 560-byte goal table: about 97 KB in all.
 pub type Planner300 = Planner<SCRATCH_WORDS_300, 3072>;
 
 /// Which planner to run.
@@ -1167,47 +1170,82 @@ fn reduced_cost_class(r: u32) -> Option<usize> {
 /// Regions of [`goal_region`].
 const REGIONS: usize = 128;
 
-/// The *region* of a cell relative to the goal, `(dx, dy)` = cell − goal, as `0 .. 128`:
-/// `|dx| − |dy|` clamped to `−4 ..= 3` (one saturation) plus 4 in bits 0..3, then "`dx` < 0",
-/// "`dx` > 0", "`dy` < 0", "`dy` > 0" in bits 3, 4, 5, 6. The octile heuristic is linear in
+/// The *region* of a cell relative to the goal, `(dx, dy)` = cell − goal, as `0 .. 128`: the
+/// *sign code* `3 (sgn dx + 1) + (sgn dy + 1)` (`0 ..= 8`) in bits 0..4 and `|dx| − |dy|`
+/// clamped to `−4 ..= 3`, plus 4, in bits 4..7. The octile heuristic is linear in
 /// `(|dx|, |dy|)` on each side of `|dx| = |dy|`, a step changes `|dx|` and `|dy|` by at most
 /// one each in a way the signs fix, and it crosses that line only from `|dx| − |dy| = ±1`; so
 /// the reduced cost of every step from a cell depends on its region only (checked against
-/// `h` for every cell and step around many goals in the tests). About 20 instructions.
+/// `h` for every cell and step around many goals in the tests). The search computes the same
+/// number from two per-axis table entries ([`goal_axis_entry`], [`axis_region`]) on grids of
+/// at most [`GOAL_AXIS_CELLS`] a side and with this function on larger ones.
 #[inline(always)]
 fn goal_region(dx: i32, dy: i32) -> usize {
-    // |v| without a branch: (v ^ s) - s with s = v >> 31.
-    let (sx, sy) = (dx >> 31, dy >> 31);
-    let d = ((dx ^ sx).wrapping_sub(sx)).wrapping_sub((dy ^ sy).wrapping_sub(sy));
-    let d = d.clamp(-4, 3);
-    let (ux, uy) = (dx as u32, dy as u32);
-    let signs = (ux >> 31)
-        | (ux.wrapping_neg() >> 31) << 1
-        | (uy >> 31) << 2
-        | (uy.wrapping_neg() >> 31) << 3;
-    (((d + 4) as u32 | signs << 3) & (REGIONS as u32 - 1)) as usize
+    let d = (dx.unsigned_abs().wrapping_sub(dy.unsigned_abs()) as i32).clamp(-4, 3) + 4;
+    let code = 3 * (dx.signum() + 1) + dy.signum() + 1;
+    ((code as u32 | (d as u32) << 4) & (REGIONS as u32 - 1)) as usize
 }
+
+/// Grid sides (cells) up to which the cell-by-cell A* takes each cell's [`goal_region`] from
+/// a per-axis table of this many words filled once per search ([`goal_axis_entry`]; 2 KB in
+/// the [`Planner`]); larger grids compute it per cell.
+const GOAL_AXIS_CELLS: usize = 512;
+
+/// Sign code of `i − g`: 0 below, 1 equal, 2 above.
+#[inline(always)]
+const fn axis_sign_code(i: u32, g: u32) -> u32 {
+    (i > g) as u32 + (i >= g) as u32
+}
+
+/// Entry `i` of the per-axis goal table for the goal `(gx, gy)`, `i < GOAL_AXIS_CELLS`: in the
+/// high half the column value `16 (|i − gx| + 4) + 3 sx + 2`, in the low half the row value
+/// `16 |i − gy| + 2 − sy` (`sx`, `sy` the [`axis_sign_code`]s; both below 2^14). The column
+/// value of `x` minus the row value of `y` is `16 (|dx| − |dy| + 4) + 3 sx + sy`: the sign
+/// code in the low nibble (never a borrow: `3 sx + 2 ≥ 2 − sy`) and the unclamped difference
+/// above it.
+#[inline(always)]
+const fn goal_axis_entry(i: u32, gx: u32, gy: u32) -> u32 {
+    let col = ((i.abs_diff(gx) + 4) << 4) + 3 * axis_sign_code(i, gx) + 2;
+    let row = (i.abs_diff(gy) << 4) + 2 - axis_sign_code(i, gy);
+    (col << 16) | row
+}
+
+/// The [`goal_region`] of the cell of queue entry `node` (`y << 16 | x << 4 | code`; its column
+/// `x` is passed too, as the search holds it already; `x` and `y` below [`GOAL_AXIS_CELLS`])
+/// from the per-axis table `axis` ([`goal_axis_entry`]): one subtraction of the two entries'
+/// halves (`a − (b << 16)`: the column value of `x` minus the row value of `y` in the high half,
+/// `16 (|dx| − |dy| + 4) + sign code`, with `|dx| − |dy| + 4` in `−507 ..= 515`), one
+/// saturation (`usat`) and one insert. With the loads of the two entries and of the step
+/// classes about 11 Cortex-M4 instructions (`STEP_CLASSES` sits at the end of the same table).
+#[inline(always)]
+fn axis_region(axis: &[u32; GOAL_TABLE_WORDS], x: usize, node: u32) -> usize {
+    let a = axis[x & (GOAL_AXIS_CELLS - 1)];
+    let b = axis[(node >> 16) as usize & (GOAL_AXIS_CELLS - 1)];
+    let v = a.wrapping_sub(b << 16) as i32;
+    let d = (v >> 20).clamp(0, 7) as u32;
+    (((v as u32 >> 16) & 15) | d << 4) as usize
+}
+
+/// Words of the [`Planner`]'s goal table: the per-axis entries, then a copy of
+/// [`STEP_CLASSES`] (in RAM next to them, the search addresses both from one base).
+const GOAL_TABLE_WORDS: usize = GOAL_AXIS_CELLS + REGIONS;
 
 /// Per [`goal_region`]: the class (index into [`REDUCED_COSTS`]) of each step, in bits
 /// `3 (code − 1) ..` for step code `code` (1 ..= 8). 512 bytes of read-only data, built at
-/// compile time from one cell of each region (0 for the sign patterns that cannot occur).
+/// compile time from one cell of each region (0 for the sign codes 9 ..= 15, which do not
+/// occur).
 static STEP_CLASSES: [u32; REGIONS] = {
     let mut table = [0u32; REGIONS];
     let mut region = 0;
     while region < REGIONS {
-        let d = (region & 7) as i32 - 4;
-        let (nx, px, ny, py) = (
-            region >> 3 & 1 == 1,
-            region >> 4 & 1 == 1,
-            region >> 5 & 1 == 1,
-            region >> 6 & 1 == 1,
-        );
-        let (sx, sy) = (px as i32 - nx as i32, py as i32 - ny as i32);
+        let d = (region >> 4) as i32 - 4;
+        let code = (region & 15) as i32;
+        let (sx, sy) = (code / 3 - 1, code % 3 - 1);
         // A cell of the region: |dx|, |dy| in 0..12 with those signs and that clamped
-        // difference (none when both sign bits of a coordinate are set).
+        // difference.
         let mut found = None;
         let mut a = 0;
-        while a < 12 && found.is_none() && !(nx && px) && !(ny && py) {
+        while a < 12 && found.is_none() && code < 9 {
             let mut b = 0;
             while b < 12 && found.is_none() {
                 let diff = a - b;
@@ -2085,12 +2123,15 @@ struct Search {
 /// (12 bytes each).
 ///
 /// A planner is reusable: every call clears the scratch of the cells it uses. It is large
-/// (`4 × SCRATCH_WORDS + 12 × QUEUE + 4 096` bytes), so keep it in a `static` or a `Box`, not on a
-/// small stack.
+/// (`4 × SCRATCH_WORDS + 12 × QUEUE + 12 288 + 2 560` bytes: the vertex buffer and the
+/// cell-by-cell A*'s goal table), so keep it in a `static` or a `Box`, not on a small stack.
 pub struct Planner<const SCRATCH_WORDS: usize, const QUEUE: usize> {
     scratch: [u32; SCRATCH_WORDS],
     queue: [OpenEntry; QUEUE],
     cells: PathCells,
+    /// The per-axis goal table of the cell-by-cell A* ([`goal_axis_entry`]), refilled by
+    /// every search on a grid of at most [`GOAL_AXIS_CELLS`] a side.
+    goal_axis: [u32; GOAL_TABLE_WORDS],
     last: Option<PlanReport>,
     queue_peak: u32,
     /// Where the last search left each cell's nibble (read by the path rebuild).
@@ -2126,6 +2167,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             scratch: [0; SCRATCH_WORDS],
             queue: [OpenEntry::ZERO; QUEUE],
             cells: Vec::new(),
+            goal_axis: [0; GOAL_TABLE_WORDS],
             last: None,
             queue_peak: 0,
             layout: Layout::Flat,
@@ -2388,7 +2430,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     }
 
     /// Cell-by-cell A* (see [`astar_search`]) on a copy of the map, in the [`Framed`] layout
-    /// when it fits the first [`FRAMED_WORDS`] words of the scratch, else the [`Flat`] one.
+    /// when it fits the first [`FRAMED_WORDS`] words of the scratch, else the [`Flat`] one, with
+    /// the goal regions from the per-axis table on grids of at most [`GOAL_AXIS_CELLS`] a side.
     /// `start`: the flat cell index.
     fn astar<const GW: usize>(
         &mut self,
@@ -2396,12 +2439,15 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         start: usize,
         goal_cell: Cell,
     ) -> Result<Search, PlanError> {
-        self.astar_in::<GW, FRAMED_WORDS>(grid, start, goal_cell, true)
+        self.astar_in::<GW, FRAMED_WORDS, true>(grid, start, goal_cell, true)
     }
 
     /// [`Planner::astar`] with a framed view of `WORDS` words (`WORDS − 1` a power of two), or
-    /// in the flat layout when `framed` is false or the framed map does not fit.
-    fn astar_in<const GW: usize, const WORDS: usize>(
+    /// in the flat layout when `framed` is false or the framed map does not fit; with
+    /// `AXIS_TABLE` the goal regions come from the per-axis table ([`axis_region`]; on grids
+    /// larger than [`GOAL_AXIS_CELLS`] a side the search runs without it, flat), else they are
+    /// computed per cell ([`goal_region`]; the tests run both on the same maps).
+    fn astar_in<const GW: usize, const WORDS: usize, const AXIS_TABLE: bool>(
         &mut self,
         grid: &Grid<GW>,
         start: usize,
@@ -2412,13 +2458,25 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let width = geometry.width() as usize;
         let start_xy = ((start % width) as u32, (start / width) as u32);
         let goal_xy = (goal_cell.x as u32, goal_cell.y as u32);
-        if framed {
+        if AXIS_TABLE {
+            let side = width.max(geometry.height() as usize);
+            if side > GOAL_AXIS_CELLS {
+                return self.astar_in::<GW, WORDS, false>(grid, start, goal_cell, false);
+            }
+            let (axis, classes) = self.goal_axis.split_at_mut(GOAL_AXIS_CELLS);
+            for (i, entry) in (0u32..).zip(axis.iter_mut().take(side)) {
+                *entry = goal_axis_entry(i, goal_xy.0, goal_xy.1);
+            }
+            classes.copy_from_slice(&STEP_CLASSES);
+        }
+        if framed && AXIS_TABLE {
             if let Some(mut map) = Framed::<WORDS>::new(&mut self.scratch, &geometry) {
                 map.copy_map(grid);
                 self.layout = Layout::Framed { stride: map.stride };
-                return astar_search(
+                return astar_search::<_, AXIS_TABLE>(
                     &mut map,
                     &mut self.queue,
+                    &self.goal_axis,
                     start_xy,
                     goal_xy,
                     &mut self.queue_peak,
@@ -2432,9 +2490,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             scratch: self.scratch.get_mut(..used_words).unwrap_or(&mut []),
             interior: Interior::new(&geometry),
         };
-        astar_search(
+        astar_search::<_, AXIS_TABLE>(
             &mut map,
             &mut self.queue,
+            &self.goal_axis,
             start_xy,
             goal_xy,
             &mut self.queue_peak,
@@ -2886,9 +2945,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
 /// mask ("nibble 0" and "not blocked" per cell); one arm per arrival step tests its
 /// candidate targets in the mask and pushes them with constant offsets. Cells on the map
 /// border read their neighbours one by one.
-fn astar_search<M: CellMap>(
+fn astar_search<M: CellMap, const AXIS_TABLE: bool>(
     map: &mut M,
     pool: &mut [OpenEntry],
+    goal_axis: &[u32; GOAL_TABLE_WORDS],
     (sx, sy): (u32, u32),
     (gx, gy): (u32, u32),
     peak: &mut u32,
@@ -2974,10 +3034,14 @@ fn astar_search<M: CellMap>(
         let base = node & !0xF;
         // The class of each step's reduced cost (its key is `state.last` plus the class's
         // reduced cost), 3 bits per step code.
-        let classes = STEP_CLASSES
-            .get(goal_region(x as i32 - gxi, y as i32 - gyi))
-            .copied()
-            .unwrap_or(0);
+        let classes = if AXIS_TABLE {
+            // In range: a region is below 128 by construction (no bounds check emitted).
+            let region = axis_region(goal_axis, x, node);
+            goal_axis[GOAL_AXIS_CELLS + region]
+        } else {
+            let region = goal_region(x as i32 - gxi, y as i32 - gyi);
+            STEP_CLASSES.get(region).copied().unwrap_or(0)
+        };
         // The pool is full: reclaim and push `(key, child)`, or end with QueueFull.
         macro_rules! reclaim {
             ($key:expr, $child:expr) => {{

@@ -814,9 +814,14 @@ fn names_and_sizes() {
     assert_eq!(PlannerKind::AnyAngle.as_str(), "anyangle");
     assert_eq!(PlanStatus::StartBlocked.as_str(), "start_blocked");
     assert_eq!(PlanStatus::OutOfBounds.as_str(), "out_of_bounds");
-    // 4 bits per cell for 300 x 300 cells, 12 bytes per queue entry, 4 bytes per vertex.
+    // 4 bits per cell for 300 x 300 cells, 12 bytes per queue entry, 4 bytes per vertex, the
+    // A* goal table (512 axis entries, 128 step-class words).
     assert_eq!(SCRATCH_WORDS_300 * 4, 45_000);
-    assert!(core::mem::size_of::<Planner300>() <= 45_000 + 3072 * 12 + MAX_PATH_POINTS * 4 + 64);
+    assert_eq!(GOAL_TABLE_WORDS * 4, 2_560);
+    assert!(
+        core::mem::size_of::<Planner300>()
+            <= 45_000 + 3072 * 12 + MAX_PATH_POINTS * 4 + GOAL_TABLE_WORDS * 4 + 64
+    );
 }
 
 #[test]
@@ -961,6 +966,77 @@ proptest! {
             prop_assert_eq!(p.path_cells().first(), Some(&s));
         }
     }
+}
+
+/// The cell-by-cell A* from `s` to `t` (after [`Planner::copy_map`]) with the goal regions
+/// from the per-axis table and computed per cell: the same result (found, cells expanded,
+/// cost, or the same error and queue peak) and the same nibbles (closed cells and their
+/// parent codes) afterwards; the scratch is left as the second search left it.
+fn astar_both_region_ways<const GW: usize, const S: usize, const Q: usize>(
+    p: &mut Planner<S, Q>,
+    g: &Grid<GW>,
+    s: Cell,
+    t: Cell,
+) -> Result<Search, PlanError> {
+    let si = g.geometry().index(s);
+    let used = scratch_words_for_cells(g.geometry().cell_count());
+    let outcome = |r: &Result<Search, PlanError>| match r {
+        Ok(s) => Ok((s.found, s.expanded, s.cost)),
+        Err(e) => Err(*e),
+    };
+    let table = p.astar_in::<GW, SMALL_FRAMED, true>(g, si, t, false);
+    let (table_nibbles, table_peak) = (p.scratch[..used].to_vec(), p.queue_peak);
+    let direct = p.astar_in::<GW, SMALL_FRAMED, false>(g, si, t, false);
+    assert_eq!(outcome(&table), outcome(&direct), "{s:?} -> {t:?}");
+    assert_eq!(table_peak, p.queue_peak, "{s:?} -> {t:?}");
+    assert!(table_nibbles == p.scratch[..used], "{s:?} -> {t:?}");
+    direct
+}
+
+/// Grids at the per-axis goal table's limit (sides of [`GOAL_AXIS_CELLS`] cells) and just
+/// beyond it (the search then computes the regions per cell), random obstacles (20 %, fewer in
+/// narrow grids, which they would cut), searches
+/// between corners, edges and the middle: the cell-by-cell A* finds `pathfinding`'s cost, the
+/// same search both ways ([`astar_both_region_ways`]).
+#[test]
+fn cell_by_cell_astar_at_the_goal_table_limit_matches_pathfinding() {
+    const CELLS: usize = (GOAL_AXIS_CELLS + 1) * (GOAL_AXIS_CELLS + 1);
+    let n = GOAL_AXIS_CELLS as u16;
+    let mut p = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 16384>::new());
+    let mut found = 0;
+    let sizes = [
+        (n, n, 20),
+        (n + 1, n + 1, 20),
+        (n, 9, 4),
+        (9, n, 4),
+        (n + 1, 7, 3),
+        (5, n + 1, 2),
+    ];
+    for (w, h, density) in sizes {
+        let seed = u64::from(w) * 7 + u64::from(h);
+        let mut g = random_grid::<{ words_for_cells(CELLS) }>(w.into(), h.into(), density, seed);
+        let (r, u) = (w - 1, h - 1);
+        for (s, t) in [
+            ((0, 0), (r, u)),
+            ((r, u), (0, 0)),
+            ((r, 0), (0, u)),
+            ((w / 2, h / 2), (r, u / 3)),
+            ((0, u / 2), (r, u / 2)),
+        ] {
+            let (s, t) = (Cell::new(s.0, s.1), Cell::new(t.0, t.1));
+            g.set(s, false);
+            g.set(t, false);
+            let search = astar_both_region_ways(&mut *p, &g, s, t).unwrap();
+            let expected = oracle_astar(&g, s, t);
+            assert_eq!(
+                search.found.then_some(search.cost),
+                expected,
+                "{w} x {h}: {s:?} -> {t:?}"
+            );
+            found += usize::from(search.found);
+        }
+    }
+    assert!(found >= 24, "{found} of 30 found");
 }
 
 /// The line of sight walked with [`crate::raster::BresenhamLine`] and the grid's checked
@@ -1975,8 +2051,14 @@ fn reduced_costs_of_octile_moves_take_six_values() {
                         "goal ({gx}, {gy}) cell ({x}, {y}) step {k}: r = {r}"
                     );
                     seen.insert(r as u32);
-                    // The search's table gives the same class.
-                    let classes = STEP_CLASSES[goal_region(x - gx, y - gy)];
+                    // The search's table gives the same class, with the region computed
+                    // per cell and from the per-axis table alike.
+                    let region = goal_region(x - gx, y - gy);
+                    let table = goal_table(gx as u32, gy as u32);
+                    let node = (y as u32) << 16 | (x as u32) << 4 | (k as u32 + 1);
+                    assert_eq!(axis_region(&table, x as usize, node), region, "({x}, {y})");
+                    assert_eq!(table[GOAL_AXIS_CELLS + region], STEP_CLASSES[region]);
+                    let classes = STEP_CLASSES[region];
                     let class = (classes >> (3 * k)) & 7;
                     assert_eq!(
                         REDUCED_COSTS[class as usize] as i64, r,
@@ -1993,6 +2075,99 @@ fn reduced_costs_of_octile_moves_take_six_values() {
         assert_eq!(reduced_cost_class(r), class, "r = {r}");
     }
     assert_eq!(reduced_cost_class(u32::MAX), None);
+}
+
+/// The goal table a search on a grid of at most [`GOAL_AXIS_CELLS`] a side fills for the goal
+/// `(gx, gy)`: every per-axis entry, then [`STEP_CLASSES`].
+fn goal_table(gx: u32, gy: u32) -> [u32; GOAL_TABLE_WORDS] {
+    let mut table = [0u32; GOAL_TABLE_WORDS];
+    for (i, entry) in (0u32..).zip(table.iter_mut()) {
+        *entry = match i.checked_sub(GOAL_AXIS_CELLS as u32) {
+            None => goal_axis_entry(i, gx, gy),
+            Some(r) => STEP_CLASSES[r as usize],
+        };
+    }
+    table
+}
+
+/// The per-axis goal table gives every cell's [`goal_region`]: every cell of a grid of
+/// [`GOAL_AXIS_CELLS`] × [`GOAL_AXIS_CELLS`] (the largest the table serves: differences up to
+/// ±511, the entries' largest values) around goals in the corners, on the edges, in the middle
+/// and next to it, with every step code in the entry's low nibble; and both halves of every
+/// entry stay below 2^14 (no carry between them).
+#[test]
+fn goal_axis_table_gives_every_cells_goal_region() {
+    let last = GOAL_AXIS_CELLS as u32 - 1;
+    let goals = [
+        (0, 0),
+        (last, 0),
+        (0, last),
+        (last, last),
+        (1, last - 1),
+        (255, 256),
+        (256, 256),
+        (300, 7),
+        (last, 200),
+        (17, 0),
+    ];
+    let mut regions = std::collections::BTreeSet::new();
+    for (gx, gy) in goals {
+        let table = goal_table(gx, gy);
+        for &entry in &table[..GOAL_AXIS_CELLS] {
+            assert!(
+                entry >> 16 < 1 << 14 && entry & 0xFFFF < 1 << 14,
+                "{entry:#x}"
+            );
+        }
+        for y in 0..=last {
+            for x in 0..=last {
+                let node = y << 16 | x << 4 | (x ^ y) & 15;
+                let region = goal_region(x as i32 - gx as i32, y as i32 - gy as i32);
+                assert_eq!(
+                    axis_region(&table, x as usize, node),
+                    region,
+                    "goal ({gx}, {gy}) cell ({x}, {y})"
+                );
+                regions.insert(region);
+            }
+        }
+    }
+    // Every sign code with every clamped difference it can have: off both axes 8 each, on
+    // the column of the goal (`dx = 0`) −4 ..= −1, on its row 1 ..= 3, and the goal itself.
+    assert_eq!(regions.len(), 4 * 8 + 2 * 4 + 2 * 3 + 1);
+}
+
+/// [`goal_region`] on the largest grids (sides of 4 096 cells: differences up to ±4 095, where
+/// the search computes it per cell) and near the goal: for every step the class that
+/// [`STEP_CLASSES`] gives is the step's reduced cost by the octile heuristic.
+#[test]
+fn goal_regions_give_reduced_costs_up_to_the_largest_grids() {
+    let far = [
+        -4095, -4094, -2049, -512, -511, -300, -5, -4, -3, -2, -1, 0, 1, 2, 3, 4, 5, 299, 511, 512,
+        513, 2048, 4094, 4095,
+    ];
+    let h = |dx: i32, dy: i32| octile(dx.unsigned_abs(), dy.unsigned_abs()) as i64;
+    for dx in far {
+        for dy in far.iter().flat_map(|&v| [v, v + dx, v - dx]) {
+            if (dx, dy) == (0, 0) {
+                continue;
+            }
+            let classes = STEP_CLASSES[goal_region(dx, dy)];
+            for (k, &(mx, my)) in STEPS.iter().enumerate() {
+                let cost = if k + 1 >= NE as usize {
+                    DIAGONAL_COST
+                } else {
+                    STRAIGHT_COST
+                };
+                let r = cost as i64 + h(dx + mx, dy + my) - h(dx, dy);
+                let class = (classes >> (3 * k)) & 7;
+                assert_eq!(
+                    REDUCED_COSTS[class as usize] as i64, r,
+                    "({dx}, {dy}) step {k}"
+                );
+            }
+        }
+    }
 }
 
 /// The queue alone against a reference (an ordered set of `(key, node)`): random
@@ -2208,11 +2383,11 @@ proptest! {
         }
         let si = g.geometry().index(s);
         let mut framed = Box::new(Planner::<SMALL_FRAMED, 4096>::new());
-        let a = framed.astar_in::<_, SMALL_FRAMED>(&g, si, t, true).unwrap();
+        let a = framed.astar_in::<_, SMALL_FRAMED, true>(&g, si, t, true).unwrap();
         let is_framed = matches!(framed.layout, Layout::Framed { .. });
         prop_assert!(is_framed);
         let mut flat = Box::new(SmallPlanner::new());
-        let b = flat.astar_in::<_, SMALL_FRAMED>(&g, si, t, false).unwrap();
+        let b = flat.astar_in::<_, SMALL_FRAMED, true>(&g, si, t, false).unwrap();
         prop_assert_eq!(flat.layout, Layout::Flat);
         prop_assert_eq!((a.found, a.cost, a.expanded), (b.found, b.cost, b.expanded));
         prop_assert_eq!(framed.queue_peak(), flat.queue_peak());
