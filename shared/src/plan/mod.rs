@@ -1219,6 +1219,7 @@ const fn goal_axis_entry(i: u32, gx: u32, gy: u32) -> u32 {
 /// classes about 11 Cortex-M4 instructions (`STEP_CLASSES` sits at the end of the same table).
 #[inline(always)]
 fn axis_region(axis: &[u32; GOAL_TABLE_WORDS], x: usize, node: u32) -> usize {
+    // Masked indices into a fixed-size array: never out of range.
     let a = axis[x & (GOAL_AXIS_CELLS - 1)];
     let b = axis[(node >> 16) as usize & (GOAL_AXIS_CELLS - 1)];
     let v = a.wrapping_sub(b << 16) as i32;
