@@ -32,6 +32,15 @@
 //! (occupied → 15, 8 cells per word from a 1 KB table), so one nibble read answers both "free?"
 //! and "reached?". The jump point search reads the map's own bits and only clears the nibbles.
 //!
+//! The cell-by-cell A* uses a *framed* copy when it fits the first 2^14 + 1 words of the
+//! scratch (300 × 300 cells take 11 477; so does any grid up to about 360 × 360, not the
+//! [`Planner300`]'s 11 250-word scratch): rows padded to whole words with at least one blocked
+//! nibble (`stride` = `width + 1` rounded up to 8 nibbles), a blocked row below and above the
+//! map and one more blocked word, cell `(x, y)` at nibble `(y + 1) · stride + x + 1`. Every
+//! cell's 3 × 3 neighbourhood is then three windows at one shift in three words a row apart,
+//! border cells too, and the words are indexed through a mask, not bounds-tested (`Framed`;
+//! `Flat` is the row-major layout above, used otherwise; both give the same search).
+//!
 //! The layered BFS uses the same words as bit planes, rows padded to `row_words = ⌈width /
 //! 32⌉` words (`nodes = height × row_words`), stored *column by column*: bit `b` of word
 //! `w · height + y` of a plane is cell `(32 w + b, y)`, so the words of one word column are
@@ -195,8 +204,9 @@
 //! nibbles of a row, two 32-bit scratch reads each) and turned by a 4 KB table into an 18-bit
 //! mask ("nibble 0" and "not blocked" per cell); one arm per arrival step tests its candidate
 //! targets in that mask and pushes each with constant offsets (`y << 16 | x << 4 | code`
-//! entries: a neighbour's entry is the cell's plus a constant).
-//! Cells on the map border read their neighbours one by one. Neither `h` nor `g` is computed
+//! entries: a neighbour's entry is the cell's plus a constant). In the framed layout (see
+//! "Memory layout") border cells need nothing special; in the flat one they read their
+//! neighbours one by one. Neither `h` nor `g` is computed
 //! per cell: the cell's *goal region* (signs of `dx`, `dy` and `|dx| − |dy|` saturated to
 //! `−4 ..= 3`; on grids of at most 512 a side from two words of a per-axis table filled per
 //! search, one subtraction and one saturation, about 11 instructions with the loads, see
