@@ -2166,6 +2166,14 @@ impl Layout {
             Layout::Framed { stride } => (cell.y as usize + 1) * stride + cell.x as usize + 1,
         }
     }
+
+    /// The scratch index step of one row up.
+    fn row_step(self, geometry: &GridGeometry) -> usize {
+        match self {
+            Layout::Flat => geometry.width() as usize,
+            Layout::Framed { stride } => stride,
+        }
+    }
 }
 
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEUE> {
@@ -2807,30 +2815,51 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         Some((parent, code))
     }
 
-    /// Rebuild the BFS / A* path from the parent steps, merging collinear cells. Returns the
-    /// length in cells, the number of steps and whether every vertex fitted.
+    /// The run of parent steps of code `code` that goes on back from `cell` (the parent of a
+    /// cell reached with `code`): the first cell back whose own code is not `code` (the run's
+    /// far end) and the number of steps to it. Walks the scratch index, a few instructions per
+    /// cell (the parent chain of a search's nibbles never leaves the map; the bound only guards
+    /// against a corrupt one).
+    fn run_back(&self, geometry: &GridGeometry, cell: Cell, code: u32) -> (Cell, u32) {
+        let Some(&(dx, dy)) = STEPS.get((code as usize).wrapping_sub(1)) else {
+            return (cell, 0);
+        };
+        let offset = (dy as isize)
+            .wrapping_mul(self.layout.row_step(geometry) as isize)
+            .wrapping_add(dx as isize) as usize;
+        let mut index = self.layout.index(geometry, cell);
+        let longest = geometry.width().max(geometry.height()) as u32;
+        let mut steps = 0u32;
+        while steps < longest && nibble(&self.scratch, index) == code {
+            index = index.wrapping_sub(offset);
+            steps += 1;
+        }
+        let end = geometry.cell_xy(
+            cell.x as i32 - dx * steps as i32,
+            cell.y as i32 - dy * steps as i32,
+        );
+        end.map_or((cell, 0), |end| (end, steps))
+    }
+
+    /// Rebuild the BFS / A* path from the parent steps, run by run ([`Planner::run_back`]), so
+    /// collinear cells are merged. Returns the length in cells, the number of steps and whether
+    /// every vertex fitted.
     fn rebuild_merged(&mut self, geometry: &GridGeometry, goal: Cell) -> (f32, u32, bool) {
         let mut fits = self.cells.push(goal).is_ok();
         let (mut straight, mut diagonal) = (0u32, 0u32);
-        let mut previous_code = 0u32;
         let mut cell = goal;
         // A parent chain never revisits a cell; the bound only guards against a corrupt one.
         for _ in 0..geometry.cell_count() {
             let Some((parent, code)) = self.parent(geometry, cell) else {
                 break;
             };
-            if previous_code != 0 && code != previous_code {
-                fits &= self.cells.push(cell).is_ok();
-            }
+            let (end, more) = self.run_back(geometry, parent, code);
             if code >= NE {
-                diagonal += 1;
+                diagonal += 1 + more;
             } else {
-                straight += 1;
+                straight += 1 + more;
             }
-            previous_code = code;
-            cell = parent;
-        }
-        if cell != goal {
+            cell = end;
             fits &= self.cells.push(cell).is_ok();
         }
         self.cells.reverse();
@@ -2866,14 +2895,9 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             let Some((mut end, code)) = self.parent(&geometry, cur) else {
                 break;
             };
-            let mut run = 1u32;
-            while let Some((p, c)) = self.parent(&geometry, end) {
-                if c != code {
-                    break;
-                }
-                end = p;
-                run += 1;
-            }
+            let (far, more) = self.run_back(&geometry, end, code);
+            end = far;
+            let run = 1 + more;
             // From the anchor itself the run is an A* move sequence: visible without a test.
             if cur == anchor {
                 cur = end;
