@@ -1678,10 +1678,11 @@ impl<'a> OpenList<'a> for ClassQueue<'a> {
     }
 }
 
-/// Share of the pool per FIFO class `1 ..= 5` of a [`RingQueue`], in 64ths of what the far
-/// list leaves (the rest goes to class 1). Per-class peaks on 20 % random obstacles (300 × 300):
-/// class 1 ~400–600 entries, class 4 ~300, class 3 ~100, class 2 ~25, class 5 ~15.
-const RING_SHARES: [u32; CLASSES] = [0, 0, 3, 7, 17, 3];
+/// Share of the pool per FIFO class `2 ..= 5` of a [`RingQueue`], in 256ths of what the far
+/// list leaves (the rest goes to class 1). Most entries at once on 20 % random obstacles
+/// (300 × 300, four seeds): class 1 304–371, class 2 13–16, class 3 62–97, class 4 310–359,
+/// class 5 4–5; with a pool of 1 024 the rings hold 426, 30, 115, 402 and 14 entries.
+const RING_SHARES: [u32; CLASSES] = [0, 0, 8, 30, 104, 4];
 /// Entries of the far list of a [`RingQueue`], in 64ths of the pool (at least one entry).
 const RING_FAR_SHARE: u32 = 2;
 
@@ -1864,7 +1865,7 @@ impl<'a> OpenList<'a> for RingQueue<'a> {
         // the pool allows; a ring of one slot holds nothing and gives up at once).
         let mut at = far_cap;
         for c in [2usize, 3, 4, 5] {
-            let n = (rest * RING_SHARES[c] / 64).max(1).min(len - at);
+            let n = (rest * RING_SHARES[c] / 256).max(1).min(len - at);
             starts[c] = at;
             at += n;
             ends[c] = at;
@@ -1950,6 +1951,15 @@ impl<'a> OpenList<'a> for RingQueue<'a> {
             e.node = node;
         }
         self.tails[c] = n;
+        #[cfg(test)]
+        {
+            let (len, _) = self.ring_fill(c);
+            tests::RING_FILLS.with(|f| {
+                let mut v = f.get();
+                v[c] = v[c].max(len);
+                f.set(v);
+            });
+        }
         true
     }
 

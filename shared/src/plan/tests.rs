@@ -2572,3 +2572,43 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn tmp_ring_fills() {
+    std::thread::Builder::new().stack_size(256 << 20).spawn(tmp_ring_fills_inner).unwrap().join().unwrap();
+}
+fn tmp_ring_fills_inner() {
+    use crate::grid::Grid300;
+    struct Rng(u64);
+    impl Rng {
+        fn next_u64(&mut self) -> u64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            self.0
+        }
+    }
+    let (s, t) = (Cell::new(2, 2), Cell::new(297, 297));
+    for seed in 1u64..5 {
+        let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed);
+        let mut g = Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
+        for y in 0..300 {
+            for x in 0..300 {
+                if rng.next_u64() % 100 < 20 {
+                    g.set_xy(x, y, true);
+                }
+            }
+        }
+        g.set(s, false);
+        g.set(t, false);
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(160_000) }, 100_000>::new());
+        RING_FILLS.with(|f| f.set([0; 8]));
+        let r = p.astar_in::<_, 16385, true>(&g, g.geometry().index(s), t, true);
+        let fills = RING_FILLS.with(|f| f.get());
+        std::println!("seed {seed}: {:?} {:?} peak {}", r.map(|r| (r.found, r.expanded)), fills, p.queue_peak());
+    }
+}
+
+std::thread_local! {
+    pub(super) static RING_FILLS: core::cell::Cell<[u32; 8]> = const { core::cell::Cell::new([0; 8]) };
+}
