@@ -1696,15 +1696,23 @@ const RING_FAR_SHARE: u32 = 2;
 /// the ring is then still more than 7/8 full the queue gives up (`reclaim_and_push` returns
 /// `None`) and the caller runs the search again with a [`ClassQueue`], so results never depend
 /// on the ring capacities.
+/// One ring of a [`RingQueue`]: next slot to pop (`head`), next slot to write (`tail`;
+/// `head == tail`: empty, and one slot stays unused so that a full ring is told apart), the
+/// end of its slots and its reduced cost (a pushed key is the last popped key plus `cost`).
+#[derive(Clone, Copy)]
+struct Ring {
+    head: u32,
+    tail: u32,
+    end: u32,
+    cost: u32,
+}
+
 struct RingQueue<'a> {
     pool: &'a mut [OpenEntry],
-    /// Next slot to pop and next slot to write of ring `c` (`heads == tails`: empty; one slot
-    /// stays unused so that a full ring is told apart).
-    heads: [u32; 8],
-    tails: [u32; 8],
-    /// The ring's slots are `starts[c] .. ends[c]`.
+    /// The hot state of ring `c` in one place (one base address for the loop).
+    rings: [Ring; 8],
+    /// Ring `c`'s slots are `starts[c] .. rings[c].end`.
     starts: [u32; 8],
-    ends: [u32; 8],
     /// Entries of the far list: slots `0 .. far_len`, sorted by key, the smallest (and of
     /// equal keys the last pushed) last; `far_cap` slots.
     far_len: u32,
@@ -1719,8 +1727,8 @@ impl RingQueue<'_> {
     #[inline(always)]
     fn head_key(&self, c: usize) -> u32 {
         let c = c & 7;
-        let h = self.heads[c];
-        if h == self.tails[c] {
+        let h = self.rings[c].head;
+        if h == self.rings[c].tail {
             return u32::MAX;
         }
         self.pool.get(h as usize).map_or(u32::MAX, |e| e.f)
@@ -1731,7 +1739,7 @@ impl RingQueue<'_> {
     #[inline(always)]
     fn take(&mut self, s: &mut QueueState, c: usize) -> u32 {
         let c = c & 7;
-        let h = self.heads[c];
+        let h = self.rings[c].head;
         let Some(e) = self.pool.get(h as usize) else {
             return NIL;
         };
@@ -1739,10 +1747,10 @@ impl RingQueue<'_> {
         s.class = c as u32;
         let node = e.node;
         let mut n = h + 1;
-        if n == self.ends[c] {
+        if n == self.rings[c].end {
             n = self.starts[c];
         }
-        self.heads[c] = n;
+        self.rings[c].head = n;
         node
     }
 
@@ -1774,8 +1782,8 @@ impl RingQueue<'_> {
     /// many were dropped.
     fn filter_ring(&mut self, c: usize, stale: &impl Fn(u32) -> bool) -> usize {
         let c = c & 7;
-        let (start, end) = (self.starts[c], self.ends[c]);
-        let (mut read, mut write, tail) = (self.heads[c], self.heads[c], self.tails[c]);
+        let (start, end) = (self.starts[c], self.rings[c].end);
+        let (mut read, mut write, tail) = (self.rings[c].head, self.rings[c].head, self.rings[c].tail);
         let mut dropped = 0;
         while read != tail {
             let Some(e) = self.pool.get(read as usize).copied() else {
@@ -1798,7 +1806,7 @@ impl RingQueue<'_> {
                 read = start;
             }
         }
-        self.tails[c] = write;
+        self.rings[c].tail = write;
         dropped
     }
 
@@ -1848,8 +1856,8 @@ impl RingQueue<'_> {
     /// Entries in ring `c` and its capacity (one slot less than its slots).
     fn ring_fill(&self, c: usize) -> (u32, u32) {
         let c = c & 7;
-        let slots = self.ends[c] - self.starts[c];
-        let (h, t) = (self.heads[c], self.tails[c]);
+        let slots = self.rings[c].end - self.starts[c];
+        let (h, t) = (self.rings[c].head, self.rings[c].tail);
         let len = if t >= h { t - h } else { t + slots - h };
         (len, slots.saturating_sub(1))
     }
@@ -1875,10 +1883,13 @@ impl<'a> OpenList<'a> for RingQueue<'a> {
         (
             Self {
                 pool,
-                heads: starts,
-                tails: starts,
+                rings: core::array::from_fn(|c| Ring {
+                    head: starts[c],
+                    tail: starts[c],
+                    end: ends[c],
+                    cost: CLASS_COSTS[c],
+                }),
                 starts,
-                ends,
                 far_len: 0,
                 far_cap,
                 wrapped: 0,
@@ -1904,9 +1915,9 @@ impl<'a> OpenList<'a> for RingQueue<'a> {
         let mut used = self.far_peak;
         for c in 1..CLASSES {
             used += if self.wrapped & (1 << c) != 0 {
-                self.ends[c] - self.starts[c]
+                self.rings[c].end - self.starts[c]
             } else {
-                self.tails[c].max(self.heads[c]) - self.starts[c]
+                self.rings[c].tail.max(self.rings[c].head) - self.starts[c]
             };
         }
         used
@@ -1936,21 +1947,22 @@ impl<'a> OpenList<'a> for RingQueue<'a> {
     #[inline(always)]
     fn push_class(&mut self, s: &mut QueueState, class: usize, node: u32) -> bool {
         let c = class & 7;
-        let key = s.last.wrapping_add(CLASS_COSTS[c]);
-        let t = self.tails[c];
+        let ring = &mut self.rings[c];
+        let key = s.last.wrapping_add(ring.cost);
+        let t = ring.tail;
         let mut n = t + 1;
-        if n == self.ends[c] {
+        if n == ring.end {
             n = self.starts[c];
             self.wrapped |= 1 << c;
         }
-        if n == self.heads[c] {
+        if n == ring.head {
             return false;
         }
         if let Some(e) = self.pool.get_mut(t as usize) {
             e.f = key;
             e.node = node;
         }
-        self.tails[c] = n;
+        self.rings[c].tail = n;
         #[cfg(test)]
         {
             let (len, _) = self.ring_fill(c);
@@ -2001,16 +2013,16 @@ impl<'a> OpenList<'a> for RingQueue<'a> {
         }
         // The ring popped last, when its head has the last popped key (runs of equal keys).
         let c = (s.class & 7) as usize;
-        let h = self.heads[c];
-        if h != self.tails[c] {
+        let h = self.rings[c].head;
+        if h != self.rings[c].tail {
             if let Some(e) = self.pool.get(h as usize) {
                 if e.f == s.last {
                     let node = e.node;
                     let mut n = h + 1;
-                    if n == self.ends[c] {
+                    if n == self.rings[c].end {
                         n = self.starts[c];
                     }
-                    self.heads[c] = n;
+                    self.rings[c].head = n;
                     return node;
                 }
             }
