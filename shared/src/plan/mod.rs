@@ -1783,7 +1783,8 @@ impl RingQueue<'_> {
     fn filter_ring(&mut self, c: usize, stale: &impl Fn(u32) -> bool) -> usize {
         let c = c & 7;
         let (start, end) = (self.starts[c], self.rings[c].end);
-        let (mut read, mut write, tail) = (self.rings[c].head, self.rings[c].head, self.rings[c].tail);
+        let (mut read, mut write, tail) =
+            (self.rings[c].head, self.rings[c].head, self.rings[c].tail);
         let mut dropped = 0;
         while read != tail {
             let Some(e) = self.pool.get(read as usize).copied() else {
@@ -1963,15 +1964,6 @@ impl<'a> OpenList<'a> for RingQueue<'a> {
             e.node = node;
         }
         self.rings[c].tail = n;
-        #[cfg(test)]
-        {
-            let (len, _) = self.ring_fill(c);
-            tests::RING_FILLS.with(|f| {
-                let mut v = f.get();
-                v[c] = v[c].max(len);
-                f.set(v);
-            });
-        }
         true
     }
 
