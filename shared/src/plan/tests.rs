@@ -2241,6 +2241,182 @@ fn class_queue_pops_keys_in_order_like_a_reference() {
     }
 }
 
+/// The ring queue against the linked class queue, fed the same random interleavings of
+/// pushes (all classes, the far list), pops and reclaims: while the rings accept the pushes,
+/// every pop returns the same node with the same key (the same order, ties included), and a
+/// reclaim drops the same number of entries. A push is refused only when its ring (or the far
+/// array, or the stack) is full.
+#[test]
+fn ring_queue_pops_like_class_queue() {
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    let mut refused = 0;
+    for round in 0..500 {
+        let size = [64usize, 200, 1024][round % 3];
+        let mut ring_pool = std::vec![OpenEntry::ZERO; size];
+        let mut list_pool = std::vec![OpenEntry::ZERO; 4 * size];
+        let first = (next_random(&mut state) % 100_000) as u32;
+        let (mut rq, mut rs) = <RingQueue as OpenList>::new(&mut ring_pool, first);
+        let (mut lq, mut ls) = ClassQueue::new(&mut list_pool, first);
+        let mut live = 0usize;
+        let mut next_node = 0u32;
+        let mut last = first;
+        let steps = 20 + next_random(&mut state) % 2000;
+        for _ in 0..steps {
+            let roll = next_random(&mut state) % 100;
+            if roll < 55 {
+                let r = match next_random(&mut state) % 8 {
+                    0 | 1 => 0,
+                    7 => 1 + (next_random(&mut state) % 40_000) as u32,
+                    k => REDUCED_COSTS[(k - 2) as usize],
+                };
+                let key = last + r;
+                let far = next_random(&mut state).is_multiple_of(4);
+                let ok = if far {
+                    OpenList::push_far(&mut rq, &mut rs, key, next_node)
+                } else {
+                    OpenList::push(&mut rq, &mut rs, key, next_node)
+                };
+                if ok {
+                    let pushed = if far {
+                        lq.push_far(&mut ls, key, next_node)
+                    } else {
+                        lq.push(&mut ls, key, next_node)
+                    };
+                    assert!(pushed, "round {round}");
+                    live += 1;
+                } else {
+                    refused += 1;
+                    let full = match reduced_cost_class(key - last) {
+                        _ if far => rq.far_len == rq.far_cap,
+                        None => rq.far_len == rq.far_cap,
+                        Some(0) => rs.stack as usize == size,
+                        Some(c) => {
+                            let (len, cap) = rq.ring_fill(c);
+                            len == cap
+                        }
+                    };
+                    assert!(full, "round {round}: refused while not full");
+                }
+                next_node += 1;
+            } else if roll < 97 {
+                let got = OpenList::pop(&mut rq, &mut rs);
+                let want = lq.pop(&mut ls);
+                assert_eq!((got, rs.last), (want, ls.last), "round {round}");
+                if got != NIL {
+                    live -= 1;
+                    last = rs.last;
+                }
+            } else {
+                let m = 2 + (next_random(&mut state) % 3) as u32;
+                let freed = rq.collect(&mut rs, |n| n % m == 0);
+                let (after, list_freed) = lq.collect(ls, |n| n % m == 0);
+                ls = after;
+                assert_eq!(freed, list_freed, "round {round}");
+                live -= freed;
+            }
+        }
+        for _ in 0..=live {
+            let got = OpenList::pop(&mut rq, &mut rs);
+            let want = lq.pop(&mut ls);
+            assert_eq!((got, rs.last), (want, ls.last), "round {round}");
+        }
+        assert_eq!(OpenList::pop(&mut rq, &mut rs), NIL);
+        assert!(OpenList::peak(&rq, &rs) as usize <= size);
+    }
+    // The small pools do fill their rings (the refusal test above ran).
+    assert!(refused > 100, "{refused}");
+}
+
+/// The framed A* on rings and on the linked lists, run directly on the same maps with a
+/// large and a small pool: when the rings do not give up, the same result, queue-independent
+/// nibbles (every closed cell with the same parent step, i.e. the same pops in the same
+/// order); when they do (`QueueFull`), the planner's answer (which then runs the linked
+/// lists) is the linked lists' one. Both cases occur.
+#[test]
+fn ring_and_linked_astar_agree_and_fall_back() {
+    let mut state = 0x1234_5678_9ABC_DEF1u64;
+    let (mut ring_ok, mut ring_gave_up) = (0, 0);
+    for round in 0..300 {
+        let (w, h) = (
+            8 + next_random(&mut state) % 24,
+            8 + next_random(&mut state) % 24,
+        );
+        let mut g = SmallGrid::new(GridGeometry::new(w as u32, h as u32, 0.1).unwrap()).unwrap();
+        let density = next_random(&mut state) % 40;
+        for y in 0..h as u16 {
+            for x in 0..w as u16 {
+                if next_random(&mut state) % 100 < density {
+                    g.set(Cell::new(x, y), true);
+                }
+            }
+        }
+        let s = Cell::new(0, 0);
+        let t = Cell::new(w as u16 - 1, h as u16 - 1);
+        g.set(s, false);
+        g.set(t, false);
+        let si = g.geometry().index(s);
+        let used = scratch_words_for_cells(g.geometry().cell_count());
+        let outcome = |r: &Result<Search, PlanError>| match r {
+            Ok(s) => Ok((s.found, s.expanded, s.cost)),
+            Err(e) => Err(*e),
+        };
+        let small = round % 2 == 1;
+        let mut p = Box::new(Planner::<SMALL_FRAMED, 4096>::new());
+        let pool = if small { 24 } else { 4096 };
+        // The planner's answer (rings, else linked lists), which also fills the goal table.
+        let planned = if small {
+            let mut q = Box::new(Planner::<SMALL_FRAMED, 24>::new());
+            let r = q.astar_in::<_, SMALL_FRAMED, true>(&g, si, t, true);
+            assert!(matches!(q.layout, Layout::Framed { .. }));
+            r
+        } else {
+            p.astar_in::<_, SMALL_FRAMED, true>(&g, si, t, true)
+        };
+        p.astar_in::<_, SMALL_FRAMED, true>(&g, si, t, true).ok();
+        assert!(matches!(p.layout, Layout::Framed { .. }));
+        let runs = |p: &mut Planner<SMALL_FRAMED, 4096>, ring: bool| {
+            let mut map = Framed::<SMALL_FRAMED>::new(&mut p.scratch, g.geometry()).unwrap();
+            map.copy_map(&g);
+            let mut peak = 0;
+            let queue = &mut p.queue[..pool];
+            let r = if ring {
+                astar_search::<_, RingQueue, true>(
+                    &mut map,
+                    queue,
+                    &p.goal_axis,
+                    (0, 0),
+                    (t.x as u32, t.y as u32),
+                    &mut peak,
+                )
+            } else {
+                astar_search::<_, ClassQueue, true>(
+                    &mut map,
+                    queue,
+                    &p.goal_axis,
+                    (0, 0),
+                    (t.x as u32, t.y as u32),
+                    &mut peak,
+                )
+            };
+            (r, p.scratch[..used].to_vec())
+        };
+        let (ring, ring_nibbles) = runs(&mut p, true);
+        let (linked, linked_nibbles) = runs(&mut p, false);
+        if matches!(ring, Err(PlanError::QueueFull { .. })) {
+            ring_gave_up += 1;
+        } else {
+            ring_ok += 1;
+            assert_eq!(outcome(&ring), outcome(&linked), "round {round}");
+            assert!(ring_nibbles == linked_nibbles, "round {round}");
+        }
+        assert_eq!(outcome(&planned), outcome(&linked), "round {round}");
+    }
+    assert!(
+        ring_ok > 50 && ring_gave_up > 10,
+        "{ring_ok} {ring_gave_up}"
+    );
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(1024))]
 
@@ -2390,7 +2566,8 @@ proptest! {
         let b = flat.astar_in::<_, SMALL_FRAMED, true>(&g, si, t, false).unwrap();
         prop_assert_eq!(flat.layout, Layout::Flat);
         prop_assert_eq!((a.found, a.cost, a.expanded), (b.found, b.cost, b.expanded));
-        prop_assert_eq!(framed.queue_peak(), flat.queue_peak());
+        // The framed search runs on rings: a different measure of the pool used.
+        prop_assert!(framed.queue_peak() <= 4096);
         prop_assert_eq!(a.found.then_some(a.cost), oracle_astar(&g, s, t));
         if a.found {
             framed.rebuild_merged(g.geometry(), t);
@@ -2398,6 +2575,68 @@ proptest! {
             prop_assert_eq!(framed.path_cells(), flat.path_cells());
             prop_assert_eq!(steps_and_cost(framed.path_cells()).1, a.cost);
             assert_collision_free(&g, framed.path_cells());
+        }
+    }
+}
+
+/// The ring capacities ([`RING_SHARES`]) fit the 20 % random benchmark grids with the MCU's
+/// pool of 1 024 entries: on the benchmark's grid (seed 1) and three more seeds the rings
+/// never give up (no second search), and they find what the linked lists find.
+#[test]
+fn rings_fit_random_grids_with_the_mcu_pool() {
+    std::thread::Builder::new()
+        .stack_size(256 << 20)
+        .spawn(rings_fit_random_grids)
+        .unwrap()
+        .join()
+        .unwrap();
+}
+
+fn rings_fit_random_grids() {
+    use crate::grid::Grid300;
+    const WORDS: usize = 16385;
+    let (s, t) = (Cell::new(2, 2), Cell::new(297, 297));
+    for seed in 1u64..5 {
+        // The generator of shared/benches/grids (xorshift64).
+        let mut rng = 0x9E37_79B9_7F4A_7C15 ^ seed;
+        let mut g = Grid300::new(GridGeometry::new(300, 300, 0.05).unwrap()).unwrap();
+        for y in 0..300 {
+            for x in 0..300 {
+                rng ^= rng << 13;
+                rng ^= rng >> 7;
+                rng ^= rng << 17;
+                if rng % 100 < 20 {
+                    g.set_xy(x, y, true);
+                }
+            }
+        }
+        g.set(s, false);
+        g.set(t, false);
+        let mut p = Box::new(Planner::<{ scratch_words_for_cells(160_000) }, 1024>::new());
+        let planned = p
+            .astar_in::<_, WORDS, true>(&g, g.geometry().index(s), t, true)
+            .unwrap();
+        assert!(matches!(p.layout, Layout::Framed { .. }));
+        let mut map = Framed::<WORDS>::new(&mut p.scratch, g.geometry()).unwrap();
+        map.copy_map(&g);
+        let mut peak = 0;
+        let ring = astar_search::<_, RingQueue, true>(
+            &mut map,
+            &mut p.queue,
+            &p.goal_axis,
+            (s.x as u32, s.y as u32),
+            (t.x as u32, t.y as u32),
+            &mut peak,
+        );
+        let ring = ring.unwrap_or_else(|e| panic!("seed {seed}: the rings gave up: {e:?}"));
+        assert!(ring.found, "seed {seed}");
+        assert_eq!(
+            (ring.expanded, ring.cost),
+            (planned.expanded, planned.cost),
+            "seed {seed}"
+        );
+        if seed == 1 {
+            assert_eq!(ring.expanded, 28_823);
         }
     }
 }
