@@ -2979,10 +2979,64 @@ fn astar_search<M: CellMap, const AXIS_TABLE: bool>(
     // `state.last`; `g` is not carried: it is `state.last − h` where needed (at the goal
     // `h` is 0).
     let mut next_node = NIL;
+    // With corridor walks until they are given up on this map (random clutter), then in a
+    // second instance of the loop without them: its registers are not spent on the walks.
+    match astar_loop::<M, AXIS_TABLE, true>(
+        map,
+        &mut open,
+        &mut state,
+        &mut next_node,
+        &mut expanded,
+        goal_axis,
+        (gx, gy),
+        goal,
+        peak,
+    ) {
+        Some(end) => end,
+        None => astar_loop::<M, AXIS_TABLE, false>(
+            map,
+            &mut open,
+            &mut state,
+            &mut next_node,
+            &mut expanded,
+            goal_axis,
+            (gx, gy),
+            goal,
+            peak,
+        )
+        .unwrap_or(Err(full)),
+    }
+}
+
+/// The expansion loop of [`astar_search`] from the queue `open` / `state`, the immediate
+/// target `next_node` and the count `expanded`: the search's result, or with `WALKS` `None`
+/// when the corridor walks are given up (the state is written back; the search goes on without
+/// them). Without `WALKS` it never returns `None`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn astar_loop<M: CellMap, const AXIS_TABLE: bool, const WALKS: bool>(
+    map: &mut M,
+    open: &mut ClassQueue<'_>,
+    queue_state: &mut QueueState,
+    next_target: &mut u32,
+    expanded_cells: &mut u32,
+    goal_axis: &[u32; GOAL_TABLE_WORDS],
+    (gx, gy): (u32, u32),
+    goal: usize,
+    peak: &mut u32,
+) -> Option<Result<Search, PlanError>> {
+    let h = |x: u32, y: u32| {
+        let (dx, dy) = (x.abs_diff(gx), y.abs_diff(gy));
+        let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
+        DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
+    };
+    let full = PlanError::QueueFull {
+        capacity: open.pool.len() as u32,
+    };
     let (gxi, gyi) = (gx as i32, gy as i32);
-    // Corridor walks start after arrival codes up to this one (S; 0 once they have been
-    // given up on this map), with this balance of cells closed minus walks started.
-    let (mut walk_codes, mut walk_credit) = (S, 0i32);
+    let (mut state, mut next_node, mut expanded) = (*queue_state, *next_target, *expanded_cells);
+    // The balance of cells closed by corridor walks minus walks started.
+    let mut walk_credit = 0i32;
     loop {
         // Close the cell: its nibble gets the arrival step (it was 0).
         let (node, x, y, index) = if next_node != NIL {
@@ -3018,11 +3072,11 @@ fn astar_search<M: CellMap, const AXIS_TABLE: bool>(
         if index == goal {
             *peak = state.bump;
             // h(goal) = 0: the key is the cost.
-            return Ok(Search {
+            return Some(Ok(Search {
                 found: true,
                 expanded,
                 cost: state.last,
-            });
+            }));
         }
 
         let (above, cur, below) = map.windows(index, x, y);
@@ -3053,7 +3107,7 @@ fn astar_search<M: CellMap, const AXIS_TABLE: bool>(
                     Some(after) => state = after,
                     None => {
                         *peak = state.bump;
-                        return Err(full);
+                        return Some(Err(full));
                     }
                 }
             }};
@@ -3081,7 +3135,7 @@ fn astar_search<M: CellMap, const AXIS_TABLE: bool>(
         // along the chain of such cells, closing each with its step, up to the first cell
         // that is not one (pushed), the goal or a cell on the map border (pushed), a dead
         // end (closed, nothing pushed) or a closed cell (nothing pushed).
-        let sides = if code <= walk_codes {
+        let sides = if WALKS && code <= S {
             u32::from(CORRIDOR_SIDES[corridor_index(m)])
         } else {
             0
@@ -3105,7 +3159,8 @@ fn astar_search<M: CellMap, const AXIS_TABLE: bool>(
             // Walks that close (nearly) nothing cost more than the arms' pushes.
             walk_credit += closed as i32 - 1;
             if walk_credit < WALK_GIVE_UP_CREDIT {
-                walk_codes = 0;
+                (*queue_state, *next_target, *expanded_cells) = (state, next_node, expanded);
+                return None;
             }
             continue;
         }
@@ -3178,11 +3233,11 @@ fn astar_search<M: CellMap, const AXIS_TABLE: bool>(
         }
     }
     *peak = state.bump;
-    Ok(Search {
+    Some(Ok(Search {
         found: false,
         expanded,
         cost: 0,
-    })
+    }))
 }
 
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Default for Planner<SCRATCH_WORDS, QUEUE> {
