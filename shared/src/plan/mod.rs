@@ -1231,10 +1231,14 @@ fn axis_region(axis: &[u32; GOAL_TABLE_WORDS], x: usize, node: u32) -> usize {
 /// [`STEP_CLASSES`] (in RAM next to them, the search addresses both from one base).
 const GOAL_TABLE_WORDS: usize = GOAL_AXIS_CELLS + REGIONS;
 
+/// Flag of the [`STEP_CLASSES`] word of the goal's region (above the eight 3-bit classes).
+const AT_GOAL: u32 = 1 << 31;
+
 /// Per [`goal_region`]: the class (index into [`REDUCED_COSTS`]) of each step, in bits
 /// `3 (code − 1) ..` for step code `code` (1 ..= 8). 512 bytes of read-only data, built at
 /// compile time from one cell of each region (0 for the sign codes 9 ..= 15, which do not
-/// occur).
+/// occur). The goal's own region (sign code 4: `dx = dy = 0`, no other cell) also has
+/// [`AT_GOAL`] set, so that the search tests for the goal on the word it loads anyway.
 static STEP_CLASSES: [u32; REGIONS] = {
     let mut table = [0u32; REGIONS];
     let mut region = 0;
@@ -1279,6 +1283,9 @@ static STEP_CLASSES: [u32; REGIONS] = {
                 assert!(c < CLASSES, "not a reduced cost");
                 word |= (c as u32) << (3 * k);
                 k += 1;
+            }
+            if dx == 0 && dy == 0 {
+                word |= AT_GOAL;
             }
             table[region] = word;
         }
@@ -3069,15 +3076,6 @@ fn astar_loop<M: CellMap, const AXIS_TABLE: bool, const WALKS: bool>(
         };
         let code = node & 0xF;
         expanded += 1;
-        if index == goal {
-            *peak = state.bump;
-            // h(goal) = 0: the key is the cost.
-            return Some(Ok(Search {
-                found: true,
-                expanded,
-                cost: state.last,
-            }));
-        }
 
         let (above, cur, below) = map.windows(index, x, y);
         let window = |w: u32| u32::from(NIBBLE_WINDOWS[(w & 0xFFF) as usize]);
@@ -3097,6 +3095,16 @@ fn astar_loop<M: CellMap, const AXIS_TABLE: bool, const WALKS: bool>(
             let region = goal_region(x as i32 - gxi, y as i32 - gyi);
             STEP_CLASSES.get(region).copied().unwrap_or(0)
         };
+        // The goal: the only cell of its region, flagged in the class word.
+        if classes & AT_GOAL != 0 {
+            *peak = state.bump;
+            // h(goal) = 0: the key is the cost.
+            return Some(Ok(Search {
+                found: true,
+                expanded,
+                cost: state.last,
+            }));
+        }
         // The pool is full: reclaim and push `(key, child)`, or end with QueueFull.
         macro_rules! reclaim {
             ($key:expr, $child:expr) => {{
