@@ -3020,7 +3020,7 @@ fn astar_search<M: CellMap, const AXIS_TABLE: bool>(
 /// when the corridor walks are given up (the state is written back; the search goes on without
 /// them). Without `WALKS` it never returns `None`.
 #[allow(clippy::too_many_arguments)]
-#[inline(always)]
+#[inline(never)]
 fn astar_loop<M: CellMap, const AXIS_TABLE: bool, const WALKS: bool>(
     map: &mut M,
     open: &mut ClassQueue<'_>,
