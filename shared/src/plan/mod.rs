@@ -1248,10 +1248,14 @@ fn axis_region(axis: &[u32; GOAL_TABLE_WORDS], x: usize, node: u32) -> usize {
 /// [`STEP_CLASSES`] (in RAM next to them, the search addresses both from one base).
 const GOAL_TABLE_WORDS: usize = GOAL_AXIS_CELLS + REGIONS;
 
+/// Flag of the [`STEP_CLASSES`] word of the goal's region (above the eight 3-bit classes).
+const AT_GOAL: u32 = 1 << 31;
+
 /// Per [`goal_region`]: the class (index into [`REDUCED_COSTS`]) of each step, in bits
 /// `3 (code − 1) ..` for step code `code` (1 ..= 8). 512 bytes of read-only data, built at
 /// compile time from one cell of each region (0 for the sign codes 9 ..= 15, which do not
-/// occur).
+/// occur). The goal's own region (sign code 4: `dx = dy = 0`, no other cell) also has
+/// [`AT_GOAL`] set, so that the search tests for the goal on the word it loads anyway.
 static STEP_CLASSES: [u32; REGIONS] = {
     let mut table = [0u32; REGIONS];
     let mut region = 0;
@@ -1296,6 +1300,9 @@ static STEP_CLASSES: [u32; REGIONS] = {
                 assert!(c < CLASSES, "not a reduced cost");
                 word |= (c as u32) << (3 * k);
                 k += 1;
+            }
+            if dx == 0 && dy == 0 {
+                word |= AT_GOAL;
             }
             table[region] = word;
         }
@@ -3473,10 +3480,64 @@ fn astar_search<'p, M: CellMap, Q: OpenList<'p>, const AXIS_TABLE: bool>(
     // `state.last`; `g` is not carried: it is `state.last − h` where needed (at the goal
     // `h` is 0).
     let mut next_node = NIL;
+    // With corridor walks until they are given up on this map (random clutter), then in a
+    // second instance of the loop without them: its registers are not spent on the walks.
+    match astar_loop::<M, Q, AXIS_TABLE, true>(
+        map,
+        &mut open,
+        &mut state,
+        &mut next_node,
+        &mut expanded,
+        goal_axis,
+        (gx, gy),
+        goal,
+        peak,
+    ) {
+        Some(end) => end,
+        None => astar_loop::<M, Q, AXIS_TABLE, false>(
+            map,
+            &mut open,
+            &mut state,
+            &mut next_node,
+            &mut expanded,
+            goal_axis,
+            (gx, gy),
+            goal,
+            peak,
+        )
+        .unwrap_or(Err(full)),
+    }
+}
+
+/// The expansion loop of [`astar_search`] from the queue `open` / `state`, the immediate
+/// target `next_node` and the count `expanded`: the search's result, or with `WALKS` `None`
+/// when the corridor walks are given up (the state is written back; the search goes on without
+/// them). Without `WALKS` it never returns `None`.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn astar_loop<'p, M: CellMap, Q: OpenList<'p>, const AXIS_TABLE: bool, const WALKS: bool>(
+    map: &mut M,
+    open: &mut Q,
+    queue_state: &mut QueueState,
+    next_target: &mut u32,
+    expanded_cells: &mut u32,
+    goal_axis: &[u32; GOAL_TABLE_WORDS],
+    (gx, gy): (u32, u32),
+    goal: usize,
+    peak: &mut u32,
+) -> Option<Result<Search, PlanError>> {
+    let h = |x: u32, y: u32| {
+        let (dx, dy) = (x.abs_diff(gx), y.abs_diff(gy));
+        let (lo, hi) = if dx < dy { (dx, dy) } else { (dy, dx) };
+        DIAGONAL_COST * lo + STRAIGHT_COST * (hi - lo)
+    };
+    let full = PlanError::QueueFull {
+        capacity: open.capacity(),
+    };
     let (gxi, gyi) = (gx as i32, gy as i32);
-    // Corridor walks start after arrival codes up to this one (S; 0 once they have been
-    // given up on this map), with this balance of cells closed minus walks started.
-    let (mut walk_codes, mut walk_credit) = (S, 0i32);
+    let (mut state, mut next_node, mut expanded) = (*queue_state, *next_target, *expanded_cells);
+    // The balance of cells closed by corridor walks minus walks started.
+    let mut walk_credit = 0i32;
     loop {
         // Close the cell: its nibble gets the arrival step (it was 0).
         let (node, x, y, index) = if next_node != NIL {
@@ -3509,15 +3570,6 @@ fn astar_search<'p, M: CellMap, Q: OpenList<'p>, const AXIS_TABLE: bool>(
         };
         let code = node & 0xF;
         expanded += 1;
-        if index == goal {
-            *peak = open.peak(&state);
-            // h(goal) = 0: the key is the cost.
-            return Ok(Search {
-                found: true,
-                expanded,
-                cost: state.last,
-            });
-        }
 
         let (above, cur, below) = map.windows(index, x, y);
         let window = |w: u32| u32::from(NIBBLE_WINDOWS[(w & 0xFFF) as usize]);
@@ -3537,6 +3589,16 @@ fn astar_search<'p, M: CellMap, Q: OpenList<'p>, const AXIS_TABLE: bool>(
             let region = goal_region(x as i32 - gxi, y as i32 - gyi);
             STEP_CLASSES.get(region).copied().unwrap_or(0)
         };
+        // The goal: the only cell of its region, flagged in the class word.
+        if classes & AT_GOAL != 0 {
+            *peak = open.peak(&state);
+            // h(goal) = 0: the key is the cost.
+            return Some(Ok(Search {
+                found: true,
+                expanded,
+                cost: state.last,
+            }));
+        }
         // The pool is full: reclaim and push `(key, child)`, or end with QueueFull.
         macro_rules! reclaim {
             ($key:expr, $child:expr) => {{
@@ -3547,7 +3609,7 @@ fn astar_search<'p, M: CellMap, Q: OpenList<'p>, const AXIS_TABLE: bool>(
                     Some(after) => state = after,
                     None => {
                         *peak = open.peak(&state);
-                        return Err(full);
+                        return Some(Err(full));
                     }
                 }
             }};
@@ -3575,7 +3637,7 @@ fn astar_search<'p, M: CellMap, Q: OpenList<'p>, const AXIS_TABLE: bool>(
         // along the chain of such cells, closing each with its step, up to the first cell
         // that is not one (pushed), the goal or a cell on the map border (pushed), a dead
         // end (closed, nothing pushed) or a closed cell (nothing pushed).
-        let sides = if code <= walk_codes {
+        let sides = if WALKS && code <= S {
             u32::from(CORRIDOR_SIDES[corridor_index(m)])
         } else {
             0
@@ -3599,7 +3661,8 @@ fn astar_search<'p, M: CellMap, Q: OpenList<'p>, const AXIS_TABLE: bool>(
             // Walks that close (nearly) nothing cost more than the arms' pushes.
             walk_credit += closed as i32 - 1;
             if walk_credit < WALK_GIVE_UP_CREDIT {
-                walk_codes = 0;
+                (*queue_state, *next_target, *expanded_cells) = (state, next_node, expanded);
+                return None;
             }
             continue;
         }
@@ -3672,11 +3735,11 @@ fn astar_search<'p, M: CellMap, Q: OpenList<'p>, const AXIS_TABLE: bool>(
         }
     }
     *peak = open.peak(&state);
-    Ok(Search {
+    Some(Ok(Search {
         found: false,
         expanded,
         cost: 0,
-    })
+    }))
 }
 
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Default for Planner<SCRATCH_WORDS, QUEUE> {
