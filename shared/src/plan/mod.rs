@@ -1905,6 +1905,13 @@ impl<'a> OpenList<'a> for RingQueue<'a> {
         }
         starts[1] = at;
         ends[1] = len;
+        // A ring left without a slot (pools of a few entries) gets the one "slot" `len`, past
+        // the pool: its tail's successor is its head, so it is always full and never written.
+        for c in 1..CLASSES {
+            if starts[c] == ends[c] {
+                (starts[c], ends[c]) = (len, len + 1);
+            }
+        }
         (
             Self {
                 pool,
@@ -1940,7 +1947,9 @@ impl<'a> OpenList<'a> for RingQueue<'a> {
         let mut used = self.far_peak;
         for c in 1..CLASSES {
             used += if self.wrapped & (1 << c) != 0 {
-                self.rings[c].end - self.starts[c]
+                // (A ring without a slot "wraps" at once: it counts 0.)
+                let end = self.rings[c].end.min(self.pool.len() as u32);
+                end.saturating_sub(self.starts[c])
             } else {
                 self.rings[c].tail.max(self.rings[c].head) - self.starts[c]
             };
