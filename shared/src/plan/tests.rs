@@ -2058,6 +2058,12 @@ fn reduced_costs_of_octile_moves_take_six_values() {
                     let node = (y as u32) << 16 | (x as u32) << 4 | (k as u32 + 1);
                     assert_eq!(axis_region(&table, x as usize, node), region, "({x}, {y})");
                     assert_eq!(table[GOAL_AXIS_CELLS + region], STEP_CLASSES[region]);
+                    // The goal flag: on the goal's region only (the search's goal test).
+                    assert_eq!(
+                        STEP_CLASSES[region] & AT_GOAL != 0,
+                        (x, y) == (gx, gy),
+                        "goal ({gx}, {gy}) cell ({x}, {y})"
+                    );
                     let classes = STEP_CLASSES[region];
                     let class = (classes >> (3 * k)) & 7;
                     assert_eq!(
@@ -2639,5 +2645,72 @@ fn rings_fit_random_grids() {
         if seed == 1 {
             assert_eq!(ring.expanded, 28_823);
         }
+    }
+}
+
+/// 20 % random obstacles on 300 × 300 cells (the benchmark's kind of map): the cell-by-cell A*
+/// gives up its corridor walks midway (the instance of the loop with walks alone returns
+/// `None` after some expansions) and goes on in the instance without them, handing over the
+/// queue, the immediate target and the count: `pathfinding`'s cost, in both layouts with the
+/// same cells expanded.
+#[test]
+fn astar_giving_up_corridor_walks_midway_keeps_the_optimal_cost() {
+    const CELLS: usize = 300 * 300;
+    let mut p = Box::new(Planner::<{ FRAMED_WORDS }, 3072>::new());
+    for (seed, s, t) in [
+        (7, Cell::new(0, 0), Cell::new(299, 299)),
+        (11, Cell::new(299, 0), Cell::new(3, 296)),
+        (13, Cell::new(150, 2), Cell::new(149, 297)),
+    ] {
+        let mut g = random_grid::<{ words_for_cells(CELLS) }>(300, 300, 20, seed);
+        g.set(s, false);
+        g.set(t, false);
+        let geometry = *g.geometry();
+        let si = geometry.index(s);
+        let expected = oracle_astar(&g, s, t).unwrap();
+        let framed = p
+            .astar_in::<_, FRAMED_WORDS, true>(&g, si, t, true)
+            .unwrap();
+        assert!(matches!(p.layout, Layout::Framed { .. }));
+        let flat = p
+            .astar_in::<_, FRAMED_WORDS, true>(&g, si, t, false)
+            .unwrap();
+        assert!(matches!(p.layout, Layout::Flat));
+        assert!(framed.found && flat.found);
+        assert_eq!(
+            (framed.cost, flat.cost),
+            (expected, expected),
+            "seed {seed}"
+        );
+        assert_eq!(framed.expanded, flat.expanded, "seed {seed}");
+        // Every cell closed (by an expansion or a walk) is counted once.
+        let closed = (0..CELLS)
+            .filter(|&i| (1..=CODE_START).contains(&nibble(&p.scratch, i)))
+            .count();
+        assert_eq!(closed, flat.expanded as usize, "seed {seed}");
+
+        // The instance with walks alone, from the start (the goal table is the search's).
+        let mut words = std::vec![0u32; FRAMED_WORDS];
+        let mut map = Framed::<FRAMED_WORDS>::new(&mut words, &geometry).unwrap();
+        map.copy_map(&g);
+        let (sx, sy) = (u32::from(s.x), u32::from(s.y));
+        let mut pool = std::vec![OpenEntry { f: 0, node: 0, next: 0 }; 3072];
+        let (mut open, mut state) = ClassQueue::new(&mut pool, 0);
+        assert!(open.push(&mut state, 0, (sy << 16) | (sx << 4) | CODE_START));
+        let (mut next, mut expanded, mut peak) = (NIL, 0, 0);
+        let goal = map.index(usize::from(t.x), usize::from(t.y));
+        let walks = astar_loop::<_, _, true, true>(
+            &mut map,
+            &mut open,
+            &mut state,
+            &mut next,
+            &mut expanded,
+            &p.goal_axis,
+            (u32::from(t.x), u32::from(t.y)),
+            goal,
+            &mut peak,
+        );
+        assert!(walks.is_none(), "seed {seed}: walks not given up");
+        assert!(0 < expanded && expanded < framed.expanded, "seed {seed}");
     }
 }
