@@ -354,11 +354,11 @@ fn random_case_on_a_large_stack() -> (Grid300, Cell, Cell) {
 }
 
 /// Measure every planner on the three 300 x 300 grids, print a Markdown table, then check the
-/// 5 M instruction budget. Ignored by default (it reports a budget the planners do not all meet
-/// yet); `cargo xtask mcu-bench` runs it. `TWIL_MCU_BENCH_ONLY=random:astar` (grid and planner
+/// 5 M instruction budget. Ignored by plain `cargo test` (about a minute of QEMU);
+/// `cargo xtask mcu-bench` runs it, and so does `cargo xtask test` (the budget is a test). `TWIL_MCU_BENCH_ONLY=random:astar` (grid and planner
 /// name prefixes, either may be empty) runs only the matching cases, e.g. under a QEMU trace.
 #[test]
-#[ignore = "measurement: run with `cargo xtask mcu-bench`"]
+#[ignore = "a minute of QEMU: `cargo xtask mcu-bench` and `cargo xtask test` run it"]
 fn mcu_bench() {
     let cases = [
         ("open", open_case()),

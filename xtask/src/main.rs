@@ -306,6 +306,11 @@ fn defmt_log_file(file: &Path) -> Result<()> {
 fn mcu_bench() -> Result<()> {
     ensure_qemu()?;
     firmware()?;
+    run_mcu_bench()
+}
+
+/// The `mcu_bench` test alone (the firmware is built).
+fn run_mcu_bench() -> Result<()> {
     let mut c = cargo();
     c.args([
         "test",
@@ -327,6 +332,8 @@ fn test() -> Result<()> {
     ensure_qemu()?;
     firmware()?;
     lint()?;
+    // The 5 M instruction budget per 300 x 300 plan is a test too (about a minute of QEMU).
+    run_mcu_bench()?;
     // Last, so that the run ends with cargo test's own summary.
     let mut c = cargo();
     c.args([
