@@ -260,7 +260,7 @@
 //! source): each FIFO class is a ring buffer of `(key, node)` in its own range of pool slots
 //! (capacities from measured per-class peaks), the stack lives in the entries' `next` fields,
 //! the far list is a short sorted array; no free list, no links (random 20 % obstacles: 5.39 M
-//! → 5.05 M instructions). When a ring stays full after a reclaim, the search is run again on
+//! → 4.99 M instructions). When a ring stays full after a reclaim, the search is run again on
 //! the linked lists, so results never depend on the ring capacities.
 //!
 //! When the pool of entries is full, the queue first *reclaims* the entries of cells closed
