@@ -902,8 +902,12 @@ impl<'a, const WORDS: usize> Framed<'a, WORDS> {
     /// blocked word (the north-east neighbour of the last cell when `width + 1` is a multiple
     /// of 8 lies just past the upper frame row).
     const fn words_for(geometry: &GridGeometry) -> usize {
-        let row_words = (geometry.width() as usize + 1).div_ceil(8);
-        row_words * (geometry.height() as usize + 2) + 1
+        Self::row_words(geometry) * (geometry.height() as usize + 2) + 1
+    }
+
+    /// Words of a padded row: `width + 1` nibbles (at least one blocked) rounded up.
+    const fn row_words(geometry: &GridGeometry) -> usize {
+        (geometry.width() as usize + 1).div_ceil(8)
     }
 
     /// The layout over the first `WORDS` words of `scratch`, when they hold the framed map of
@@ -913,7 +917,7 @@ impl<'a, const WORDS: usize> Framed<'a, WORDS> {
             return None;
         }
         let words = scratch.first_chunk_mut::<WORDS>()?;
-        let row_words = (geometry.width() as usize + 1).div_ceil(8);
+        let row_words = Self::row_words(geometry);
         Some(Self {
             words,
             stride: row_words * 8,
@@ -1396,17 +1400,6 @@ impl<'a> ClassQueue<'a> {
         }
     }
 
-    /// Insert any key not below `s.last`: on the stack, a FIFO list or the far list by its
-    /// reduced cost; `false` when the pool is full.
-    #[inline(never)]
-    fn push(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
-        match reduced_cost_class(key.wrapping_sub(s.last)) {
-            Some(0) => self.push_stack(s, node),
-            Some(c) => self.push_class(s, c, node),
-            None => self.push_far(s, key, node),
-        }
-    }
-
     /// Insert with the last popped key (class 0); `false` when the pool is full.
     #[inline(always)]
     fn push_stack(&mut self, s: &mut QueueState, node: u32) -> bool {
@@ -1645,7 +1638,16 @@ trait OpenList<'a>: Sized {
     fn new(pool: &'a mut [OpenEntry], first_key: u32) -> (Self, QueueState);
     fn capacity(&self) -> u32;
     fn peak(&self, s: &QueueState) -> u32;
-    fn push(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool;
+    /// Insert any key not below `s.last`: on the stack, a FIFO list or the far list by its
+    /// reduced cost; `false` when there is no room.
+    #[inline(never)]
+    fn push(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
+        match reduced_cost_class(key.wrapping_sub(s.last)) {
+            Some(0) => self.push_stack(s, node),
+            Some(c) => self.push_class(s, c, node),
+            None => self.push_far(s, key, node),
+        }
+    }
     fn push_stack(&mut self, s: &mut QueueState, node: u32) -> bool;
     fn push_class(&mut self, s: &mut QueueState, class: usize, node: u32) -> bool;
     fn push_far(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool;
@@ -1671,10 +1673,6 @@ impl<'a> OpenList<'a> for ClassQueue<'a> {
     #[inline(always)]
     fn peak(&self, s: &QueueState) -> u32 {
         s.bump
-    }
-    #[inline(always)]
-    fn push(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
-        ClassQueue::push(self, s, key, node)
     }
     #[inline(always)]
     fn push_stack(&mut self, s: &mut QueueState, node: u32) -> bool {
@@ -1967,15 +1965,6 @@ impl<'a> OpenList<'a> for RingQueue<'a> {
             };
         }
         used
-    }
-
-    #[inline(never)]
-    fn push(&mut self, s: &mut QueueState, key: u32, node: u32) -> bool {
-        match reduced_cost_class(key.wrapping_sub(s.last)) {
-            Some(0) => self.push_stack(s, node),
-            Some(c) => self.push_class(s, c, node),
-            None => self.push_far(s, key, node),
-        }
     }
 
     #[inline(always)]
