@@ -274,4 +274,52 @@ fn bad_inputs_exit_1_naming_the_file_and_line() {
 
     let err = simulate_fails(&office, &["--size", "5x5"]);
     assert!(err.contains("goal") && err.contains("off"), "{err}");
+
+    let err = simulate_fails(&office, &["--plan-latency-ms", "-5"]);
+    assert!(
+        err.contains("--plan-latency-ms") && err.contains("-5"),
+        "{err}"
+    );
+}
+
+#[test]
+fn plans_come_back_after_the_stated_latency_and_missions_still_reach_the_goal() {
+    let da = world("office.da");
+    let par = world("office.par");
+    for mode in ["stop", "continuous"] {
+        let run = |latency_ms: &str| {
+            simulate(&[
+                "--real",
+                &da,
+                "--params",
+                &par,
+                "--mode",
+                mode,
+                "--plan-latency-ms",
+                latency_ms,
+            ])
+        };
+        let at_once = run("0");
+        let default = run("50");
+        let slow = run("2000");
+        for (latency, r) in [("0", &at_once), ("50", &default), ("2000", &slow)] {
+            assert_eq!(
+                r.status,
+                SimStatus::Reached,
+                "{mode} {latency}: {:?}",
+                r.stats
+            );
+            assert!(r.min_clearance_m > 0.0, "{mode} {latency}");
+        }
+        // Each plan holds the robot (or keeps it on its old prefix) for the latency: two
+        // seconds per plan show in the mission time.
+        assert!(
+            slow.sim_time_s > at_once.sim_time_s + 1.5 * at_once.stats.plans as f32,
+            "{mode}: {} s with 2 s per plan, {} s without ({} plans)",
+            slow.sim_time_s,
+            at_once.sim_time_s,
+            at_once.stats.plans
+        );
+        assert_ne!(default.sim_time_s, at_once.sim_time_s, "{mode}");
+    }
 }

@@ -98,6 +98,12 @@ pub struct Args {
     /// come round more often but see less to the sides; experimental).
     #[arg(long, default_value_t = 95.0)]
     pub moving_sweep: f32,
+    /// How long the planner takes to hand a plan back, milliseconds of mission time: the
+    /// robot holds (or, moving, goes on along the old prefix) meanwhile. The default, one
+    /// control period, is what the firmware guarantees (a plan is at most 5 M instructions,
+    /// 30 ms at 168 MHz); 0 applies every plan at once.
+    #[arg(long, default_value_t = 50.0, value_name = "MS")]
+    pub plan_latency_ms: f32,
     /// GIF scale, pixels per cell.
     #[arg(long, default_value_t = 2)]
     pub gif_scale: u32,
@@ -161,6 +167,12 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
     if let Err(e) = robot.validate() {
         bail!("robot config: {e}");
     }
+    if !(args.plan_latency_ms.is_finite() && (0.0..=60_000.0).contains(&args.plan_latency_ms)) {
+        bail!(
+            "--plan-latency-ms: must be between 0 and 60000, got {}",
+            args.plan_latency_ms
+        );
+    }
     if !(args.time_limit.is_finite() && args.time_limit > 0.0) {
         bail!(
             "--time-limit: must be a positive number of seconds, got {}",
@@ -198,6 +210,7 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         constant_depth_filter: args.rcd,
         trust_seen_space: !args.seed_prune,
         moving_half_sweep_deg: args.moving_sweep,
+        plan_latency_s: args.plan_latency_ms / 1000.0,
     })
 }
 

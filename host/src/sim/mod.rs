@@ -4,11 +4,23 @@
 //! The loop, once per controller period:
 //!
 //! 1. read the plant's encoder counts and feed their deltas to the mission as a `Tick`;
-//! 2. answer every sonar request of the mission by ray casting from the plant's true pose on
+//! 2. hand back a plan whose latency has run out (`PlanDone`);
+//! 3. answer every sonar request of the mission by ray casting from the plant's true pose on
 //!    the real polygons (the mission only knows its odometry);
-//! 3. apply the mission's wheel voltages to the plant for one period;
-//! 4. record the true pose, the clearance to the real polygons (negative = collision, which
+//! 4. run the planner for a plan request at once, on the mission's grid (which does not change
+//!    until the result is back), and keep the result until its latency has run out;
+//! 5. apply the mission's wheel voltages to the plant for one period;
+//! 6. record the true pose, the clearance to the real polygons (negative = collision, which
 //!    aborts the mission with status `collision`) and, for the pictures, snapshots.
+//!
+//! **Latency model.** A plan asked for during period `k` is handed back in period
+//! `k + ceil(latency / period)`, after that period's controller step, so the new trajectory
+//! starts at the tick after. With the default latency of one period (50 ms) the controller
+//! holds (or follows the old prefix) for one more tick than without latency: the firmware's
+//! worst case, whose planner runs in its lowest-priority task and needs up to 5 M instructions
+//! (30 ms at 168 MHz, 40 ms at QEMU's `-icount shift=3` pace), so a plan asked for late in a
+//! period misses the next tick. A latency of 0 applies each plan within the step that asked
+//! for it (the simulator before the split).
 //!
 //! Everything is deterministic: the plant's noise generator is seeded, and the mission is pure.
 
@@ -19,9 +31,11 @@ use twil_core::control::Pose;
 use twil_core::geom::PointM;
 use twil_core::grid::{Grid400, GridGeometry};
 use twil_core::mission::{
-    Mission400, MissionConfig, MissionEvent, MissionInput, MissionMode, MissionStats, MissionStatus,
+    HostMissionPlanner, Mission400, MissionConfig, MissionEvent, MissionInput, MissionMode,
+    MissionOutput, MissionStats, MissionStatus, PlanRequest,
 };
 use twil_core::plan::PlannerKind;
+use twil_core::plan::{PlanError, PlanReport};
 use twil_core::plant::Plant;
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
@@ -53,6 +67,8 @@ pub struct SimSetup {
     pub moving_half_sweep_deg: f32,
     /// Take a picture snapshot every this many seconds of simulated time (0: none).
     pub snapshot_period_s: f32,
+    /// How long after its request a plan is handed back, seconds (see the module docs).
+    pub plan_latency_s: f32,
 }
 
 /// How a simulation ended.
@@ -233,49 +249,69 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
     });
     // A hard cap on loop iterations in case the mission never returns a final status.
     let max_ticks = ((setup.time_limit_s / period_s) as u64).saturating_add(100);
+    let latency_ticks = plan_latency_ticks(setup.plan_latency_s, period_s);
+    let mut planner = Box::new(HostMissionPlanner::new());
+    let mut pending: Option<DuePlan> = None;
     let mut ticks = 0u64;
+    let debug = std::env::var_os("TWIL_SIM_DEBUG").is_some();
     while !collision {
         ticks += 1;
         if ticks > max_ticks {
             bail!("the mission did not end within its time limit (internal error)");
         }
+        let mut planned = false;
         let counts = plant.encoder_counts();
         let deltas = (
             counts.0.wrapping_sub(previous_counts.0),
             counts.1.wrapping_sub(previous_counts.1),
         );
         previous_counts = counts;
-        let mut out = mission.step(MissionInput::Tick {
+        let out = mission.step(MissionInput::Tick {
             left_delta_counts: deltas.0,
             right_delta_counts: deltas.1,
             elapsed_s: period_s,
         });
-        let debug = std::env::var_os("TWIL_SIM_DEBUG").is_some();
         if debug && !out.events.is_empty() {
             eprintln!("{t_s:8.2} {:?} pose {:?}", out.events, mission.pose_world());
         }
-        let mut planned = has_plan(&out.events);
+        planned |= has_plan(&out.events);
+        let (served, p) = serve_plans(&mut mission, &mut planner, out, ticks, latency_ticks);
+        pending = pending.or(p);
+        planned |= served.planned;
+        let mut out = served.out;
+        // A plan whose latency ran out comes back after this period's controller step (the
+        // controller held meanwhile; the new trajectory starts at the next tick).
+        if let Some(due) = pending.take_if(|d| d.tick <= ticks) {
+            let done = mission.step(MissionInput::PlanDone {
+                id: due.id,
+                result: due.result,
+            });
+            planned |= has_plan(&done.events);
+            let (more, p) = serve_plans(&mut mission, &mut planner, done, ticks, latency_ticks);
+            pending = p;
+            planned |= more.planned;
+            out.sonar_request = out.sonar_request.or(more.out.sonar_request);
+        }
         while let Some(request) = out.sonar_request {
             let range_m =
                 plant.sonar_range_m(&setup.real, request.neck_angle_rad, robot.sonar_range_m);
-            out = mission.step(MissionInput::SonarReading {
+            let reading = mission.step(MissionInput::SonarReading {
                 neck_angle_rad: request.neck_angle_rad,
                 range_m,
             });
-            planned |= has_plan(&out.events);
-            if debug && !out.events.is_empty() {
-                eprintln!("{t_s:8.2} {:?} prefix {:?}", out.events, mission.prefix());
-                if mission.prefix().len() < 2 {
-                    let p = mission.path();
-                    eprintln!("   path {:?}", &p[..p.len().min(5)]);
-                    let g = *mission.grid().geometry();
-                    for q in &p[..p.len().min(2)] {
-                        if let Ok(c) = g.cell_of(*q) {
-                            eprintln!("   cell {:?} occ {}", c, mission.grid().is_occupied(c));
-                        }
-                    }
-                }
+            if debug && !reading.events.is_empty() {
+                eprintln!(
+                    "{t_s:8.2} {:?} prefix {:?}",
+                    reading.events,
+                    mission.prefix()
+                );
             }
+            planned |= has_plan(&reading.events);
+            let (served, p) =
+                serve_plans(&mut mission, &mut planner, reading, ticks, latency_ticks);
+            pending = pending.or(p);
+            planned |= served.planned;
+            out = served.out;
         }
         if planned {
             plans.push(snapshot(
@@ -344,6 +380,72 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
         final_odometry_pose: mission.pose_world(),
         known_map_plan_length_m: known_map_plan_length_m(setup),
     })
+}
+
+/// Plan latency in whole control periods (rounded up).
+fn plan_latency_ticks(latency_s: f32, period_s: f32) -> u64 {
+    let positive = |x: f32| x.is_finite() && x > 0.0;
+    if !positive(latency_s) || !positive(period_s) {
+        return 0;
+    }
+    // A few ppm of slack so that 0.05 / 0.05 is one period, not two.
+    ((latency_s / period_s) * (1.0 - 1.0e-6)).ceil().min(1.0e9) as u64
+}
+
+/// A plan computed and not yet handed back.
+struct DuePlan {
+    /// Tick at which it is handed back.
+    tick: u64,
+    id: u32,
+    result: Result<PlanReport, PlanError>,
+}
+
+/// What [`serve_plans`] leaves: the last output (the one whose sonar request is still to be
+/// answered) and whether a plan was applied.
+struct Served {
+    out: MissionOutput,
+    planned: bool,
+}
+
+/// Run the planner for the plan request of `out`, if any, on the mission's workspace. With a
+/// latency the result is kept for later (returned); without, it is handed back at once, and
+/// so are the requests that follow from it.
+fn serve_plans(
+    mission: &mut Mission400,
+    planner: &mut HostMissionPlanner,
+    mut out: MissionOutput,
+    tick: u64,
+    latency_ticks: u64,
+) -> (Served, Option<DuePlan>) {
+    let mut planned = false;
+    while let Some(request) = out.plan_request.take() {
+        let result = run_planner(mission, planner, &request);
+        if latency_ticks > 0 {
+            let due = DuePlan {
+                tick: tick + latency_ticks,
+                id: request.id,
+                result,
+            };
+            return (Served { out, planned }, Some(due));
+        }
+        let sonar_request = out.sonar_request;
+        out = mission.step(MissionInput::PlanDone {
+            id: request.id,
+            result,
+        });
+        planned |= has_plan(&out.events);
+        out.sonar_request = out.sonar_request.or(sonar_request);
+    }
+    (Served { out, planned }, None)
+}
+
+fn run_planner(
+    mission: &mut Mission400,
+    planner: &mut HostMissionPlanner,
+    request: &PlanRequest,
+) -> Result<PlanReport, PlanError> {
+    let (grid, path) = mission.plan_workspace();
+    planner.plan(request.kind, grid, request.start, request.goal, path)
 }
 
 fn has_plan(events: &[MissionEvent]) -> bool {

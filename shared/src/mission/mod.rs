@@ -5,17 +5,31 @@
 //!
 //! ## Shape
 //!
-//! A [`Mission`] owns everything the navigation needs: the occupancy grid, the planner and its
-//! scratch memory, the full path and the kept prefix, the [`TrajectorySupplier`], the
-//! [`Controller`] and the buffer of the sweep in progress. It does no I/O: the shell (the
-//! firmware, `twil simulate`, a test) calls [`Mission::step`] with
+//! A [`Mission`] owns everything the navigation needs but the planner: the occupancy grid, the
+//! full path and the kept prefix, the [`TrajectorySupplier`], the [`Controller`] and the buffer
+//! of the sweep in progress. It does no I/O: the shell (the firmware, `twil simulate`, a test)
+//! calls [`Mission::step`] with
 //!
 //! - [`MissionInput::Tick`] once per controller period (50 ms) with the encoder count deltas;
 //!   the output carries the wheel voltages to apply and, when the sonar is sweeping and the
 //!   sweep's time budget allows, a [`SonarRequest`] (a neck angle to measure at);
 //! - [`MissionInput::SonarReading`] with the answer to each request; the output may carry the
 //!   next request (several readings fit in one period when the echo wait is short);
+//! - [`MissionInput::PlanDone`] with the result of a [`PlanRequest`];
 //! - [`MissionInput::Abort`] when the shell must stop (e.g. a collision).
+//!
+//! ## The control period never waits for the planner
+//!
+//! A plan costs up to 5 M instructions (30 ms at 168 MHz), so the mission does not run it: it
+//! asks for it ([`MissionOutput::plan_request`]) and goes on. The shell runs the planner on
+//! [`Mission::plan_workspace`] (the grid, and the path buffer the result goes to) at a lower
+//! priority than the control period and hands the result back as [`MissionInput::PlanDone`].
+//! Meanwhile every tick still runs the controller: standing, the robot holds its place
+//! ([`MissionPhase::Plan`]); moving (continuous mode), it goes on along the old prefix, and the
+//! new one starts from where the supplier is when the result comes back. Until then the grid
+//! and the path do not change: a sweep that ends meanwhile is marked after the result. The
+//! firmware runs the planner in its lowest-priority task; `twil simulate` hands the result back
+//! after a stated latency (one control period by default, see `docs/simulate.md`).
 //!
 //! Simulated and real time are the same thing here: the mission's clock advances by one
 //! controller period per tick, and a sonar reading costs `echo_wait_s + neck_step_time_s` of
@@ -32,7 +46,8 @@
 //!            v                                                              │
 //!           Mark (filter the sweep, hits -> grid with expansion)            │
 //!            v                                                              │
-//!           Plan (planner on the map from the current pose) ── no path ──> Unreachable
+//!           Plan (ask; the shell plans from the current pose) ── no path ──> Unreachable
+//!            │ result handed back                                           │
 //!            v                                                              │
 //!           Prune (prefix within sonar range and visible)                   │
 //!            │ a kept point outside the ±95° band and last sweep not full   │
@@ -79,11 +94,12 @@
 //!
 //! ## Memory
 //!
-//! No heap. The size is dominated by the two grids (map and seen space, 1 bit per cell each),
-//! the planner scratch (4 bits per cell plus its queue) and two paths of
-//! [`MAX_PATH_POINTS`](crate::plan::MAX_PATH_POINTS) points (8 KiB each) plus the supplier's
-//! copy: 144 288 bytes for [`Mission300`]. [`Mission::SIZE_BYTES`] gives the exact figure for an instantiation; see
-//! `docs/simulate.md` for the numbers of [`Mission300`] and [`Mission400`].
+//! No heap. The size is dominated by the two grids (map and seen space, 1 bit per cell each)
+//! and two paths of [`MAX_PATH_POINTS`](crate::plan::MAX_PATH_POINTS) points (24 KiB each)
+//! plus the supplier's copy. The planner (4 bits per cell of scratch plus its queue) belongs
+//! to the shell ([`MissionPlanner300`], [`HostMissionPlanner`]). [`Mission::SIZE_BYTES`] gives
+//! the exact figure for an instantiation; see `docs/simulate.md` for the numbers of
+//! [`Mission300`] and [`Mission400`].
 
 use heapless::Vec;
 
@@ -92,8 +108,8 @@ use crate::geom::{Cell, PointM};
 use crate::grid::{words_for_cells, Grid, GridError, GridGeometry};
 use crate::math::{cos, hypot, sin};
 use crate::plan::{
-    needs_full_sweep, prune_visible_prefix, PathM, PlanError, PlanStatus, Planner, PlannerKind,
-    SCRATCH_WORDS_300, SCRATCH_WORDS_400,
+    needs_full_sweep, prune_visible_prefix, PathM, PlanError, PlanReport, PlanStatus, Planner,
+    PlannerKind, SCRATCH_WORDS_300, SCRATCH_WORDS_400,
 };
 use crate::raster::{mark_point_m, mark_polygon, BresenhamLine};
 use crate::robot::RobotConfig;
@@ -110,20 +126,25 @@ pub const MAX_SWEEP_READINGS: usize = SWEEP_CAPACITY;
 /// Most events one [`Mission::step`] can report.
 pub const MAX_EVENTS_PER_STEP: usize = 8;
 
-/// Open-list capacity of the planner inside [`Mission300`] (entries, 12 bytes each: 36 KiB),
-/// as [`crate::plan::Planner300`]: the planner reclaims stale entries, and the bundled worlds
+/// Open-list capacity of [`MissionPlanner300`] (entries, 12 bytes each: 36 KiB), as
+/// [`crate::plan::Planner300`]: the planner reclaims stale entries, and the bundled worlds
 /// need at most 2122 live ones.
 pub const MISSION_QUEUE: usize = 3072;
 
-/// Open-list capacity of the planner inside [`Mission400`], the host's (entries).
+/// Open-list capacity of [`HostMissionPlanner`] (entries).
 pub const HOST_MISSION_QUEUE: usize = 65536;
 
 /// A mission on a grid of at most 300 × 300 cells (15 m × 15 m at 0.05 m): the MCU size.
-pub type Mission300 = Mission<{ words_for_cells(300 * 300) }, SCRATCH_WORDS_300, MISSION_QUEUE>;
+pub type Mission300 = Mission<{ words_for_cells(300 * 300) }>;
 
 /// A mission on a grid of at most 400 × 400 cells (20 m × 20 m at 0.05 m): the host size.
-pub type Mission400 =
-    Mission<{ words_for_cells(400 * 400) }, SCRATCH_WORDS_400, HOST_MISSION_QUEUE>;
+pub type Mission400 = Mission<{ words_for_cells(400 * 400) }>;
+
+/// A planner for the plan requests of a [`Mission300`].
+pub type MissionPlanner300 = Planner<SCRATCH_WORDS_300, MISSION_QUEUE>;
+
+/// A planner for the plan requests of a [`Mission400`] (the simulator's).
+pub type HostMissionPlanner = Planner<SCRATCH_WORDS_400, HOST_MISSION_QUEUE>;
 
 /// How the robot uses its sonar.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -266,13 +287,6 @@ pub enum MissionError {
     },
     /// The grid geometry does not fit the mission's grid capacity.
     Grid(GridError),
-    /// The grid has more cells than the planner's scratch covers.
-    PlannerTooSmall {
-        /// Cells in the grid.
-        cells: u32,
-        /// Cells the planner covers.
-        capacity: u32,
-    },
     /// The start or the goal lies off the map.
     OffMap {
         /// `"start"` or `"goal"`.
@@ -286,10 +300,6 @@ impl core::fmt::Display for MissionError {
             MissionError::Robot(e) => write!(f, "robot config: {e}"),
             MissionError::BadValue { field, value } => write!(f, "{field}: bad value {value}"),
             MissionError::Grid(e) => write!(f, "grid: {e}"),
-            MissionError::PlannerTooSmall { cells, capacity } => write!(
-                f,
-                "grid of {cells} cells is larger than the planner's {capacity}"
-            ),
             MissionError::OffMap { which } => write!(f, "the {which} lies off the map"),
         }
     }
@@ -337,6 +347,9 @@ pub enum MissionPhase {
     Follow,
     /// Holding the last point for the settle time.
     Settle,
+    /// Standing, waiting for the result of a [`PlanRequest`] (stop mode, and every standing
+    /// sweep; while moving the robot goes on following during a plan).
+    Plan,
     /// Ended; see [`Mission::status`].
     Done,
 }
@@ -361,8 +374,35 @@ pub enum MissionInput {
         /// Measured range from the sonar, metres, or `None` for no echo.
         range_m: Option<f32>,
     },
+    /// The result of the [`PlanRequest`] with this `id`: the planner ran on
+    /// [`Mission::plan_workspace`]'s grid and wrote its path there. Results of other ids, or
+    /// when no request is out, are ignored.
+    PlanDone {
+        /// The request's id.
+        id: u32,
+        /// What the planner returned.
+        result: Result<PlanReport, PlanError>,
+    },
     /// Stop the mission now ([`MissionStatus::Aborted`]).
     Abort,
+}
+
+/// Run the planner and answer with [`MissionInput::PlanDone`] (the mission goes on meanwhile).
+///
+/// The planner must run on the grid and write into the path of [`Mission::plan_workspace`]:
+/// the mission does not change either until the result is handed back (a sweep that ends
+/// meanwhile is marked afterwards).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PlanRequest {
+    /// Echoed by [`MissionInput::PlanDone`].
+    pub id: u32,
+    /// Which planner.
+    pub kind: PlannerKind,
+    /// Where the path starts, world metres (a free cell near the robot).
+    pub start: PointM,
+    /// The goal, world metres.
+    pub goal: PointM,
 }
 
 /// Take one sonar reading at this neck angle and answer with [`MissionInput::SonarReading`].
@@ -417,6 +457,8 @@ pub struct MissionOutput {
     pub right_voltage_v: f32,
     /// Take this sonar reading now (before the next tick).
     pub sonar_request: Option<SonarRequest>,
+    /// Run the planner (at the lowest priority) and answer with [`MissionInput::PlanDone`].
+    pub plan_request: Option<PlanRequest>,
     /// What happened.
     pub events: Vec<MissionEvent, MAX_EVENTS_PER_STEP>,
     /// Status after the step.
@@ -475,13 +517,25 @@ struct SweepState {
     waiting: bool,
 }
 
+/// A plan asked for and not handed back yet.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PendingPlan {
+    id: u32,
+    /// Continuous mode: the new obstacles blocked the remaining path.
+    blocked: bool,
+    /// Asked while following (continuous mode).
+    moving: bool,
+    /// The mission no longer wants the result (a settle ended the moving pass it was for); it
+    /// still waits for it before it changes the grid.
+    cancelled: bool,
+}
+
 /// The mission: see the module documentation.
-pub struct Mission<const W: usize, const S: usize, const Q: usize> {
+pub struct Mission<const W: usize> {
     config: MissionConfig,
     supplier_config: SupplierConfig,
     grid: Grid<W>,
     seen: Grid<W>,
-    planner: Planner<S, Q>,
     path: PathM,
     prefix: PathM,
     supplier: TrajectorySupplier,
@@ -504,25 +558,24 @@ pub struct Mission<const W: usize, const S: usize, const Q: usize> {
     voltages_v: (f32, f32),
     last_plan_origin: Option<PointM>,
     stalled_plans: u16,
+    pending_plan: Option<PendingPlan>,
+    /// A sweep that ended while a plan was out: marked when the result is back.
+    deferred_sweep_end: Option<SweepState>,
+    next_plan_id: u32,
 }
 
-impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
+impl<const W: usize> Mission<W> {
     /// Size of this mission type in bytes (it is meant to live in a `static` on the MCU).
     pub const SIZE_BYTES: usize = core::mem::size_of::<Self>();
 
     /// A mission on an empty map of `geometry`. Validates the config and checks that the grid
-    /// fits both the grid and the planner capacity and that start and goal are on the map.
+    /// fits the grid capacity and that start and goal are on the map. (The planner that serves
+    /// its [`PlanRequest`]s must cover `geometry`'s cells, or the first plan aborts the mission
+    /// with [`PlanError::ScratchTooSmall`].)
     pub fn new(config: MissionConfig, geometry: GridGeometry) -> Result<Self, MissionError> {
         config.validate()?;
         let grid = Grid::<W>::new(geometry).map_err(MissionError::Grid)?;
         let seen = grid.clone();
-        let cells = geometry.cell_count();
-        if cells > Planner::<S, Q>::CAPACITY_CELLS {
-            return Err(MissionError::PlannerTooSmall {
-                cells: cells as u32,
-                capacity: Planner::<S, Q>::CAPACITY_CELLS as u32,
-            });
-        }
         if geometry.cell_of(config.start).is_err() {
             return Err(MissionError::OffMap { which: "start" });
         }
@@ -538,7 +591,6 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
             config,
             grid,
             seen,
-            planner: Planner::new(),
             path: Vec::new(),
             prefix: Vec::new(),
             supplier: TrajectorySupplier::new(),
@@ -559,7 +611,22 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
             voltages_v: (0.0, 0.0),
             last_plan_origin: None,
             stalled_plans: 0,
+            pending_plan: None,
+            deferred_sweep_end: None,
+            next_plan_id: 1,
         })
+    }
+
+    /// What the planner of a [`PlanRequest`] works on: the grid to plan on and the buffer its
+    /// path goes to (the mission's [`Mission::path`]). Neither changes until the request's
+    /// [`MissionInput::PlanDone`] is handed back.
+    pub fn plan_workspace(&mut self) -> (&Grid<W>, &mut PathM) {
+        (&self.grid, &mut self.path)
+    }
+
+    /// `true` while a [`PlanRequest`] has not been answered.
+    pub fn plan_pending(&self) -> bool {
+        self.pending_plan.is_some()
     }
 
     /// Rasterize an obstacle known a priori (a closed outline, world metres), grown by the
@@ -631,6 +698,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
             left_voltage_v: self.voltages_v.0,
             right_voltage_v: self.voltages_v.1,
             sonar_request: None,
+            plan_request: None,
             events: Vec::new(),
             status: self.status,
         };
@@ -649,11 +717,13 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
                 neck_angle_rad,
                 range_m,
             } => self.on_reading(neck_angle_rad, range_m, &mut out),
+            MissionInput::PlanDone { id, result } => self.on_plan_done(id, result, &mut out),
             MissionInput::Abort => self.finish(MissionStatus::Aborted, &mut out),
         }
         if self.status != MissionStatus::Running {
             self.voltages_v = (0.0, 0.0);
             out.sonar_request = None;
+            out.plan_request = None;
         }
         out.left_voltage_v = self.voltages_v.0;
         out.right_voltage_v = self.voltages_v.1;
@@ -767,9 +837,9 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
             return;
         }
 
-        // Start a sweep when none runs: standing in the Sweep phase, or moving in continuous
-        // mode.
-        if self.sweep.is_none() {
+        // Start a sweep when none runs (and none waits to be marked): standing in the Sweep
+        // phase, or moving in continuous mode.
+        if self.sweep.is_none() && self.deferred_sweep_end.is_none() {
             match self.phase {
                 MissionPhase::Sweep { full } => self.start_sweep(full, false, out),
                 MissionPhase::Follow | MissionPhase::Settle
@@ -801,9 +871,12 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
             return;
         }
         // Stand and sweep again. In continuous mode a moving pass may be under way: it is
-        // dropped and a standing sweep starts.
+        // dropped and a standing sweep starts; so is the replan it asked for.
         self.supplier.stop();
         self.sweep = None;
+        if let Some(pending) = &mut self.pending_plan {
+            pending.cancelled = true;
+        }
         self.phase = MissionPhase::Sweep { full: false };
     }
 
@@ -915,7 +988,12 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         self.sweep = Some(sweep);
         if sweep.next >= sweep.count {
             self.sweep = None;
-            self.end_of_sweep(sweep, out);
+            if self.pending_plan.is_some() {
+                // The planner may be reading the grid: mark when its result is back.
+                self.deferred_sweep_end = Some(sweep);
+            } else {
+                self.end_of_sweep(sweep, out);
+            }
         } else {
             self.request_next(out);
         }
@@ -1106,19 +1184,12 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         false
     }
 
-    /// Plan from where the robot is (or, moving, from where it is told to be), prune, and
-    /// either follow, ask for a full sweep, or end.
+    /// Ask for a plan from where the robot is (or, moving, from where it is told to be); its
+    /// result is handled by [`Self::on_plan_done`].
     fn plan_and_go(&mut self, blocked: bool, out: &mut MissionOutput) {
         let moving = matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle)
             && self.config.mode == MissionMode::Continuous;
-        // Where the new trajectory starts: the robot, or while moving the point the supplier
-        // hands out now (the reference model is a little behind it), so motion is continuous.
-        let origin = if moving && self.phase == MissionPhase::Follow {
-            let s = self.supplier.current_point_odom();
-            self.frame.odom_to_world(s)
-        } else {
-            self.position_world()
-        };
+        let origin = self.plan_origin(moving);
 
         // Stall detection.
         match self.last_plan_origin {
@@ -1151,13 +1222,75 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         if self.stats.plans > 1 {
             self.stats.replans += 1;
         }
-        let result = self.planner.plan(
-            self.config.planner,
-            &self.grid,
-            start_point,
-            self.config.goal,
-            &mut self.path,
-        );
+        let id = self.next_plan_id;
+        self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
+        self.pending_plan = Some(PendingPlan {
+            id,
+            blocked,
+            moving,
+            cancelled: false,
+        });
+        if !moving {
+            // Hold where the controller is heading now until the result is back.
+            self.supplier.stop();
+            self.phase = MissionPhase::Plan;
+        }
+        out.plan_request = Some(PlanRequest {
+            id,
+            kind: self.config.planner,
+            start: start_point,
+            goal: self.config.goal,
+        });
+    }
+
+    /// Where a new trajectory starts: the robot, or while moving the point the supplier hands
+    /// out now (the reference model is a little behind it), so motion is continuous.
+    fn plan_origin(&self, moving: bool) -> PointM {
+        if moving && self.phase == MissionPhase::Follow {
+            let s = self.supplier.current_point_odom();
+            self.frame.odom_to_world(s)
+        } else {
+            self.position_world()
+        }
+    }
+
+    /// A plan is back: prune it, then follow, ask for a full sweep, or end. Then mark a sweep
+    /// that ended meanwhile.
+    fn on_plan_done(
+        &mut self,
+        id: u32,
+        result: Result<PlanReport, PlanError>,
+        out: &mut MissionOutput,
+    ) {
+        let Some(pending) = self.pending_plan else {
+            return; // Nobody asked: ignored.
+        };
+        if pending.id != id {
+            return;
+        }
+        self.pending_plan = None;
+        if !pending.cancelled {
+            self.apply_plan(pending, result, out);
+        }
+        if let Some(sweep) = self.deferred_sweep_end.take() {
+            if self.status == MissionStatus::Running {
+                self.end_of_sweep(sweep, out);
+            }
+        }
+    }
+
+    fn apply_plan(
+        &mut self,
+        pending: PendingPlan,
+        result: Result<PlanReport, PlanError>,
+        out: &mut MissionOutput,
+    ) {
+        let blocked = pending.blocked;
+        let moving = pending.moving;
+        // The robot went on while the planner ran (moving) or drifted a little (holding): the
+        // trajectory starts where it is now.
+        let origin = self.plan_origin(moving);
+        let g = *self.grid.geometry();
         let report = match result {
             Ok(r) => r,
             Err(e) => {
@@ -1203,7 +1336,7 @@ impl<const W: usize, const S: usize, const Q: usize> Mission<W, S, Q> {
         // last vertex within 1.5 cells of the start, and if that keeps nothing beyond a cell,
         // from each later vertex within 3 cells in turn.
         let res_m = g.resolution_m();
-        let first = self.path.first().copied().unwrap_or(start_point);
+        let first = self.path.first().copied().unwrap_or(origin);
         let from_first = |p: &PointM| hypot(p.x_m - first.x_m, p.y_m - first.y_m);
         let skip = self
             .path
@@ -1414,376 +1547,4 @@ fn nearest_free<const W: usize>(grid: &Grid<W>, x: i32, y: i32, max_ring: i32) -
 }
 
 #[cfg(test)]
-mod tests {
-    extern crate std;
-    use std::boxed::Box;
-
-    use super::*;
-    use crate::plant::Plant;
-    use crate::world::Obstacles;
-
-    fn square(x0: f32, y0: f32, x1: f32, y1: f32) -> [PointM; 4] {
-        [
-            PointM::new(x0, y0),
-            PointM::new(x1, y0),
-            PointM::new(x1, y1),
-            PointM::new(x0, y1),
-        ]
-    }
-
-    fn config(start: PointM, goal: PointM, mode: MissionMode) -> MissionConfig {
-        let params = Params {
-            robot_radius_m: 0.4,
-            speed_m_s: 0.2,
-            initial_heading_deg: 0.0,
-            start,
-            goal,
-        };
-        let mut c = MissionConfig::from_params(&params, RobotConfig::default());
-        c.mode = mode;
-        c
-    }
-
-    /// Drive a mission against the plant until it ends; returns the status, the plant and
-    /// the smallest clearance.
-    fn run(mission: &mut Mission300, real: &Obstacles, plant: &mut Plant) -> (MissionStatus, f32) {
-        let period = mission.config().robot.controller_period_s;
-        let range = mission.config().robot.sonar_range_m;
-        let mut previous = plant.encoder_counts();
-        let mut min_clearance = f32::INFINITY;
-        for _ in 0..200_000 {
-            let counts = plant.encoder_counts();
-            let mut out = mission.step(MissionInput::Tick {
-                left_delta_counts: counts.0 - previous.0,
-                right_delta_counts: counts.1 - previous.1,
-                elapsed_s: period,
-            });
-            previous = counts;
-            while let Some(request) = out.sonar_request {
-                let range_m = plant.sonar_range_m(real, request.neck_angle_rad, range);
-                out = mission.step(MissionInput::SonarReading {
-                    neck_angle_rad: request.neck_angle_rad,
-                    range_m,
-                });
-            }
-            if out.status != MissionStatus::Running {
-                return (out.status, min_clearance);
-            }
-            plant.step(period, out.left_voltage_v, out.right_voltage_v);
-            min_clearance = min_clearance.min(plant.clearance_m(real));
-        }
-        (mission.status(), min_clearance)
-    }
-
-    fn geometry() -> GridGeometry {
-        GridGeometry::from_size_m(8.0, 8.0, 0.05).unwrap()
-    }
-
-    fn room_with_block() -> Obstacles {
-        let mut o = Obstacles::new();
-        o.push(&square(0.0, 0.0, 8.0, 0.1)).unwrap();
-        o.push(&square(0.0, 7.9, 8.0, 8.0)).unwrap();
-        o.push(&square(0.0, 0.0, 0.1, 8.0)).unwrap();
-        o.push(&square(7.9, 0.0, 8.0, 8.0)).unwrap();
-        o.push(&square(3.5, 1.5, 4.0, 6.5)).unwrap();
-        o
-    }
-
-    #[test]
-    fn reaches_the_goal_around_an_unknown_block_in_both_modes() {
-        let real = room_with_block();
-        for mode in [MissionMode::Stop, MissionMode::Continuous] {
-            let start = PointM::new(1.5, 4.0);
-            let goal = PointM::new(6.5, 4.0);
-            let c = config(start, goal, mode);
-            let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
-            let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
-            let (status, clearance) = run(&mut mission, &real, &mut plant);
-            assert_eq!(status, MissionStatus::Reached, "{mode:?}");
-            assert!(clearance > 0.0, "{mode:?}: clearance {clearance}");
-            let p = plant.pose();
-            assert!(
-                hypot(p.x_m - goal.x_m, p.y_m - goal.y_m) < 0.25,
-                "{mode:?}: ended at {p:?}"
-            );
-            let s = mission.stats();
-            assert!(s.stops >= 1 && s.plans >= 2 && s.hits > 0, "{s:?}");
-        }
-    }
-
-    #[test]
-    fn a_goal_inside_a_known_box_is_unreachable_after_the_first_sweep() {
-        let real = room_with_block();
-        let start = PointM::new(1.5, 4.0);
-        let goal = PointM::new(6.0, 4.0);
-        let c = config(start, goal, MissionMode::Stop);
-        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
-        for wall in [
-            square(5.0, 3.0, 7.0, 3.1),
-            square(5.0, 4.9, 7.0, 5.0),
-            square(5.0, 3.0, 5.1, 5.0),
-            square(6.9, 3.0, 7.0, 5.0),
-        ] {
-            mission.add_known_polygon(&wall);
-        }
-        let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
-        let (status, _) = run(&mut mission, &real, &mut plant);
-        assert_eq!(status, MissionStatus::Unreachable);
-        let s = mission.stats();
-        assert_eq!(s.stops, 1);
-        assert!(matches!(
-            s.unreachable_reason,
-            Some(UnreachableReason::NoPath | UnreachableReason::GoalBlocked)
-        ));
-    }
-
-    #[test]
-    fn the_time_limit_ends_the_mission() {
-        let real = room_with_block();
-        let start = PointM::new(1.5, 4.0);
-        let mut c = config(start, PointM::new(6.5, 4.0), MissionMode::Stop);
-        c.time_limit_s = 2.0;
-        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
-        let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
-        let (status, _) = run(&mut mission, &real, &mut plant);
-        assert_eq!(status, MissionStatus::Timeout);
-        assert!(mission.stats().time_s >= 2.0 && mission.stats().time_s < 2.2);
-    }
-
-    #[test]
-    fn abort_stops_the_motors_and_ignores_later_inputs() {
-        let c = config(
-            PointM::new(1.5, 4.0),
-            PointM::new(6.5, 4.0),
-            MissionMode::Stop,
-        );
-        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
-        let out = mission.step(MissionInput::Abort);
-        assert_eq!(out.status, MissionStatus::Aborted);
-        assert!(out
-            .events
-            .contains(&MissionEvent::Finished(MissionStatus::Aborted)));
-        let out = mission.step(MissionInput::Tick {
-            left_delta_counts: 1000,
-            right_delta_counts: -1000,
-            elapsed_s: 0.05,
-        });
-        assert_eq!((out.left_voltage_v, out.right_voltage_v), (0.0, 0.0));
-        assert_eq!(out.sonar_request, None);
-        assert_eq!(mission.phase(), MissionPhase::Done);
-    }
-
-    #[test]
-    fn readings_nobody_asked_for_and_nonsense_values_change_nothing() {
-        let c = config(
-            PointM::new(1.5, 4.0),
-            PointM::new(6.5, 4.0),
-            MissionMode::Stop,
-        );
-        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
-        let before = mission.grid().count_occupied();
-        let out = mission.step(MissionInput::SonarReading {
-            neck_angle_rad: 0.0,
-            range_m: Some(1.0),
-        });
-        assert!(out.events.is_empty());
-        assert_eq!(mission.grid().count_occupied(), before);
-        assert_eq!(mission.stats().readings, 0);
-        // A requested reading with NaN/inf values: counted, nothing marked, no panic.
-        let out = mission.step(MissionInput::Tick {
-            left_delta_counts: 0,
-            right_delta_counts: 0,
-            elapsed_s: f32::NAN,
-        });
-        assert!(out.sonar_request.is_some());
-        mission.step(MissionInput::SonarReading {
-            neck_angle_rad: f32::NAN,
-            range_m: Some(f32::INFINITY),
-        });
-        assert_eq!(mission.stats().readings, 1);
-        assert_eq!(mission.grid().count_occupied(), before);
-    }
-
-    #[test]
-    fn bad_configs_are_errors_naming_the_field() {
-        let mut c = config(
-            PointM::new(1.5, 4.0),
-            PointM::new(6.5, 4.0),
-            MissionMode::Stop,
-        );
-        c.speed_m_s = f32::NAN;
-        assert!(matches!(
-            Mission300::new(c, geometry()),
-            Err(MissionError::BadValue {
-                field: "speed_m_s",
-                ..
-            })
-        ));
-        let c = config(
-            PointM::new(1.5, 4.0),
-            PointM::new(9.5, 4.0),
-            MissionMode::Stop,
-        );
-        assert!(matches!(
-            Mission300::new(c, geometry()),
-            Err(MissionError::OffMap { which: "goal" })
-        ));
-        let big = GridGeometry::new(400, 400, 0.05).unwrap();
-        let c = config(
-            PointM::new(1.5, 4.0),
-            PointM::new(6.5, 4.0),
-            MissionMode::Stop,
-        );
-        assert!(matches!(
-            Mission300::new(c, big),
-            Err(MissionError::Grid(_))
-        ));
-    }
-
-    #[test]
-    fn a_sweep_asks_for_the_seed_angles_at_the_echo_rate() {
-        let c = config(
-            PointM::new(1.5, 4.0),
-            PointM::new(6.5, 4.0),
-            MissionMode::Stop,
-        );
-        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
-        let mut angles = std::vec::Vec::new();
-        let mut ticks = 0;
-        while mission.stats().plans == 0 && ticks < 1000 {
-            ticks += 1;
-            let mut out = mission.step(MissionInput::Tick {
-                left_delta_counts: 0,
-                right_delta_counts: 0,
-                elapsed_s: 0.05,
-            });
-            while let Some(r) = out.sonar_request {
-                angles.push(r.neck_angle_rad);
-                out = mission.step(MissionInput::SonarReading {
-                    neck_angle_rad: r.neck_angle_rad,
-                    range_m: None,
-                });
-            }
-        }
-        // ±95° at 1.8°: 52 steps each side, 105 readings from -93.6° to +93.6°.
-        assert_eq!(angles.len(), 105);
-        assert!((angles[0].to_degrees() + 93.6).abs() < 1e-3);
-        assert!((angles[104].to_degrees() - 93.6).abs() < 1e-3);
-        // 36 ms per reading: 105 readings take 3.78 s = 76 periods of 50 ms.
-        assert!((75..=77).contains(&ticks), "{ticks}");
-    }
-
-    #[test]
-    fn the_mcu_sized_mission_crosses_the_bundled_worlds() {
-        for (da, par) in [
-            (
-                include_str!("../../worlds/office.da"),
-                include_str!("../../worlds/office.par"),
-            ),
-            (
-                include_str!("../../worlds/pillars.da"),
-                include_str!("../../worlds/pillars.par"),
-            ),
-            (
-                include_str!("../../worlds/corridor.da"),
-                include_str!("../../worlds/corridor.par"),
-            ),
-        ] {
-            mcu_sized_mission_reaches(da, par);
-        }
-    }
-
-    fn mcu_sized_mission_reaches(da: &str, par: &str) {
-        let mut real = Obstacles::new();
-        crate::world::parse_da(da, &mut real).unwrap();
-        let params = crate::world::parse_par(par).unwrap();
-        for mode in [MissionMode::Stop, MissionMode::Continuous] {
-            let mut c = MissionConfig::from_params(&params, RobotConfig::default());
-            c.planner = PlannerKind::AStar;
-            c.mode = mode;
-            let mut mission = Box::new(Mission300::new(c, GridGeometry::seed_default()).unwrap());
-            let mut plant = Plant::new(
-                &c.robot,
-                Pose::new(params.start.x_m, params.start.y_m, c.initial_heading_rad),
-            );
-            let (status, clearance) = run(&mut mission, &real, &mut plant);
-            assert_eq!(
-                status,
-                MissionStatus::Reached,
-                "{mode:?} {:?}",
-                mission.stats()
-            );
-            assert!(clearance > 0.0, "{mode:?}");
-            assert_eq!(mission.stats().plan_errors, 0);
-        }
-    }
-
-    #[test]
-    fn mission_sizes_fit_their_targets() {
-        // Documented in docs/simulate.md.
-        std::println!(
-            "Mission300 {} B, Mission400 {} B",
-            Mission300::SIZE_BYTES,
-            Mission400::SIZE_BYTES
-        );
-        const { assert!(Mission300::SIZE_BYTES < 250_000) };
-        const { assert!(Mission300::SIZE_BYTES < Mission400::SIZE_BYTES) };
-    }
-
-    mod props {
-        use super::*;
-        use proptest::prelude::*;
-
-        fn any_f32() -> impl Strategy<Value = f32> {
-            prop_oneof![
-                -10.0f32..10.0,
-                Just(f32::NAN),
-                Just(f32::INFINITY),
-                Just(f32::NEG_INFINITY),
-                Just(0.0f32),
-            ]
-        }
-
-        fn any_input() -> impl Strategy<Value = MissionInput> {
-            prop_oneof![
-                8 => (-5000i32..5000, -5000i32..5000, any_f32()).prop_map(|(l, r, e)| {
-                    MissionInput::Tick {
-                        left_delta_counts: l,
-                        right_delta_counts: r,
-                        elapsed_s: e,
-                    }
-                }),
-                8 => (any_f32(), prop::option::of(any_f32())).prop_map(|(a, r)| {
-                    MissionInput::SonarReading {
-                        neck_angle_rad: a,
-                        range_m: r,
-                    }
-                }),
-                1 => Just(MissionInput::Abort),
-            ]
-        }
-
-        proptest! {
-            #![proptest_config(ProptestConfig::with_cases(32))]
-            /// Any sequence of inputs, however absurd: no panic, voltages within the
-            /// saturation, and once ended the mission stays ended with the motors off.
-            #[test]
-            fn nonsense_inputs_never_panic(inputs in prop::collection::vec(any_input(), 1..400)) {
-                let c = config(PointM::new(1.5, 4.0), PointM::new(6.5, 4.0), MissionMode::Continuous);
-                let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
-                let max_v = c.robot.max_voltage_v;
-                let mut ended = false;
-                for input in inputs {
-                    let out = mission.step(input);
-                    prop_assert!(out.left_voltage_v.abs() <= max_v + 1e-4);
-                    prop_assert!(out.right_voltage_v.abs() <= max_v + 1e-4);
-                    if ended {
-                        prop_assert!(out.status != MissionStatus::Running);
-                        prop_assert_eq!((out.left_voltage_v, out.right_voltage_v), (0.0, 0.0));
-                    }
-                    ended |= out.status != MissionStatus::Running;
-                }
-            }
-        }
-    }
-}
+mod tests;

@@ -1,0 +1,620 @@
+//! Mission tests: whole missions against the plant, and inputs that must change nothing.
+extern crate std;
+use std::boxed::Box;
+
+use super::*;
+use crate::plant::Plant;
+use crate::world::Obstacles;
+
+fn square(x0: f32, y0: f32, x1: f32, y1: f32) -> [PointM; 4] {
+    [
+        PointM::new(x0, y0),
+        PointM::new(x1, y0),
+        PointM::new(x1, y1),
+        PointM::new(x0, y1),
+    ]
+}
+
+fn config(start: PointM, goal: PointM, mode: MissionMode) -> MissionConfig {
+    let params = Params {
+        robot_radius_m: 0.4,
+        speed_m_s: 0.2,
+        initial_heading_deg: 0.0,
+        start,
+        goal,
+    };
+    let mut c = MissionConfig::from_params(&params, RobotConfig::default());
+    c.mode = mode;
+    c
+}
+
+/// A plan answered later: (due tick, id, result).
+type Due = Option<(u64, u32, Result<PlanReport, PlanError>)>;
+
+/// Run the planner of a request at once on the mission's workspace; its result is handed back
+/// `latency_ticks` later (0: within the same step sequence).
+fn serve(
+    mission: &mut Mission300,
+    planner: &mut MissionPlanner300,
+    request: Option<PlanRequest>,
+    tick: u64,
+    latency_ticks: u64,
+    due: &mut Due,
+) -> MissionOutput {
+    let mut out_last = None;
+    let mut request = request;
+    while let Some(r) = request.take() {
+        let (grid, path) = mission.plan_workspace();
+        let result = planner.plan(r.kind, grid, r.start, r.goal, path);
+        if latency_ticks > 0 {
+            *due = Some((tick + latency_ticks, r.id, result));
+            break;
+        }
+        let out = mission.step(MissionInput::PlanDone { id: r.id, result });
+        request = out.plan_request;
+        out_last = Some(out);
+    }
+    out_last.unwrap_or(MissionOutput {
+        left_voltage_v: 0.0,
+        right_voltage_v: 0.0,
+        sonar_request: None,
+        plan_request: None,
+        events: Vec::new(),
+        status: mission.status(),
+    })
+}
+
+/// Drive a mission against the plant until it ends, plans handed back at once; returns the
+/// status and the smallest clearance.
+fn run(mission: &mut Mission300, real: &Obstacles, plant: &mut Plant) -> (MissionStatus, f32) {
+    run_with_latency(mission, real, plant, 0)
+}
+
+/// [`run`] with each plan handed back `latency_ticks` controller periods after its request.
+fn run_with_latency(
+    mission: &mut Mission300,
+    real: &Obstacles,
+    plant: &mut Plant,
+    latency_ticks: u64,
+) -> (MissionStatus, f32) {
+    let mut planner = Box::new(MissionPlanner300::new());
+    let period = mission.config().robot.controller_period_s;
+    let range = mission.config().robot.sonar_range_m;
+    let mut previous = plant.encoder_counts();
+    let mut min_clearance = f32::INFINITY;
+    let mut due: Due = None;
+    for tick in 0..200_000u64 {
+        if let Some((at, id, result)) = due {
+            if at <= tick {
+                due = None;
+                let out = mission.step(MissionInput::PlanDone { id, result });
+                serve(
+                    mission,
+                    &mut planner,
+                    out.plan_request,
+                    tick,
+                    latency_ticks,
+                    &mut due,
+                );
+            }
+        }
+        let counts = plant.encoder_counts();
+        let mut out = mission.step(MissionInput::Tick {
+            left_delta_counts: counts.0 - previous.0,
+            right_delta_counts: counts.1 - previous.1,
+            elapsed_s: period,
+        });
+        previous = counts;
+        loop {
+            if out.plan_request.is_some() {
+                let request = out.plan_request.take();
+                let served = serve(
+                    mission,
+                    &mut planner,
+                    request,
+                    tick,
+                    latency_ticks,
+                    &mut due,
+                );
+                if latency_ticks == 0 {
+                    out = MissionOutput {
+                        sonar_request: out.sonar_request.or(served.sonar_request),
+                        ..served
+                    };
+                }
+            }
+            let Some(request) = out.sonar_request else {
+                break;
+            };
+            let range_m = plant.sonar_range_m(real, request.neck_angle_rad, range);
+            out = mission.step(MissionInput::SonarReading {
+                neck_angle_rad: request.neck_angle_rad,
+                range_m,
+            });
+        }
+        if mission.status() != MissionStatus::Running {
+            return (mission.status(), min_clearance);
+        }
+        plant.step(period, out.left_voltage_v, out.right_voltage_v);
+        min_clearance = min_clearance.min(plant.clearance_m(real));
+    }
+    (mission.status(), min_clearance)
+}
+
+fn geometry() -> GridGeometry {
+    GridGeometry::from_size_m(8.0, 8.0, 0.05).unwrap()
+}
+
+fn room_with_block() -> Obstacles {
+    let mut o = Obstacles::new();
+    o.push(&square(0.0, 0.0, 8.0, 0.1)).unwrap();
+    o.push(&square(0.0, 7.9, 8.0, 8.0)).unwrap();
+    o.push(&square(0.0, 0.0, 0.1, 8.0)).unwrap();
+    o.push(&square(7.9, 0.0, 8.0, 8.0)).unwrap();
+    o.push(&square(3.5, 1.5, 4.0, 6.5)).unwrap();
+    o
+}
+
+#[test]
+fn reaches_the_goal_around_an_unknown_block_in_both_modes() {
+    let real = room_with_block();
+    for mode in [MissionMode::Stop, MissionMode::Continuous] {
+        let start = PointM::new(1.5, 4.0);
+        let goal = PointM::new(6.5, 4.0);
+        let c = config(start, goal, mode);
+        let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+        let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
+        let (status, clearance) = run(&mut mission, &real, &mut plant);
+        assert_eq!(status, MissionStatus::Reached, "{mode:?}");
+        assert!(clearance > 0.0, "{mode:?}: clearance {clearance}");
+        let p = plant.pose();
+        assert!(
+            hypot(p.x_m - goal.x_m, p.y_m - goal.y_m) < 0.25,
+            "{mode:?}: ended at {p:?}"
+        );
+        let s = mission.stats();
+        assert!(s.stops >= 1 && s.plans >= 2 && s.hits > 0, "{s:?}");
+    }
+}
+
+#[test]
+fn a_goal_inside_a_known_box_is_unreachable_after_the_first_sweep() {
+    let real = room_with_block();
+    let start = PointM::new(1.5, 4.0);
+    let goal = PointM::new(6.0, 4.0);
+    let c = config(start, goal, MissionMode::Stop);
+    let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+    for wall in [
+        square(5.0, 3.0, 7.0, 3.1),
+        square(5.0, 4.9, 7.0, 5.0),
+        square(5.0, 3.0, 5.1, 5.0),
+        square(6.9, 3.0, 7.0, 5.0),
+    ] {
+        mission.add_known_polygon(&wall);
+    }
+    let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
+    let (status, _) = run(&mut mission, &real, &mut plant);
+    assert_eq!(status, MissionStatus::Unreachable);
+    let s = mission.stats();
+    assert_eq!(s.stops, 1);
+    assert!(matches!(
+        s.unreachable_reason,
+        Some(UnreachableReason::NoPath | UnreachableReason::GoalBlocked)
+    ));
+}
+
+#[test]
+fn the_time_limit_ends_the_mission() {
+    let real = room_with_block();
+    let start = PointM::new(1.5, 4.0);
+    let mut c = config(start, PointM::new(6.5, 4.0), MissionMode::Stop);
+    c.time_limit_s = 2.0;
+    let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+    let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
+    let (status, _) = run(&mut mission, &real, &mut plant);
+    assert_eq!(status, MissionStatus::Timeout);
+    assert!(mission.stats().time_s >= 2.0 && mission.stats().time_s < 2.2);
+}
+
+#[test]
+fn abort_stops_the_motors_and_ignores_later_inputs() {
+    let c = config(
+        PointM::new(1.5, 4.0),
+        PointM::new(6.5, 4.0),
+        MissionMode::Stop,
+    );
+    let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+    let out = mission.step(MissionInput::Abort);
+    assert_eq!(out.status, MissionStatus::Aborted);
+    assert!(out
+        .events
+        .contains(&MissionEvent::Finished(MissionStatus::Aborted)));
+    let out = mission.step(MissionInput::Tick {
+        left_delta_counts: 1000,
+        right_delta_counts: -1000,
+        elapsed_s: 0.05,
+    });
+    assert_eq!((out.left_voltage_v, out.right_voltage_v), (0.0, 0.0));
+    assert_eq!(out.sonar_request, None);
+    assert_eq!(mission.phase(), MissionPhase::Done);
+}
+
+#[test]
+fn readings_nobody_asked_for_and_nonsense_values_change_nothing() {
+    let c = config(
+        PointM::new(1.5, 4.0),
+        PointM::new(6.5, 4.0),
+        MissionMode::Stop,
+    );
+    let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+    let before = mission.grid().count_occupied();
+    let out = mission.step(MissionInput::SonarReading {
+        neck_angle_rad: 0.0,
+        range_m: Some(1.0),
+    });
+    assert!(out.events.is_empty());
+    assert_eq!(mission.grid().count_occupied(), before);
+    assert_eq!(mission.stats().readings, 0);
+    // A requested reading with NaN/inf values: counted, nothing marked, no panic.
+    let out = mission.step(MissionInput::Tick {
+        left_delta_counts: 0,
+        right_delta_counts: 0,
+        elapsed_s: f32::NAN,
+    });
+    assert!(out.sonar_request.is_some());
+    mission.step(MissionInput::SonarReading {
+        neck_angle_rad: f32::NAN,
+        range_m: Some(f32::INFINITY),
+    });
+    assert_eq!(mission.stats().readings, 1);
+    assert_eq!(mission.grid().count_occupied(), before);
+}
+
+#[test]
+fn bad_configs_are_errors_naming_the_field() {
+    let mut c = config(
+        PointM::new(1.5, 4.0),
+        PointM::new(6.5, 4.0),
+        MissionMode::Stop,
+    );
+    c.speed_m_s = f32::NAN;
+    assert!(matches!(
+        Mission300::new(c, geometry()),
+        Err(MissionError::BadValue {
+            field: "speed_m_s",
+            ..
+        })
+    ));
+    let c = config(
+        PointM::new(1.5, 4.0),
+        PointM::new(9.5, 4.0),
+        MissionMode::Stop,
+    );
+    assert!(matches!(
+        Mission300::new(c, geometry()),
+        Err(MissionError::OffMap { which: "goal" })
+    ));
+    let big = GridGeometry::new(400, 400, 0.05).unwrap();
+    let c = config(
+        PointM::new(1.5, 4.0),
+        PointM::new(6.5, 4.0),
+        MissionMode::Stop,
+    );
+    assert!(matches!(
+        Mission300::new(c, big),
+        Err(MissionError::Grid(_))
+    ));
+}
+
+#[test]
+fn a_sweep_asks_for_the_seed_angles_at_the_echo_rate() {
+    let c = config(
+        PointM::new(1.5, 4.0),
+        PointM::new(6.5, 4.0),
+        MissionMode::Stop,
+    );
+    let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+    let mut angles = std::vec::Vec::new();
+    let mut ticks = 0;
+    while mission.stats().plans == 0 && ticks < 1000 {
+        ticks += 1;
+        let mut out = mission.step(MissionInput::Tick {
+            left_delta_counts: 0,
+            right_delta_counts: 0,
+            elapsed_s: 0.05,
+        });
+        while let Some(r) = out.sonar_request {
+            angles.push(r.neck_angle_rad);
+            out = mission.step(MissionInput::SonarReading {
+                neck_angle_rad: r.neck_angle_rad,
+                range_m: None,
+            });
+        }
+    }
+    // ±95° at 1.8°: 52 steps each side, 105 readings from -93.6° to +93.6°.
+    assert_eq!(angles.len(), 105);
+    assert!((angles[0].to_degrees() + 93.6).abs() < 1e-3);
+    assert!((angles[104].to_degrees() - 93.6).abs() < 1e-3);
+    // 36 ms per reading: 105 readings take 3.78 s = 76 periods of 50 ms.
+    assert!((75..=77).contains(&ticks), "{ticks}");
+}
+
+#[test]
+fn the_mcu_sized_mission_crosses_the_bundled_worlds() {
+    for (da, par) in [
+        (
+            include_str!("../../../worlds/office.da"),
+            include_str!("../../../worlds/office.par"),
+        ),
+        (
+            include_str!("../../../worlds/pillars.da"),
+            include_str!("../../../worlds/pillars.par"),
+        ),
+        (
+            include_str!("../../../worlds/corridor.da"),
+            include_str!("../../../worlds/corridor.par"),
+        ),
+    ] {
+        mcu_sized_mission_reaches(da, par);
+    }
+}
+
+fn mcu_sized_mission_reaches(da: &str, par: &str) {
+    let mut real = Obstacles::new();
+    crate::world::parse_da(da, &mut real).unwrap();
+    let params = crate::world::parse_par(par).unwrap();
+    // Plans handed back at once, and one control period later (the MCU's latency).
+    for (mode, latency_ticks) in [
+        (MissionMode::Stop, 0),
+        (MissionMode::Continuous, 0),
+        (MissionMode::Stop, 1),
+        (MissionMode::Continuous, 1),
+    ] {
+        let mut c = MissionConfig::from_params(&params, RobotConfig::default());
+        c.planner = PlannerKind::AStar;
+        c.mode = mode;
+        let mut mission = Box::new(Mission300::new(c, GridGeometry::seed_default()).unwrap());
+        let mut plant = Plant::new(
+            &c.robot,
+            Pose::new(params.start.x_m, params.start.y_m, c.initial_heading_rad),
+        );
+        let (status, clearance) = run_with_latency(&mut mission, &real, &mut plant, latency_ticks);
+        assert_eq!(
+            status,
+            MissionStatus::Reached,
+            "{mode:?} latency {latency_ticks}: {:?}",
+            mission.stats()
+        );
+        assert!(clearance > 0.0, "{mode:?} latency {latency_ticks}");
+        assert_eq!(mission.stats().plan_errors, 0);
+    }
+}
+
+/// Tick with no motion until the mission asks for a plan; answers every sonar request with
+/// `range_m`. Returns the request and the ticks it took.
+fn tick_until_plan_request(mission: &mut Mission300, range_m: Option<f32>) -> (PlanRequest, u32) {
+    for ticks in 1..10_000 {
+        let mut out = mission.step(MissionInput::Tick {
+            left_delta_counts: 0,
+            right_delta_counts: 0,
+            elapsed_s: 0.05,
+        });
+        loop {
+            if let Some(r) = out.plan_request {
+                return (r, ticks);
+            }
+            let Some(s) = out.sonar_request else { break };
+            out = mission.step(MissionInput::SonarReading {
+                neck_angle_rad: s.neck_angle_rad,
+                range_m,
+            });
+        }
+    }
+    panic!("no plan request: {:?}", mission.stats());
+}
+
+#[test]
+fn the_robot_holds_while_the_planner_runs_and_stale_results_are_ignored() {
+    let c = config(
+        PointM::new(1.5, 4.0),
+        PointM::new(6.5, 4.0),
+        MissionMode::Stop,
+    );
+    let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+    // A result before any request changes nothing.
+    let stray = MissionInput::PlanDone {
+        id: 1,
+        result: Err(PlanError::QueueFull { capacity: 1 }),
+    };
+    assert!(mission.step(stray).events.is_empty());
+    assert_eq!(mission.stats().plan_errors, 0);
+
+    let (request, _) = tick_until_plan_request(&mut mission, None);
+    assert_eq!(mission.phase(), MissionPhase::Plan);
+    assert!(mission.plan_pending());
+    assert_eq!(request.goal, c.goal);
+    // Ten periods without the result: the controller keeps stepping (holding), nothing else
+    // is asked, the phase stays.
+    for _ in 0..10 {
+        let out = mission.step(MissionInput::Tick {
+            left_delta_counts: 0,
+            right_delta_counts: 0,
+            elapsed_s: 0.05,
+        });
+        assert_eq!(out.sonar_request, None);
+        assert_eq!(out.plan_request, None);
+        assert_eq!(mission.phase(), MissionPhase::Plan);
+    }
+    // A result for another id is ignored; the right one is applied.
+    let wrong = MissionInput::PlanDone {
+        id: request.id.wrapping_add(1),
+        result: Err(PlanError::QueueFull { capacity: 1 }),
+    };
+    mission.step(wrong);
+    assert!(mission.plan_pending());
+    assert_eq!(mission.stats().plan_errors, 0);
+    let mut planner = Box::new(MissionPlanner300::new());
+    let (grid, path) = mission.plan_workspace();
+    let result = planner.plan(request.kind, grid, request.start, request.goal, path);
+    let out = mission.step(MissionInput::PlanDone {
+        id: request.id,
+        result,
+    });
+    assert!(
+        out.events.iter().any(|e| matches!(
+            e,
+            MissionEvent::Planned {
+                status: PlanStatus::Found,
+                ..
+            }
+        )),
+        "{:?}",
+        out.events
+    );
+    assert_eq!(mission.phase(), MissionPhase::Follow);
+    assert!(!mission.plan_pending());
+    // Answering the same id twice does nothing more.
+    let again = mission.step(MissionInput::PlanDone {
+        id: request.id,
+        result,
+    });
+    assert!(again.events.is_empty());
+}
+
+#[test]
+fn a_sweep_that_ends_while_the_planner_runs_is_marked_after_the_result() {
+    // Continuous mode, a wall 1 m ahead: the first (standing) sweep asks for a plan; the
+    // result comes back only after the first moving sweep has ended.
+    let c = config(
+        PointM::new(1.5, 4.0),
+        PointM::new(6.5, 4.0),
+        MissionMode::Continuous,
+    );
+    let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+    let (request, _) = tick_until_plan_request(&mut mission, None);
+    let mut planner = Box::new(MissionPlanner300::new());
+    let (grid, path) = mission.plan_workspace();
+    let result = planner.plan(request.kind, grid, request.start, request.goal, path);
+    mission.step(MissionInput::PlanDone {
+        id: request.id,
+        result,
+    });
+    assert_eq!(mission.phase(), MissionPhase::Follow);
+    // The first moving sweep (hits at 1 m) ends with a replan request; hold its result back.
+    let (request, _) = tick_until_plan_request(&mut mission, Some(1.0));
+    let occupied = mission.grid().count_occupied();
+    assert!(occupied > 0, "the moving sweep's hits are marked");
+    let hits_before = mission.stats().hits;
+    // A whole second sweep goes by: it ends, but nothing is marked while the plan is out.
+    let mut readings = 0;
+    for _ in 0..400 {
+        let mut out = mission.step(MissionInput::Tick {
+            left_delta_counts: 0,
+            right_delta_counts: 0,
+            elapsed_s: 0.05,
+        });
+        assert_eq!(out.plan_request, None);
+        while let Some(s) = out.sonar_request {
+            readings += 1;
+            out = mission.step(MissionInput::SonarReading {
+                neck_angle_rad: s.neck_angle_rad,
+                range_m: Some(1.2),
+            });
+            assert_eq!(out.plan_request, None);
+        }
+    }
+    assert!(readings >= 105, "{readings}");
+    assert_eq!(mission.grid().count_occupied(), occupied);
+    assert_eq!(mission.stats().hits, hits_before);
+    // The result comes back: the deferred sweep is marked.
+    let (grid, path) = mission.plan_workspace();
+    let result = planner.plan(request.kind, grid, request.start, request.goal, path);
+    mission.step(MissionInput::PlanDone {
+        id: request.id,
+        result,
+    });
+    assert!(mission.stats().hits > hits_before);
+    assert!(mission.grid().count_occupied() > occupied);
+}
+
+#[test]
+fn mission_sizes_fit_their_targets() {
+    // Documented in docs/simulate.md.
+    std::println!(
+        "Mission300 {} B, Mission400 {} B",
+        Mission300::SIZE_BYTES,
+        Mission400::SIZE_BYTES
+    );
+    const { assert!(Mission300::SIZE_BYTES < 250_000) };
+    const { assert!(Mission300::SIZE_BYTES < Mission400::SIZE_BYTES) };
+}
+
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn any_f32() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            -10.0f32..10.0,
+            Just(f32::NAN),
+            Just(f32::INFINITY),
+            Just(f32::NEG_INFINITY),
+            Just(0.0f32),
+        ]
+    }
+
+    fn any_input() -> impl Strategy<Value = MissionInput> {
+        prop_oneof![
+            8 => (-5000i32..5000, -5000i32..5000, any_f32()).prop_map(|(l, r, e)| {
+                MissionInput::Tick {
+                    left_delta_counts: l,
+                    right_delta_counts: r,
+                    elapsed_s: e,
+                }
+            }),
+            8 => (any_f32(), prop::option::of(any_f32())).prop_map(|(a, r)| {
+                MissionInput::SonarReading {
+                    neck_angle_rad: a,
+                    range_m: r,
+                }
+            }),
+            2 => (0u32..4, prop::bool::ANY).prop_map(|(id, ok)| MissionInput::PlanDone {
+                id,
+                result: if ok {
+                    Ok(PlanReport {
+                        status: PlanStatus::Found,
+                        expanded: 1,
+                        cost: 1,
+                        length_m: 1.0,
+                    })
+                } else {
+                    Err(PlanError::QueueFull { capacity: 8 })
+                },
+            }),
+            1 => Just(MissionInput::Abort),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+        /// Any sequence of inputs, however absurd: no panic, voltages within the
+        /// saturation, and once ended the mission stays ended with the motors off.
+        #[test]
+        fn nonsense_inputs_never_panic(inputs in prop::collection::vec(any_input(), 1..400)) {
+            let c = config(PointM::new(1.5, 4.0), PointM::new(6.5, 4.0), MissionMode::Continuous);
+            let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+            let max_v = c.robot.max_voltage_v;
+            let mut ended = false;
+            for input in inputs {
+                let out = mission.step(input);
+                prop_assert!(out.left_voltage_v.abs() <= max_v + 1e-4);
+                prop_assert!(out.right_voltage_v.abs() <= max_v + 1e-4);
+                if ended {
+                    prop_assert!(out.status != MissionStatus::Running);
+                    prop_assert_eq!((out.left_voltage_v, out.right_voltage_v), (0.0, 0.0));
+                }
+                ended |= out.status != MissionStatus::Running;
+            }
+        }
+    }
+}
