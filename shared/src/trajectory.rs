@@ -54,10 +54,10 @@ use heapless::Vec;
 
 use crate::geom::PointM;
 use crate::math::{abs, atan2, cos, hypot, sin, wrap_angle_rad};
-use crate::plan::MAX_PATH_POINTS;
 
-/// Largest number of points a supplied trajectory can hold (the planner's path capacity).
-pub const MAX_TRAJECTORY_POINTS: usize = MAX_PATH_POINTS;
+/// Largest number of points a supplied trajectory can hold (the mission's prefix capacity,
+/// `mission::MISSION_PATH_POINTS`: 8 KiB).
+pub const MAX_TRAJECTORY_POINTS: usize = 1024;
 
 /// Segments shorter than this are skipped (they have no reliable direction), metres.
 pub const MIN_SEGMENT_M: f32 = 1.0e-3;

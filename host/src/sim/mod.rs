@@ -3,17 +3,17 @@
 //!
 //! The loop, once per controller period:
 //!
-//! 1. read the plant's encoder counts and feed their deltas to the mission as a `Tick`;
-//! 2. hand back a plan whose latency has run out (`PlanDone`);
-//! 3. answer every sonar request of the mission by ray casting from the plant's true pose on
-//!    the real polygons (the mission only knows its odometry);
-//! 4. run the planner for a plan request at once, on the mission's grid (which does not change
-//!    until the result is back), and keep the result until its latency has run out;
-//! 5. apply the mission's wheel voltages to the plant for one period;
-//! 6. record the true pose, the clearance to the real polygons (negative = collision, which
+//! 1. read the plant's encoder counts and hand their deltas to the mission's
+//!    [`LocalRunner`] (the pilot, the mission, the planner with its latency; see its docs),
+//!    which answers every sonar request by ray casting from the plant's true pose on the real
+//!    polygons (the mission only knows its odometry);
+//! 2. apply the pilot's wheel voltages to the plant for one period;
+//! 3. record the true pose, the clearance to the real polygons (negative = collision, which
 //!    aborts the mission with status `collision`) and, for the pictures, snapshots.
 //!
-//! **Latency model.** A plan asked for during period `k` is handed back in period
+//! **Latency model** (`--plan-latency-ms`, [`SimSetup::plan_latency_s`]): the planner runs at
+//! once on the mission's grid (which does not change until the result is back) and its result
+//! is kept until its latency has run out. A plan asked for during period `k` is handed back in period
 //! `k + ceil(latency / period)`, after that period's controller step, so the new trajectory
 //! starts at the tick after. With the default latency of one period (50 ms) the controller
 //! holds (or follows the old prefix) for one more tick than without latency: the firmware's
@@ -31,11 +31,10 @@ use twil_core::control::Pose;
 use twil_core::geom::PointM;
 use twil_core::grid::{Grid400, GridGeometry};
 use twil_core::mission::{
-    HostMissionPlanner, Mission400, MissionConfig, MissionEvent, MissionInput, MissionMode,
-    MissionOutput, MissionStats, MissionStatus, PlanRequest,
+    HostMissionPlanner, LocalRunner, Mission400, MissionConfig, MissionMode, MissionStats,
+    MissionStatus,
 };
 use twil_core::plan::PlannerKind;
-use twil_core::plan::{PlanError, PlanReport};
 use twil_core::plant::Plant;
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
@@ -226,6 +225,7 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
             mission.add_known_polygon(polygon);
         }
     }
+    let mut planner = Box::new(HostMissionPlanner::new());
     let start_pose = Pose {
         x_m: setup.params.start.x_m,
         y_m: setup.params.start.y_m,
@@ -233,6 +233,8 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
     };
     let mut plant = Plant::new(&robot, start_pose);
     let period_s = robot.controller_period_s;
+    let latency_ticks = plan_latency_ticks(setup.plan_latency_s, period_s);
+    let mut runner = LocalRunner::new(&mut mission, &mut planner, latency_ticks);
     let mut trajectory = Vec::new();
     let mut plans = Vec::new();
     let mut frames = Vec::new();
@@ -249,9 +251,6 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
     });
     // A hard cap on loop iterations in case the mission never returns a final status.
     let max_ticks = ((setup.time_limit_s / period_s) as u64).saturating_add(100);
-    let latency_ticks = plan_latency_ticks(setup.plan_latency_s, period_s);
-    let mut planner = Box::new(HostMissionPlanner::new());
-    let mut pending: Option<DuePlan> = None;
     let mut ticks = 0u64;
     let debug = std::env::var_os("TWIL_SIM_DEBUG").is_some();
     while !collision {
@@ -259,74 +258,35 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
         if ticks > max_ticks {
             bail!("the mission did not end within its time limit (internal error)");
         }
-        let mut planned = false;
         let counts = plant.encoder_counts();
         let deltas = (
             counts.0.wrapping_sub(previous_counts.0),
             counts.1.wrapping_sub(previous_counts.1),
         );
         previous_counts = counts;
-        let out = mission.step(MissionInput::Tick {
-            left_delta_counts: deltas.0,
-            right_delta_counts: deltas.1,
-            elapsed_s: period_s,
+        let outcome = runner.tick(deltas.0, deltas.1, period_s, &mut |angle| {
+            plant.sonar_range_m(&setup.real, angle, robot.sonar_range_m)
         });
-        if debug && !out.events.is_empty() {
-            eprintln!("{t_s:8.2} {:?} pose {:?}", out.events, mission.pose_world());
+        if debug && !outcome.events.is_empty() {
+            let m = runner.mission();
+            eprintln!("{t_s:8.2} {:?} pose {:?}", outcome.events, m.pose_world());
+            eprintln!("         prefix {:?}", m.prefix());
         }
-        planned |= has_plan(&out.events);
-        let (served, p) = serve_plans(&mut mission, &mut planner, out, ticks, latency_ticks);
-        pending = pending.or(p);
-        planned |= served.planned;
-        let mut out = served.out;
-        // A plan whose latency ran out comes back after this period's controller step (the
-        // controller held meanwhile; the new trajectory starts at the next tick).
-        if let Some(due) = pending.take_if(|d| d.tick <= ticks) {
-            let done = mission.step(MissionInput::PlanDone {
-                id: due.id,
-                result: due.result,
-            });
-            planned |= has_plan(&done.events);
-            let (more, p) = serve_plans(&mut mission, &mut planner, done, ticks, latency_ticks);
-            pending = p;
-            planned |= more.planned;
-            out.sonar_request = out.sonar_request.or(more.out.sonar_request);
-        }
-        while let Some(request) = out.sonar_request {
-            let range_m =
-                plant.sonar_range_m(&setup.real, request.neck_angle_rad, robot.sonar_range_m);
-            let reading = mission.step(MissionInput::SonarReading {
-                neck_angle_rad: request.neck_angle_rad,
-                range_m,
-            });
-            if debug && !reading.events.is_empty() {
-                eprintln!(
-                    "{t_s:8.2} {:?} prefix {:?}",
-                    reading.events,
-                    mission.prefix()
-                );
-            }
-            planned |= has_plan(&reading.events);
-            let (served, p) =
-                serve_plans(&mut mission, &mut planner, reading, ticks, latency_ticks);
-            pending = pending.or(p);
-            planned |= served.planned;
-            out = served.out;
-        }
-        if planned {
+        if outcome.planned {
+            let m = runner.mission();
             plans.push(snapshot(
-                &mission,
+                m,
                 t_s,
                 plant.pose(),
                 trajectory.len(),
-                mission.stats().plans,
+                m.stats().plans,
             ));
         }
-        if out.status != MissionStatus::Running {
+        if outcome.status != MissionStatus::Running {
             break;
         }
         let before = plant.pose();
-        plant.step(period_s, out.left_voltage_v, out.right_voltage_v);
+        plant.step(period_s, outcome.left_voltage_v, outcome.right_voltage_v);
         t_s += period_s;
         let after = plant.pose();
         let d = ((after.x_m - before.x_m).powi(2) + (after.y_m - before.y_m).powi(2)).sqrt();
@@ -340,18 +300,25 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
         }
         if clearance < 0.0 {
             collision = true;
-            mission.step(MissionInput::Abort);
+            runner.abort();
         }
         if setup.snapshot_period_s > 0.0 && t_s >= next_snapshot_s {
             next_snapshot_s += setup.snapshot_period_s;
-            frames.push(snapshot(&mission, t_s, after, trajectory.len(), 0));
+            frames.push(snapshot(runner.mission(), t_s, after, trajectory.len(), 0));
         }
         if t_s >= next_progress_s {
             next_progress_s += 1.0;
-            progress.update(t_s, setup.time_limit_s, &mission.stats());
+            progress.update(t_s, setup.time_limit_s, &runner.mission().stats());
         }
     }
-    frames.push(snapshot(&mission, t_s, plant.pose(), trajectory.len(), 0));
+    frames.push(snapshot(
+        runner.mission(),
+        t_s,
+        plant.pose(),
+        trajectory.len(),
+        0,
+    ));
+    let mission = runner.mission();
     let status = if collision {
         SimStatus::Collision
     } else {
@@ -390,68 +357,6 @@ fn plan_latency_ticks(latency_s: f32, period_s: f32) -> u64 {
     }
     // A few ppm of slack so that 0.05 / 0.05 is one period, not two.
     ((latency_s / period_s) * (1.0 - 1.0e-6)).ceil().min(1.0e9) as u64
-}
-
-/// A plan computed and not yet handed back.
-struct DuePlan {
-    /// Tick at which it is handed back.
-    tick: u64,
-    id: u32,
-    result: Result<PlanReport, PlanError>,
-}
-
-/// What [`serve_plans`] leaves: the last output (the one whose sonar request is still to be
-/// answered) and whether a plan was applied.
-struct Served {
-    out: MissionOutput,
-    planned: bool,
-}
-
-/// Run the planner for the plan request of `out`, if any, on the mission's workspace. With a
-/// latency the result is kept for later (returned); without, it is handed back at once, and
-/// so are the requests that follow from it.
-fn serve_plans(
-    mission: &mut Mission400,
-    planner: &mut HostMissionPlanner,
-    mut out: MissionOutput,
-    tick: u64,
-    latency_ticks: u64,
-) -> (Served, Option<DuePlan>) {
-    let mut planned = false;
-    while let Some(request) = out.plan_request.take() {
-        let result = run_planner(mission, planner, &request);
-        if latency_ticks > 0 {
-            let due = DuePlan {
-                tick: tick + latency_ticks,
-                id: request.id,
-                result,
-            };
-            return (Served { out, planned }, Some(due));
-        }
-        let sonar_request = out.sonar_request;
-        out = mission.step(MissionInput::PlanDone {
-            id: request.id,
-            result,
-        });
-        planned |= has_plan(&out.events);
-        out.sonar_request = out.sonar_request.or(sonar_request);
-    }
-    (Served { out, planned }, None)
-}
-
-fn run_planner(
-    mission: &mut Mission400,
-    planner: &mut HostMissionPlanner,
-    request: &PlanRequest,
-) -> Result<PlanReport, PlanError> {
-    let (grid, path) = mission.plan_workspace();
-    planner.plan(request.kind, grid, request.start, request.goal, path)
-}
-
-fn has_plan(events: &[MissionEvent]) -> bool {
-    events
-        .iter()
-        .any(|e| matches!(e, MissionEvent::Planned { .. }))
 }
 
 /// The length of the plan from start to goal on the real world fully known (the yardstick the

@@ -5,14 +5,20 @@
 //!
 //! ## Shape
 //!
-//! A [`Mission`] owns everything the navigation needs but the planner: the occupancy grid, the
-//! full path and the kept prefix, the [`TrajectorySupplier`], the [`Controller`] and the buffer
-//! of the sweep in progress. It does no I/O: the shell (the firmware, `twil simulate`, a test)
-//! calls [`Mission::step`] with
+//! Two halves, each a plain value with step functions and no I/O:
 //!
-//! - [`MissionInput::Tick`] once per controller period (50 ms) with the encoder count deltas;
-//!   the output carries the wheel voltages to apply and, when the sonar is sweeping and the
-//!   sweep's time budget allows, a [`SonarRequest`] (a neck angle to measure at);
+//! - the [`Pilot`] (`pilot.rs`): odometry, the trajectory supplier and the controller, run
+//!   once per 50 ms control period; cheap, and its cost does not depend on the map;
+//! - the [`Mission`] (this file): the occupancy grid and the seen space, the sweep in progress,
+//!   the full path and the kept prefix; it steers the pilot and asks for sonar readings and
+//!   plans. It owns no planner: plans are asked for and handed back.
+//!
+//! The shell (the firmware, [`LocalRunner`] in `twil simulate` and the tests) calls
+//! [`Pilot::tick`] with the encoder counts every period, and [`Mission::step`] with
+//!
+//! - [`MissionInput::Tick`] with the pilot's [`PilotReport`] of that period; the output may
+//!   carry a [`PilotCommand`] (follow the new prefix, hold, stop) and, when the sonar is
+//!   sweeping and the sweep's time budget allows, a [`SonarRequest`] (a neck angle);
 //! - [`MissionInput::SonarReading`] with the answer to each request; the output may carry the
 //!   next request (several readings fit in one period when the echo wait is short);
 //! - [`MissionInput::PlanDone`] with the result of a [`PlanRequest`];
@@ -30,6 +36,9 @@
 //! and the path do not change: a sweep that ends meanwhile is marked after the result. The
 //! firmware runs the planner in its lowest-priority task; `twil simulate` hands the result back
 //! after a stated latency (one control period by default, see `docs/simulate.md`).
+//!
+//! Every output's [`MissionOutput::pilot_command`] goes to the pilot at once (the firmware:
+//! before the pilot's next tick). The wheel voltages are the pilot's.
 //!
 //! Simulated and real time are the same thing here: the mission's clock advances by one
 //! controller period per tick, and a sonar reading costs `echo_wait_s + neck_step_time_s` of
@@ -95,20 +104,20 @@
 //! ## Memory
 //!
 //! No heap. The size is dominated by the two grids (map and seen space, 1 bit per cell each)
-//! and two paths of [`MAX_PATH_POINTS`](crate::plan::MAX_PATH_POINTS) points (24 KiB each)
-//! plus the supplier's copy. The planner (4 bits per cell of scratch plus its queue) belongs
+//! and two paths of [`MISSION_PATH_POINTS`] points (8 KiB each) plus the supplier's copy:
+//! [`Mission300`] fits the MCU's 64 KiB CCM. The planner (4 bits per cell of scratch plus its queue) belongs
 //! to the shell ([`MissionPlanner300`], [`HostMissionPlanner`]). [`Mission::SIZE_BYTES`] gives
 //! the exact figure for an instantiation; see `docs/simulate.md` for the numbers of
 //! [`Mission300`] and [`Mission400`].
 
 use heapless::Vec;
 
-use crate::control::{ControlInput, Controller, Pose};
+use crate::control::Pose;
 use crate::geom::{Cell, PointM};
 use crate::grid::{words_for_cells, Grid, GridError, GridGeometry};
 use crate::math::{cos, hypot, sin};
 use crate::plan::{
-    needs_full_sweep, prune_visible_prefix, PathM, PlanError, PlanReport, PlanStatus, Planner,
+    needs_full_sweep, prune_visible_prefix, PlanError, PlanReport, PlanStatus, Planner,
     PlannerKind, SCRATCH_WORDS_300, SCRATCH_WORDS_400,
 };
 use crate::raster::{mark_point_m, mark_polygon, BresenhamLine};
@@ -117,7 +126,7 @@ use crate::sonar::{
     filter_constant_depth, HitBuffer, RcdParams, Reading, SweepBuffer, SweepKind, SweepPlan,
     SWEEP_CAPACITY,
 };
-use crate::trajectory::{FrameTransform, SupplierConfig, SupplyEvent, TrajectorySupplier};
+use crate::trajectory::{FrameTransform, SupplierConfig, SupplyEvent};
 use crate::world::Params;
 
 /// Most readings one sweep can hold: a full ±180° sweep at 1.8° per step (200 steps + 1).
@@ -133,6 +142,15 @@ pub const MISSION_QUEUE: usize = 3072;
 
 /// Open-list capacity of [`HostMissionPlanner`] (entries).
 pub const HOST_MISSION_QUEUE: usize = 65536;
+
+/// Vertices of the mission's plan and of its kept prefix. A path with more vertices (a
+/// 300 × 300 maze's needs up to 2 845) ends the mission with [`PlanError::PathFull`]; rooms
+/// need a few dozen. 8 KiB per path: the three paths of the mission (plan, prefix, the
+/// supplier's copy) must fit the MCU's 64 KiB CCM with the two grids.
+pub const MISSION_PATH_POINTS: usize = crate::trajectory::MAX_TRAJECTORY_POINTS;
+
+/// A plan or a prefix of the mission, world metres.
+pub type MissionPath = Vec<PointM, MISSION_PATH_POINTS>;
 
 /// A mission on a grid of at most 300 × 300 cells (15 m × 15 m at 0.05 m): the MCU size.
 pub type Mission300 = Mission<{ words_for_cells(300 * 300) }>;
@@ -358,15 +376,8 @@ pub enum MissionPhase {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum MissionInput {
-    /// A controller period went by.
-    Tick {
-        /// Left encoder counts since the previous tick.
-        left_delta_counts: i32,
-        /// Right encoder counts since the previous tick.
-        right_delta_counts: i32,
-        /// Real time since the previous tick, seconds (for the overrun flag).
-        elapsed_s: f32,
-    },
+    /// A controller period went by: what the [`Pilot`] did in it.
+    Tick(PilotReport),
     /// The answer to the last [`SonarRequest`].
     SonarReading {
         /// Neck angle the reading was taken at, robot frame, radians.
@@ -451,10 +462,8 @@ pub enum MissionEvent {
 /// What one [`Mission::step`] asks of the shell.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MissionOutput {
-    /// Left motor voltage to apply until the next tick, volts.
-    pub left_voltage_v: f32,
-    /// Right motor voltage, volts.
-    pub right_voltage_v: f32,
+    /// What the [`Pilot`] must do from now on (the latest command wins; `Stop` once ended).
+    pub pilot_command: Option<PilotCommand>,
     /// Take this sonar reading now (before the next tick).
     pub sonar_request: Option<SonarRequest>,
     /// Run the planner (at the lowest priority) and answer with [`MissionInput::PlanDone`].
@@ -533,13 +542,10 @@ struct PendingPlan {
 /// The mission: see the module documentation.
 pub struct Mission<const W: usize> {
     config: MissionConfig,
-    supplier_config: SupplierConfig,
     grid: Grid<W>,
     seen: Grid<W>,
-    path: PathM,
-    prefix: PathM,
-    supplier: TrajectorySupplier,
-    controller: Controller,
+    path: MissionPath,
+    prefix: MissionPath,
     frame: FrameTransform,
     expansion_cells: u16,
     readings: SweepBuffer,
@@ -552,10 +558,11 @@ pub struct Mission<const W: usize> {
     phase: MissionPhase,
     status: MissionStatus,
     stats: MissionStats,
-    /// Controller reference (control point), odometry frame.
-    reference: PointM,
+    /// The odometry pose of the latest tick.
     pose_odom: Pose,
-    voltages_v: (f32, f32),
+    /// Where the supplier stood at the latest tick (odometry frame) and on which segment.
+    supply_point_odom: PointM,
+    supply_segment: u16,
     last_plan_origin: Option<PointM>,
     stalled_plans: u16,
     pending_plan: Option<PendingPlan>,
@@ -583,18 +590,13 @@ impl<const W: usize> Mission<W> {
             return Err(MissionError::OffMap { which: "goal" });
         }
         let frame = FrameTransform::new(config.start, config.initial_heading_rad);
-        let controller = Controller::new(&config.robot, Pose::default());
-        let reference = PointM::new(config.robot.point_offset_m, 0.0);
         Ok(Self {
-            supplier_config: config.supplier_config(),
             expansion_cells: geometry.expansion_cells(config.robot.planning_radius_m),
             config,
             grid,
             seen,
             path: Vec::new(),
             prefix: Vec::new(),
-            supplier: TrajectorySupplier::new(),
-            controller,
             frame,
             readings: SweepBuffer::new(),
             filtered: HitBuffer::new(),
@@ -606,9 +608,9 @@ impl<const W: usize> Mission<W> {
             phase: MissionPhase::Sweep { full: false },
             status: MissionStatus::Running,
             stats: MissionStats::default(),
-            reference,
             pose_odom: Pose::default(),
-            voltages_v: (0.0, 0.0),
+            supply_point_odom: PointM::new(0.0, 0.0),
+            supply_segment: 0,
             last_plan_origin: None,
             stalled_plans: 0,
             pending_plan: None,
@@ -620,7 +622,7 @@ impl<const W: usize> Mission<W> {
     /// What the planner of a [`PlanRequest`] works on: the grid to plan on and the buffer its
     /// path goes to (the mission's [`Mission::path`]). Neither changes until the request's
     /// [`MissionInput::PlanDone`] is handed back.
-    pub fn plan_workspace(&mut self) -> (&Grid<W>, &mut PathM) {
+    pub fn plan_workspace(&mut self) -> (&Grid<W>, &mut MissionPath) {
         (&self.grid, &mut self.path)
     }
 
@@ -695,24 +697,18 @@ impl<const W: usize> Mission<W> {
     /// Advance the mission by one input; see the module documentation.
     pub fn step(&mut self, input: MissionInput) -> MissionOutput {
         let mut out = MissionOutput {
-            left_voltage_v: self.voltages_v.0,
-            right_voltage_v: self.voltages_v.1,
+            pilot_command: None,
             sonar_request: None,
             plan_request: None,
             events: Vec::new(),
             status: self.status,
         };
         if self.status != MissionStatus::Running {
-            out.left_voltage_v = 0.0;
-            out.right_voltage_v = 0.0;
+            out.pilot_command = Some(PilotCommand::Stop);
             return out;
         }
         match input {
-            MissionInput::Tick {
-                left_delta_counts,
-                right_delta_counts,
-                elapsed_s,
-            } => self.on_tick(left_delta_counts, right_delta_counts, elapsed_s, &mut out),
+            MissionInput::Tick(report) => self.on_tick(&report, &mut out),
             MissionInput::SonarReading {
                 neck_angle_rad,
                 range_m,
@@ -721,12 +717,10 @@ impl<const W: usize> Mission<W> {
             MissionInput::Abort => self.finish(MissionStatus::Aborted, &mut out),
         }
         if self.status != MissionStatus::Running {
-            self.voltages_v = (0.0, 0.0);
+            out.pilot_command = Some(PilotCommand::Stop);
             out.sonar_request = None;
             out.plan_request = None;
         }
-        out.left_voltage_v = self.voltages_v.0;
-        out.right_voltage_v = self.voltages_v.1;
         out.status = self.status;
         out
     }
@@ -740,14 +734,7 @@ impl<const W: usize> Mission<W> {
     }
 
     fn to_world(&self, pose_odom: Pose) -> Pose {
-        let p = self
-            .frame
-            .odom_to_world(PointM::new(pose_odom.x_m, pose_odom.y_m));
-        Pose {
-            x_m: p.x_m,
-            y_m: p.y_m,
-            heading_rad: self.frame.heading_odom_to_world(pose_odom.heading_rad),
-        }
+        pilot::pose_to_world(&self.frame, pose_odom)
     }
 
     fn position_world(&self) -> PointM {
@@ -759,32 +746,28 @@ impl<const W: usize> Mission<W> {
         self.status = status;
         self.phase = MissionPhase::Done;
         self.sweep = None;
-        self.supplier.stop();
+        out.pilot_command = Some(PilotCommand::Stop);
         push(out, MissionEvent::Finished(status));
     }
 
-    fn on_tick(&mut self, left: i32, right: i32, elapsed_s: f32, out: &mut MissionOutput) {
-        let period = self.period_s();
-        self.stats.time_s += period;
-
-        // Trajectory supplier -> reference of the control point.
+    fn on_tick(&mut self, report: &PilotReport, out: &mut MissionOutput) {
+        self.stats.time_s += self.period_s();
+        self.pose_odom = report.pose_odom;
+        self.supply_point_odom = report.supply_point_odom;
+        self.supply_segment = report.segment;
+        if report.overrun {
+            self.stats.controller_overruns += 1;
+        }
+        if report.saturated {
+            self.stats.saturated_periods += 1;
+        }
+        if report.moved_m.is_finite() {
+            self.stats.odometry_distance_m += report.moved_m;
+        }
+        // The supplier's events drive the phases (it only supplies while following or
+        // settling; an event of a pass the mission already left is stale).
         if matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle) {
-            let supply = self.supplier.tick(period);
-            // Where the control point (offset ahead of the axle) should be, and how fast it
-            // moves: along the heading when moving, on a circle of radius `d` when turning.
-            let d = self.config.robot.point_offset_m;
-            let (c, s) = (cos(supply.heading_rad), sin(supply.heading_rad));
-            let vx = supply.speed_m_s * c - d * supply.turn_rate_rad_s * s;
-            let vy = supply.speed_m_s * s + d * supply.turn_rate_rad_s * c;
-            // Feed-forward through the first-order reference model: with p = y + τ·ẏ the
-            // model output follows y without the lag τ·v (0.2 m at 0.2 m/s), so the centre
-            // stays on the path and turns in place stay in place.
-            let tau = self.config.robot.reference_time_constant_s;
-            self.reference = PointM::new(
-                supply.point.x_m + d * c + tau * vx,
-                supply.point.y_m + d * s + tau * vy,
-            );
-            match supply.event {
+            match report.event {
                 Some(SupplyEvent::EndOfTrajectory) => {
                     push(out, MissionEvent::EndOfTrajectory);
                     self.phase = MissionPhase::Settle;
@@ -795,30 +778,6 @@ impl<const W: usize> Mission<W> {
                 }
                 None => {}
             }
-        }
-
-        // Controller.
-        let before = self.pose_odom;
-        let control = self.controller.step(ControlInput {
-            reference: self.reference,
-            encoder_left_delta_counts: left,
-            encoder_right_delta_counts: right,
-            elapsed_since_last_step_s: elapsed_s,
-        });
-        self.pose_odom = control.pose;
-        self.voltages_v = (control.left_voltage_v, control.right_voltage_v);
-        if control.overrun {
-            self.stats.controller_overruns += 1;
-        }
-        if control.saturated {
-            self.stats.saturated_periods += 1;
-        }
-        let moved = hypot(
-            self.pose_odom.x_m - before.x_m,
-            self.pose_odom.y_m - before.y_m,
-        );
-        if moved.is_finite() {
-            self.stats.odometry_distance_m += moved;
         }
 
         if self.status != MissionStatus::Running {
@@ -851,7 +810,7 @@ impl<const W: usize> Mission<W> {
             }
         }
         if self.sweep.is_some() {
-            self.sonar_budget_s += period;
+            self.sonar_budget_s += self.period_s();
             self.request_next(out);
         } else {
             self.sonar_budget_s = 0.0;
@@ -872,7 +831,7 @@ impl<const W: usize> Mission<W> {
         }
         // Stand and sweep again. In continuous mode a moving pass may be under way: it is
         // dropped and a standing sweep starts; so is the replan it asked for.
-        self.supplier.stop();
+        out.pilot_command = Some(PilotCommand::Hold);
         self.sweep = None;
         if let Some(pending) = &mut self.pending_plan {
             pending.cancelled = true;
@@ -1032,99 +991,6 @@ impl<const W: usize> Mission<W> {
         }
     }
 
-    /// `true` when the cell of `p` is free, seen, and every cell within the planning radius
-    /// around it is seen or occupied.
-    fn trusted(&self, p: PointM) -> bool {
-        let g = self.grid.geometry();
-        let Some((x, y)) = g.cell_xy_of(p) else {
-            return false;
-        };
-        if !g.contains_xy(x, y) || self.grid.is_occupied_xy(x, y) || !self.seen_near(x, y) {
-            return false;
-        }
-        let h = self.expansion_cells as i32;
-        for cy in y - h..=y + h {
-            for cx in x - h..=x + h {
-                if g.contains_xy(cx, cy)
-                    && !self.grid.is_occupied_xy(cx, cy)
-                    && !self.seen_near(cx, cy)
-                {
-                    return false;
-                }
-            }
-        }
-        true
-    }
-
-    /// A ray crossed a cell within [`SEEN_NEAR_CELLS`] of (`x`, `y`).
-    fn seen_near(&self, x: i32, y: i32) -> bool {
-        let g = self.grid.geometry();
-        let h = SEEN_NEAR_CELLS;
-        for cy in y - h..=y + h {
-            for cx in x - h..=x + h {
-                if g.contains_xy(cx, cy) && self.seen.is_occupied_xy(cx, cy) {
-                    return true;
-                }
-            }
-        }
-        false
-    }
-
-    /// The prefix of `path` through trusted cells (see [`Self::seen`]), at most
-    /// `max_trusted_path_m` along the path, written to `out`; returns its length.
-    fn prune_through_seen(&self, path: &[PointM], out: &mut PathM) -> f32 {
-        self.prune_through_seen_capped(path, self.config.max_trusted_path_m, out)
-    }
-
-    /// [`Self::prune_through_seen`] with a length cap of `cap_m`.
-    fn prune_through_seen_capped(&self, path: &[PointM], cap_m: f32, out: &mut PathM) -> f32 {
-        out.clear();
-        let Some(&first) = path.first() else {
-            return 0.0;
-        };
-        let _ = out.push(first);
-        let step_m = 0.5 * self.grid.geometry().resolution_m();
-        let mut length_m = 0.0f32;
-        for pair in path.windows(2) {
-            let (a, b) = (pair[0], pair[1]);
-            let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
-            let segment_m = hypot(dx, dy);
-            if segment_m.is_nan() || segment_m <= 0.0 {
-                continue;
-            }
-            let allowed_m = segment_m.min(cap_m - length_m);
-            let samples = ((allowed_m / step_m) as u32)
-                .saturating_add(1)
-                .min(1_000_000);
-            let at = |t_m: f32| {
-                PointM::new(
-                    a.x_m + dx * (t_m / segment_m),
-                    a.y_m + dy * (t_m / segment_m),
-                )
-            };
-            let mut last_ok_m = 0.0f32;
-            for k in 1..=samples {
-                let t_m = allowed_m * (k as f32 / samples as f32);
-                if !self.trusted(at(t_m)) {
-                    if last_ok_m > 0.0 {
-                        let _ = out.push(at(last_ok_m));
-                    }
-                    return length_m + last_ok_m;
-                }
-                last_ok_m = t_m;
-            }
-            if allowed_m < segment_m {
-                let _ = out.push(at(allowed_m));
-                return length_m + allowed_m;
-            }
-            if out.push(b).is_err() {
-                return length_m;
-            }
-            length_m += segment_m;
-        }
-        length_m
-    }
-
     fn end_of_sweep(&mut self, sweep: SweepState, out: &mut MissionOutput) {
         // Mark.
         let hits = self.mark_readings();
@@ -1168,7 +1034,7 @@ impl<const W: usize> Mission<W> {
 
     /// Continuous mode: does an occupied cell lie on what remains of the path?
     fn remaining_path_blocked(&self) -> bool {
-        let from = self.supplier.segment().min(self.path.len());
+        let from = (self.supply_segment as usize).min(self.path.len());
         let g = *self.grid.geometry();
         let Some(rest) = self.path.get(from..) else {
             return false;
@@ -1232,7 +1098,7 @@ impl<const W: usize> Mission<W> {
         });
         if !moving {
             // Hold where the controller is heading now until the result is back.
-            self.supplier.stop();
+            out.pilot_command = Some(PilotCommand::Hold);
             self.phase = MissionPhase::Plan;
         }
         out.plan_request = Some(PlanRequest {
@@ -1247,8 +1113,7 @@ impl<const W: usize> Mission<W> {
     /// out now (the reference model is a little behind it), so motion is continuous.
     fn plan_origin(&self, moving: bool) -> PointM {
         if moving && self.phase == MissionPhase::Follow {
-            let s = self.supplier.current_point_odom();
-            self.frame.odom_to_world(s)
+            self.frame.odom_to_world(self.supply_point_odom)
         } else {
             self.position_world()
         }
@@ -1319,7 +1184,7 @@ impl<const W: usize> Mission<W> {
                 // counter ends this if it never frees up).
                 push_planned(out, report.status, blocked, 0);
                 self.path.clear();
-                self.begin_standing_sweep(true);
+                self.begin_standing_sweep(true, out);
                 return;
             }
             PlanStatus::OutOfBounds => {
@@ -1351,16 +1216,24 @@ impl<const W: usize> Mission<W> {
             .count()
             .saturating_sub(1)
             .max(skip);
-        let mut kept = PathM::new();
+        // Each try writes the seed's prefix into `self.prefix`; the seen-space rule is measured
+        // first and written over it only when it keeps more (no second path buffer: on the MCU
+        // this runs on a task's stack).
+        let range_m = self.prune_range_m();
+        let cap_m = self.config.max_trusted_path_m;
         for k in skip..=last_try {
             let rest = self.path.get(k..).unwrap_or(&[]);
             let mut pruned_m =
-                prune_visible_prefix(&self.grid, rest, self.prune_range_m(), &mut kept).length_m;
+                prune_visible_prefix(&self.grid, rest, range_m, &mut self.prefix).length_m;
             if self.config.trust_seen_space {
-                let mut through_seen = PathM::new();
-                let length_m = self.prune_through_seen(rest, &mut through_seen);
+                let seen = SeenSpace {
+                    grid: &self.grid,
+                    seen: &self.seen,
+                    expansion_cells: self.expansion_cells as i32,
+                };
+                let length_m = seen.prune_through_seen::<MISSION_PATH_POINTS>(rest, cap_m, None);
                 if length_m > pruned_m + 1.0e-3 {
-                    kept = through_seen;
+                    seen.prune_through_seen(rest, cap_m, Some(&mut self.prefix));
                     pruned_m = length_m;
                 }
             }
@@ -1368,22 +1241,16 @@ impl<const W: usize> Mission<W> {
                 break;
             }
         }
-        // The trajectory starts where the robot is (or where it is told to be).
-        self.prefix.clear();
-        let _ = self.prefix.push(origin);
-        // Path points within a cell of the origin are dropped: a cell centre a few centimetres
-        // behind the robot would otherwise make it turn round for nothing.
+        // The trajectory starts where the robot is (or where it is told to be). Path points
+        // within a cell of the origin are dropped: a cell centre a few centimetres behind the
+        // robot would otherwise make it turn round for nothing.
         let near_m = g.resolution_m();
-        let mut leaving = true;
-        for p in kept.iter() {
-            if leaving && hypot(p.x_m - origin.x_m, p.y_m - origin.y_m) < near_m {
-                continue;
-            }
-            leaving = false;
-            if self.prefix.push(*p).is_err() {
-                break;
-            }
-        }
+        let dropped = self
+            .prefix
+            .iter()
+            .take_while(|p| hypot(p.x_m - origin.x_m, p.y_m - origin.y_m) < near_m)
+            .count();
+        start_with(&mut self.prefix, dropped, origin);
         push_planned(out, report.status, blocked, self.prefix.len() as u16);
 
         // Band check (seed traj_fora_faixa_leit): a kept point more than the normal half sweep
@@ -1425,21 +1292,21 @@ impl<const W: usize> Mission<W> {
                 self.stats.band_cuts += 1;
             } else {
                 push(out, MissionEvent::FullSweepRequested);
-                self.begin_standing_sweep(true);
+                self.begin_standing_sweep(true, out);
                 return;
             }
         }
 
-        // Follow.
-        let heading_odom = self.pose_odom.heading_rad;
-        match self.supplier.start(
-            &self.prefix,
-            &self.frame,
-            heading_odom,
-            &self.supplier_config,
-        ) {
-            Ok(()) => self.phase = MissionPhase::Follow,
-            Err(_) => self.finish(MissionStatus::Aborted, out),
+        // Follow (the pilot turns in place first when the prefix starts elsewhere). What the
+        // supplier would refuse ends the mission here instead of leaving the robot holding.
+        let followable = self.pose_odom.heading_rad.is_finite()
+            && self.prefix.len() <= crate::trajectory::MAX_TRAJECTORY_POINTS
+            && self.prefix.iter().all(|p| p.is_finite());
+        if followable {
+            self.phase = MissionPhase::Follow;
+            out.pilot_command = Some(PilotCommand::Follow);
+        } else {
+            self.finish(MissionStatus::Aborted, out);
         }
     }
 
@@ -1487,17 +1354,13 @@ impl<const W: usize> Mission<W> {
     }
 
     /// Hold the robot and sweep standing.
-    fn begin_standing_sweep(&mut self, full: bool) {
-        self.supplier.stop();
+    fn begin_standing_sweep(&mut self, full: bool, out: &mut MissionOutput) {
+        out.pilot_command = Some(PilotCommand::Hold);
         self.sweep = None;
         // Hold where the controller is heading now.
         self.phase = MissionPhase::Sweep { full };
     }
 }
-
-/// A path cell counts as seen when a ray crossed a cell within this many cells of it (rays
-/// 1.8° apart are one cell apart at 1.6 m, two at 3.2 m).
-const SEEN_NEAR_CELLS: i32 = 1;
 
 fn push(out: &mut MissionOutput, event: MissionEvent) {
     // Full: the oldest events are kept; the status field still tells the outcome.
@@ -1513,6 +1376,28 @@ fn push_planned(out: &mut MissionOutput, status: PlanStatus, blocked: bool, pref
             prefix_points,
         },
     );
+}
+
+/// Replace the first `dropped` points of `path` by `first` (shifting the rest; when `dropped`
+/// is 0 and `path` is full, its last point falls off).
+fn start_with<const P: usize>(path: &mut Vec<PointM, P>, dropped: usize, first: PointM) {
+    let n = path.len();
+    if dropped == 0 {
+        if path.push(first).is_err() {
+            // Full: drop the last point to make room.
+            path.truncate(n.saturating_sub(1));
+            let _ = path.push(first);
+        }
+        // Rotate the new point to the front.
+        path.rotate_right(1);
+        return;
+    }
+    // Keep path[dropped..], preceded by `first`.
+    path.rotate_left(dropped - 1);
+    path.truncate(n - (dropped - 1));
+    if let Some(p) = path.first_mut() {
+        *p = first;
+    }
 }
 
 /// The free cell nearest to (`x`, `y`) in growing square rings up to `max_ring`, or `None`.
@@ -1546,5 +1431,14 @@ fn nearest_free<const W: usize>(grid: &Grid<W>, x: i32, y: i32, max_ring: i32) -
     None
 }
 
+mod local;
+mod pilot;
 #[cfg(test)]
 mod tests;
+mod trust;
+
+pub use local::{LocalRunner, TickOutcome, MAX_EVENTS_PER_TICK, MAX_READINGS_PER_TICK};
+pub use pilot::{Pilot, PilotCommand, PilotReport};
+
+use trust::SeenSpace;
+pub use trust::SEEN_NEAR_CELLS;

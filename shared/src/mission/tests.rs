@@ -28,42 +28,6 @@ fn config(start: PointM, goal: PointM, mode: MissionMode) -> MissionConfig {
     c
 }
 
-/// A plan answered later: (due tick, id, result).
-type Due = Option<(u64, u32, Result<PlanReport, PlanError>)>;
-
-/// Run the planner of a request at once on the mission's workspace; its result is handed back
-/// `latency_ticks` later (0: within the same step sequence).
-fn serve(
-    mission: &mut Mission300,
-    planner: &mut MissionPlanner300,
-    request: Option<PlanRequest>,
-    tick: u64,
-    latency_ticks: u64,
-    due: &mut Due,
-) -> MissionOutput {
-    let mut out_last = None;
-    let mut request = request;
-    while let Some(r) = request.take() {
-        let (grid, path) = mission.plan_workspace();
-        let result = planner.plan(r.kind, grid, r.start, r.goal, path);
-        if latency_ticks > 0 {
-            *due = Some((tick + latency_ticks, r.id, result));
-            break;
-        }
-        let out = mission.step(MissionInput::PlanDone { id: r.id, result });
-        request = out.plan_request;
-        out_last = Some(out);
-    }
-    out_last.unwrap_or(MissionOutput {
-        left_voltage_v: 0.0,
-        right_voltage_v: 0.0,
-        sonar_request: None,
-        plan_request: None,
-        events: Vec::new(),
-        status: mission.status(),
-    })
-}
-
 /// Drive a mission against the plant until it ends, plans handed back at once; returns the
 /// status and the smallest clearance.
 fn run(mission: &mut Mission300, real: &Obstacles, plant: &mut Plant) -> (MissionStatus, f32) {
@@ -80,65 +44,41 @@ fn run_with_latency(
     let mut planner = Box::new(MissionPlanner300::new());
     let period = mission.config().robot.controller_period_s;
     let range = mission.config().robot.sonar_range_m;
+    let mut runner = LocalRunner::new(mission, &mut planner, latency_ticks);
     let mut previous = plant.encoder_counts();
     let mut min_clearance = f32::INFINITY;
-    let mut due: Due = None;
-    for tick in 0..200_000u64 {
-        if let Some((at, id, result)) = due {
-            if at <= tick {
-                due = None;
-                let out = mission.step(MissionInput::PlanDone { id, result });
-                serve(
-                    mission,
-                    &mut planner,
-                    out.plan_request,
-                    tick,
-                    latency_ticks,
-                    &mut due,
-                );
-            }
-        }
+    for _ in 0..200_000u64 {
         let counts = plant.encoder_counts();
-        let mut out = mission.step(MissionInput::Tick {
-            left_delta_counts: counts.0 - previous.0,
-            right_delta_counts: counts.1 - previous.1,
-            elapsed_s: period,
-        });
+        let outcome = runner.tick(
+            counts.0 - previous.0,
+            counts.1 - previous.1,
+            period,
+            &mut |angle| plant.sonar_range_m(real, angle, range),
+        );
         previous = counts;
-        loop {
-            if out.plan_request.is_some() {
-                let request = out.plan_request.take();
-                let served = serve(
-                    mission,
-                    &mut planner,
-                    request,
-                    tick,
-                    latency_ticks,
-                    &mut due,
-                );
-                if latency_ticks == 0 {
-                    out = MissionOutput {
-                        sonar_request: out.sonar_request.or(served.sonar_request),
-                        ..served
-                    };
-                }
-            }
-            let Some(request) = out.sonar_request else {
-                break;
-            };
-            let range_m = plant.sonar_range_m(real, request.neck_angle_rad, range);
-            out = mission.step(MissionInput::SonarReading {
-                neck_angle_rad: request.neck_angle_rad,
-                range_m,
-            });
+        if outcome.status != MissionStatus::Running {
+            return (outcome.status, min_clearance);
         }
-        if mission.status() != MissionStatus::Running {
-            return (mission.status(), min_clearance);
-        }
-        plant.step(period, out.left_voltage_v, out.right_voltage_v);
+        plant.step(period, outcome.left_voltage_v, outcome.right_voltage_v);
         min_clearance = min_clearance.min(plant.clearance_m(real));
     }
-    (mission.status(), min_clearance)
+    (runner.mission().status(), min_clearance)
+}
+
+/// One period of a robot whose wheels never turn: the pilot ticks with no counts, the
+/// mission steps with its report, the pilot takes the mission's command.
+fn tick_still(mission: &mut Mission300, pilot: &mut Pilot) -> MissionOutput {
+    let report = pilot.tick(0, 0, 0.05);
+    step(mission, pilot, MissionInput::Tick(report))
+}
+
+/// A mission step whose command the pilot carries out.
+fn step(mission: &mut Mission300, pilot: &mut Pilot, input: MissionInput) -> MissionOutput {
+    let out = mission.step(input);
+    if let Some(command) = out.pilot_command {
+        let _ = pilot.command(command, mission.prefix());
+    }
+    out
 }
 
 fn geometry() -> GridGeometry {
@@ -229,12 +169,14 @@ fn abort_stops_the_motors_and_ignores_later_inputs() {
     assert!(out
         .events
         .contains(&MissionEvent::Finished(MissionStatus::Aborted)));
-    let out = mission.step(MissionInput::Tick {
-        left_delta_counts: 1000,
-        right_delta_counts: -1000,
-        elapsed_s: 0.05,
-    });
-    assert_eq!((out.left_voltage_v, out.right_voltage_v), (0.0, 0.0));
+    assert_eq!(out.pilot_command, Some(PilotCommand::Stop));
+    let mut pilot = Pilot::new(&c);
+    pilot.command(PilotCommand::Stop, &[]).unwrap();
+    let report = pilot.tick(1000, -1000, 0.05);
+    assert_eq!((report.left_voltage_v, report.right_voltage_v), (0.0, 0.0));
+    let out = step(&mut mission, &mut pilot, MissionInput::Tick(report));
+    assert_eq!(out.pilot_command, Some(PilotCommand::Stop));
+    assert_eq!(pilot.voltages_v(), (0.0, 0.0));
     assert_eq!(out.sonar_request, None);
     assert_eq!(mission.phase(), MissionPhase::Done);
 }
@@ -256,11 +198,9 @@ fn readings_nobody_asked_for_and_nonsense_values_change_nothing() {
     assert_eq!(mission.grid().count_occupied(), before);
     assert_eq!(mission.stats().readings, 0);
     // A requested reading with NaN/inf values: counted, nothing marked, no panic.
-    let out = mission.step(MissionInput::Tick {
-        left_delta_counts: 0,
-        right_delta_counts: 0,
-        elapsed_s: f32::NAN,
-    });
+    let mut pilot = Pilot::new(&c);
+    let report = pilot.tick(0, 0, f32::NAN);
+    let out = step(&mut mission, &mut pilot, MissionInput::Tick(report));
     assert!(out.sonar_request.is_some());
     mission.step(MissionInput::SonarReading {
         neck_angle_rad: f32::NAN,
@@ -314,21 +254,22 @@ fn a_sweep_asks_for_the_seed_angles_at_the_echo_rate() {
         MissionMode::Stop,
     );
     let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+    let mut pilot = Pilot::new(&c);
     let mut angles = std::vec::Vec::new();
     let mut ticks = 0;
     while mission.stats().plans == 0 && ticks < 1000 {
         ticks += 1;
-        let mut out = mission.step(MissionInput::Tick {
-            left_delta_counts: 0,
-            right_delta_counts: 0,
-            elapsed_s: 0.05,
-        });
+        let mut out = tick_still(&mut mission, &mut pilot);
         while let Some(r) = out.sonar_request {
             angles.push(r.neck_angle_rad);
-            out = mission.step(MissionInput::SonarReading {
-                neck_angle_rad: r.neck_angle_rad,
-                range_m: None,
-            });
+            out = step(
+                &mut mission,
+                &mut pilot,
+                MissionInput::SonarReading {
+                    neck_angle_rad: r.neck_angle_rad,
+                    range_m: None,
+                },
+            );
         }
     }
     // ±95° at 1.8°: 52 steps each side, 105 readings from -93.6° to +93.6°.
@@ -392,22 +333,26 @@ fn mcu_sized_mission_reaches(da: &str, par: &str) {
 
 /// Tick with no motion until the mission asks for a plan; answers every sonar request with
 /// `range_m`. Returns the request and the ticks it took.
-fn tick_until_plan_request(mission: &mut Mission300, range_m: Option<f32>) -> (PlanRequest, u32) {
+fn tick_until_plan_request(
+    mission: &mut Mission300,
+    pilot: &mut Pilot,
+    range_m: Option<f32>,
+) -> (PlanRequest, u32) {
     for ticks in 1..10_000 {
-        let mut out = mission.step(MissionInput::Tick {
-            left_delta_counts: 0,
-            right_delta_counts: 0,
-            elapsed_s: 0.05,
-        });
+        let mut out = tick_still(mission, pilot);
         loop {
             if let Some(r) = out.plan_request {
                 return (r, ticks);
             }
             let Some(s) = out.sonar_request else { break };
-            out = mission.step(MissionInput::SonarReading {
-                neck_angle_rad: s.neck_angle_rad,
-                range_m,
-            });
+            out = step(
+                mission,
+                pilot,
+                MissionInput::SonarReading {
+                    neck_angle_rad: s.neck_angle_rad,
+                    range_m,
+                },
+            );
         }
     }
     panic!("no plan request: {:?}", mission.stats());
@@ -421,26 +366,23 @@ fn the_robot_holds_while_the_planner_runs_and_stale_results_are_ignored() {
         MissionMode::Stop,
     );
     let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+    let mut pilot = Pilot::new(&c);
     // A result before any request changes nothing.
     let stray = MissionInput::PlanDone {
         id: 1,
         result: Err(PlanError::QueueFull { capacity: 1 }),
     };
-    assert!(mission.step(stray).events.is_empty());
+    assert!(step(&mut mission, &mut pilot, stray).events.is_empty());
     assert_eq!(mission.stats().plan_errors, 0);
 
-    let (request, _) = tick_until_plan_request(&mut mission, None);
+    let (request, _) = tick_until_plan_request(&mut mission, &mut pilot, None);
     assert_eq!(mission.phase(), MissionPhase::Plan);
     assert!(mission.plan_pending());
     assert_eq!(request.goal, c.goal);
     // Ten periods without the result: the controller keeps stepping (holding), nothing else
     // is asked, the phase stays.
     for _ in 0..10 {
-        let out = mission.step(MissionInput::Tick {
-            left_delta_counts: 0,
-            right_delta_counts: 0,
-            elapsed_s: 0.05,
-        });
+        let out = tick_still(&mut mission, &mut pilot);
         assert_eq!(out.sonar_request, None);
         assert_eq!(out.plan_request, None);
         assert_eq!(mission.phase(), MissionPhase::Plan);
@@ -450,16 +392,20 @@ fn the_robot_holds_while_the_planner_runs_and_stale_results_are_ignored() {
         id: request.id.wrapping_add(1),
         result: Err(PlanError::QueueFull { capacity: 1 }),
     };
-    mission.step(wrong);
+    step(&mut mission, &mut pilot, wrong);
     assert!(mission.plan_pending());
     assert_eq!(mission.stats().plan_errors, 0);
     let mut planner = Box::new(MissionPlanner300::new());
     let (grid, path) = mission.plan_workspace();
     let result = planner.plan(request.kind, grid, request.start, request.goal, path);
-    let out = mission.step(MissionInput::PlanDone {
-        id: request.id,
-        result,
-    });
+    let out = step(
+        &mut mission,
+        &mut pilot,
+        MissionInput::PlanDone {
+            id: request.id,
+            result,
+        },
+    );
     assert!(
         out.events.iter().any(|e| matches!(
             e,
@@ -474,10 +420,14 @@ fn the_robot_holds_while_the_planner_runs_and_stale_results_are_ignored() {
     assert_eq!(mission.phase(), MissionPhase::Follow);
     assert!(!mission.plan_pending());
     // Answering the same id twice does nothing more.
-    let again = mission.step(MissionInput::PlanDone {
-        id: request.id,
-        result,
-    });
+    let again = step(
+        &mut mission,
+        &mut pilot,
+        MissionInput::PlanDone {
+            id: request.id,
+            result,
+        },
+    );
     assert!(again.events.is_empty());
 }
 
@@ -491,35 +441,40 @@ fn a_sweep_that_ends_while_the_planner_runs_is_marked_after_the_result() {
         MissionMode::Continuous,
     );
     let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
-    let (request, _) = tick_until_plan_request(&mut mission, None);
+    let mut pilot = Pilot::new(&c);
+    let (request, _) = tick_until_plan_request(&mut mission, &mut pilot, None);
     let mut planner = Box::new(MissionPlanner300::new());
     let (grid, path) = mission.plan_workspace();
     let result = planner.plan(request.kind, grid, request.start, request.goal, path);
-    mission.step(MissionInput::PlanDone {
-        id: request.id,
-        result,
-    });
+    step(
+        &mut mission,
+        &mut pilot,
+        MissionInput::PlanDone {
+            id: request.id,
+            result,
+        },
+    );
     assert_eq!(mission.phase(), MissionPhase::Follow);
     // The first moving sweep (hits at 1 m) ends with a replan request; hold its result back.
-    let (request, _) = tick_until_plan_request(&mut mission, Some(1.0));
+    let (request, _) = tick_until_plan_request(&mut mission, &mut pilot, Some(1.0));
     let occupied = mission.grid().count_occupied();
     assert!(occupied > 0, "the moving sweep's hits are marked");
     let hits_before = mission.stats().hits;
     // A whole second sweep goes by: it ends, but nothing is marked while the plan is out.
     let mut readings = 0;
     for _ in 0..400 {
-        let mut out = mission.step(MissionInput::Tick {
-            left_delta_counts: 0,
-            right_delta_counts: 0,
-            elapsed_s: 0.05,
-        });
+        let mut out = tick_still(&mut mission, &mut pilot);
         assert_eq!(out.plan_request, None);
         while let Some(s) = out.sonar_request {
             readings += 1;
-            out = mission.step(MissionInput::SonarReading {
-                neck_angle_rad: s.neck_angle_rad,
-                range_m: Some(1.2),
-            });
+            out = step(
+                &mut mission,
+                &mut pilot,
+                MissionInput::SonarReading {
+                    neck_angle_rad: s.neck_angle_rad,
+                    range_m: Some(1.2),
+                },
+            );
             assert_eq!(out.plan_request, None);
         }
     }
@@ -529,10 +484,14 @@ fn a_sweep_that_ends_while_the_planner_runs_is_marked_after_the_result() {
     // The result comes back: the deferred sweep is marked.
     let (grid, path) = mission.plan_workspace();
     let result = planner.plan(request.kind, grid, request.start, request.goal, path);
-    mission.step(MissionInput::PlanDone {
-        id: request.id,
-        result,
-    });
+    step(
+        &mut mission,
+        &mut pilot,
+        MissionInput::PlanDone {
+            id: request.id,
+            result,
+        },
+    );
     assert!(mission.stats().hits > hits_before);
     assert!(mission.grid().count_occupied() > occupied);
 }
@@ -545,7 +504,8 @@ fn mission_sizes_fit_their_targets() {
         Mission300::SIZE_BYTES,
         Mission400::SIZE_BYTES
     );
-    const { assert!(Mission300::SIZE_BYTES < 250_000) };
+    // The MCU's mission lives in the 64 KiB CCM (the planner takes the main SRAM).
+    const { assert!(Mission300::SIZE_BYTES <= 64 * 1024) };
     const { assert!(Mission300::SIZE_BYTES < Mission400::SIZE_BYTES) };
 }
 
@@ -563,22 +523,29 @@ mod props {
         ]
     }
 
-    fn any_input() -> impl Strategy<Value = MissionInput> {
+    /// A tick of the pilot (whose report goes to the mission) or a mission input.
+    #[derive(Clone, Debug)]
+    enum Input {
+        Tick {
+            left: i32,
+            right: i32,
+            elapsed_s: f32,
+        },
+        Mission(MissionInput),
+    }
+
+    fn any_input() -> impl Strategy<Value = Input> {
         prop_oneof![
             8 => (-5000i32..5000, -5000i32..5000, any_f32()).prop_map(|(l, r, e)| {
-                MissionInput::Tick {
-                    left_delta_counts: l,
-                    right_delta_counts: r,
-                    elapsed_s: e,
-                }
+                Input::Tick { left: l, right: r, elapsed_s: e }
             }),
             8 => (any_f32(), prop::option::of(any_f32())).prop_map(|(a, r)| {
-                MissionInput::SonarReading {
+                Input::Mission(MissionInput::SonarReading {
                     neck_angle_rad: a,
                     range_m: r,
-                }
+                })
             }),
-            2 => (0u32..4, prop::bool::ANY).prop_map(|(id, ok)| MissionInput::PlanDone {
+            2 => (0u32..4, prop::bool::ANY).prop_map(|(id, ok)| Input::Mission(MissionInput::PlanDone {
                 id,
                 result: if ok {
                     Ok(PlanReport {
@@ -590,8 +557,8 @@ mod props {
                 } else {
                     Err(PlanError::QueueFull { capacity: 8 })
                 },
-            }),
-            1 => Just(MissionInput::Abort),
+            })),
+            1 => Just(Input::Mission(MissionInput::Abort)),
         ]
     }
 
@@ -603,18 +570,57 @@ mod props {
         fn nonsense_inputs_never_panic(inputs in prop::collection::vec(any_input(), 1..400)) {
             let c = config(PointM::new(1.5, 4.0), PointM::new(6.5, 4.0), MissionMode::Continuous);
             let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+            let mut pilot = Pilot::new(&c);
             let max_v = c.robot.max_voltage_v;
             let mut ended = false;
             for input in inputs {
-                let out = mission.step(input);
-                prop_assert!(out.left_voltage_v.abs() <= max_v + 1e-4);
-                prop_assert!(out.right_voltage_v.abs() <= max_v + 1e-4);
+                let out = match input {
+                    Input::Tick { left, right, elapsed_s } => {
+                        let report = pilot.tick(left, right, elapsed_s);
+                        prop_assert!(report.left_voltage_v.abs() <= max_v + 1e-4);
+                        prop_assert!(report.right_voltage_v.abs() <= max_v + 1e-4);
+                        if ended {
+                            prop_assert_eq!((report.left_voltage_v, report.right_voltage_v), (0.0, 0.0));
+                        }
+                        step(&mut mission, &mut pilot, MissionInput::Tick(report))
+                    }
+                    Input::Mission(input) => step(&mut mission, &mut pilot, input),
+                };
+                let (left, right) = pilot.voltages_v();
+                prop_assert!(left.abs() <= max_v + 1e-4 && right.abs() <= max_v + 1e-4);
                 if ended {
                     prop_assert!(out.status != MissionStatus::Running);
-                    prop_assert_eq!((out.left_voltage_v, out.right_voltage_v), (0.0, 0.0));
+                    prop_assert_eq!(out.pilot_command, Some(PilotCommand::Stop));
+                    prop_assert_eq!((left, right), (0.0, 0.0));
                 }
                 ended |= out.status != MissionStatus::Running;
             }
         }
     }
+}
+
+#[test]
+fn the_prefix_starts_at_the_origin_without_the_points_near_it() {
+    let p = |x: f32| PointM::new(x, 0.0);
+    let origin = PointM::new(-1.0, 0.0);
+    let xs = |v: &Vec<PointM, 4>| v.iter().map(|q| q.x_m).collect::<std::vec::Vec<_>>();
+    // Nothing dropped: the origin goes in front.
+    let mut v: Vec<PointM, 4> = Vec::from_slice(&[p(1.0), p(2.0)]).unwrap();
+    start_with(&mut v, 0, origin);
+    assert_eq!(xs(&v), [-1.0, 1.0, 2.0]);
+    // Full: the last point falls off.
+    let mut v: Vec<PointM, 4> = Vec::from_slice(&[p(1.0), p(2.0), p(3.0), p(4.0)]).unwrap();
+    start_with(&mut v, 0, origin);
+    assert_eq!(xs(&v), [-1.0, 1.0, 2.0, 3.0]);
+    // Two dropped.
+    let mut v: Vec<PointM, 4> = Vec::from_slice(&[p(1.0), p(2.0), p(3.0), p(4.0)]).unwrap();
+    start_with(&mut v, 2, origin);
+    assert_eq!(xs(&v), [-1.0, 3.0, 4.0]);
+    // All dropped; empty.
+    let mut v: Vec<PointM, 4> = Vec::from_slice(&[p(1.0), p(2.0)]).unwrap();
+    start_with(&mut v, 2, origin);
+    assert_eq!(xs(&v), [-1.0]);
+    let mut v: Vec<PointM, 4> = Vec::new();
+    start_with(&mut v, 0, origin);
+    assert_eq!(xs(&v), [-1.0]);
 }

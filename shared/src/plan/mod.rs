@@ -2666,15 +2666,16 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     ///
     /// Errors: [`PlanError::ScratchTooSmall`] when the grid has more cells than the scratch,
     /// [`PlanError::QueueFull`] when the open list overflows, [`PlanError::PathFull`] when the
-    /// polyline has more than [`MAX_PATH_POINTS`] vertices (`path` then holds nothing and
+    /// polyline has more vertices than `path` holds (at most [`MAX_PATH_POINTS`]: `path` then
+    /// holds nothing and
     /// [`Planner::last_report`] has the search's result).
-    pub fn plan<const W: usize>(
+    pub fn plan<const W: usize, const P: usize>(
         &mut self,
         kind: PlannerKind,
         grid: &Grid<W>,
         start: PointM,
         goal: PointM,
-        path: &mut PathM,
+        path: &mut Vec<PointM, P>,
     ) -> Result<PlanReport, PlanError> {
         path.clear();
         self.cells.clear();
@@ -2692,7 +2693,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             if path.push(geometry.center_of(c)).is_err() {
                 path.clear();
                 return Err(PlanError::PathFull {
-                    capacity: MAX_PATH_POINTS as u32,
+                    capacity: P.min(MAX_PATH_POINTS) as u32,
                 });
             }
         }

@@ -14,7 +14,7 @@
 //!   the first point's cell; the prefix stops at the last visible sample, so it may end in the
 //!   middle of a segment.
 
-use super::{line_of_sight, PathM};
+use super::line_of_sight;
 use crate::geom::PointM;
 use crate::grid::Grid;
 use crate::math::hypot;
@@ -32,7 +32,7 @@ pub enum PruneEnd {
     Range,
     /// Cut before the first point not visible from the first point (or off the map).
     Hidden,
-    /// The output ran out of room ([`super::MAX_PATH_POINTS`]).
+    /// The output ran out of room.
     Capacity,
 }
 
@@ -67,11 +67,11 @@ pub struct Pruned {
 /// assert_eq!(out.len(), 2);
 /// assert!((out[1].x_m - 3.5).abs() < 1e-4);
 /// ```
-pub fn prune_visible_prefix<const W: usize>(
+pub fn prune_visible_prefix<const W: usize, const P: usize>(
     grid: &Grid<W>,
     path: &[PointM],
     range_m: f32,
-    out: &mut PathM,
+    out: &mut heapless::Vec<PointM, P>,
 ) -> Pruned {
     out.clear();
     let mut length_m = 0.0f32;
