@@ -49,6 +49,11 @@ use panic_probe as _;
 #[cfg(feature = "qemu")]
 use panic_semihosting as _;
 
+// Wired into the app by the mission firmware; until then only its build is checked.
+#[cfg(feature = "hardware")]
+#[allow(dead_code)]
+mod board;
+
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use heapless::spsc::Queue;

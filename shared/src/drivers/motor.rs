@@ -108,6 +108,18 @@ pub fn duty_to_counts(duty: f32, max_duty: u16) -> u16 {
     (floor(d * max_duty as f32 + 0.5) as u16).min(max_duty)
 }
 
+/// Battery voltage from the millivolts at the ADC pin and the divider's ratio (battery volts
+/// per pin volt). A ratio that is not a number gives NaN, which [`duty_for_voltage`] refuses
+/// as a low battery.
+///
+/// ```
+/// use twil_core::drivers::motor::battery_v_from_pin_mv;
+/// assert!((battery_v_from_pin_mv(2_200, 5.7) - 12.54).abs() < 1e-4);
+/// ```
+pub fn battery_v_from_pin_mv(pin_mv: u16, divider_ratio: f32) -> f32 {
+    f32::from(pin_mv) * 0.001 * divider_ratio
+}
+
 /// One motor on a sign-magnitude bridge.
 pub struct Motor<PWM, DIR> {
     pwm: PWM,
@@ -233,6 +245,15 @@ mod tests {
             );
         }
         assert!(duty_for_voltage(1.0, 10.5, MAX_V).is_ok());
+    }
+
+    #[test]
+    fn battery_volts_from_the_divider() {
+        assert!((battery_v_from_pin_mv(2_000, 5.7) - 11.4).abs() < 1e-5);
+        assert_eq!(battery_v_from_pin_mv(0, 5.7), 0.0);
+        assert!(battery_v_from_pin_mv(2_000, f32::NAN).is_nan());
+        // A flat or unconnected divider reads as a low battery.
+        assert!(duty_for_voltage(1.0, battery_v_from_pin_mv(1_800, 5.7), MAX_V).is_err());
     }
 
     #[test]
