@@ -1,7 +1,7 @@
 //! The board: Twil's signals on an **Olimex STM32-H405** (STM32F405RGT6, 8 MHz crystal, port
 //! pins on headers; its own LED is PC12, its button PA0, USB PA11/PA12 with VBUS sensing on
-//! PC4, debug PA13/PA14 (and PA15/PB3/PB4 for JTAG): none of them is used here). Wiring only: every rule about the signals lives in
-//! `twil_core::drivers`.
+//! PC4, debug PA13/PA14 (and PA15/PB3/PB4 for JTAG): none of them is used here). Wiring only:
+//! every rule about the signals lives in `twil_core::drivers`.
 //!
 //! | signal | pin | peripheral | driver |
 //! |---|---|---|---|

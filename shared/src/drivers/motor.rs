@@ -1,11 +1,11 @@
 //! Wheel motor: the controller's voltage command as a PWM duty and a direction level.
 //!
 //! Seed 003 (`twlckin.cpp`): each wheel's PID output is saturated to ±11.7 V
-//! ([`RobotConfig::max_voltage_v`]) and sent to the motor board. Here the bridge is a
-//! sign-magnitude one with a PWM input and a direction input (Cytron MD10C / MD13S, Pololu
-//! DRV8838 / DRV8876 in phase-enable mode): one [`SetDutyCycle`] channel sets the magnitude,
-//! one [`OutputPin`] the sign. That needs one timer channel per motor and no dead-time
-//! handling in the firmware (the bridge does it).
+//! ([`RobotConfig::max_voltage_v`](crate::robot::RobotConfig::max_voltage_v)) and sent to the
+//! motor board. Here the bridge is a sign-magnitude one with a PWM input and a direction input
+//! (Cytron MD10C / MD13S, Pololu DRV8838 / DRV8876 in phase-enable mode): one [`SetDutyCycle`]
+//! channel sets the magnitude, one [`OutputPin`] the sign. That needs one timer channel per
+//! motor and no dead-time handling in the firmware (the bridge does it).
 //!
 //! The bridge puts `duty × battery voltage` across the motor, so a command of `v` volts is
 //! `duty = |v| / battery_v`, measured each period because the battery sags under load:
@@ -240,9 +240,10 @@ mod tests {
     fn a_low_or_missing_battery_reading_is_an_error() {
         for battery_v in [10.4, 0.0, -12.0, f32::NAN] {
             let e = duty_for_voltage(1.0, battery_v, MAX_V).unwrap_err();
-            assert!(
-                matches!(e, MotorError::BatteryLow { min_battery_v, .. } if min_battery_v == MIN_BATTERY_V)
-            );
+            let MotorError::BatteryLow { min_battery_v, .. } = e else {
+                panic!("{e:?} for {battery_v} V");
+            };
+            assert_eq!(min_battery_v, MIN_BATTERY_V);
         }
         assert!(duty_for_voltage(1.0, 10.5, MAX_V).is_ok());
     }

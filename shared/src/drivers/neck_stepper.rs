@@ -316,25 +316,24 @@ where
             });
         }
         let start = self.position_steps.ok_or(NeckError::NotHomed)?;
-        let delta = target_steps - start;
+        // In i64: a home offset set far outside the limits must not overflow.
+        let delta = i64::from(target_steps) - i64::from(start);
         if delta == 0 {
             return Ok(0);
         }
-        let (direction, unit) = if delta > 0 {
-            (StepDirection::Positive, 1)
+        let direction = if delta > 0 {
+            StepDirection::Positive
         } else {
-            (StepDirection::Negative, -1)
+            StepDirection::Negative
         };
         // Unknown until every step is done: a pin error midway leaves it unknown.
         self.position_steps = None;
         self.set_direction(direction)?;
-        let mut at = start;
-        while at != target_steps {
+        for _ in 0..delta.unsigned_abs() {
             self.pulse()?;
-            at += unit;
         }
-        self.position_steps = Some(at);
-        Ok(delta)
+        self.position_steps = Some(target_steps);
+        Ok(i32::try_from(delta).unwrap_or(if delta > 0 { i32::MAX } else { i32::MIN }))
     }
 
     /// Give the pins back.

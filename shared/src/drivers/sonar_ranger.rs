@@ -116,7 +116,7 @@ pub fn echo_ticks_to_time_of_flight_s(echo_ticks: u32, tick_hz: u32) -> Option<f
     if tick_hz == 0 {
         None
     } else {
-        // Two f32 divisions would lose nothing that matters: 24 bits are 60 ns at 16 MHz.
+        // f32 holds 24 bits exactly: at 1 MHz that is every tick up to 16.7 s.
         Some(echo_ticks as f32 / tick_hz as f32)
     }
 }
