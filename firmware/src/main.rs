@@ -49,6 +49,11 @@ use panic_probe as _;
 #[cfg(feature = "qemu")]
 use panic_semihosting as _;
 
+// Wired into the app by the mission firmware; until then only its build is checked.
+#[cfg(feature = "hardware")]
+#[allow(dead_code)]
+mod board;
+
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use heapless::spsc::Queue;
@@ -168,6 +173,7 @@ mod app {
     use stm32f4xx_hal::{
         pac::USART1,
         prelude::*,
+        rcc,
         serial::{Config, Rx, Serial, Tx},
     };
     use twil_core::link::{DeviceFrame, Telemetry};
@@ -190,19 +196,18 @@ mod app {
         planner_memory: TwilPlanner = TwilPlanner::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
-        let rcc = cx.device.RCC.constrain();
         // QEMU: stay on the HSI (16 MHz), no PLL (its ready flag is never set under QEMU).
         #[cfg(feature = "qemu")]
-        let clocks = rcc.cfgr.freeze();
+        let mut rcc = cx.device.RCC.freeze(rcc::Config::hsi());
         #[cfg(feature = "hardware")]
-        let clocks = rcc.cfgr.sysclk(168.MHz()).freeze();
+        let mut rcc = cx.device.RCC.freeze(rcc::Config::hsi().sysclk(168.MHz()));
 
-        let gpioa = cx.device.GPIOA.split();
+        let gpioa = cx.device.GPIOA.split(&mut rcc);
         let serial: Serial<USART1> = Serial::new(
             cx.device.USART1,
             (gpioa.pa9, gpioa.pa10),
             Config::default().baudrate(115_200.bps()),
-            &clocks,
+            &mut rcc,
         )
         .unwrap_or_else(|_| panic!("115200 baud is reachable from any clock"));
         let (mut tx, mut rx) = serial.split();

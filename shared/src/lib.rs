@@ -17,6 +17,8 @@
 //!   the simulated robot it can drive.
 //! - [`link`]: the host <-> firmware protocol.
 //! - [`cspace`]: the two-link manipulator planner of seed 000.
+//! - [`drivers`]: the logic of the drivers for Twil's boards (sonar, neck, motors, encoders,
+//!   emergency stop) over embedded-hal 1.0 traits.
 //!
 //! Every buffer has a named capacity; running out of it is an error value, never a panic.
 #![no_std]
@@ -25,6 +27,7 @@
 
 pub mod control;
 pub mod cspace;
+pub mod drivers;
 pub mod geom;
 pub mod grid;
 pub mod link;
