@@ -122,42 +122,47 @@ pub struct RobotConfig {
 
 impl Default for RobotConfig {
     fn default() -> Self {
-        Self {
-            planning_radius_m: 0.40,
-            wheel_radius_m: 0.075,
-            half_axle_m: 0.22,
-            point_offset_m: 0.15,
-            encoder_pulses_per_rev: 2000,
-            motor_gain_rad_s_per_v: 0.8,
-            motor_time_constant_s: 0.10,
-            max_voltage_v: 11.7,
-            controller_period_s: 0.05,
-            pid_kp_v_per_rad_s: 2.5,
-            pid_ki_v_per_rad: 3.25,
-            pid_kd_v_s2_per_rad: 0.05,
-            reference_time_constant_s: 1.0,
-            tracking_gain_1_s: 1.0,
-            turn_gain_1_s: 2.0,
-            max_turn_rate_rad_s: 0.8,
-            settle_tolerance: 0.02,
-            sonar_offset_m: 0.20,
-            sonar_min_range_m: 0.26,
-            sonar_range_m: 1.5,
-            neck_step_deg: 1.8,
-            normal_half_sweep_deg: 95.0,
-            full_half_sweep_deg: 180.0,
-            echo_wait_s: 0.035,
-            neck_step_time_s: 0.001,
-            sonar_cone_deg: 0.0,
-            sonar_cone_rays: 1,
-            sonar_noise_std_m: 0.0,
-            noise_seed: 1,
-            rcd_depth_tolerance_m: 0.01,
-            rcd_min_pairs: 4,
-            rcd_min_arc_m: 0.126,
-            plant_substep_s: 0.001,
-        }
+        Self::DEFAULT
     }
+}
+
+impl RobotConfig {
+    /// The defaults (see `docs/robot-model.md` for their sources), usable in `const` contexts.
+    pub const DEFAULT: Self = Self {
+        planning_radius_m: 0.40,
+        wheel_radius_m: 0.075,
+        half_axle_m: 0.22,
+        point_offset_m: 0.15,
+        encoder_pulses_per_rev: 2000,
+        motor_gain_rad_s_per_v: 0.8,
+        motor_time_constant_s: 0.10,
+        max_voltage_v: 11.7,
+        controller_period_s: 0.05,
+        pid_kp_v_per_rad_s: 2.5,
+        pid_ki_v_per_rad: 3.25,
+        pid_kd_v_s2_per_rad: 0.05,
+        reference_time_constant_s: 1.0,
+        tracking_gain_1_s: 1.0,
+        turn_gain_1_s: 2.0,
+        max_turn_rate_rad_s: 0.8,
+        settle_tolerance: 0.02,
+        sonar_offset_m: 0.20,
+        sonar_min_range_m: 0.26,
+        sonar_range_m: 1.5,
+        neck_step_deg: 1.8,
+        normal_half_sweep_deg: 95.0,
+        full_half_sweep_deg: 180.0,
+        echo_wait_s: 0.035,
+        neck_step_time_s: 0.001,
+        sonar_cone_deg: 0.0,
+        sonar_cone_rays: 1,
+        sonar_noise_std_m: 0.0,
+        noise_seed: 1,
+        rcd_depth_tolerance_m: 0.01,
+        rcd_min_pairs: 4,
+        rcd_min_arc_m: 0.126,
+        plant_substep_s: 0.001,
+    };
 }
 
 /// A config field with a value that makes no sense.

@@ -221,6 +221,28 @@ pub struct MissionConfig {
 }
 
 impl MissionConfig {
+    /// A placeholder for missions that have not been set up ([`Mission::IDLE`]): the default
+    /// robot at the origin, facing +x, with the goal there too.
+    pub const IDLE: Self = Self {
+        mode: MissionMode::Stop,
+        planner: PlannerKind::AStar,
+        robot: RobotConfig::DEFAULT,
+        start: PointM { x_m: 0.0, y_m: 0.0 },
+        initial_heading_rad: 0.0,
+        goal: PointM { x_m: 0.0, y_m: 0.0 },
+        speed_m_s: 0.2,
+        turn_rate_rad_s: 0.8,
+        turn_in_place_above_rad: core::f32::consts::FRAC_PI_6,
+        time_limit_s: 600.0,
+        goal_tolerance_m: 0.10,
+        max_stalled_plans: 6,
+        stall_distance_m: 0.10,
+        constant_depth_filter: false,
+        trust_seen_space: true,
+        max_trusted_path_m: 30.0,
+        moving_half_sweep_deg: 95.0,
+    };
+
     /// A configuration from a `.par` file's parameters and a robot config (whose planning
     /// radius is replaced by the `.par` radius), stop mode, A*, a 600 s time limit.
     pub fn from_params(params: &Params, robot: RobotConfig) -> Self {
@@ -512,6 +534,28 @@ pub struct MissionStats {
     pub last_plan_error: Option<PlanError>,
 }
 
+impl MissionStats {
+    /// Every counter 0 (`Default`, usable in `const` contexts).
+    pub const ZERO: Self = Self {
+        stops: 0,
+        moving_sweeps: 0,
+        full_sweeps: 0,
+        plans: 0,
+        replans: 0,
+        blocked_replans: 0,
+        band_cuts: 0,
+        readings: 0,
+        hits: 0,
+        odometry_distance_m: 0.0,
+        time_s: 0.0,
+        controller_overruns: 0,
+        saturated_periods: 0,
+        unreachable_reason: None,
+        plan_errors: 0,
+        last_plan_error: None,
+    };
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct SweepState {
     full: bool,
@@ -575,29 +619,33 @@ impl<const W: usize> Mission<W> {
     /// Size of this mission type in bytes (it is meant to live in a `static` on the MCU).
     pub const SIZE_BYTES: usize = core::mem::size_of::<Self>();
 
-    /// A mission on an empty map of `geometry`. Validates the config and checks that the grid
-    /// fits the grid capacity and that start and goal are on the map. (The planner that serves
-    /// its [`PlanRequest`]s must cover `geometry`'s cells, or the first plan aborts the mission
-    /// with [`PlanError::ScratchTooSmall`].)
-    pub fn new(config: MissionConfig, geometry: GridGeometry) -> Result<Self, MissionError> {
-        config.validate()?;
-        let grid = Grid::<W>::new(geometry).map_err(MissionError::Grid)?;
-        let seen = grid.clone();
-        if geometry.cell_of(config.start).is_err() {
-            return Err(MissionError::OffMap { which: "start" });
-        }
-        if geometry.cell_of(config.goal).is_err() {
-            return Err(MissionError::OffMap { which: "goal" });
-        }
-        let frame = FrameTransform::new(config.start, config.initial_heading_rad);
-        Ok(Self {
-            expansion_cells: geometry.expansion_cells(config.robot.planning_radius_m),
-            config,
+    /// A mission that has ended before it began ([`MissionStatus::Aborted`], phase
+    /// [`MissionPhase::Done`]) on the seed's 300 × 300 map, or a one-cell map when the grid
+    /// holds less: what a `static` holds until [`Mission::restart`] sets it up in place.
+    pub const IDLE: Self = {
+        let geometry = match Grid::<W>::new_const(GridGeometry::seed_default()) {
+            Ok(_) => GridGeometry::seed_default(),
+            Err(_) => match GridGeometry::new(1, 1, crate::grid::DEFAULT_RESOLUTION_M) {
+                Ok(g) => g,
+                Err(_) => panic!("a 1 x 1 geometry is valid"),
+            },
+        };
+        let grid = match Grid::<W>::new_const(geometry) {
+            Ok(g) => g,
+            Err(_) => panic!("the grid holds one cell"),
+        };
+        let seen = match Grid::<W>::new_const(geometry) {
+            Ok(g) => g,
+            Err(_) => panic!("the grid holds one cell"),
+        };
+        Self {
+            config: MissionConfig::IDLE,
             grid,
             seen,
             path: Vec::new(),
             prefix: Vec::new(),
-            frame,
+            frame: FrameTransform::identity(),
+            expansion_cells: 0,
             readings: SweepBuffer::new(),
             filtered: HitBuffer::new(),
             hits: Vec::new(),
@@ -605,18 +653,91 @@ impl<const W: usize> Mission<W> {
             next_sweep_reversed: false,
             last_sweep_full: false,
             sonar_budget_s: 0.0,
-            phase: MissionPhase::Sweep { full: false },
-            status: MissionStatus::Running,
-            stats: MissionStats::default(),
-            pose_odom: Pose::default(),
-            supply_point_odom: PointM::new(0.0, 0.0),
+            phase: MissionPhase::Done,
+            status: MissionStatus::Aborted,
+            stats: MissionStats::ZERO,
+            pose_odom: Pose {
+                x_m: 0.0,
+                y_m: 0.0,
+                heading_rad: 0.0,
+            },
+            supply_point_odom: PointM { x_m: 0.0, y_m: 0.0 },
             supply_segment: 0,
             last_plan_origin: None,
             stalled_plans: 0,
             pending_plan: None,
             deferred_sweep_end: None,
             next_plan_id: 1,
-        })
+        }
+    };
+
+    /// A mission on an empty map of `geometry`. Validates the config and checks that the grid
+    /// fits the grid capacity and that start and goal are on the map. (The planner that serves
+    /// its [`PlanRequest`]s must cover `geometry`'s cells, or the first plan aborts the mission
+    /// with [`PlanError::ScratchTooSmall`].)
+    ///
+    /// The value is large ([`Mission::SIZE_BYTES`]): on the MCU keep one in a `static`
+    /// ([`Mission::IDLE`]) and set it up with [`Mission::restart`] instead.
+    pub fn new(config: MissionConfig, geometry: GridGeometry) -> Result<Self, MissionError> {
+        Self::check(&config, geometry)?;
+        let mut mission = Self::IDLE;
+        mission.restart(config, geometry)?;
+        Ok(mission)
+    }
+
+    fn check(config: &MissionConfig, geometry: GridGeometry) -> Result<(), MissionError> {
+        config.validate()?;
+        if geometry.cell_count() > Grid::<W>::CAPACITY_CELLS {
+            return Err(MissionError::Grid(GridError::CapacityExceeded {
+                cells: geometry.cell_count() as u32,
+                capacity: Grid::<W>::CAPACITY_CELLS as u32,
+            }));
+        }
+        if geometry.cell_of(config.start).is_err() {
+            return Err(MissionError::OffMap { which: "start" });
+        }
+        if geometry.cell_of(config.goal).is_err() {
+            return Err(MissionError::OffMap { which: "goal" });
+        }
+        Ok(())
+    }
+
+    /// Set this mission up afresh, in place (no large temporary): an empty map of `geometry`,
+    /// the sweep about to start. Checks as [`Mission::new`]; on error nothing changes. A plan
+    /// still out for the previous mission is ignored when it comes back (its id is not
+    /// reused).
+    pub fn restart(
+        &mut self,
+        config: MissionConfig,
+        geometry: GridGeometry,
+    ) -> Result<(), MissionError> {
+        Self::check(&config, geometry)?;
+        self.grid.reset(geometry).map_err(MissionError::Grid)?;
+        self.seen.reset(geometry).map_err(MissionError::Grid)?;
+        self.expansion_cells = geometry.expansion_cells(config.robot.planning_radius_m);
+        self.frame = FrameTransform::new(config.start, config.initial_heading_rad);
+        self.config = config;
+        self.path.clear();
+        self.prefix.clear();
+        self.readings.clear();
+        self.filtered.clear();
+        self.hits.clear();
+        self.sweep = None;
+        self.next_sweep_reversed = false;
+        self.last_sweep_full = false;
+        self.sonar_budget_s = 0.0;
+        self.phase = MissionPhase::Sweep { full: false };
+        self.status = MissionStatus::Running;
+        self.stats = MissionStats::ZERO;
+        self.pose_odom = Pose::default();
+        self.supply_point_odom = PointM::new(0.0, 0.0);
+        self.supply_segment = 0;
+        self.last_plan_origin = None;
+        self.stalled_plans = 0;
+        self.pending_plan = None;
+        self.deferred_sweep_end = None;
+        self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
+        Ok(())
     }
 
     /// What the planner of a [`PlanRequest`] works on: the grid to plan on and the buffer its

@@ -624,3 +624,34 @@ fn the_prefix_starts_at_the_origin_without_the_points_near_it() {
     start_with(&mut v, 0, origin);
     assert_eq!(xs(&v), [-1.0]);
 }
+
+#[test]
+fn a_restarted_mission_runs_like_a_new_one_and_a_bad_restart_changes_nothing() {
+    let real = room_with_block();
+    let start = PointM::new(1.5, 4.0);
+    let c = config(start, PointM::new(6.5, 4.0), MissionMode::Stop);
+    let mut fresh = Box::new(Mission300::new(c, geometry()).unwrap());
+    let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
+    let expected = run(&mut fresh, &real, &mut plant);
+
+    // The idle mission ignores everything until it is set up.
+    let mut reused = Box::new(Mission300::IDLE);
+    assert_eq!(reused.status(), MissionStatus::Aborted);
+    assert_eq!(reused.phase(), MissionPhase::Done);
+    // A bad setup is refused and leaves it idle.
+    let mut bad = c;
+    bad.goal = PointM::new(50.0, 4.0);
+    assert!(matches!(
+        reused.restart(bad, geometry()),
+        Err(MissionError::OffMap { which: "goal" })
+    ));
+    assert_eq!(reused.status(), MissionStatus::Aborted);
+    // Twice in a row, each run equals the fresh mission's.
+    for _ in 0..2 {
+        reused.restart(c, geometry()).unwrap();
+        let mut plant = Plant::new(&c.robot, Pose::new(start.x_m, start.y_m, 0.0));
+        assert_eq!(run(&mut reused, &real, &mut plant), expected);
+        assert_eq!(reused.stats(), fresh.stats());
+        assert_eq!(reused.grid(), fresh.grid());
+    }
+}
