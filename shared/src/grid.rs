@@ -71,6 +71,8 @@ pub enum GridError {
         /// The point, metres.
         point: PointM,
     },
+    /// Two grids that must have the same geometry do not.
+    GeometryMismatch,
 }
 
 impl core::fmt::Display for GridError {
@@ -92,6 +94,7 @@ impl core::fmt::Display for GridError {
                 "point ({}, {}) m is outside the map",
                 point.x_m, point.y_m
             ),
+            GridError::GeometryMismatch => write!(f, "the two grids' geometries differ"),
         }
     }
 }
@@ -434,6 +437,18 @@ impl<const WORDS: usize> Grid<WORDS> {
     /// The packed bits of the used cells (row-major, bit `i % 32` of word `i / 32` is cell `i`).
     pub fn words(&self) -> &[u32] {
         &self.bits[..words_for_cells(self.geometry.cell_count())]
+    }
+
+    /// Mark every cell that is occupied in `other`, a grid of the same geometry (of any
+    /// capacity). Errors, changing nothing, when the geometries differ.
+    pub fn merge_from<const V: usize>(&mut self, other: &Grid<V>) -> Result<(), GridError> {
+        if other.geometry() != self.geometry() {
+            return Err(GridError::GeometryMismatch);
+        }
+        for (mine, theirs) in self.bits.iter_mut().zip(other.words()) {
+            *mine |= *theirs;
+        }
+        Ok(())
     }
 
     /// Overwrite packed words starting at word `offset` (for chunked map transfers). Words beyond

@@ -302,6 +302,18 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                 })
             }
             Request::Status => Ok(Reply::Status(self.status())),
+            // Missions and the real world are [`super::RobotDevice`]'s; a plain handler (the
+            // planning service) does not run them.
+            Request::SetMission(_)
+            | Request::WorldChunk { .. }
+            | Request::ClearWorld
+            | Request::StartMission
+            | Request::PauseMission
+            | Request::ResumeMission
+            | Request::AbortMission
+            | Request::EmergencyStop
+            | Request::ClearEmergencyStop
+            | Request::MissionStatus => Err(ErrorReply::new(ErrorCode::NotOnThisBuild, 0, 0)),
         }
     }
 

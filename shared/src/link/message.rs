@@ -11,11 +11,19 @@ use heapless::Vec;
 use serde::{Deserialize, Serialize};
 
 use crate::geom::PointM;
+use crate::mission::{MissionMode, MissionPhase, MissionStats, MissionStatus};
 use crate::plan::{PlanStatus, PlannerKind};
 
 /// Version of this protocol. A host and a device only talk when their versions are equal
-/// ([`Request::Hello`]).
-pub const PROTOCOL_VERSION: u16 = 1;
+/// ([`Request::Hello`]). 2: missions (requests 10–18, telemetry 3–8, the pose report).
+pub const PROTOCOL_VERSION: u16 = 2;
+
+/// Points carried by one telemetry chunk of hits, prefix or path.
+pub const TELEMETRY_CHUNK_POINTS: usize = 32;
+
+/// Most plan vertices sent as telemetry after a plan (the prefix is sent whole): 8 chunks, so
+/// a plan costs at most about 2.3 KB of the link's 11.5 KB/s.
+pub const TELEMETRY_PATH_POINTS: usize = 256;
 
 /// Vertices carried by one [`Request::ObstacleChunk`].
 pub const OBSTACLE_CHUNK_VERTICES: usize = 32;
@@ -138,6 +146,127 @@ pub enum Request {
     },
     /// Answered by [`Reply::Status`].
     Status,
+    /// Set up the next mission (on the map of `SetParams`, with the obstacles uploaded so far
+    /// as what the robot knows). Refused while a mission runs. Answered by [`Reply::Ack`].
+    SetMission(MissionSetup),
+    /// Part of a polygon of the *real* world, in which the simulated sonar casts its rays and
+    /// the simulated robot drives (QEMU and host builds only; a board answers
+    /// [`ErrorCode::NotOnThisBuild`]). Chunks as [`Request::ObstacleChunk`]. Answered by
+    /// [`Reply::Obstacles`] with the world's counts.
+    WorldChunk {
+        /// Index of `vertices[0]` within the polygon.
+        first_vertex: u16,
+        /// The vertices, metres.
+        vertices: Vec<PointM, OBSTACLE_CHUNK_VERTICES>,
+        /// This chunk ends the polygon.
+        last: bool,
+    },
+    /// Forget the real world's polygons. Answered by [`Reply::Ack`].
+    ClearWorld,
+    /// Start the mission set up by [`Request::SetMission`] (the simulated robot, if any, is put
+    /// at its start pose). Answered by [`Reply::Ack`]; then telemetry streams.
+    StartMission,
+    /// Hold the robot where it is; the mission's clock stops. Answered by [`Reply::Ack`].
+    PauseMission,
+    /// Go on after a pause: the robot sweeps and plans afresh from where it stands.
+    ResumeMission,
+    /// End the mission: zero volts on both motors within one control period, status
+    /// `Aborted`. Answered by [`Reply::Ack`] (the firmware acts on it before it answers).
+    AbortMission,
+    /// As [`Request::AbortMission`], and no mission starts again until
+    /// [`Request::ClearEmergencyStop`].
+    EmergencyStop,
+    /// Allow missions again after [`Request::EmergencyStop`] (a board also needs its e-stop
+    /// input released).
+    ClearEmergencyStop,
+    /// Answered by [`Reply::Mission`].
+    MissionStatus,
+}
+
+/// What a mission needs beyond the map (`SetParams`: size, resolution, planning radius) and
+/// the known obstacles (`ObstacleChunk`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct MissionSetup {
+    /// Stop-and-sweep or continuous.
+    pub mode: MissionMode,
+    /// Planner.
+    pub planner: PlannerKind,
+    /// Start position, metres.
+    pub start: PointM,
+    /// Initial heading, radians counter-clockwise from +x.
+    pub initial_heading_rad: f32,
+    /// Goal, metres.
+    pub goal: PointM,
+    /// Cruise speed, m/s.
+    pub speed_m_s: f32,
+    /// Sonar range, metres (0.26 < range <= 6).
+    pub sonar_range_m: f32,
+    /// Mission time limit, seconds.
+    pub time_limit_s: f32,
+    /// Filter sweeps with the regions-of-constant-depth filter.
+    pub constant_depth_filter: bool,
+    /// Trust space seen free by earlier sweeps.
+    pub trust_seen_space: bool,
+    /// Seed of the simulated sonar's noise (simulated builds).
+    pub noise_seed: u64,
+    /// Standard deviation of the simulated sonar's noise, metres (simulated builds).
+    pub sonar_noise_std_m: f32,
+}
+
+/// How the device's mission stands ([`Reply::Mission`], [`Telemetry::Finished`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MissionReport {
+    /// Set up, running, paused, ended.
+    pub state: RunState,
+    /// The mission's status.
+    pub status: MissionStatus,
+    /// Its phase.
+    pub phase: MissionPhase,
+    /// Its counters.
+    pub stats: MissionStats,
+    /// Most instructions one control step took (firmware: measured; 0 elsewhere).
+    pub max_control_instructions: u64,
+    /// Most instructions one plan took (firmware: measured; 0 elsewhere).
+    pub max_plan_instructions: u64,
+    /// Deepest stack use seen (painted stack), bytes (firmware; 0 elsewhere).
+    pub stack_high_water_bytes: u32,
+    /// The emergency stop is latched.
+    pub emergency_stop: bool,
+}
+
+/// The device's mission, as a whole.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RunState {
+    /// No mission set up.
+    Idle,
+    /// Set up, not started.
+    Ready,
+    /// Running.
+    Running,
+    /// Paused: the robot holds.
+    Paused,
+    /// Ended (see the status).
+    Ended,
+}
+
+/// The robot's pose as the mission believes it (odometry), five times a second.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PoseReport {
+    /// Mission time, milliseconds.
+    pub t_ms: u32,
+    /// Position, metres.
+    pub position: PointM,
+    /// Heading, radians counter-clockwise from +x.
+    pub heading_rad: f32,
+    /// Left motor voltage, volts.
+    pub left_voltage_v: f32,
+    /// Right motor voltage, volts.
+    pub right_voltage_v: f32,
+    /// Controller periods that overran so far.
+    pub controller_overruns: u32,
 }
 
 /// Which program answers.
@@ -295,6 +424,8 @@ pub enum Reply {
     Status(DeviceStatus),
     /// The request failed and changed nothing.
     Error(ErrorReply),
+    /// The mission's state ([`Request::MissionStatus`]).
+    Mission(MissionReport),
 }
 
 /// Why a request failed. The variant index is the code on the wire (postcard varint).
@@ -331,6 +462,16 @@ pub enum ErrorCode {
     OutOfRange,
     /// 13: an obstacle chunk closes a polygon that has no vertex.
     EmptyPolygon,
+    /// 14: the request is for a simulated build (the real world); this is a board.
+    NotOnThisBuild,
+    /// 15: not now: `value` is the [`RunState`] index that refuses it (e.g. `SetMission` while
+    /// running, `StartMission` without a setup: 0), `detail` 1 when the emergency stop is
+    /// latched.
+    WrongState,
+    /// 16: the mission setup is refused: `value` is the index of the offending field of
+    /// [`MissionSetup`] (or 100 + the robot config's, see the device log), `detail` 1 when the
+    /// start or the goal lies off the map.
+    BadMission,
 }
 
 /// An error answer: a code and up to three numbers whose meaning the code documents.
@@ -403,6 +544,30 @@ impl core::fmt::Display for ErrorReply {
             }
             ErrorCode::OutOfRange => write!(f, "read from {v} but there are only {l} items"),
             ErrorCode::EmptyPolygon => write!(f, "an obstacle polygon needs at least one vertex"),
+            ErrorCode::NotOnThisBuild => {
+                write!(f, "the real world is for simulated builds; this is a board")
+            }
+            ErrorCode::WrongState => {
+                if self.detail == 1 {
+                    write!(f, "the emergency stop is latched (clear it first)")
+                } else {
+                    let state = match v {
+                        0 => "no mission is set up",
+                        1 => "the mission has not started",
+                        2 => "a mission is running",
+                        3 => "the mission is paused",
+                        _ => "the mission has ended",
+                    };
+                    write!(f, "not now: {state}")
+                }
+            }
+            ErrorCode::BadMission => {
+                if self.detail == 1 {
+                    write!(f, "the mission's start or goal lies off the map")
+                } else {
+                    write!(f, "mission setup field {v} is not a valid value")
+                }
+            }
         }
     }
 }
@@ -415,13 +580,68 @@ pub enum Telemetry {
         /// Its [`PROTOCOL_VERSION`].
         protocol_version: u16,
     },
-    /// The robot's pose estimate (mission firmware).
-    Pose {
-        /// Position, metres.
-        position: PointM,
-        /// Heading, radians counter-clockwise from +x.
-        heading_rad: f32,
-    },
+    /// The robot's pose estimate, five times a second while a mission runs.
+    Pose(PoseReport),
     /// The device state changed.
     Status(DeviceStatus),
+    /// The mission's phase or status changed.
+    Phase {
+        /// Mission time, milliseconds.
+        t_ms: u32,
+        /// The new phase.
+        phase: MissionPhase,
+        /// The status.
+        status: MissionStatus,
+    },
+    /// Hits of a finished sweep (marked on the map grown by the planning radius: the host
+    /// marks the same points and has the same map), in chunks.
+    SweepHits {
+        /// Sweep number, from 1.
+        sweep: u32,
+        /// Index of `hits[0]`.
+        first: u16,
+        /// Hits of the sweep.
+        total: u16,
+        /// The hits, metres.
+        hits: Vec<PointM, TELEMETRY_CHUNK_POINTS>,
+    },
+    /// A plan came back and was applied.
+    Planned {
+        /// Mission time, milliseconds.
+        t_ms: u32,
+        /// Plan number, from 1.
+        plan: u32,
+        /// The planner's verdict.
+        status: PlanStatus,
+        /// Vertices of the plan.
+        path_points: u16,
+        /// Vertices of the kept prefix.
+        prefix_points: u16,
+        /// Instructions the planner took (firmware; 0 elsewhere).
+        instructions: u64,
+    },
+    /// Part of the kept prefix of plan `plan`.
+    Prefix {
+        /// Plan number.
+        plan: u32,
+        /// Index of `points[0]`.
+        first: u16,
+        /// Points of the prefix.
+        total: u16,
+        /// The points, metres.
+        points: Vec<PointM, TELEMETRY_CHUNK_POINTS>,
+    },
+    /// Part of plan `plan` (its first [`TELEMETRY_PATH_POINTS`] vertices).
+    Path {
+        /// Plan number.
+        plan: u32,
+        /// Index of `points[0]`.
+        first: u16,
+        /// Points sent of the path (at most [`TELEMETRY_PATH_POINTS`]).
+        total: u16,
+        /// The points, metres.
+        points: Vec<PointM, TELEMETRY_CHUNK_POINTS>,
+    },
+    /// The mission ended.
+    Finished(MissionReport),
 }
