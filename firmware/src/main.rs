@@ -168,6 +168,7 @@ mod app {
     use stm32f4xx_hal::{
         pac::USART1,
         prelude::*,
+        rcc,
         serial::{Config, Rx, Serial, Tx},
     };
     use twil_core::link::{DeviceFrame, Telemetry};
@@ -179,8 +180,8 @@ mod app {
     struct Local {
         rx: Rx<USART1>,
         tx: Tx<USART1>,
-        producer: Producer<'static, u8, RX_QUEUE_BYTES>,
-        consumer: Consumer<'static, u8, RX_QUEUE_BYTES>,
+        producer: Producer<'static, u8>,
+        consumer: Consumer<'static, u8>,
         syst: cortex_m::peripheral::SYST,
         device: &'static mut TwilDevice,
         planner: &'static mut TwilPlanner,
@@ -190,19 +191,18 @@ mod app {
         planner_memory: TwilPlanner = TwilPlanner::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
-        let rcc = cx.device.RCC.constrain();
         // QEMU: stay on the HSI (16 MHz), no PLL (its ready flag is never set under QEMU).
         #[cfg(feature = "qemu")]
-        let clocks = rcc.cfgr.freeze();
+        let mut rcc = cx.device.RCC.freeze(rcc::Config::hsi());
         #[cfg(feature = "hardware")]
-        let clocks = rcc.cfgr.sysclk(168.MHz()).freeze();
+        let mut rcc = cx.device.RCC.freeze(rcc::Config::hsi().sysclk(168.MHz()));
 
-        let gpioa = cx.device.GPIOA.split();
+        let gpioa = cx.device.GPIOA.split(&mut rcc);
         let serial: Serial<USART1> = Serial::new(
             cx.device.USART1,
             (gpioa.pa9, gpioa.pa10),
             Config::default().baudrate(115_200.bps()),
-            &clocks,
+            &mut rcc,
         )
         .unwrap_or_else(|_| panic!("115200 baud is reachable from any clock"));
         let (mut tx, mut rx) = serial.split();
