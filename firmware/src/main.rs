@@ -17,7 +17,7 @@
 //!
 //! | task       | binds    | prio | does                                                        |
 //! |------------|----------|------|-------------------------------------------------------------|
-//! | `systick`  | SysTick  | 3    | counts SysTick wraps while a request is handled (timing)     |
+//! | `SysTick`  | SysTick  | -    | [`Mono`]'s tick (1 kHz, from `rtic-monotonics`): time, delays |
 //! | `usart1_rx`| USART1   | 2    | moves every received byte into the RX queue (never blocks)   |
 //! | `idle`     | -        | 0    | drains the queue into the `Device`, plans, writes replies    |
 //!
@@ -106,41 +106,57 @@ fn init_ccm() -> (
     }
 }
 
-/// SysTick reload: the full 24 bits.
-const SYST_RELOAD: u32 = 0x00FF_FFFF;
-/// SysTick wraps since the timer was started (counted by the SysTick exception).
-static SYST_WRAPS: AtomicU32 = AtomicU32::new(0);
+/// Rate of the monotonic [`Mono`], Hz: one SysTick interrupt per millisecond. At 168 MHz that
+/// is one interrupt (about a hundred instructions) per 168 000 cycles, 0.06 % of the core; a
+/// 5 M-instruction plan sees 5 of them. It is also the resolution of `Mono::delay`.
+pub const MONO_HZ: u32 = 1_000;
+
+// (A literal: the macro uses it both as SysTick's rate and as the tick type's rate.)
+rtic_monotonics::systick_monotonic!(Mono, 1_000);
+
+/// SysTick's input clock, Hz: the core clock on the board (PLL at 168 MHz); under QEMU 7.2 the
+/// `netduinoplus2`'s SysTick counts at a fixed 168 MHz of virtual time whatever the RCC says
+/// (the QEMU build runs on the 16 MHz HSI), so both builds start the monotonic with this value.
+pub const SYSTICK_HZ: u32 = 168_000_000;
+/// SysTick counts per monotonic tick: SysTick's reload is this minus one.
+const SYSTICK_PER_MONO: u32 = SYSTICK_HZ / MONO_HZ;
+
 /// Bytes dropped by the receive interrupt (queue full or a line error).
 static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
 
-/// SysTick ticks counted so far (the counter runs only while requests are handled): wraps ×
-/// 2^24 + the count down of the current period. Differences of two readings are elapsed ticks.
-fn ticks() -> u64 {
-    use cortex_m::peripheral::{SCB, SYST};
+/// SysTick counts since [`Mono`] started: monotonic ticks × [`SYSTICK_PER_MONO`] + the count
+/// down of the current period. Differences of two readings are elapsed SysTick counts (the
+/// 32-bit tick count wraps after 2^32 ms, 49.7 days: a reading across that goes back to 0).
+fn systick_counts() -> u64 {
+    use rtic_monotonics::rtic_time::monotonic::TimerQueueBasedInstant;
+    use rtic_monotonics::Timebase;
     loop {
-        // The wrap is counted by the exception on the 1 -> 0 step; a wrap whose exception has
-        // not run yet shows as a pending SysTick. Readings that straddle either are retried.
-        let wraps_before = SYST_WRAPS.load(Ordering::Acquire);
-        let pending_before = SCB::is_pendst_pending();
-        let value = SYST::get_current();
-        let pending_after = SCB::is_pendst_pending();
-        let wraps_after = SYST_WRAPS.load(Ordering::Acquire);
-        if wraps_before != wraps_after || pending_before != pending_after {
+        // `Mono::now()` counts a wrap (SysTick's COUNTFLAG, set on the 1 -> 0 step) whether or
+        // not its interrupt has run yet, exactly once. A wrap between the two readings changes
+        // the tick count: read again.
+        let before = Mono::now().ticks();
+        let value = cortex_m::peripheral::SYST::get_current();
+        let after = Mono::now().ticks();
+        if before != after {
             continue;
         }
-        let wraps = wraps_before as u64 + pending_before as u64;
-        // Ticks into the period: 0 at the 1 -> 0 step, then RELOAD, RELOAD - 1, ... count 1, 2, ...
-        let into_period = (SYST_RELOAD - value).wrapping_add(1) & SYST_RELOAD;
-        return (wraps << 24) + into_period as u64;
+        // Counts into the period: 0 at the 1 -> 0 step (the wrap already counted), then
+        // RELOAD, RELOAD - 1, ... are 1, 2, ... (a value above RELOAD, before start: 0).
+        let into_period = if value == 0 || value >= SYSTICK_PER_MONO {
+            0
+        } else {
+            SYSTICK_PER_MONO - value
+        };
+        return before as u64 * SYSTICK_PER_MONO as u64 + into_period as u64;
     }
 }
 
-/// Instructions (QEMU) or cycles (board) counted so far (see [`ticks`]).
+/// Instructions (QEMU) or cycles (board) counted so far (see [`systick_counts`]).
 ///
 /// QEMU's SysTick runs at 168 MHz of virtual time; with `-icount shift=0` one instruction takes
-/// 1 ns, so instructions = ticks × 1000 / 168. On a board at 168 MHz, ticks are core cycles.
+/// 1 ns, so instructions = counts × 1000 / 168. On a board at 168 MHz, counts are core cycles.
 fn instructions() -> u64 {
-    let t = ticks();
+    let t = systick_counts();
     if cfg!(feature = "qemu") {
         t * 1000 / 168
     } else {
@@ -163,7 +179,6 @@ fn static_ram_bytes() -> u32 {
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
     use super::*;
-    use cortex_m::peripheral::syst::SystClkSource;
     use heapless::spsc::{Consumer, Producer};
     use stm32f4xx_hal::{
         pac::USART1,
@@ -182,7 +197,6 @@ mod app {
         tx: Tx<USART1>,
         producer: Producer<'static, u8>,
         consumer: Consumer<'static, u8>,
-        syst: cortex_m::peripheral::SYST,
         device: &'static mut TwilDevice,
         planner: &'static mut TwilPlanner,
     }
@@ -208,17 +222,14 @@ mod app {
         let (mut tx, mut rx) = serial.split();
         rx.listen();
 
-        let mut syst = cx.core.SYST;
-        syst.set_clock_source(SystClkSource::Core);
-        syst.set_reload(SYST_RELOAD);
-        syst.clear_current();
-        syst.enable_interrupt();
-        // The first tick after a clear loads the reload value without counting a wrap: let it
-        // happen now, so that `ticks()` only ever grows. From here the counter is paused and
-        // resumed, never cleared.
-        syst.enable_counter();
-        while cortex_m::peripheral::SYST::get_current() == 0 {}
-        syst.disable_counter();
+        // The monotonic: SysTick at MONO_HZ, never paused (see SYSTICK_HZ for the clock).
+        #[cfg(feature = "hardware")]
+        assert_eq!(
+            rcc.clocks.sysclk().raw(),
+            SYSTICK_HZ,
+            "SysTick runs from the core clock"
+        );
+        Mono::start(cx.core.SYST, SYSTICK_HZ);
 
         let (device, rx_queue) = init_ccm();
         device.handler.set_build(if cfg!(feature = "qemu") {
@@ -242,7 +253,6 @@ mod app {
                 tx,
                 producer,
                 consumer,
-                syst,
                 device,
                 planner: cx.local.planner_memory,
             },
@@ -268,21 +278,13 @@ mod app {
         }
     }
 
-    /// Counts SysTick periods (only while a request is being handled).
-    #[task(binds = SysTick, priority = 3)]
-    fn systick(_cx: systick::Context) {
-        SYST_WRAPS.fetch_add(1, Ordering::AcqRel);
-    }
-
-    #[idle(local = [consumer, tx, syst, device, planner])]
+    #[idle(local = [consumer, tx, device, planner])]
     fn idle(cx: idle::Context) -> ! {
         // Calibration of the instruction count: `asm::delay(n)` runs n + 1 times a two-instruction
         // loop, so 500 000 gives 1 000 002 instructions (+ a few for the reads).
-        cx.local.syst.enable_counter();
         let before = instructions();
         cortex_m::asm::delay(500_000);
         let after = instructions();
-        cx.local.syst.disable_counter();
         log!(
             "calibration: 1000002 instructions measured as {}",
             (after - before) as u32
@@ -314,9 +316,6 @@ mod app {
             if dropped > 0 {
                 cx.local.device.handler.note_rx_dropped(dropped);
             }
-            // SysTick runs only while requests are handled, so the core sleeps otherwise (and
-            // QEMU's virtual clock has no timer to chase).
-            cx.local.syst.enable_counter();
             let tx = &mut *cx.local.tx;
             cx.local.device.receive(
                 &chunk[..n],
@@ -324,7 +323,6 @@ mod app {
                 &mut instructions,
                 &mut |bytes: &[u8]| write_all(tx, bytes),
             );
-            cx.local.syst.disable_counter();
         }
     }
 
