@@ -151,6 +151,13 @@ fn systick_counts() -> u64 {
     }
 }
 
+// defmt log lines carry the time since start-up in microseconds (SysTick counts at 168 MHz on
+// both builds; QEMU: virtual time, 1 ns per instruction while the core runs).
+defmt::timestamp!(
+    "{=u64:us}",
+    systick_counts() / (SYSTICK_HZ / 1_000_000) as u64
+);
+
 /// Instructions (QEMU) or cycles (board) counted so far (see [`systick_counts`]).
 ///
 /// QEMU's SysTick runs at 168 MHz of virtual time; with `-icount shift=0` one instruction takes

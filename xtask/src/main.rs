@@ -378,8 +378,8 @@ fn lint() -> Result<()> {
 mod tests {
     use super::*;
 
-    /// The QEMU firmware's defmt log (semihosting) decodes into its boot lines, and the
-    /// instruction-count calibration it logs is within 0.1 % of the truth. Needs the QEMU ELF
+    /// The QEMU firmware's defmt log (semihosting) decodes into its boot lines, with their
+    /// timestamps, and the instruction-count calibration it logs is within 0.1 % of the truth. Needs the QEMU ELF
     /// and `qemu-system-arm`, which `cargo xtask test` provides before running the tests.
     #[test]
     fn qemu_firmware_defmt_log_decodes() {
@@ -412,11 +412,24 @@ mod tests {
         let _ = child.wait();
         result.expect("decode");
         assert_eq!(lines.len(), 2, "QEMU ended before two log lines: {lines:?}");
+        // Each line: the time since start-up (seconds, µs resolution, from the monotonic),
+        // the level, the message.
+        let split = |line: &str| -> (f64, String) {
+            let (time, rest) = line.split_once(' ').unwrap_or_else(|| panic!("{lines:?}"));
+            let time = time
+                .parse()
+                .unwrap_or_else(|_| panic!("no timestamp: {lines:?}"));
+            (time, rest.to_string())
+        };
+        let (t0, first) = split(&lines[0]);
+        let (t1, second) = split(&lines[1]);
         assert!(
-            lines[0].starts_with("INFO twil firmware up: static RAM "),
+            first.starts_with("INFO twil firmware up: static RAM "),
             "{lines:?}"
         );
-        let measured: u64 = lines[1]
+        // The calibration runs after the first line, and takes 1 ms of virtual time.
+        assert!(t0 < t1 && t1 < 1.0, "{lines:?}");
+        let measured: u64 = second
             .strip_prefix("INFO calibration: 1000002 instructions measured as ")
             .and_then(|n| n.trim().parse().ok())
             .unwrap_or_else(|| panic!("{lines:?}"));
