@@ -51,8 +51,8 @@ use panic_semihosting as _;
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use heapless::spsc::Queue;
-use twil_core::link::{Build, DeviceInfo, PROTOCOL_VERSION};
+use twil_core::link::{Build, PROTOCOL_VERSION};
+pub use twil_firmware::{memory, TwilDevice, RX_QUEUE_BYTES};
 
 /// Log a line with defmt: over RTT on a board (probe-rs prints it), over semihosting under QEMU
 /// (`cargo xtask qemu` decodes it with the ELF's defmt table).
@@ -64,47 +64,8 @@ macro_rules! log {
 
 /// Planner open-list capacity, entries (`twil_core::link::mcu`, shared with the host).
 pub const QUEUE: usize = twil_core::link::mcu::PLANNER_QUEUE;
-/// Bytes of the receive queue (holds one less).
-pub const RX_QUEUE_BYTES: usize = 1024;
-
-/// The device: grid (400 x 400 cells), obstacles, last path, framing.
-pub type TwilDevice = twil_core::link::mcu::McuDevice;
 /// The planner (scratch for 400 x 400 cells, [`QUEUE`] open-list entries).
 pub type TwilPlanner = twil_core::link::mcu::McuPlanner;
-
-/// The receive queue, in the CCM (SRAM is the planner's). Never touched before [`init_ccm`].
-#[link_section = ".ccmram.rx_queue"]
-static mut RX_QUEUE: Queue<u8, RX_QUEUE_BYTES> = Queue::new();
-
-/// The device in the CCM. Never read before [`init_ccm`] has copied its initial value.
-#[link_section = ".ccmram.device"]
-static mut DEVICE: TwilDevice = TwilDevice::new(DeviceInfo::for_build(Build::Hardware));
-
-/// Copy the initial values of `.ccmram` from flash (the start-up code only does this for
-/// `.data`) and hand out the device and the receive queue. Called once, from `init`.
-fn init_ccm() -> (
-    &'static mut TwilDevice,
-    &'static mut Queue<u8, RX_QUEUE_BYTES>,
-) {
-    extern "C" {
-        static mut __sccmram: u32;
-        static mut __eccmram: u32;
-        static __siccmram: u32;
-    }
-    // SAFETY: runs once, in `init` with interrupts disabled, before anything touches the CCM
-    // statics; the linker script (`ccm.x`) makes [__sccmram, __eccmram) word-aligned in the CCM
-    // and __siccmram its image in flash, of the same length.
-    unsafe {
-        let start = core::ptr::addr_of_mut!(__sccmram);
-        let end = core::ptr::addr_of_mut!(__eccmram);
-        let words = (end as usize - start as usize) / 4;
-        core::ptr::copy_nonoverlapping(core::ptr::addr_of!(__siccmram), start, words);
-        (
-            &mut *core::ptr::addr_of_mut!(DEVICE),
-            &mut *core::ptr::addr_of_mut!(RX_QUEUE),
-        )
-    }
-}
 
 /// Rate of the monotonic [`Mono`], Hz: one SysTick interrupt per millisecond. At 168 MHz that
 /// is one interrupt (about a hundred instructions) per 168 000 cycles, 0.06 % of the core; a
@@ -171,18 +132,6 @@ fn instructions() -> u64 {
     }
 }
 
-/// Statically allocated SRAM (`.data` + `.bss` + `.uninit`, not the CCM), from the linker's
-/// symbols.
-fn static_ram_bytes() -> u32 {
-    extern "C" {
-        static __euninit: u8;
-    }
-    const RAM_ORIGIN: usize = 0x2000_0000;
-    // Only the address of the linker symbol is taken, never its contents.
-    let end = core::ptr::addr_of!(__euninit) as usize;
-    end.saturating_sub(RAM_ORIGIN) as u32
-}
-
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
     use super::*;
@@ -238,20 +187,30 @@ mod app {
         );
         Mono::start(cx.core.SYST, SYSTICK_HZ);
 
-        let (device, rx_queue) = init_ccm();
+        // SAFETY: the first thing that touches `.ccmram`: nothing has read or referenced a CCM
+        // static yet (the device and the queue are handed out just below).
+        unsafe { memory::copy_ccm() };
+        let (device, rx_queue) =
+            twil_firmware::take_ccm_statics().expect("init takes the CCM statics once");
         device.handler.set_build(if cfg!(feature = "qemu") {
             Build::Qemu
         } else {
             Build::Hardware
         });
-        device.handler.set_static_ram_bytes(static_ram_bytes());
+        device
+            .handler
+            .set_static_ram_bytes(memory::static_ram_bytes());
         device.send_frame(
             &DeviceFrame::Telemetry(Telemetry::Boot {
                 protocol_version: PROTOCOL_VERSION,
             }),
             &mut |bytes: &[u8]| write_all(&mut tx, bytes),
         );
-        log!("twil firmware up: static RAM {} bytes", static_ram_bytes());
+        log!(
+            "twil firmware up: static RAM {} bytes, stack {} bytes",
+            memory::static_ram_bytes(),
+            memory::stack_bytes()
+        );
         let (producer, consumer) = rx_queue.split();
         (
             Shared {},
@@ -296,6 +255,10 @@ mod app {
             "calibration: 1000002 instructions measured as {}",
             (after - before) as u32
         );
+        // The stack was painted at reset (cortex-m-rt's `paint-stack`); report its high-water
+        // mark now and whenever a request took it deeper.
+        let mut high_water = memory::stack_high_water_bytes();
+        log_stack(high_water);
 
         let mut chunk = [0u8; 64];
         loop {
@@ -330,7 +293,23 @@ mod app {
                 &mut instructions,
                 &mut |bytes: &[u8]| write_all(tx, bytes),
             );
+            let now = memory::stack_high_water_bytes();
+            if now > high_water {
+                high_water = now;
+                log_stack(high_water);
+            }
         }
+    }
+
+    /// Log the stack's high-water mark and what is left below it.
+    fn log_stack(high_water: u32) {
+        let stack = memory::stack_bytes();
+        log!(
+            "stack high-water: {} of {} bytes ({} free)",
+            high_water,
+            stack,
+            stack.saturating_sub(high_water)
+        );
     }
 
     /// Write bytes, waiting for the transmitter.
