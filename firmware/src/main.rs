@@ -6,9 +6,11 @@
 //!
 //! ## Memory
 //!
-//! - SRAM (`.data`, `.bss`): the planner (4-bit scratch for 400 x 400 cells, a [`QUEUE`]-entry
-//!   open list, its path buffer), RTIC's state. Its size is what `static_ram_bytes` reports and
-//!   what the 112 KiB budget is about.
+//! - SRAM, top (`.data`, `.bss`, `.uninit`): the planner (4-bit scratch for 400 x 400 cells, a
+//!   [`QUEUE`]-entry open list, its path buffer), RTIC's state. Its size is what
+//!   `static_ram_bytes` reports and what the 112 KiB budget is about.
+//! - SRAM, bottom: the stack, below the statics (flip-link), so an overflow faults. Painted at
+//!   reset; its high-water mark is logged (see [`memory`]).
 //! - CCM (64 KiB at 0x1000_0000, `.ccmram`, see `build.rs`): the [`TwilDevice`] (the 400 x 400
 //!   grid, the obstacles, the last path, the frame decoder) and the receive queue. Their initial
 //!   values are stored in flash and copied by `init` before anything reads them.
