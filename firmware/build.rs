@@ -39,6 +39,7 @@ fn main() {
     fs::write(out.join("ccm.x"), ccm).unwrap();
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rustc-link-arg-bins=-Tccm.x");
+    println!("cargo:rustc-link-arg-tests=-Tccm.x");
     println!("cargo:rerun-if-changed={}", memory.display());
     println!("cargo:rerun-if-changed=build.rs");
 }

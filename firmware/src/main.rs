@@ -6,9 +6,11 @@
 //!
 //! ## Memory
 //!
-//! - SRAM (`.data`, `.bss`): the planner (4-bit scratch for 400 x 400 cells, a [`QUEUE`]-entry
-//!   open list, its path buffer), RTIC's state. Its size is what `static_ram_bytes` reports and
-//!   what the 112 KiB budget is about.
+//! - SRAM, top (`.data`, `.bss`, `.uninit`): the planner (4-bit scratch for 400 x 400 cells, a
+//!   [`QUEUE`]-entry open list, its path buffer), RTIC's state. Its size is what
+//!   `static_ram_bytes` reports and what the 112 KiB budget is about.
+//! - SRAM, bottom: the stack, below the statics (flip-link), so an overflow faults. Painted at
+//!   reset; its high-water mark is logged (see [`memory`]).
 //! - CCM (64 KiB at 0x1000_0000, `.ccmram`, see `build.rs`): the [`TwilDevice`] (the 400 x 400
 //!   grid, the obstacles, the last path, the frame decoder) and the receive queue. Their initial
 //!   values are stored in flash and copied by `init` before anything reads them.
@@ -17,7 +19,7 @@
 //!
 //! | task       | binds    | prio | does                                                        |
 //! |------------|----------|------|-------------------------------------------------------------|
-//! | `systick`  | SysTick  | 3    | counts SysTick wraps while a request is handled (timing)     |
+//! | `SysTick`  | SysTick  | -    | [`Mono`]'s tick (1 kHz, from `rtic-monotonics`): time, delays |
 //! | `usart1_rx`| USART1   | 2    | moves every received byte into the RX queue (never blocks)   |
 //! | `idle`     | -        | 0    | drains the queue into the `Device`, plans, writes replies    |
 //!
@@ -56,8 +58,8 @@ mod board;
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use heapless::spsc::Queue;
-use twil_core::link::{Build, DeviceInfo, PROTOCOL_VERSION};
+use twil_core::link::{Build, PROTOCOL_VERSION};
+pub use twil_firmware::{memory, TwilDevice, RX_QUEUE_BYTES};
 
 /// Log a line with defmt: over RTT on a board (probe-rs prints it), over semihosting under QEMU
 /// (`cargo xtask qemu` decodes it with the ELF's defmt table).
@@ -69,83 +71,67 @@ macro_rules! log {
 
 /// Planner open-list capacity, entries (`twil_core::link::mcu`, shared with the host).
 pub const QUEUE: usize = twil_core::link::mcu::PLANNER_QUEUE;
-/// Bytes of the receive queue (holds one less).
-pub const RX_QUEUE_BYTES: usize = 1024;
-
-/// The device: grid (400 x 400 cells), obstacles, last path, framing.
-pub type TwilDevice = twil_core::link::mcu::McuDevice;
 /// The planner (scratch for 400 x 400 cells, [`QUEUE`] open-list entries).
 pub type TwilPlanner = twil_core::link::mcu::McuPlanner;
 
-/// The receive queue, in the CCM (SRAM is the planner's). Never touched before [`init_ccm`].
-#[link_section = ".ccmram.rx_queue"]
-static mut RX_QUEUE: Queue<u8, RX_QUEUE_BYTES> = Queue::new();
+/// Rate of the monotonic [`Mono`], Hz: one SysTick interrupt per millisecond. At 168 MHz that
+/// is one interrupt (about a hundred instructions) per 168 000 cycles, 0.06 % of the core; a
+/// 5 M-instruction plan sees 5 of them. It is also the resolution of `Mono::delay`.
+pub const MONO_HZ: u32 = 1_000;
 
-/// The device in the CCM. Never read before [`init_ccm`] has copied its initial value.
-#[link_section = ".ccmram.device"]
-static mut DEVICE: TwilDevice = TwilDevice::new(DeviceInfo::for_build(Build::Hardware));
+// (A literal: the macro uses it both as SysTick's rate and as the tick type's rate.)
+rtic_monotonics::systick_monotonic!(Mono, 1_000);
 
-/// Copy the initial values of `.ccmram` from flash (the start-up code only does this for
-/// `.data`) and hand out the device and the receive queue. Called once, from `init`.
-fn init_ccm() -> (
-    &'static mut TwilDevice,
-    &'static mut Queue<u8, RX_QUEUE_BYTES>,
-) {
-    extern "C" {
-        static mut __sccmram: u32;
-        static mut __eccmram: u32;
-        static __siccmram: u32;
-    }
-    // SAFETY: runs once, in `init` with interrupts disabled, before anything touches the CCM
-    // statics; the linker script (`ccm.x`) makes [__sccmram, __eccmram) word-aligned in the CCM
-    // and __siccmram its image in flash, of the same length.
-    unsafe {
-        let start = core::ptr::addr_of_mut!(__sccmram);
-        let end = core::ptr::addr_of_mut!(__eccmram);
-        let words = (end as usize - start as usize) / 4;
-        core::ptr::copy_nonoverlapping(core::ptr::addr_of!(__siccmram), start, words);
-        (
-            &mut *core::ptr::addr_of_mut!(DEVICE),
-            &mut *core::ptr::addr_of_mut!(RX_QUEUE),
-        )
-    }
-}
+/// SysTick's input clock, Hz: the core clock on the board (PLL at 168 MHz); under QEMU 7.2 the
+/// `netduinoplus2`'s SysTick counts at a fixed 168 MHz of virtual time whatever the RCC says
+/// (the QEMU build runs on the 16 MHz HSI), so both builds start the monotonic with this value.
+pub const SYSTICK_HZ: u32 = 168_000_000;
+/// SysTick counts per monotonic tick: SysTick's reload is this minus one.
+const SYSTICK_PER_MONO: u32 = SYSTICK_HZ / MONO_HZ;
 
-/// SysTick reload: the full 24 bits.
-const SYST_RELOAD: u32 = 0x00FF_FFFF;
-/// SysTick wraps since the timer was started (counted by the SysTick exception).
-static SYST_WRAPS: AtomicU32 = AtomicU32::new(0);
 /// Bytes dropped by the receive interrupt (queue full or a line error).
 static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
 
-/// SysTick ticks counted so far (the counter runs only while requests are handled): wraps ×
-/// 2^24 + the count down of the current period. Differences of two readings are elapsed ticks.
-fn ticks() -> u64 {
-    use cortex_m::peripheral::{SCB, SYST};
+/// SysTick counts since [`Mono`] started: monotonic ticks × [`SYSTICK_PER_MONO`] + the count
+/// down of the current period. Differences of two readings are elapsed SysTick counts (the
+/// 32-bit tick count wraps after 2^32 ms, 49.7 days: a reading across that goes back to 0).
+fn systick_counts() -> u64 {
+    use rtic_monotonics::rtic_time::monotonic::TimerQueueBasedInstant;
+    use rtic_monotonics::Timebase;
     loop {
-        // The wrap is counted by the exception on the 1 -> 0 step; a wrap whose exception has
-        // not run yet shows as a pending SysTick. Readings that straddle either are retried.
-        let wraps_before = SYST_WRAPS.load(Ordering::Acquire);
-        let pending_before = SCB::is_pendst_pending();
-        let value = SYST::get_current();
-        let pending_after = SCB::is_pendst_pending();
-        let wraps_after = SYST_WRAPS.load(Ordering::Acquire);
-        if wraps_before != wraps_after || pending_before != pending_after {
+        // `Mono::now()` counts a wrap (SysTick's COUNTFLAG, set on the 1 -> 0 step) whether or
+        // not its interrupt has run yet, exactly once. A wrap between the two readings changes
+        // the tick count: read again.
+        let before = Mono::now().ticks();
+        let value = cortex_m::peripheral::SYST::get_current();
+        let after = Mono::now().ticks();
+        if before != after {
             continue;
         }
-        let wraps = wraps_before as u64 + pending_before as u64;
-        // Ticks into the period: 0 at the 1 -> 0 step, then RELOAD, RELOAD - 1, ... count 1, 2, ...
-        let into_period = (SYST_RELOAD - value).wrapping_add(1) & SYST_RELOAD;
-        return (wraps << 24) + into_period as u64;
+        // Counts into the period: 0 at the 1 -> 0 step (the wrap already counted), then
+        // RELOAD, RELOAD - 1, ... are 1, 2, ... (a value above RELOAD, before start: 0).
+        let into_period = if value == 0 || value >= SYSTICK_PER_MONO {
+            0
+        } else {
+            SYSTICK_PER_MONO - value
+        };
+        return before as u64 * SYSTICK_PER_MONO as u64 + into_period as u64;
     }
 }
 
-/// Instructions (QEMU) or cycles (board) counted so far (see [`ticks`]).
+// defmt log lines carry the time since start-up in microseconds (SysTick counts at 168 MHz on
+// both builds; QEMU: virtual time, 1 ns per instruction while the core runs).
+defmt::timestamp!(
+    "{=u64:us}",
+    systick_counts() / (SYSTICK_HZ / 1_000_000) as u64
+);
+
+/// Instructions (QEMU) or cycles (board) counted so far (see [`systick_counts`]).
 ///
 /// QEMU's SysTick runs at 168 MHz of virtual time; with `-icount shift=0` one instruction takes
-/// 1 ns, so instructions = ticks × 1000 / 168. On a board at 168 MHz, ticks are core cycles.
+/// 1 ns, so instructions = counts × 1000 / 168. On a board at 168 MHz, counts are core cycles.
 fn instructions() -> u64 {
-    let t = ticks();
+    let t = systick_counts();
     if cfg!(feature = "qemu") {
         t * 1000 / 168
     } else {
@@ -153,22 +139,9 @@ fn instructions() -> u64 {
     }
 }
 
-/// Statically allocated SRAM (`.data` + `.bss` + `.uninit`, not the CCM), from the linker's
-/// symbols.
-fn static_ram_bytes() -> u32 {
-    extern "C" {
-        static __euninit: u8;
-    }
-    const RAM_ORIGIN: usize = 0x2000_0000;
-    // Only the address of the linker symbol is taken, never its contents.
-    let end = core::ptr::addr_of!(__euninit) as usize;
-    end.saturating_sub(RAM_ORIGIN) as u32
-}
-
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
     use super::*;
-    use cortex_m::peripheral::syst::SystClkSource;
     use heapless::spsc::{Consumer, Producer};
     use stm32f4xx_hal::{
         pac::USART1,
@@ -185,9 +158,8 @@ mod app {
     struct Local {
         rx: Rx<USART1>,
         tx: Tx<USART1>,
-        producer: Producer<'static, u8, RX_QUEUE_BYTES>,
-        consumer: Consumer<'static, u8, RX_QUEUE_BYTES>,
-        syst: cortex_m::peripheral::SYST,
+        producer: Producer<'static, u8>,
+        consumer: Consumer<'static, u8>,
         device: &'static mut TwilDevice,
         planner: &'static mut TwilPlanner,
     }
@@ -213,32 +185,39 @@ mod app {
         let (mut tx, mut rx) = serial.split();
         rx.listen();
 
-        let mut syst = cx.core.SYST;
-        syst.set_clock_source(SystClkSource::Core);
-        syst.set_reload(SYST_RELOAD);
-        syst.clear_current();
-        syst.enable_interrupt();
-        // The first tick after a clear loads the reload value without counting a wrap: let it
-        // happen now, so that `ticks()` only ever grows. From here the counter is paused and
-        // resumed, never cleared.
-        syst.enable_counter();
-        while cortex_m::peripheral::SYST::get_current() == 0 {}
-        syst.disable_counter();
+        // The monotonic: SysTick at MONO_HZ, never paused (see SYSTICK_HZ for the clock).
+        #[cfg(feature = "hardware")]
+        assert_eq!(
+            rcc.clocks.sysclk().raw(),
+            SYSTICK_HZ,
+            "SysTick runs from the core clock"
+        );
+        Mono::start(cx.core.SYST, SYSTICK_HZ);
 
-        let (device, rx_queue) = init_ccm();
+        // SAFETY: the first thing that touches `.ccmram`: nothing has read or referenced a CCM
+        // static yet (the device and the queue are handed out just below).
+        unsafe { memory::copy_ccm() };
+        let (device, rx_queue) =
+            twil_firmware::take_ccm_statics().expect("init takes the CCM statics once");
         device.handler.set_build(if cfg!(feature = "qemu") {
             Build::Qemu
         } else {
             Build::Hardware
         });
-        device.handler.set_static_ram_bytes(static_ram_bytes());
+        device
+            .handler
+            .set_static_ram_bytes(memory::static_ram_bytes());
         device.send_frame(
             &DeviceFrame::Telemetry(Telemetry::Boot {
                 protocol_version: PROTOCOL_VERSION,
             }),
             &mut |bytes: &[u8]| write_all(&mut tx, bytes),
         );
-        log!("twil firmware up: static RAM {} bytes", static_ram_bytes());
+        log!(
+            "twil firmware up: static RAM {} bytes, stack {} bytes",
+            memory::static_ram_bytes(),
+            memory::stack_bytes()
+        );
         let (producer, consumer) = rx_queue.split();
         (
             Shared {},
@@ -247,7 +226,6 @@ mod app {
                 tx,
                 producer,
                 consumer,
-                syst,
                 device,
                 planner: cx.local.planner_memory,
             },
@@ -273,25 +251,21 @@ mod app {
         }
     }
 
-    /// Counts SysTick periods (only while a request is being handled).
-    #[task(binds = SysTick, priority = 3)]
-    fn systick(_cx: systick::Context) {
-        SYST_WRAPS.fetch_add(1, Ordering::AcqRel);
-    }
-
-    #[idle(local = [consumer, tx, syst, device, planner])]
+    #[idle(local = [consumer, tx, device, planner])]
     fn idle(cx: idle::Context) -> ! {
         // Calibration of the instruction count: `asm::delay(n)` runs n + 1 times a two-instruction
         // loop, so 500 000 gives 1 000 002 instructions (+ a few for the reads).
-        cx.local.syst.enable_counter();
         let before = instructions();
         cortex_m::asm::delay(500_000);
         let after = instructions();
-        cx.local.syst.disable_counter();
         log!(
             "calibration: 1000002 instructions measured as {}",
             (after - before) as u32
         );
+        // The stack was painted at reset (cortex-m-rt's `paint-stack`); report its high-water
+        // mark now and whenever a request took it deeper.
+        let mut high_water = memory::stack_high_water_bytes();
+        log_stack(high_water);
 
         let mut chunk = [0u8; 64];
         loop {
@@ -319,9 +293,6 @@ mod app {
             if dropped > 0 {
                 cx.local.device.handler.note_rx_dropped(dropped);
             }
-            // SysTick runs only while requests are handled, so the core sleeps otherwise (and
-            // QEMU's virtual clock has no timer to chase).
-            cx.local.syst.enable_counter();
             let tx = &mut *cx.local.tx;
             cx.local.device.receive(
                 &chunk[..n],
@@ -329,8 +300,23 @@ mod app {
                 &mut instructions,
                 &mut |bytes: &[u8]| write_all(tx, bytes),
             );
-            cx.local.syst.disable_counter();
+            let now = memory::stack_high_water_bytes();
+            if now > high_water {
+                high_water = now;
+                log_stack(high_water);
+            }
         }
+    }
+
+    /// Log the stack's high-water mark and what is left below it.
+    fn log_stack(high_water: u32) {
+        let stack = memory::stack_bytes();
+        log!(
+            "stack high-water: {} of {} bytes ({} free)",
+            high_water,
+            stack,
+            stack.saturating_sub(high_water)
+        );
     }
 
     /// Write bytes, waiting for the transmitter.

@@ -17,6 +17,7 @@ const USAGE: &str = "usage: cargo xtask <command>
   size        print flash / static RAM / CCM of the built ELFs
   qemu [PORT] run the QEMU firmware with USART1 on tcp:127.0.0.1:PORT (default: a free port)
   mcu-bench   instructions per plan on 300x300 grids (open, 20% random, maze) under QEMU
+  on-target   build the firmware's on-target tests (defmt-test) and run them under QEMU
   defmt-log FILE  decode a saved QEMU log (TWIL_QEMU_LOG=FILE twil … --remote qemu)";
 
 /// Target of the firmware.
@@ -39,6 +40,7 @@ fn main() -> Result<()> {
         Some("size") => size(),
         Some("qemu") => qemu(args.get(1).map(String::as_str)),
         Some("mcu-bench") => mcu_bench(),
+        Some("on-target") => on_target(),
         Some("defmt-log") => match args.get(1) {
             Some(file) => defmt_log_file(Path::new(file)),
             None => {
@@ -110,6 +112,26 @@ fn ensure_thumb_target() -> Result<()> {
     run(c)
 }
 
+/// Install flip-link when it is missing: `.cargo/config.toml` links the firmware with it (the
+/// stack goes below the statics, so an overflow faults instead of overwriting them).
+fn ensure_flip_link() -> Result<()> {
+    let found = Command::new("flip-link")
+        .arg("--help")
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if found {
+        return Ok(());
+    }
+    eprintln!(
+        "xtask: flip-link (the firmware's linker, see .cargo/config.toml) is missing; \
+         installing it with `cargo install flip-link --locked`"
+    );
+    let mut c = cargo();
+    c.args(["install", "flip-link", "--locked"]);
+    run(c).context("could not install flip-link; run `cargo install flip-link --locked`")
+}
+
 /// Install `qemu-system-arm` with apt when it is missing (CI runs on a fresh Debian machine).
 fn ensure_qemu() -> Result<()> {
     let found = Command::new("qemu-system-arm")
@@ -168,6 +190,7 @@ fn build_firmware(qemu: bool) -> Result<()> {
 /// Build the QEMU ELF (copied to `twil-firmware-qemu`), then the hardware ELF, and report sizes.
 fn firmware() -> Result<()> {
     ensure_thumb_target()?;
+    ensure_flip_link()?;
     let (hardware, qemu) = elf_paths();
     build_firmware(true)?;
     std::fs::copy(&hardware, &qemu)
@@ -185,10 +208,13 @@ struct Sizes {
     static_ram: u64,
     /// CCM: `.ccmram`.
     ccm: u64,
+    /// Stack: from `_stack_end` (its bottom, SRAM's start with flip-link) up to `_stack_start`
+    /// (the initial stack pointer, right below the statics with flip-link).
+    stack: u64,
 }
 
 fn sizes(elf: &Path) -> Result<Sizes> {
-    use object::{Object, ObjectSection, SectionFlags};
+    use object::{Object, ObjectSection, ObjectSymbol, SectionFlags};
     let data = std::fs::read(elf)
         .with_context(|| format!("cannot read {} (run `cargo xtask firmware`)", elf.display()))?;
     let file =
@@ -203,7 +229,9 @@ fn sizes(elf: &Path) -> Result<Sizes> {
             continue;
         }
         let addr = section.address();
-        // NOBITS sections (.bss, .uninit) have no bytes in the file, hence none in flash.
+        // SRAM holds `.data`, `.bss` and `.uninit` (the stack is no section: with flip-link
+        // it is the SRAM below them, see `stack`). NOBITS sections (.bss, .uninit) have no
+        // bytes in the file, hence none in flash.
         let nobits = section.file_range().is_none();
         if FLASH.contains(&addr) {
             s.flash += section.size();
@@ -219,22 +247,31 @@ fn sizes(elf: &Path) -> Result<Sizes> {
             }
         }
     }
+    let symbol = |name: &str| {
+        file.symbols()
+            .find(|sym| sym.name() == Ok(name))
+            .map(|sym| sym.address())
+            .with_context(|| format!("{}: no symbol {name}", elf.display()))
+    };
+    s.stack = symbol("_stack_start")? - symbol("_stack_end")?;
     Ok(s)
 }
 
 fn size() -> Result<()> {
     let (hardware, qemu) = elf_paths();
-    println!("| build | flash (bytes) | static SRAM (bytes) | CCM (bytes) |");
-    println!("|-------|--------------:|--------------------:|------------:|");
+    println!("| build | flash (bytes) | static SRAM (bytes) | CCM (bytes) | stack (bytes) |");
+    println!("|-------|--------------:|--------------------:|------------:|--------------:|");
     let mut over = Vec::new();
     for (name, elf) in [("hardware", &hardware), ("qemu", &qemu)] {
         let s = sizes(elf)?;
         println!(
-            "| {name} | {} | {} ({:.1} KiB) | {} |",
+            "| {name} | {} | {} ({:.1} KiB) | {} | {} ({:.1} KiB) |",
             s.flash,
             s.static_ram,
             s.static_ram as f64 / 1024.0,
-            s.ccm
+            s.ccm,
+            s.stack,
+            s.stack as f64 / 1024.0
         );
         if s.static_ram > STATIC_RAM_BUDGET {
             over.push(format!(
@@ -328,9 +365,95 @@ fn run_mcu_bench() -> Result<()> {
     run(c)
 }
 
+/// Build the on-target tests (`firmware/tests/on_target.rs`, QEMU build) and run them.
+fn on_target() -> Result<()> {
+    ensure_thumb_target()?;
+    ensure_flip_link()?;
+    ensure_qemu()?;
+    let elf = build_on_target()?;
+    run_on_target(&elf)
+}
+
+/// `cargo test --no-run` of the on-target tests; the path of the test ELF.
+fn build_on_target() -> Result<PathBuf> {
+    let mut c = cargo();
+    c.args([
+        "test",
+        "--package",
+        "twil-firmware",
+        "--target",
+        THUMB,
+        "--profile",
+        "firmware",
+        "--no-default-features",
+        "--features",
+        "qemu",
+        "--test",
+        "on_target",
+        "--no-run",
+        "--message-format=json-render-diagnostics",
+    ])
+    .stdout(std::process::Stdio::piped());
+    eprintln!("xtask: running {c:?}");
+    let out = c.output().context("could not run cargo test")?;
+    if !out.status.success() {
+        bail!("building the on-target tests failed with {}", out.status);
+    }
+    // One JSON object per line; the test's artifact names its ELF in "executable".
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter(|l| l.contains("\"reason\":\"compiler-artifact\"") && l.contains("on_target"))
+        .find_map(|l| {
+            let rest = &l[l.find("\"executable\":\"")? + 14..];
+            Some(PathBuf::from(&rest[..rest.find('"')?]))
+        })
+        .context("cargo did not report the on-target test's executable")
+}
+
+/// Run the on-target test ELF under QEMU, print its decoded defmt log, and fail when a test
+/// failed (defmt-test ends with a semihosting exit: 0 when all passed; a failure panics and
+/// the test's HardFault handler exits with 1) or when QEMU runs longer than a minute.
+fn run_on_target(elf: &Path) -> Result<()> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    let table = defmt_log::table(elf)?;
+    let mut args = qemu_cmd::qemu_args(elf, "null");
+    args.splice(0..0, ["-no-reboot".to_string()]);
+    eprintln!("xtask: running qemu-system-arm {}", args.join(" "));
+    let mut child = Command::new("qemu-system-arm")
+        .args(&args)
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .context("cannot start qemu-system-arm")?;
+    let stdout = child.stdout.take().context("QEMU's stdout")?;
+    let timed_out = Arc::new(AtomicBool::new(false));
+    let pid = child.id().to_string();
+    let flag = timed_out.clone();
+    std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_secs(60));
+        flag.store(true, Ordering::SeqCst);
+        let _ = Command::new("kill").args(["-9", &pid]).status();
+    });
+    defmt_log::decode(&table, stdout, |line| {
+        println!("{line}");
+        true
+    })?;
+    let status = child.wait()?;
+    if timed_out.load(Ordering::SeqCst) {
+        bail!("on-target tests: QEMU still running after 60 s (a test hangs?)");
+    }
+    if !status.success() {
+        bail!("on-target tests failed (QEMU exited with {status})");
+    }
+    eprintln!("xtask: on-target tests passed");
+    Ok(())
+}
+
 fn test() -> Result<()> {
     ensure_qemu()?;
     firmware()?;
+    // The firmware's own tests, on the (emulated) chip.
+    run_on_target(&build_on_target()?)?;
     lint()?;
     // The 5 M instruction budget per 300 x 300 plan is a test too (about a minute of QEMU).
     run_mcu_bench()?;
@@ -355,9 +478,15 @@ fn lint() -> Result<()> {
     let mut c = cargo();
     c.args(["clippy", "--all-targets", "--", "-D", "warnings"]);
     run(c)?;
+    // `--all-targets` lints the on-target tests too (they need the `qemu` build).
     for features in [
         &["--features", "hardware"][..],
-        &["--no-default-features", "--features", "qemu"][..],
+        &[
+            "--all-targets",
+            "--no-default-features",
+            "--features",
+            "qemu",
+        ][..],
     ] {
         let mut c = cargo();
         c.args([
@@ -378,8 +507,8 @@ fn lint() -> Result<()> {
 mod tests {
     use super::*;
 
-    /// The QEMU firmware's defmt log (semihosting) decodes into its boot lines, and the
-    /// instruction-count calibration it logs is within 0.1 % of the truth. Needs the QEMU ELF
+    /// The QEMU firmware's defmt log (semihosting) decodes into its boot lines, with their
+    /// timestamps, and the instruction-count calibration it logs is within 0.1 % of the truth. Needs the QEMU ELF
     /// and `qemu-system-arm`, which `cargo xtask test` provides before running the tests.
     #[test]
     fn qemu_firmware_defmt_log_decodes() {
@@ -412,11 +541,24 @@ mod tests {
         let _ = child.wait();
         result.expect("decode");
         assert_eq!(lines.len(), 2, "QEMU ended before two log lines: {lines:?}");
+        // Each line: the time since start-up (seconds, µs resolution, from the monotonic),
+        // the level, the message.
+        let split = |line: &str| -> (f64, String) {
+            let (time, rest) = line.split_once(' ').unwrap_or_else(|| panic!("{lines:?}"));
+            let time = time
+                .parse()
+                .unwrap_or_else(|_| panic!("no timestamp: {lines:?}"));
+            (time, rest.to_string())
+        };
+        let (t0, first) = split(&lines[0]);
+        let (t1, second) = split(&lines[1]);
         assert!(
-            lines[0].starts_with("INFO twil firmware up: static RAM "),
+            first.starts_with("INFO twil firmware up: static RAM "),
             "{lines:?}"
         );
-        let measured: u64 = lines[1]
+        // The calibration runs after the first line, and takes 1 ms of virtual time.
+        assert!(t0 < t1 && t1 < 1.0, "{lines:?}");
+        let measured: u64 = second
             .strip_prefix("INFO calibration: 1000002 instructions measured as ")
             .and_then(|n| n.trim().parse().ok())
             .unwrap_or_else(|| panic!("{lines:?}"));
