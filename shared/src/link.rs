@@ -52,6 +52,7 @@
 pub mod frame;
 pub mod handler;
 pub mod message;
+pub mod robot;
 
 pub use frame::{FrameDecoder, FrameFault, MAX_FRAME_BYTES};
 
@@ -80,3 +81,4 @@ pub mod mcu {
 }
 pub use handler::{Device, Handler};
 pub use message::*;
+pub use robot::{NoWorld, RobotDevice, WorldAccess, WorldUpload};

@@ -385,76 +385,24 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         vertices: &[PointM],
         last: bool,
     ) -> Result<Reply, ErrorReply> {
-        let already = if first_vertex == 0 {
-            0
-        } else {
-            self.pending.len()
-        };
-        if first_vertex as usize != already {
-            return Err(ErrorReply::new(
-                ErrorCode::ChunkOutOfOrder,
-                first_vertex as u32,
-                already as u32,
-            ));
-        }
-        if let Some(i) = vertices.iter().position(|v| !v.is_finite()) {
-            return Err(ErrorReply::new(
-                ErrorCode::BadArgument,
-                first_vertex as u32 + i as u32,
-                0,
-            ));
-        }
-        let needed = already + vertices.len();
-        let left = (MAX_VERTICES - self.obstacles.vertex_count()).min(MAX_PENDING_VERTICES);
-        if needed > left {
-            return Err(ErrorReply::new(
-                ErrorCode::TooManyVertices,
-                needed as u32,
-                left as u32,
-            ));
-        }
-        if self.obstacles.len() >= MAX_POLYGONS {
-            return Err(ErrorReply::new(
-                ErrorCode::TooManyPolygons,
-                self.obstacles.len() as u32 + 1,
-                MAX_POLYGONS as u32,
-            ));
-        }
-        if last && needed == 0 {
-            return Err(ErrorReply::new(ErrorCode::EmptyPolygon, 0, 0));
-        }
-        // All checks passed: from here nothing can fail.
-        if first_vertex == 0 {
-            self.pending.clear();
-        }
-        let _ = self.pending.extend_from_slice(vertices);
-        if last {
-            match self.obstacles.push(&self.pending) {
-                Ok(()) => {}
-                Err(PolygonSetError::TooManyPolygons { capacity }) => {
-                    return Err(ErrorReply::new(
-                        ErrorCode::TooManyPolygons,
-                        capacity as u32 + 1,
-                        capacity as u32,
-                    ))
-                }
-                Err(PolygonSetError::TooManyVertices { capacity_left }) => {
-                    return Err(ErrorReply::new(
-                        ErrorCode::TooManyVertices,
-                        self.pending.len() as u32,
-                        capacity_left as u32,
-                    ))
-                }
-                Err(PolygonSetError::Empty) => {
-                    return Err(ErrorReply::new(ErrorCode::EmptyPolygon, 0, 0))
-                }
-            }
+        if upload_chunk(
+            &mut self.obstacles,
+            &mut self.pending,
+            first_vertex,
+            vertices,
+            last,
+        )? {
+            // The polygon closed: it is the last one stored.
             let half = self
                 .grid
                 .geometry()
                 .expansion_cells(self.params.robot_radius_m);
-            mark_polygon(&mut self.grid, &self.pending, half);
-            self.pending.clear();
+            if let Some(polygon) = self
+                .obstacles
+                .polygon(self.obstacles.len().saturating_sub(1))
+            {
+                mark_polygon(&mut self.grid, polygon, half);
+            }
             self.path.clear();
         }
         Ok(Reply::Obstacles {
@@ -463,6 +411,89 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             pending_vertices: self.pending.len() as u16,
         })
     }
+
+    /// The map parameters in use.
+    pub fn params(&self) -> MapParams {
+        self.params
+    }
+
+    /// Count a request answered outside [`Handler::handle`] (by [`super::RobotDevice`]).
+    pub fn count_request(&mut self) {
+        self.requests = self.requests.saturating_add(1);
+    }
+}
+
+/// Add one chunk of a polygon being uploaded to `pending`; the `last` chunk stores the polygon
+/// in `obstacles` and returns `true`. Checks everything first: on error nothing changes.
+pub(crate) fn upload_chunk(
+    obstacles: &mut Obstacles,
+    pending: &mut Vec<PointM, MAX_PENDING_VERTICES>,
+    first_vertex: u16,
+    vertices: &[PointM],
+    last: bool,
+) -> Result<bool, ErrorReply> {
+    let already = if first_vertex == 0 { 0 } else { pending.len() };
+    if first_vertex as usize != already {
+        return Err(ErrorReply::new(
+            ErrorCode::ChunkOutOfOrder,
+            first_vertex as u32,
+            already as u32,
+        ));
+    }
+    if let Some(i) = vertices.iter().position(|v| !v.is_finite()) {
+        return Err(ErrorReply::new(
+            ErrorCode::BadArgument,
+            first_vertex as u32 + i as u32,
+            0,
+        ));
+    }
+    let needed = already + vertices.len();
+    let left = (MAX_VERTICES - obstacles.vertex_count()).min(MAX_PENDING_VERTICES);
+    if needed > left {
+        return Err(ErrorReply::new(
+            ErrorCode::TooManyVertices,
+            needed as u32,
+            left as u32,
+        ));
+    }
+    if obstacles.len() >= MAX_POLYGONS {
+        return Err(ErrorReply::new(
+            ErrorCode::TooManyPolygons,
+            obstacles.len() as u32 + 1,
+            MAX_POLYGONS as u32,
+        ));
+    }
+    if last && needed == 0 {
+        return Err(ErrorReply::new(ErrorCode::EmptyPolygon, 0, 0));
+    }
+    // All checks passed: from here nothing can fail.
+    if first_vertex == 0 {
+        pending.clear();
+    }
+    let _ = pending.extend_from_slice(vertices);
+    if !last {
+        return Ok(false);
+    }
+    match obstacles.push(pending) {
+        Ok(()) => {}
+        Err(PolygonSetError::TooManyPolygons { capacity }) => {
+            return Err(ErrorReply::new(
+                ErrorCode::TooManyPolygons,
+                capacity as u32 + 1,
+                capacity as u32,
+            ))
+        }
+        Err(PolygonSetError::TooManyVertices { capacity_left }) => {
+            return Err(ErrorReply::new(
+                ErrorCode::TooManyVertices,
+                pending.len() as u32,
+                capacity_left as u32,
+            ))
+        }
+        Err(PolygonSetError::Empty) => return Err(ErrorReply::new(ErrorCode::EmptyPolygon, 0, 0)),
+    }
+    pending.clear();
+    Ok(true)
 }
 
 fn plan_error(e: PlanError) -> ErrorReply {
@@ -522,6 +553,11 @@ impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
 
     /// Encode and send a frame (a reply or telemetry).
     pub fn send_frame(&mut self, frame: &DeviceFrame, send: &mut impl FnMut(&[u8])) {
+        Self::send_encoded(frame, send);
+    }
+
+    /// Encode `frame` and pass the bytes to `send` (for shells that keep no `Device`).
+    pub fn send_encoded(frame: &DeviceFrame, send: &mut impl FnMut(&[u8])) {
         let mut out = [0u8; MAX_FRAME_BYTES];
         match encode(frame, &mut out) {
             Ok(bytes) => send(bytes),

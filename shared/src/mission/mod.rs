@@ -416,6 +416,9 @@ pub enum MissionInput {
         /// What the planner returned.
         result: Result<PlanReport, PlanError>,
     },
+    /// The robot was held from outside (a pause): stop following, stand, and sweep and plan
+    /// afresh from where it is. A plan still out is dropped when it comes back.
+    Interrupt,
     /// Stop the mission now ([`MissionStatus::Aborted`]).
     Abort,
 }
@@ -752,6 +755,13 @@ impl<const W: usize> Mission<W> {
         self.pending_plan.is_some()
     }
 
+    /// Mark every occupied cell of `known` (a map of the same geometry, obstacles grown by the
+    /// same radius: what the robot knows a priori). Errors, changing nothing, when the
+    /// geometries differ.
+    pub fn add_known_map<const V: usize>(&mut self, known: &Grid<V>) -> Result<(), GridError> {
+        self.grid.merge_from(known)
+    }
+
     /// Rasterize an obstacle known a priori (a closed outline, world metres), grown by the
     /// planning radius. Call before the first step; later calls are allowed (the map only
     /// gains obstacles).
@@ -835,6 +845,7 @@ impl<const W: usize> Mission<W> {
                 range_m,
             } => self.on_reading(neck_angle_rad, range_m, &mut out),
             MissionInput::PlanDone { id, result } => self.on_plan_done(id, result, &mut out),
+            MissionInput::Interrupt => self.interrupt(&mut out),
             MissionInput::Abort => self.finish(MissionStatus::Aborted, &mut out),
         }
         if self.status != MissionStatus::Running {
@@ -936,6 +947,14 @@ impl<const W: usize> Mission<W> {
         } else {
             self.sonar_budget_s = 0.0;
         }
+    }
+
+    fn interrupt(&mut self, out: &mut MissionOutput) {
+        if let Some(pending) = &mut self.pending_plan {
+            pending.cancelled = true;
+        }
+        // A sweep half done was taken from poses the robot has left: start it again.
+        self.begin_standing_sweep(false, out);
     }
 
     fn at_goal(&self) -> bool {

@@ -558,6 +558,7 @@ mod props {
                     Err(PlanError::QueueFull { capacity: 8 })
                 },
             })),
+            1 => Just(Input::Mission(MissionInput::Interrupt)),
             1 => Just(Input::Mission(MissionInput::Abort)),
         ]
     }

@@ -1,0 +1,802 @@
+//! The device that runs missions: the link's planning service ([`Handler`]: the known map and
+//! the planner on request) with a [`Mission`], the mission requests of protocol 2 and the
+//! telemetry a running mission streams.
+//!
+//! ## Shape
+//!
+//! [`RobotDevice`] is sans-IO like the rest of the core. The firmware's lowest-priority task
+//! owns one (in a `static`) with the planner; the simulator and the tests drive one on the host.
+//! The shell calls
+//!
+//! - [`RobotDevice::receive`] with the bytes of the link (replies go to `send`);
+//! - [`RobotDevice::tick`] with each [`PilotReport`] of the control task;
+//! - [`RobotDevice::reading`] with each sonar reading;
+//! - [`RobotDevice::run_planner`] when [`RobotDevice::plan_pending`] says a plan is asked for;
+//!
+//! and takes from it what the other tasks must do: [`RobotDevice::take_pilot_command`] (with
+//! [`RobotDevice::prefix`] for `Follow`), [`RobotDevice::take_sonar_request`],
+//! [`RobotDevice::take_started`] (a mission started: reset the pilot, and a simulated robot, to
+//! its start) and [`RobotDevice::next_telemetry`] (pull, so a slow link delays telemetry, never
+//! the mission).
+//!
+//! ## Telemetry
+//!
+//! While a mission runs: the pose every [`POSE_EVERY_TICKS`] control periods (5 Hz), every
+//! change of phase or status, each finished sweep's hits, each applied plan with its kept
+//! prefix and its first [`TELEMETRY_PATH_POINTS`] vertices, and the final report. Chunks of
+//! [`TELEMETRY_CHUNK_POINTS`] points; a newer sweep or plan replaces one not yet sent in full.
+//! The map travels as the hits: the host marks them with the same expansion.
+//!
+//! ## Memory
+//!
+//! The handler's grid is the known map (obstacles uploaded with `ObstacleChunk`); at the start
+//! the mission's map is set to it. The real world of the simulated builds is not here: the
+//! shell keeps it where its simulated sonar can read it and routes `WorldChunk` / `ClearWorld`
+//! to [`RobotDevice::handle_world`].
+
+use heapless::Vec;
+
+use super::frame::{FrameDecoder, FrameFault};
+use super::handler::{upload_chunk, Handler, MAX_PENDING_VERTICES};
+use super::message::*;
+use super::Device;
+use crate::geom::PointM;
+use crate::mission::{
+    Mission, MissionConfig, MissionError, MissionEvent, MissionInput, MissionOutput, MissionPhase,
+    MissionStatus, PilotCommand, PilotReport, PlanRequest, SonarRequest,
+};
+use crate::plan::{PlanStatus, Planner};
+use crate::robot::RobotConfig;
+use crate::world::{Obstacles, Params};
+
+/// The pose is reported every this many control periods (5 Hz at 50 ms).
+pub const POSE_EVERY_TICKS: u32 = 4;
+
+/// The real world of a simulated build, uploaded with [`Request::WorldChunk`].
+pub struct WorldUpload {
+    /// The closed polygons.
+    pub obstacles: Obstacles,
+    /// The polygon being uploaded.
+    pub pending: Vec<PointM, MAX_PENDING_VERTICES>,
+}
+
+impl WorldUpload {
+    /// No polygon.
+    pub const fn new() -> Self {
+        Self {
+            obstacles: Obstacles::new(),
+            pending: Vec::new(),
+        }
+    }
+}
+
+impl Default for WorldUpload {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Where the shell keeps the real world: [`RobotDevice::receive`] reaches it only for
+/// `WorldChunk` and `ClearWorld` (the firmware locks it just for that).
+pub trait WorldAccess {
+    /// Call `f` with the world, if this build has one.
+    fn with_world(&mut self, f: &mut dyn FnMut(&mut WorldUpload));
+}
+
+impl WorldAccess for WorldUpload {
+    fn with_world(&mut self, f: &mut dyn FnMut(&mut WorldUpload)) {
+        f(self)
+    }
+}
+
+/// A build without a real world (a board): world requests get [`ErrorCode::NotOnThisBuild`].
+pub struct NoWorld;
+
+impl WorldAccess for NoWorld {
+    fn with_world(&mut self, _f: &mut dyn FnMut(&mut WorldUpload)) {}
+}
+
+/// What is left to send of a list of points (hits, prefix, path).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Cursor {
+    /// Sweep or plan number.
+    number: u32,
+    /// Next point to send.
+    next: u16,
+    /// Points to send.
+    total: u16,
+    /// Something is left.
+    active: bool,
+}
+
+impl Cursor {
+    fn start(number: u32, total: usize, cap: usize) -> Self {
+        Self {
+            number,
+            next: 0,
+            total: total.min(cap).min(u16::MAX as usize) as u16,
+            active: true,
+        }
+    }
+
+    /// The next chunk of `points` (at most `total`), or `None` when all went.
+    fn chunk(
+        &mut self,
+        points: &[PointM],
+    ) -> Option<(u32, u16, u16, Vec<PointM, TELEMETRY_CHUNK_POINTS>)> {
+        if !self.active {
+            return None;
+        }
+        let total = (self.total as usize).min(points.len());
+        let first = self.next as usize;
+        if first >= total && !(first == 0 && total == 0) {
+            self.active = false;
+            return None;
+        }
+        let end = (first + TELEMETRY_CHUNK_POINTS).min(total);
+        let mut out = Vec::new();
+        for p in points.get(first..end).unwrap_or(&[]) {
+            let _ = out.push(*p); // at most TELEMETRY_CHUNK_POINTS
+        }
+        self.next = end as u16;
+        if end >= total {
+            self.active = false;
+        }
+        Some((self.number, first as u16, total as u16, out))
+    }
+}
+
+/// Telemetry items waiting, one slot each (a newer one replaces an older of its kind).
+#[derive(Clone, Copy, Debug, Default)]
+struct Pending {
+    finished: bool,
+    phase: bool,
+    pose: Option<PoseReport>,
+    planned: Option<PlannedNote>,
+    hits: Cursor,
+    prefix: Cursor,
+    path: Cursor,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PlannedNote {
+    t_ms: u32,
+    plan: u32,
+    status: PlanStatus,
+    path_points: u16,
+    prefix_points: u16,
+    instructions: u64,
+}
+
+/// The mission device: see the module documentation.
+pub struct RobotDevice<const GRID_WORDS: usize, const MISSION_WORDS: usize> {
+    decoder: FrameDecoder,
+    /// The planning service and the known map (public so the firmware can set its build and
+    /// RAM figures).
+    pub handler: Handler<GRID_WORDS>,
+    mission: Mission<MISSION_WORDS>,
+    setup: Option<MissionSetup>,
+    state: RunState,
+    emergency_stop: bool,
+    plan_request: Option<PlanRequest>,
+    pilot_command: Option<PilotCommand>,
+    sonar_request: Option<SonarRequest>,
+    started: bool,
+    ticks: u32,
+    sweeps: u32,
+    plans: u32,
+    last_plan_instructions: u64,
+    max_plan_instructions: u64,
+    max_control_instructions: u64,
+    stack_high_water_bytes: u32,
+    reported: (MissionPhase, MissionStatus),
+    pending: Pending,
+}
+
+impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS, MISSION_WORDS> {
+    /// A device with an empty known map and no mission (`const`: it lives in a `static`).
+    pub const fn new(info: DeviceInfo) -> Self {
+        Self {
+            decoder: FrameDecoder::new(),
+            handler: Handler::new(info),
+            mission: Mission::IDLE,
+            setup: None,
+            state: RunState::Idle,
+            emergency_stop: false,
+            plan_request: None,
+            pilot_command: None,
+            sonar_request: None,
+            started: false,
+            ticks: 0,
+            sweeps: 0,
+            plans: 0,
+            last_plan_instructions: 0,
+            max_plan_instructions: 0,
+            max_control_instructions: 0,
+            stack_high_water_bytes: 0,
+            reported: (MissionPhase::Done, MissionStatus::Aborted),
+            pending: Pending {
+                finished: false,
+                phase: false,
+                pose: None,
+                planned: None,
+                hits: Cursor {
+                    number: 0,
+                    next: 0,
+                    total: 0,
+                    active: false,
+                },
+                prefix: Cursor {
+                    number: 0,
+                    next: 0,
+                    total: 0,
+                    active: false,
+                },
+                path: Cursor {
+                    number: 0,
+                    next: 0,
+                    total: 0,
+                    active: false,
+                },
+            },
+        }
+    }
+
+    /// The mission (its map, paths, stats).
+    pub fn mission(&self) -> &Mission<MISSION_WORDS> {
+        &self.mission
+    }
+
+    /// Where the mission stands.
+    pub fn state(&self) -> RunState {
+        self.state
+    }
+
+    /// The kept prefix, for [`PilotCommand::Follow`].
+    pub fn prefix(&self) -> &[PointM] {
+        self.mission.prefix()
+    }
+
+    /// The latest command for the pilot, if any since the last call.
+    pub fn take_pilot_command(&mut self) -> Option<PilotCommand> {
+        self.pilot_command.take()
+    }
+
+    /// The sonar reading the mission asks for, if any since the last call.
+    pub fn take_sonar_request(&mut self) -> Option<SonarRequest> {
+        self.sonar_request.take()
+    }
+
+    /// The configuration of a mission that has just started (once): the shell resets its
+    /// pilot (`Pilot::new`) and, simulated, the robot to the start pose.
+    pub fn take_started(&mut self) -> Option<MissionConfig> {
+        if core::mem::take(&mut self.started) {
+            Some(*self.mission.config())
+        } else {
+            None
+        }
+    }
+
+    /// A plan is asked for: call [`RobotDevice::run_planner`].
+    pub fn plan_pending(&self) -> bool {
+        self.plan_request.is_some()
+    }
+
+    /// The firmware's measurements, for the mission report.
+    pub fn note_timing(&mut self, max_control_instructions: u64, stack_high_water_bytes: u32) {
+        self.max_control_instructions = max_control_instructions;
+        self.stack_high_water_bytes = stack_high_water_bytes;
+    }
+
+    /// Feed received bytes; for every complete frame, call `send` with the encoded reply.
+    /// `planner` serves `Plan` requests; `clock` counts instructions (firmware) or returns 0;
+    /// `world` is the real world of a simulated build ([`NoWorld`] on a board).
+    pub fn receive<const S: usize, const Q: usize>(
+        &mut self,
+        bytes: &[u8],
+        planner: &mut Planner<S, Q>,
+        clock: &mut impl FnMut() -> u64,
+        world: &mut impl WorldAccess,
+        send: &mut impl FnMut(&[u8]),
+    ) {
+        let mut rest = bytes;
+        while !rest.is_empty() {
+            let (got, r) = self.decoder.feed::<RequestFrame>(rest);
+            rest = r;
+            let (seq, reply) = match got {
+                None => continue,
+                Some(Ok(frame)) => {
+                    let reply = if matches!(
+                        frame.request,
+                        Request::WorldChunk { .. } | Request::ClearWorld
+                    ) {
+                        let mut reply = None;
+                        world.with_world(&mut |w| {
+                            reply = Some(self.handle_world(&frame.request, w));
+                        });
+                        reply.unwrap_or_else(|| {
+                            self.handler.count_request();
+                            Reply::Error(ErrorReply::new(ErrorCode::NotOnThisBuild, 0, 0))
+                        })
+                    } else {
+                        self.handle(&frame.request, planner, clock)
+                    };
+                    (Some(frame.seq), reply)
+                }
+                Some(Err(fault)) => self.fault(fault),
+            };
+            Device::<GRID_WORDS>::send_encoded(&DeviceFrame::Reply { seq, reply }, send);
+        }
+    }
+
+    /// Encode a telemetry message as a frame and pass the bytes to `send`.
+    pub fn send_telemetry(telemetry: &Telemetry, send: &mut impl FnMut(&[u8])) {
+        Device::<GRID_WORDS>::send_encoded(&DeviceFrame::Telemetry(telemetry.clone()), send);
+    }
+
+    fn fault(&mut self, fault: FrameFault) -> (Option<u16>, Reply) {
+        self.handler.fault_reply(fault)
+    }
+
+    /// Answer one request (the real world's are refused: the shell routes them to
+    /// [`RobotDevice::handle_world`]).
+    pub fn handle<const S: usize, const Q: usize>(
+        &mut self,
+        request: &Request,
+        planner: &mut Planner<S, Q>,
+        clock: &mut impl FnMut() -> u64,
+    ) -> Reply {
+        match self.try_handle_mission(request) {
+            Some(Ok(reply)) => {
+                self.handler.count_request();
+                reply
+            }
+            Some(Err(error)) => {
+                self.handler.count_request();
+                Reply::Error(error)
+            }
+            None => {
+                let map_request = matches!(
+                    request,
+                    Request::SetParams(_)
+                        | Request::ClearMap
+                        | Request::ObstacleChunk { .. }
+                        | Request::WriteMap { .. }
+                        | Request::Plan { .. }
+                );
+                if map_request && matches!(self.state, RunState::Running | RunState::Paused) {
+                    // The planner and the map are the mission's while it runs.
+                    self.handler.count_request();
+                    return Reply::Error(ErrorReply::new(
+                        ErrorCode::WrongState,
+                        state_index(self.state),
+                        0,
+                    ));
+                }
+                self.handler.handle(request, planner, clock)
+            }
+        }
+    }
+
+    /// Answer a request about the real world ([`Request::WorldChunk`], [`Request::ClearWorld`])
+    /// on `world` (simulated builds). Refused while a mission runs.
+    pub fn handle_world(&mut self, request: &Request, world: &mut WorldUpload) -> Reply {
+        self.handler.count_request();
+        if matches!(self.state, RunState::Running | RunState::Paused) {
+            return Reply::Error(ErrorReply::new(
+                ErrorCode::WrongState,
+                state_index(self.state),
+                0,
+            ));
+        }
+        match request {
+            Request::ClearWorld => {
+                world.obstacles.clear();
+                world.pending.clear();
+                Reply::Ack
+            }
+            Request::WorldChunk {
+                first_vertex,
+                vertices,
+                last,
+            } => match upload_chunk(
+                &mut world.obstacles,
+                &mut world.pending,
+                *first_vertex,
+                vertices,
+                *last,
+            ) {
+                Ok(_) => Reply::Obstacles {
+                    polygons: world.obstacles.len() as u16,
+                    vertices: world.obstacles.vertex_count() as u16,
+                    pending_vertices: world.pending.len() as u16,
+                },
+                Err(e) => Reply::Error(e),
+            },
+            _ => Reply::Error(ErrorReply::new(ErrorCode::BadMessage, 0, 0)),
+        }
+    }
+
+    /// The mission requests; `None` for the others.
+    fn try_handle_mission(&mut self, request: &Request) -> Option<Result<Reply, ErrorReply>> {
+        let wrong = |state: RunState| ErrorReply::new(ErrorCode::WrongState, state_index(state), 0);
+        let running = matches!(self.state, RunState::Running | RunState::Paused);
+        Some(match request {
+            Request::SetMission(setup) => {
+                if running {
+                    Err(wrong(self.state))
+                } else {
+                    self.mission_config(setup).map(|_| {
+                        self.setup = Some(*setup);
+                        self.state = RunState::Ready;
+                        Reply::Ack
+                    })
+                }
+            }
+            Request::WorldChunk { .. } | Request::ClearWorld => {
+                Err(ErrorReply::new(ErrorCode::NotOnThisBuild, 0, 0))
+            }
+            Request::StartMission => self.start(),
+            Request::PauseMission => {
+                if self.state == RunState::Running {
+                    self.state = RunState::Paused;
+                    self.pilot_command = Some(PilotCommand::Hold);
+                    Ok(Reply::Ack)
+                } else {
+                    Err(wrong(self.state))
+                }
+            }
+            Request::ResumeMission => {
+                if self.state == RunState::Paused {
+                    self.state = RunState::Running;
+                    let out = self.mission.step(MissionInput::Interrupt);
+                    self.absorb(out);
+                    Ok(Reply::Ack)
+                } else {
+                    Err(wrong(self.state))
+                }
+            }
+            Request::AbortMission => {
+                self.stop_mission();
+                Ok(Reply::Ack)
+            }
+            Request::EmergencyStop => {
+                self.emergency_stop = true;
+                self.stop_mission();
+                Ok(Reply::Ack)
+            }
+            Request::ClearEmergencyStop => {
+                self.emergency_stop = false;
+                Ok(Reply::Ack)
+            }
+            Request::MissionStatus => Ok(Reply::Mission(self.report())),
+            _ => return None,
+        })
+    }
+
+    /// The mission configuration of `setup` on the current map and radius; errors name the
+    /// field.
+    fn mission_config(&self, setup: &MissionSetup) -> Result<MissionConfig, ErrorReply> {
+        let params = self.handler.params();
+        let bad = |field: u32| ErrorReply::new(ErrorCode::BadMission, field, 0);
+        let robot = RobotConfig {
+            sonar_range_m: setup.sonar_range_m,
+            sonar_noise_std_m: setup.sonar_noise_std_m,
+            noise_seed: setup.noise_seed,
+            ..RobotConfig::DEFAULT
+        };
+        let par = Params {
+            robot_radius_m: params.robot_radius_m,
+            speed_m_s: setup.speed_m_s,
+            initial_heading_deg: setup.initial_heading_rad.to_degrees(),
+            start: setup.start,
+            goal: setup.goal,
+        };
+        let mut config = MissionConfig::from_params(&par, robot);
+        config.initial_heading_rad = setup.initial_heading_rad;
+        config.mode = setup.mode;
+        config.planner = setup.planner;
+        config.time_limit_s = setup.time_limit_s;
+        config.constant_depth_filter = setup.constant_depth_filter;
+        config.trust_seen_space = setup.trust_seen_space;
+        // Field indices of MissionSetup: 2 start, 3 heading, 4 goal, 5 speed, 6 sonar range,
+        // 7 time limit, 11 noise.
+        if !setup.start.is_finite() {
+            return Err(bad(2));
+        }
+        if !setup.initial_heading_rad.is_finite() {
+            return Err(bad(3));
+        }
+        if !setup.goal.is_finite() {
+            return Err(bad(4));
+        }
+        if let Err(e) = config.validate() {
+            return Err(match e {
+                MissionError::BadValue { field, .. } => match field {
+                    "speed_m_s" => bad(5),
+                    "time_limit_s" => bad(7),
+                    _ => bad(100),
+                },
+                MissionError::Robot(r) => match r.field {
+                    "sonar_range_m" => bad(6),
+                    "sonar_noise_std_m" => bad(11),
+                    _ => bad(100),
+                },
+                _ => bad(100),
+            });
+        }
+        let geometry = *self.handler.grid().geometry();
+        if geometry.cell_of(setup.start).is_err() || geometry.cell_of(setup.goal).is_err() {
+            return Err(ErrorReply {
+                code: ErrorCode::BadMission,
+                value: 0,
+                limit: 0,
+                detail: 1,
+            });
+        }
+        Ok(config)
+    }
+
+    fn start(&mut self) -> Result<Reply, ErrorReply> {
+        if self.emergency_stop {
+            return Err(ErrorReply {
+                code: ErrorCode::WrongState,
+                value: state_index(self.state),
+                limit: 0,
+                detail: 1,
+            });
+        }
+        let Some(setup) = self.setup else {
+            return Err(ErrorReply::new(ErrorCode::WrongState, 0, 0));
+        };
+        if matches!(self.state, RunState::Running | RunState::Paused) {
+            return Err(ErrorReply::new(
+                ErrorCode::WrongState,
+                state_index(self.state),
+                0,
+            ));
+        }
+        // The map may have changed since SetMission: check again.
+        let config = self.mission_config(&setup)?;
+        let geometry = *self.handler.grid().geometry();
+        self.mission.restart(config, geometry).map_err(|_| {
+            ErrorReply::new(ErrorCode::GridCapacity, geometry.cell_count() as u32, 0)
+        })?;
+        // What the robot knows: the uploaded obstacles, grown by the same radius.
+        let _ = self.mission.add_known_map(self.handler.grid());
+        self.state = RunState::Running;
+        self.started = true;
+        self.ticks = 0;
+        self.sweeps = 0;
+        self.plans = 0;
+        self.max_plan_instructions = 0;
+        self.plan_request = None;
+        self.sonar_request = None;
+        self.pilot_command = Some(PilotCommand::Hold);
+        self.pending = Pending::default();
+        self.reported = (self.mission.phase(), self.mission.status());
+        self.pending.phase = true;
+        Ok(Reply::Ack)
+    }
+
+    fn stop_mission(&mut self) {
+        if matches!(self.state, RunState::Running | RunState::Paused) {
+            let out = self.mission.step(MissionInput::Abort);
+            self.absorb(out);
+        }
+        self.pilot_command = Some(PilotCommand::Stop);
+        self.sonar_request = None;
+    }
+
+    /// One control period of the pilot.
+    pub fn tick(&mut self, report: &PilotReport) {
+        if self.state != RunState::Running {
+            return;
+        }
+        self.ticks = self.ticks.wrapping_add(1);
+        let out = self.mission.step(MissionInput::Tick(*report));
+        if self.ticks.is_multiple_of(POSE_EVERY_TICKS) {
+            let pose = self.mission.pose_world();
+            self.pending.pose = Some(PoseReport {
+                t_ms: self.t_ms(),
+                position: PointM::new(pose.x_m, pose.y_m),
+                heading_rad: pose.heading_rad,
+                left_voltage_v: report.left_voltage_v,
+                right_voltage_v: report.right_voltage_v,
+                controller_overruns: self.mission.stats().controller_overruns,
+            });
+        }
+        self.absorb(out);
+    }
+
+    /// The answer to the last sonar request.
+    pub fn reading(&mut self, neck_angle_rad: f32, range_m: Option<f32>) {
+        if self.state != RunState::Running {
+            return;
+        }
+        let out = self.mission.step(MissionInput::SonarReading {
+            neck_angle_rad,
+            range_m,
+        });
+        self.absorb(out);
+    }
+
+    /// Run the planner for the plan asked for, on the mission's map, and hand the result back
+    /// (also while paused: the mission is not changed meanwhile). `clock` counts instructions.
+    pub fn run_planner<const S: usize, const Q: usize>(
+        &mut self,
+        planner: &mut Planner<S, Q>,
+        clock: &mut impl FnMut() -> u64,
+    ) {
+        let Some(request) = self.plan_request.take() else {
+            return;
+        };
+        let before = clock();
+        let (grid, path) = self.mission.plan_workspace();
+        let result = planner.plan(request.kind, grid, request.start, request.goal, path);
+        let instructions = clock().saturating_sub(before);
+        self.last_plan_instructions = instructions;
+        self.max_plan_instructions = self.max_plan_instructions.max(instructions);
+        let out = self.mission.step(MissionInput::PlanDone {
+            id: request.id,
+            result,
+        });
+        self.absorb(out);
+    }
+
+    /// Take what a mission step asked for and note its telemetry.
+    fn absorb(&mut self, out: MissionOutput) {
+        if let Some(command) = out.pilot_command {
+            // Stop is final for this mission; the latest of the others wins.
+            if self.pilot_command != Some(PilotCommand::Stop) {
+                self.pilot_command = Some(command);
+            }
+        }
+        if out.sonar_request.is_some() {
+            self.sonar_request = out.sonar_request;
+        }
+        if out.plan_request.is_some() {
+            self.plan_request = out.plan_request;
+        }
+        let t_ms = self.t_ms();
+        for event in out.events.iter() {
+            match *event {
+                MissionEvent::SweepDone { .. } => {
+                    self.sweeps += 1;
+                    let hits = self.mission.last_hits().len();
+                    self.pending.hits = Cursor::start(self.sweeps, hits, usize::MAX);
+                }
+                MissionEvent::Planned {
+                    status,
+                    prefix_points,
+                    ..
+                } => {
+                    self.plans += 1;
+                    let path_points = self.mission.path().len();
+                    self.pending.planned = Some(PlannedNote {
+                        t_ms,
+                        plan: self.plans,
+                        status,
+                        path_points: path_points.min(u16::MAX as usize) as u16,
+                        prefix_points,
+                        instructions: self.last_plan_instructions,
+                    });
+                    self.pending.prefix =
+                        Cursor::start(self.plans, self.mission.prefix().len(), usize::MAX);
+                    self.pending.path =
+                        Cursor::start(self.plans, path_points, TELEMETRY_PATH_POINTS);
+                }
+                MissionEvent::Finished(_) => {
+                    self.state = RunState::Ended;
+                    self.plan_request = None;
+                    self.sonar_request = None;
+                    self.pending.finished = true;
+                }
+                _ => {}
+            }
+        }
+        let now = (self.mission.phase(), self.mission.status());
+        if now != self.reported {
+            self.reported = now;
+            self.pending.phase = true;
+        }
+    }
+
+    fn t_ms(&self) -> u32 {
+        let t = self.mission.stats().time_s * 1000.0;
+        if t.is_finite() && t >= 0.0 {
+            (t + 0.5) as u32
+        } else {
+            0
+        }
+    }
+
+    /// The mission report.
+    pub fn report(&self) -> MissionReport {
+        MissionReport {
+            state: self.state,
+            status: self.mission.status(),
+            phase: self.mission.phase(),
+            stats: self.mission.stats(),
+            max_control_instructions: self.max_control_instructions,
+            max_plan_instructions: self.max_plan_instructions,
+            stack_high_water_bytes: self.stack_high_water_bytes,
+            emergency_stop: self.emergency_stop,
+        }
+    }
+
+    /// The next telemetry message to send, most urgent first: the phase, the pose, the plan,
+    /// its prefix, the sweep's hits, the plan's vertices, and last the final report (after
+    /// everything the mission produced before it ended).
+    pub fn next_telemetry(&mut self) -> Option<Telemetry> {
+        let p = &mut self.pending;
+        if core::mem::take(&mut p.phase) {
+            return Some(Telemetry::Phase {
+                t_ms: self.t_ms_cached(),
+                phase: self.reported.0,
+                status: self.reported.1,
+            });
+        }
+        if let Some(pose) = self.pending.pose.take() {
+            return Some(Telemetry::Pose(pose));
+        }
+        if let Some(n) = self.pending.planned.take() {
+            return Some(Telemetry::Planned {
+                t_ms: n.t_ms,
+                plan: n.plan,
+                status: n.status,
+                path_points: n.path_points,
+                prefix_points: n.prefix_points,
+                instructions: n.instructions,
+            });
+        }
+        if let Some((plan, first, total, points)) = self.pending.prefix.chunk(self.mission.prefix())
+        {
+            return Some(Telemetry::Prefix {
+                plan,
+                first,
+                total,
+                points,
+            });
+        }
+        if let Some((sweep, first, total, hits)) = self.pending.hits.chunk(self.mission.last_hits())
+        {
+            return Some(Telemetry::SweepHits {
+                sweep,
+                first,
+                total,
+                hits,
+            });
+        }
+        if let Some((plan, first, total, points)) = self.pending.path.chunk(self.mission.path()) {
+            return Some(Telemetry::Path {
+                plan,
+                first,
+                total,
+                points,
+            });
+        }
+        if core::mem::take(&mut self.pending.finished) {
+            return Some(Telemetry::Finished(self.report()));
+        }
+        None
+    }
+
+    fn t_ms_cached(&self) -> u32 {
+        self.t_ms()
+    }
+}
+
+/// [`RunState`]'s index, as [`ErrorCode::WrongState`] reports it.
+fn state_index(state: RunState) -> u32 {
+    match state {
+        RunState::Idle => 0,
+        RunState::Ready => 1,
+        RunState::Running => 2,
+        RunState::Paused => 3,
+        RunState::Ended => 4,
+    }
+}
+
+#[cfg(test)]
+mod tests;

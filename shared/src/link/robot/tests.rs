@@ -1,0 +1,554 @@
+//! RobotDevice tests: whole missions over the wire format against the simulated robot, and
+//! requests in the wrong state.
+extern crate std;
+
+use std::boxed::Box;
+use std::vec::Vec as StdVec;
+
+use super::*;
+use crate::control::Pose;
+use crate::grid::{words_for_cells, Grid, GridGeometry};
+use crate::link::frame::{encode, FrameDecoder, MAX_FRAME_BYTES};
+use crate::mission::{LocalRunner, Mission300, MissionMode, MissionPlanner300, Pilot};
+use crate::plan::PlannerKind;
+use crate::plant::Plant;
+use crate::raster::mark_point_m;
+
+type TestDevice = RobotDevice<{ words_for_cells(300 * 300) }, { words_for_cells(300 * 300) }>;
+
+/// The host side and the simulated robot around a device, run in the order of
+/// [`LocalRunner`] (pilot, mission, commands, plans at once, then the sonar).
+struct Bench {
+    device: Box<TestDevice>,
+    planner: Box<MissionPlanner300>,
+    world: Box<WorldUpload>,
+    pilot: Option<Pilot>,
+    plant: Option<Plant>,
+    previous_counts: (i32, i32),
+    decoder: FrameDecoder,
+    seq: u16,
+    telemetry: StdVec<Telemetry>,
+}
+
+impl Bench {
+    fn new() -> Self {
+        Self {
+            device: Box::new(TestDevice::new(DeviceInfo::default())),
+            planner: Box::new(MissionPlanner300::new()),
+            world: Box::new(WorldUpload::new()),
+            pilot: None,
+            plant: None,
+            previous_counts: (0, 0),
+            decoder: FrameDecoder::new(),
+            seq: 0,
+            telemetry: StdVec::new(),
+        }
+    }
+
+    /// One request through the wire format; its reply (telemetry on the way is kept).
+    fn call(&mut self, request: Request) -> Reply {
+        self.seq = self.seq.wrapping_add(1);
+        let mut wire = [0u8; MAX_FRAME_BYTES];
+        let bytes = encode(
+            &RequestFrame {
+                seq: self.seq,
+                request,
+            },
+            &mut wire,
+        )
+        .unwrap()
+        .to_vec();
+        let mut out = StdVec::new();
+        self.device.receive(
+            &bytes,
+            &mut *self.planner,
+            &mut || 0,
+            &mut *self.world,
+            &mut |b: &[u8]| out.extend_from_slice(b),
+        );
+        let mut replies = StdVec::new();
+        for frame in self.decode(&out) {
+            match frame {
+                DeviceFrame::Reply { seq, reply } => {
+                    assert_eq!(seq, Some(self.seq));
+                    replies.push(reply);
+                }
+                DeviceFrame::Telemetry(t) => self.telemetry.push(t),
+            }
+        }
+        assert_eq!(replies.len(), 1, "one reply per request");
+        replies.pop().unwrap()
+    }
+
+    fn decode(&mut self, bytes: &[u8]) -> StdVec<DeviceFrame> {
+        let mut frames = StdVec::new();
+        let mut rest = bytes;
+        while !rest.is_empty() {
+            let (got, r) = self.decoder.feed::<DeviceFrame>(rest);
+            rest = r;
+            if let Some(got) = got {
+                frames.push(got.expect("the device sends valid frames"));
+            }
+        }
+        frames
+    }
+
+    fn upload_world(&mut self, world: &Obstacles) {
+        for polygon in world.iter() {
+            let chunks: StdVec<&[PointM]> = polygon.chunks(OBSTACLE_CHUNK_VERTICES).collect();
+            for (i, chunk) in chunks.iter().enumerate() {
+                let reply = self.call(Request::WorldChunk {
+                    first_vertex: (i * OBSTACLE_CHUNK_VERTICES) as u16,
+                    vertices: Vec::from_slice(chunk).unwrap(),
+                    last: i + 1 == chunks.len(),
+                });
+                assert!(matches!(reply, Reply::Obstacles { .. }), "{reply:?}");
+            }
+        }
+    }
+
+    /// Carry out what the device asks: the pilot's command, plans (at once), sonar readings.
+    fn serve(&mut self) {
+        loop {
+            if let Some(command) = self.device.take_pilot_command() {
+                if let Some(pilot) = &mut self.pilot {
+                    let _ = pilot.command(command, self.device.prefix());
+                }
+            }
+            if self.device.plan_pending() {
+                self.device.run_planner(&mut *self.planner, &mut || 0);
+                continue;
+            }
+            let Some(request) = self.device.take_sonar_request() else {
+                return;
+            };
+            let Some(plant) = &mut self.plant else {
+                return;
+            };
+            let range = self.device.mission().config().robot.sonar_range_m;
+            let range_m = plant.sonar_range_m(&self.world.obstacles, request.neck_angle_rad, range);
+            self.device.reading(request.neck_angle_rad, range_m);
+        }
+    }
+
+    /// One control period; the telemetry it produced goes through the wire format.
+    fn tick(&mut self) {
+        if let Some(config) = self.device.take_started() {
+            self.pilot = Some(Pilot::new(&config));
+            let plant = Plant::new(
+                &config.robot,
+                Pose::new(
+                    config.start.x_m,
+                    config.start.y_m,
+                    config.initial_heading_rad,
+                ),
+            );
+            self.previous_counts = plant.encoder_counts();
+            self.plant = Some(plant);
+        }
+        let (Some(plant), Some(pilot)) = (&mut self.plant, &mut self.pilot) else {
+            return;
+        };
+        let counts = plant.encoder_counts();
+        let report = pilot.tick(
+            counts.0 - self.previous_counts.0,
+            counts.1 - self.previous_counts.1,
+            0.05,
+        );
+        self.previous_counts = counts;
+        self.device.tick(&report);
+        self.serve();
+        let (left, right) = self.pilot.as_ref().unwrap().voltages_v();
+        self.plant.as_mut().unwrap().step(0.05, left, right);
+        let mut out = StdVec::new();
+        while let Some(t) = self.device.next_telemetry() {
+            TestDevice::send_telemetry(&t, &mut |b: &[u8]| out.extend_from_slice(b));
+        }
+        for frame in self.decode(&out) {
+            match frame {
+                DeviceFrame::Telemetry(t) => self.telemetry.push(t),
+                other => panic!("unasked reply {other:?}"),
+            }
+        }
+    }
+}
+
+fn office() -> (Obstacles, crate::world::Params) {
+    let mut real = Obstacles::new();
+    crate::world::parse_da(include_str!("../../../../worlds/office.da"), &mut real).unwrap();
+    let params = crate::world::parse_par(include_str!("../../../../worlds/office.par")).unwrap();
+    (real, params)
+}
+
+fn setup(params: &crate::world::Params, mode: MissionMode) -> MissionSetup {
+    MissionSetup {
+        mode,
+        planner: PlannerKind::AStar,
+        start: params.start,
+        initial_heading_rad: params.initial_heading_deg.to_radians(),
+        goal: params.goal,
+        speed_m_s: params.speed_m_s,
+        sonar_range_m: 1.5,
+        time_limit_s: 900.0,
+        constant_depth_filter: false,
+        trust_seen_space: true,
+        noise_seed: 1,
+        sonar_noise_std_m: 0.0,
+    }
+}
+
+/// A ready bench: map, radius, real world, the mission set up.
+fn ready(mode: MissionMode) -> (Bench, Obstacles, crate::world::Params) {
+    let (real, params) = office();
+    let mut b = Bench::new();
+    let map = MapParams {
+        robot_radius_m: params.robot_radius_m,
+        ..MapParams::default()
+    };
+    assert_eq!(b.call(Request::SetParams(map)), Reply::Ack);
+    b.upload_world(&real);
+    assert_eq!(
+        b.call(Request::SetMission(setup(&params, mode))),
+        Reply::Ack
+    );
+    (b, real, params)
+}
+
+#[test]
+fn a_mission_over_the_link_runs_exactly_like_the_simulator_and_its_telemetry_rebuilds_the_map() {
+    for mode in [MissionMode::Stop, MissionMode::Continuous] {
+        let (mut b, real, params) = ready(mode);
+        assert_eq!(b.call(Request::StartMission), Reply::Ack);
+        for _ in 0..40_000 {
+            b.tick();
+            if b.device.state() == RunState::Ended {
+                break;
+            }
+        }
+        let report = b.device.report();
+        assert_eq!(report.status, MissionStatus::Reached, "{mode:?} {report:?}");
+
+        // The same mission in the simulator's shell.
+        let config = *b.device.mission().config();
+        let mut mission = Box::new(Mission300::new(config, GridGeometry::seed_default()).unwrap());
+        let mut planner = Box::new(MissionPlanner300::new());
+        let mut plant = Plant::new(
+            &config.robot,
+            Pose::new(
+                params.start.x_m,
+                params.start.y_m,
+                config.initial_heading_rad,
+            ),
+        );
+        let mut runner = LocalRunner::new(&mut mission, &mut planner, 0);
+        let mut previous = plant.encoder_counts();
+        loop {
+            let counts = plant.encoder_counts();
+            let o = runner.tick(
+                counts.0 - previous.0,
+                counts.1 - previous.1,
+                0.05,
+                &mut |a| plant.sonar_range_m(&real, a, 1.5),
+            );
+            previous = counts;
+            if o.status != MissionStatus::Running {
+                break;
+            }
+            plant.step(0.05, o.left_voltage_v, o.right_voltage_v);
+        }
+        assert_eq!(runner.mission().stats(), report.stats, "{mode:?}");
+
+        // The telemetry: phases in order, a final report, poses at 5 Hz, and the hits of every
+        // sweep, which marked with the planning radius give the device's map.
+        let finished: StdVec<_> = b
+            .telemetry
+            .iter()
+            .filter_map(|t| match t {
+                Telemetry::Finished(r) => Some(*r),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(finished.len(), 1);
+        assert_eq!(finished[0].stats, report.stats);
+        assert!(matches!(b.telemetry.last(), Some(Telemetry::Finished(_))));
+        let poses = b
+            .telemetry
+            .iter()
+            .filter(|t| matches!(t, Telemetry::Pose(_)))
+            .count() as f32;
+        let expected = report.stats.time_s * 5.0;
+        assert!(
+            (poses - expected).abs() <= 2.0,
+            "{poses} poses in {} s",
+            report.stats.time_s
+        );
+        let mut map = Box::new(
+            Grid::<{ words_for_cells(300 * 300) }>::new(GridGeometry::seed_default()).unwrap(),
+        );
+        let half = GridGeometry::seed_default().expansion_cells(params.robot_radius_m);
+        let mut sweeps = 0;
+        for t in &b.telemetry {
+            if let Telemetry::SweepHits { hits, first, .. } = t {
+                if *first == 0 {
+                    sweeps += 1;
+                }
+                for p in hits {
+                    mark_point_m(&mut map, *p, half);
+                }
+            }
+        }
+        // Every sweep started was reported, but one still under way when the goal was reached.
+        let started = report.stats.stops + report.stats.moving_sweeps;
+        assert!(
+            sweeps == started || sweeps + 1 == started,
+            "{mode:?}: {sweeps} of {started}"
+        );
+        assert_eq!(&*map, b.device.mission().grid(), "{mode:?}");
+        let planned = b
+            .telemetry
+            .iter()
+            .filter(|t| matches!(t, Telemetry::Planned { .. }))
+            .count() as u32;
+        assert_eq!(planned, report.stats.plans, "{mode:?}");
+    }
+}
+
+#[test]
+fn abort_and_emergency_stop_put_zero_volts_on_the_motors_at_the_next_tick() {
+    for request in [Request::AbortMission, Request::EmergencyStop] {
+        let (mut b, _, _) = ready(MissionMode::Continuous);
+        assert_eq!(b.call(Request::StartMission), Reply::Ack);
+        // Run until the robot drives.
+        let mut driving = false;
+        for _ in 0..2_000 {
+            b.tick();
+            let (l, r) = b.pilot.as_ref().unwrap().voltages_v();
+            if l.abs() > 1.0 && r.abs() > 1.0 {
+                driving = true;
+                break;
+            }
+        }
+        assert!(driving);
+        let stop_requested = request.clone();
+        assert_eq!(b.call(request), Reply::Ack);
+        // The shell hands the command to the pilot before its next tick.
+        assert_eq!(b.device.take_pilot_command(), Some(PilotCommand::Stop));
+        b.pilot.as_mut().unwrap().stop();
+        b.tick();
+        assert_eq!(b.pilot.as_ref().unwrap().voltages_v(), (0.0, 0.0));
+        assert_eq!(b.device.state(), RunState::Ended);
+        assert_eq!(b.device.report().status, MissionStatus::Aborted);
+        // A new start is allowed after an abort, not after an emergency stop until cleared.
+        let again = b.call(Request::StartMission);
+        if stop_requested == Request::EmergencyStop {
+            assert!(
+                matches!(
+                    again,
+                    Reply::Error(ErrorReply {
+                        code: ErrorCode::WrongState,
+                        detail: 1,
+                        ..
+                    })
+                ),
+                "{again:?}"
+            );
+            assert_eq!(b.call(Request::ClearEmergencyStop), Reply::Ack);
+            assert_eq!(b.call(Request::StartMission), Reply::Ack);
+        } else {
+            assert_eq!(again, Reply::Ack);
+        }
+    }
+}
+
+#[test]
+fn requests_in_the_wrong_state_are_refused_and_change_nothing() {
+    let (real, params) = office();
+    let mut b = Bench::new();
+    let code = |r: Reply| match r {
+        Reply::Error(e) => Some(e.code),
+        _ => None,
+    };
+    assert_eq!(
+        code(b.call(Request::StartMission)),
+        Some(ErrorCode::WrongState)
+    );
+    assert_eq!(
+        code(b.call(Request::PauseMission)),
+        Some(ErrorCode::WrongState)
+    );
+    // A goal off the map, a NaN speed: refused, naming the field.
+    let mut bad = setup(&params, MissionMode::Stop);
+    bad.goal = PointM::new(99.0, 1.0);
+    assert_eq!(
+        b.call(Request::SetMission(bad)),
+        Reply::Error(ErrorReply {
+            code: ErrorCode::BadMission,
+            value: 0,
+            limit: 0,
+            detail: 1
+        })
+    );
+    let mut bad = setup(&params, MissionMode::Stop);
+    bad.speed_m_s = f32::NAN;
+    assert_eq!(
+        b.call(Request::SetMission(bad)),
+        Reply::Error(ErrorReply::new(ErrorCode::BadMission, 5, 0))
+    );
+    assert_eq!(b.device.state(), RunState::Idle);
+    b.upload_world(&real);
+    assert_eq!(
+        b.call(Request::SetMission(setup(&params, MissionMode::Stop))),
+        Reply::Ack
+    );
+    assert_eq!(b.call(Request::StartMission), Reply::Ack);
+    // While it runs: no new setup, no map change, no planning service, no world upload.
+    let occupied = b.device.handler.grid().count_occupied();
+    for request in [
+        Request::SetMission(setup(&params, MissionMode::Stop)),
+        Request::ClearMap,
+        Request::Plan {
+            kind: PlannerKind::AStar,
+            start: params.start,
+            goal: params.goal,
+        },
+        Request::ClearWorld,
+        Request::StartMission,
+        Request::ResumeMission,
+    ] {
+        assert_eq!(code(b.call(request)), Some(ErrorCode::WrongState));
+    }
+    assert_eq!(b.device.handler.grid().count_occupied(), occupied);
+    assert_eq!(b.world.obstacles.len(), real.len());
+    // Pause holds the robot and stops the mission's clock; resume sweeps afresh.
+    for _ in 0..100 {
+        b.tick();
+    }
+    assert_eq!(b.call(Request::PauseMission), Reply::Ack);
+    assert_eq!(b.device.take_pilot_command(), Some(PilotCommand::Hold));
+    b.pilot.as_mut().unwrap().hold();
+    let t = b.device.mission().stats().time_s;
+    for _ in 0..50 {
+        b.tick();
+    }
+    assert_eq!(b.device.mission().stats().time_s, t);
+    assert_eq!(b.call(Request::ResumeMission), Reply::Ack);
+    assert_eq!(
+        b.device.mission().phase(),
+        crate::mission::MissionPhase::Sweep { full: false }
+    );
+    match b.call(Request::MissionStatus) {
+        Reply::Mission(r) => assert_eq!(r.state, RunState::Running),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn a_board_refuses_the_real_world() {
+    let mut device = Box::new(TestDevice::new(DeviceInfo::default()));
+    let mut planner = Box::new(MissionPlanner300::new());
+    let mut wire = [0u8; MAX_FRAME_BYTES];
+    let bytes = encode(
+        &RequestFrame {
+            seq: 9,
+            request: Request::ClearWorld,
+        },
+        &mut wire,
+    )
+    .unwrap()
+    .to_vec();
+    let mut out = StdVec::new();
+    device.receive(
+        &bytes,
+        &mut *planner,
+        &mut || 0,
+        &mut NoWorld,
+        &mut |b: &[u8]| out.extend_from_slice(b),
+    );
+    let (got, _) = FrameDecoder::new().feed::<DeviceFrame>(&out);
+    assert_eq!(
+        got,
+        Some(Ok(DeviceFrame::Reply {
+            seq: Some(9),
+            reply: Reply::Error(ErrorReply::new(ErrorCode::NotOnThisBuild, 0, 0))
+        }))
+    );
+}
+
+#[test]
+fn the_largest_mission_messages_fit_a_frame() {
+    let full: Vec<PointM, TELEMETRY_CHUNK_POINTS> =
+        Vec::from_slice(&[PointM::new(-1.0e9, 1.0e9); TELEMETRY_CHUNK_POINTS]).unwrap();
+    let report = MissionReport {
+        state: RunState::Ended,
+        status: MissionStatus::Unreachable,
+        phase: crate::mission::MissionPhase::Sweep { full: true },
+        stats: crate::mission::MissionStats {
+            stops: u32::MAX,
+            moving_sweeps: u32::MAX,
+            full_sweeps: u32::MAX,
+            plans: u32::MAX,
+            replans: u32::MAX,
+            blocked_replans: u32::MAX,
+            band_cuts: u32::MAX,
+            readings: u32::MAX,
+            hits: u32::MAX,
+            odometry_distance_m: f32::MAX,
+            time_s: f32::MAX,
+            controller_overruns: u32::MAX,
+            saturated_periods: u32::MAX,
+            unreachable_reason: Some(crate::mission::UnreachableReason::NoProgress),
+            plan_errors: u32::MAX,
+            last_plan_error: None,
+        },
+        max_control_instructions: u64::MAX,
+        max_plan_instructions: u64::MAX,
+        stack_high_water_bytes: u32::MAX,
+        emergency_stop: true,
+    };
+    let frames = [
+        DeviceFrame::Telemetry(Telemetry::SweepHits {
+            sweep: u32::MAX,
+            first: u16::MAX,
+            total: u16::MAX,
+            hits: full.clone(),
+        }),
+        DeviceFrame::Telemetry(Telemetry::Path {
+            plan: u32::MAX,
+            first: u16::MAX,
+            total: u16::MAX,
+            points: full,
+        }),
+        DeviceFrame::Telemetry(Telemetry::Finished(report)),
+        DeviceFrame::Reply {
+            seq: Some(u16::MAX),
+            reply: Reply::Mission(report),
+        },
+    ];
+    for frame in frames {
+        let mut out = [0u8; MAX_FRAME_BYTES];
+        assert!(encode(&frame, &mut out).is_ok(), "{frame:?}");
+    }
+    let setup = MissionSetup {
+        mode: MissionMode::Continuous,
+        planner: PlannerKind::AnyAngle,
+        start: PointM::new(f32::MAX, f32::MAX),
+        initial_heading_rad: f32::MAX,
+        goal: PointM::new(f32::MAX, f32::MAX),
+        speed_m_s: f32::MAX,
+        sonar_range_m: f32::MAX,
+        time_limit_s: f32::MAX,
+        constant_depth_filter: true,
+        trust_seen_space: true,
+        noise_seed: u64::MAX,
+        sonar_noise_std_m: f32::MAX,
+    };
+    let mut out = [0u8; MAX_FRAME_BYTES];
+    assert!(encode(
+        &RequestFrame {
+            seq: u16::MAX,
+            request: Request::SetMission(setup)
+        },
+        &mut out
+    )
+    .is_ok());
+}
