@@ -81,4 +81,4 @@ pub mod mcu {
 }
 pub use handler::{Device, Handler};
 pub use message::*;
-pub use robot::{NoWorld, RobotDevice, WorldAccess, WorldUpload};
+pub use robot::{NoWorld, RobotDevice, RobotLink, WorldAccess, WorldUpload};

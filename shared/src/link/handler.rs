@@ -21,7 +21,7 @@ use super::frame::{encode, FrameDecoder, FrameFault, MAX_FRAME_BYTES};
 use super::message::*;
 use crate::geom::PointM;
 use crate::grid::{words_for_cells, Grid, GridError, GridGeometry, DEFAULT_RESOLUTION_M};
-use crate::plan::{PathM, PlanError, Planner};
+use crate::plan::{PlanError, Planner};
 use crate::raster::mark_polygon;
 use crate::world::{Obstacles, PolygonSetError, MAX_POLYGONS, MAX_VERTICES};
 
@@ -39,7 +39,7 @@ pub struct Handler<const GRID_WORDS: usize> {
     grid: Grid<GRID_WORDS>,
     obstacles: Obstacles,
     pending: Vec<PointM, MAX_PENDING_VERTICES>,
-    path: PathM,
+    path_points: u16,
     requests: u32,
     frame_errors: u32,
     rx_dropped_bytes: u32,
@@ -105,7 +105,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             grid,
             obstacles: Obstacles::new(),
             pending: Vec::new(),
-            path: Vec::new(),
+            path_points: 0,
             requests: 0,
             frame_errors: 0,
             rx_dropped_bytes: 0,
@@ -142,9 +142,15 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         &self.obstacles
     }
 
-    /// The last path planned (empty unless the last plan found one).
-    pub fn path(&self) -> &PathM {
-        &self.path
+    /// Vertices of the last path planned (0 unless the last plan found one); the path itself
+    /// is the planner's [`Planner::path_cells`], read back by [`Request::ReadPath`].
+    pub fn path_points(&self) -> u16 {
+        self.path_points
+    }
+
+    /// Forget the last path (the planner has been used for something else since).
+    pub fn forget_path(&mut self) {
+        self.path_points = 0;
     }
 
     /// Count bytes the receiver had to drop (reported by [`Request::Status`]).
@@ -205,7 +211,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             Request::ClearMap => {
                 self.obstacles.clear();
                 self.pending.clear();
-                self.path.clear();
+                self.path_points = 0;
                 self.grid.clear();
                 Ok(Reply::Ack)
             }
@@ -228,12 +234,12 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                             used as u32,
                         )
                     })?;
-                self.path.clear();
+                self.path_points = 0;
                 Ok(Reply::Ack)
             }
             Request::Plan { kind, start, goal } => {
                 let before = clock();
-                let result = planner.plan(*kind, &self.grid, *start, *goal, &mut self.path);
+                let result = planner.plan_at(*kind, &self.grid, *start, *goal);
                 let after = clock();
                 self.last_plan = LastPlan {
                     instructions: after.saturating_sub(before),
@@ -241,24 +247,29 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                     queue_peak: planner.queue_peak(),
                 };
                 let report = result.map_err(|e| {
-                    self.path.clear();
+                    self.path_points = 0;
                     plan_error(e)
                 })?;
+                self.path_points = if report.status == crate::plan::PlanStatus::Found {
+                    planner.path_cells().len().min(u16::MAX as usize) as u16
+                } else {
+                    0
+                };
                 Ok(Reply::Plan(PlanSummary {
                     status: report.status,
                     expanded: report.expanded,
                     cost: report.cost,
                     length_m: report.length_m,
-                    points: self.path.len() as u16,
+                    points: self.path_points,
                     mcu_instructions: after.saturating_sub(before),
                 }))
             }
             Request::ReadPath { offset } => {
-                let total = self.path.len();
+                let cells = planner.path_cells();
+                let total = (self.path_points as usize).min(cells.len());
                 let start = *offset as usize;
-                let chunk = self
-                    .path
-                    .get(start..)
+                let chunk = cells
+                    .get(start..total)
                     .ok_or(ErrorReply::new(
                         ErrorCode::OutOfRange,
                         start as u32,
@@ -266,9 +277,11 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                     ))?
                     .iter()
                     .take(PATH_CHUNK_POINTS);
+                let geometry = self.grid.geometry();
                 let mut points = Vec::new();
-                for p in chunk {
-                    let _ = points.push(*p); // at most PATH_CHUNK_POINTS: cannot fail
+                for c in chunk {
+                    // at most PATH_CHUNK_POINTS: cannot fail
+                    let _ = points.push(geometry.center_of(*c));
                 }
                 Ok(Reply::PathChunk {
                     offset: *offset,
@@ -363,7 +376,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             ),
         })?;
         self.params = params;
-        self.path.clear();
+        self.path_points = 0;
         self.mark_all();
         Ok(())
     }
@@ -403,7 +416,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             {
                 mark_polygon(&mut self.grid, polygon, half);
             }
-            self.path.clear();
+            self.path_points = 0;
         }
         Ok(Reply::Obstacles {
             polygons: self.obstacles.len() as u16,
@@ -1024,7 +1037,7 @@ mod tests {
             },
         );
         assert_eq!(error_code(&r), Some(ErrorCode::PlannerCapacity), "{r:?}");
-        assert!(d.handler.path().is_empty());
+        assert_eq!(d.handler.path_points(), 0);
         assert_eq!(d.handler.status().last_plan_expanded, 0);
     }
 
@@ -1074,7 +1087,7 @@ mod tests {
                 &wall,
                 GridGeometry::seed_default().expansion_cells(0.3),
             );
-            let mut path = PathM::new();
+            let mut path = crate::plan::PathM::new();
             let mut reference = std::boxed::Box::new(Planner::<SCRATCH_WORDS_300, 4096>::new());
             let report = reference.plan(kind, &grid, start, goal, &mut path).unwrap();
             assert_eq!(summary.status, PlanStatus::Found);
@@ -1091,7 +1104,19 @@ mod tests {
             let mut points = StdVec::new();
             while points.len() < summary.points as usize {
                 let offset = points.len() as u16;
-                match call(&mut d, 11, Request::ReadPath { offset }) {
+                // Through the same planner: the path is its cell buffer.
+                let mut out = StdVec::new();
+                d.receive(
+                    &frame(11, Request::ReadPath { offset }),
+                    &mut *planner,
+                    &mut || 0,
+                    &mut |b: &[u8]| out.extend_from_slice(b),
+                );
+                let (got, _) = FrameDecoder::new().feed::<DeviceFrame>(&out);
+                let Some(Ok(DeviceFrame::Reply { reply, .. })) = got else {
+                    panic!("{got:?}");
+                };
+                match reply {
                     Reply::PathChunk {
                         points: p, total, ..
                     } => {

@@ -46,6 +46,7 @@ use crate::mission::{
     MissionStatus, PilotCommand, PilotReport, PlanRequest, SonarRequest,
 };
 use crate::plan::{PlanStatus, Planner};
+
 use crate::robot::RobotConfig;
 use crate::world::{Obstacles, Params};
 
@@ -170,11 +171,11 @@ struct PlannedNote {
 
 /// The mission device: see the module documentation.
 pub struct RobotDevice<const GRID_WORDS: usize, const MISSION_WORDS: usize> {
+    _mission: core::marker::PhantomData<[u32; MISSION_WORDS]>,
     decoder: FrameDecoder,
     /// The planning service and the known map (public so the firmware can set its build and
     /// RAM figures).
     pub handler: Handler<GRID_WORDS>,
-    mission: Mission<MISSION_WORDS>,
     setup: Option<MissionSetup>,
     state: RunState,
     emergency_stop: bool,
@@ -197,9 +198,9 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
     /// A device with an empty known map and no mission (`const`: it lives in a `static`).
     pub const fn new(info: DeviceInfo) -> Self {
         Self {
+            _mission: core::marker::PhantomData,
             decoder: FrameDecoder::new(),
             handler: Handler::new(info),
-            mission: Mission::IDLE,
             setup: None,
             state: RunState::Idle,
             emergency_stop: false,
@@ -242,19 +243,18 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
         }
     }
 
-    /// The mission (its map, paths, stats).
-    pub fn mission(&self) -> &Mission<MISSION_WORDS> {
-        &self.mission
+    /// This device with `mission` (kept apart so the firmware can place it in its own memory
+    /// region): what every call about the link or the mission goes through.
+    pub fn link<'a>(
+        &'a mut self,
+        mission: &'a mut Mission<MISSION_WORDS>,
+    ) -> RobotLink<'a, GRID_WORDS, MISSION_WORDS> {
+        RobotLink { d: self, mission }
     }
 
     /// Where the mission stands.
     pub fn state(&self) -> RunState {
         self.state
-    }
-
-    /// The kept prefix, for [`PilotCommand::Follow`].
-    pub fn prefix(&self) -> &[PointM] {
-        self.mission.prefix()
     }
 
     /// The latest command for the pilot, if any since the last call.
@@ -267,17 +267,7 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
         self.sonar_request.take()
     }
 
-    /// The configuration of a mission that has just started (once): the shell resets its
-    /// pilot (`Pilot::new`) and, simulated, the robot to the start pose.
-    pub fn take_started(&mut self) -> Option<MissionConfig> {
-        if core::mem::take(&mut self.started) {
-            Some(*self.mission.config())
-        } else {
-            None
-        }
-    }
-
-    /// A plan is asked for: call [`RobotDevice::run_planner`].
+    /// A plan is asked for: call [`RobotLink::run_planner`].
     pub fn plan_pending(&self) -> bool {
         self.plan_request.is_some()
     }
@@ -286,6 +276,39 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
     pub fn note_timing(&mut self, max_control_instructions: u64, stack_high_water_bytes: u32) {
         self.max_control_instructions = max_control_instructions;
         self.stack_high_water_bytes = stack_high_water_bytes;
+    }
+
+    /// Encode a telemetry message as a frame and pass the bytes to `send`.
+    pub fn send_telemetry(telemetry: &Telemetry, send: &mut impl FnMut(&[u8])) {
+        Device::<GRID_WORDS>::send_encoded(&DeviceFrame::Telemetry(telemetry.clone()), send);
+    }
+}
+
+/// A [`RobotDevice`] with its mission: see the module documentation.
+pub struct RobotLink<'a, const GRID_WORDS: usize, const MISSION_WORDS: usize> {
+    d: &'a mut RobotDevice<GRID_WORDS, MISSION_WORDS>,
+    mission: &'a mut Mission<MISSION_WORDS>,
+}
+
+impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotLink<'_, GRID_WORDS, MISSION_WORDS> {
+    /// The mission (its map, paths, stats).
+    pub fn mission(&self) -> &Mission<MISSION_WORDS> {
+        self.mission
+    }
+
+    /// The kept prefix, for [`PilotCommand::Follow`].
+    pub fn prefix(&self) -> &[PointM] {
+        self.mission.prefix()
+    }
+
+    /// The configuration of a mission that has just started (once): the shell resets its
+    /// pilot (`Pilot::new`) and, simulated, the robot to the start pose.
+    pub fn take_started(&mut self) -> Option<MissionConfig> {
+        if core::mem::take(&mut self.d.started) {
+            Some(*self.mission.config())
+        } else {
+            None
+        }
     }
 
     /// Feed received bytes; for every complete frame, call `send` with the encoded reply.
@@ -301,7 +324,7 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
     ) {
         let mut rest = bytes;
         while !rest.is_empty() {
-            let (got, r) = self.decoder.feed::<RequestFrame>(rest);
+            let (got, r) = self.d.decoder.feed::<RequestFrame>(rest);
             rest = r;
             let (seq, reply) = match got {
                 None => continue,
@@ -315,7 +338,7 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
                             reply = Some(self.handle_world(&frame.request, w));
                         });
                         reply.unwrap_or_else(|| {
-                            self.handler.count_request();
+                            self.d.handler.count_request();
                             Reply::Error(ErrorReply::new(ErrorCode::NotOnThisBuild, 0, 0))
                         })
                     } else {
@@ -329,13 +352,8 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
         }
     }
 
-    /// Encode a telemetry message as a frame and pass the bytes to `send`.
-    pub fn send_telemetry(telemetry: &Telemetry, send: &mut impl FnMut(&[u8])) {
-        Device::<GRID_WORDS>::send_encoded(&DeviceFrame::Telemetry(telemetry.clone()), send);
-    }
-
     fn fault(&mut self, fault: FrameFault) -> (Option<u16>, Reply) {
-        self.handler.fault_reply(fault)
+        self.d.handler.fault_reply(fault)
     }
 
     /// Answer one request (the real world's are refused: the shell routes them to
@@ -348,11 +366,11 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
     ) -> Reply {
         match self.try_handle_mission(request) {
             Some(Ok(reply)) => {
-                self.handler.count_request();
+                self.d.handler.count_request();
                 reply
             }
             Some(Err(error)) => {
-                self.handler.count_request();
+                self.d.handler.count_request();
                 Reply::Error(error)
             }
             None => {
@@ -364,16 +382,16 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
                         | Request::WriteMap { .. }
                         | Request::Plan { .. }
                 );
-                if map_request && matches!(self.state, RunState::Running | RunState::Paused) {
+                if map_request && matches!(self.d.state, RunState::Running | RunState::Paused) {
                     // The planner and the map are the mission's while it runs.
-                    self.handler.count_request();
+                    self.d.handler.count_request();
                     return Reply::Error(ErrorReply::new(
                         ErrorCode::WrongState,
-                        state_index(self.state),
+                        state_index(self.d.state),
                         0,
                     ));
                 }
-                self.handler.handle(request, planner, clock)
+                self.d.handler.handle(request, planner, clock)
             }
         }
     }
@@ -381,11 +399,11 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
     /// Answer a request about the real world ([`Request::WorldChunk`], [`Request::ClearWorld`])
     /// on `world` (simulated builds). Refused while a mission runs.
     pub fn handle_world(&mut self, request: &Request, world: &mut WorldUpload) -> Reply {
-        self.handler.count_request();
-        if matches!(self.state, RunState::Running | RunState::Paused) {
+        self.d.handler.count_request();
+        if matches!(self.d.state, RunState::Running | RunState::Paused) {
             return Reply::Error(ErrorReply::new(
                 ErrorCode::WrongState,
-                state_index(self.state),
+                state_index(self.d.state),
                 0,
             ));
         }
@@ -420,15 +438,15 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
     /// The mission requests; `None` for the others.
     fn try_handle_mission(&mut self, request: &Request) -> Option<Result<Reply, ErrorReply>> {
         let wrong = |state: RunState| ErrorReply::new(ErrorCode::WrongState, state_index(state), 0);
-        let running = matches!(self.state, RunState::Running | RunState::Paused);
+        let running = matches!(self.d.state, RunState::Running | RunState::Paused);
         Some(match request {
             Request::SetMission(setup) => {
                 if running {
-                    Err(wrong(self.state))
+                    Err(wrong(self.d.state))
                 } else {
                     self.mission_config(setup).map(|_| {
-                        self.setup = Some(*setup);
-                        self.state = RunState::Ready;
+                        self.d.setup = Some(*setup);
+                        self.d.state = RunState::Ready;
                         Reply::Ack
                     })
                 }
@@ -438,22 +456,22 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
             }
             Request::StartMission => self.start(),
             Request::PauseMission => {
-                if self.state == RunState::Running {
-                    self.state = RunState::Paused;
-                    self.pilot_command = Some(PilotCommand::Hold);
+                if self.d.state == RunState::Running {
+                    self.d.state = RunState::Paused;
+                    self.d.pilot_command = Some(PilotCommand::Hold);
                     Ok(Reply::Ack)
                 } else {
-                    Err(wrong(self.state))
+                    Err(wrong(self.d.state))
                 }
             }
             Request::ResumeMission => {
-                if self.state == RunState::Paused {
-                    self.state = RunState::Running;
+                if self.d.state == RunState::Paused {
+                    self.d.state = RunState::Running;
                     let out = self.mission.step(MissionInput::Interrupt);
                     self.absorb(out);
                     Ok(Reply::Ack)
                 } else {
-                    Err(wrong(self.state))
+                    Err(wrong(self.d.state))
                 }
             }
             Request::AbortMission => {
@@ -461,12 +479,12 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
                 Ok(Reply::Ack)
             }
             Request::EmergencyStop => {
-                self.emergency_stop = true;
+                self.d.emergency_stop = true;
                 self.stop_mission();
                 Ok(Reply::Ack)
             }
             Request::ClearEmergencyStop => {
-                self.emergency_stop = false;
+                self.d.emergency_stop = false;
                 Ok(Reply::Ack)
             }
             Request::MissionStatus => Ok(Reply::Mission(self.report())),
@@ -477,7 +495,7 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
     /// The mission configuration of `setup` on the current map and radius; errors name the
     /// field.
     fn mission_config(&self, setup: &MissionSetup) -> Result<MissionConfig, ErrorReply> {
-        let params = self.handler.params();
+        let params = self.d.handler.params();
         let bad = |field: u32| ErrorReply::new(ErrorCode::BadMission, field, 0);
         let robot = RobotConfig {
             sonar_range_m: setup.sonar_range_m,
@@ -525,7 +543,7 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
                 _ => bad(100),
             });
         }
-        let geometry = *self.handler.grid().geometry();
+        let geometry = *self.d.handler.grid().geometry();
         if geometry.cell_of(setup.start).is_err() || geometry.cell_of(setup.goal).is_err() {
             return Err(ErrorReply {
                 code: ErrorCode::BadMission,
@@ -538,66 +556,66 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
     }
 
     fn start(&mut self) -> Result<Reply, ErrorReply> {
-        if self.emergency_stop {
+        if self.d.emergency_stop {
             return Err(ErrorReply {
                 code: ErrorCode::WrongState,
-                value: state_index(self.state),
+                value: state_index(self.d.state),
                 limit: 0,
                 detail: 1,
             });
         }
-        let Some(setup) = self.setup else {
+        let Some(setup) = self.d.setup else {
             return Err(ErrorReply::new(ErrorCode::WrongState, 0, 0));
         };
-        if matches!(self.state, RunState::Running | RunState::Paused) {
+        if matches!(self.d.state, RunState::Running | RunState::Paused) {
             return Err(ErrorReply::new(
                 ErrorCode::WrongState,
-                state_index(self.state),
+                state_index(self.d.state),
                 0,
             ));
         }
         // The map may have changed since SetMission: check again.
         let config = self.mission_config(&setup)?;
-        let geometry = *self.handler.grid().geometry();
+        let geometry = *self.d.handler.grid().geometry();
         self.mission.restart(config, geometry).map_err(|_| {
             ErrorReply::new(ErrorCode::GridCapacity, geometry.cell_count() as u32, 0)
         })?;
         // What the robot knows: the uploaded obstacles, grown by the same radius.
-        let _ = self.mission.add_known_map(self.handler.grid());
-        self.state = RunState::Running;
-        self.started = true;
-        self.ticks = 0;
-        self.sweeps = 0;
-        self.plans = 0;
-        self.max_plan_instructions = 0;
-        self.plan_request = None;
-        self.sonar_request = None;
-        self.pilot_command = Some(PilotCommand::Hold);
-        self.pending = Pending::default();
-        self.reported = (self.mission.phase(), self.mission.status());
-        self.pending.phase = true;
+        let _ = self.mission.add_known_map(self.d.handler.grid());
+        self.d.state = RunState::Running;
+        self.d.started = true;
+        self.d.ticks = 0;
+        self.d.sweeps = 0;
+        self.d.plans = 0;
+        self.d.max_plan_instructions = 0;
+        self.d.plan_request = None;
+        self.d.sonar_request = None;
+        self.d.pilot_command = Some(PilotCommand::Hold);
+        self.d.pending = Pending::default();
+        self.d.reported = (self.mission.phase(), self.mission.status());
+        self.d.pending.phase = true;
         Ok(Reply::Ack)
     }
 
     fn stop_mission(&mut self) {
-        if matches!(self.state, RunState::Running | RunState::Paused) {
+        if matches!(self.d.state, RunState::Running | RunState::Paused) {
             let out = self.mission.step(MissionInput::Abort);
             self.absorb(out);
         }
-        self.pilot_command = Some(PilotCommand::Stop);
-        self.sonar_request = None;
+        self.d.pilot_command = Some(PilotCommand::Stop);
+        self.d.sonar_request = None;
     }
 
     /// One control period of the pilot.
     pub fn tick(&mut self, report: &PilotReport) {
-        if self.state != RunState::Running {
+        if self.d.state != RunState::Running {
             return;
         }
-        self.ticks = self.ticks.wrapping_add(1);
+        self.d.ticks = self.d.ticks.wrapping_add(1);
         let out = self.mission.step(MissionInput::Tick(*report));
-        if self.ticks.is_multiple_of(POSE_EVERY_TICKS) {
+        if self.d.ticks.is_multiple_of(POSE_EVERY_TICKS) {
             let pose = self.mission.pose_world();
-            self.pending.pose = Some(PoseReport {
+            self.d.pending.pose = Some(PoseReport {
                 t_ms: self.t_ms(),
                 position: PointM::new(pose.x_m, pose.y_m),
                 heading_rad: pose.heading_rad,
@@ -611,7 +629,7 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
 
     /// The answer to the last sonar request.
     pub fn reading(&mut self, neck_angle_rad: f32, range_m: Option<f32>) {
-        if self.state != RunState::Running {
+        if self.d.state != RunState::Running {
             return;
         }
         let out = self.mission.step(MissionInput::SonarReading {
@@ -628,15 +646,17 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
         planner: &mut Planner<S, Q>,
         clock: &mut impl FnMut() -> u64,
     ) {
-        let Some(request) = self.plan_request.take() else {
+        let Some(request) = self.d.plan_request.take() else {
             return;
         };
         let before = clock();
         let (grid, path) = self.mission.plan_workspace();
         let result = planner.plan(request.kind, grid, request.start, request.goal, path);
         let instructions = clock().saturating_sub(before);
-        self.last_plan_instructions = instructions;
-        self.max_plan_instructions = self.max_plan_instructions.max(instructions);
+        // The planner's cell buffer now holds the mission's path, not the service's.
+        self.d.handler.forget_path();
+        self.d.last_plan_instructions = instructions;
+        self.d.max_plan_instructions = self.d.max_plan_instructions.max(instructions);
         let out = self.mission.step(MissionInput::PlanDone {
             id: request.id,
             result,
@@ -648,57 +668,57 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
     fn absorb(&mut self, out: MissionOutput) {
         if let Some(command) = out.pilot_command {
             // Stop is final for this mission; the latest of the others wins.
-            if self.pilot_command != Some(PilotCommand::Stop) {
-                self.pilot_command = Some(command);
+            if self.d.pilot_command != Some(PilotCommand::Stop) {
+                self.d.pilot_command = Some(command);
             }
         }
         if out.sonar_request.is_some() {
-            self.sonar_request = out.sonar_request;
+            self.d.sonar_request = out.sonar_request;
         }
         if out.plan_request.is_some() {
-            self.plan_request = out.plan_request;
+            self.d.plan_request = out.plan_request;
         }
         let t_ms = self.t_ms();
         for event in out.events.iter() {
             match *event {
                 MissionEvent::SweepDone { .. } => {
-                    self.sweeps += 1;
+                    self.d.sweeps += 1;
                     let hits = self.mission.last_hits().len();
-                    self.pending.hits = Cursor::start(self.sweeps, hits, usize::MAX);
+                    self.d.pending.hits = Cursor::start(self.d.sweeps, hits, usize::MAX);
                 }
                 MissionEvent::Planned {
                     status,
                     prefix_points,
                     ..
                 } => {
-                    self.plans += 1;
+                    self.d.plans += 1;
                     let path_points = self.mission.path().len();
-                    self.pending.planned = Some(PlannedNote {
+                    self.d.pending.planned = Some(PlannedNote {
                         t_ms,
-                        plan: self.plans,
+                        plan: self.d.plans,
                         status,
                         path_points: path_points.min(u16::MAX as usize) as u16,
                         prefix_points,
-                        instructions: self.last_plan_instructions,
+                        instructions: self.d.last_plan_instructions,
                     });
-                    self.pending.prefix =
-                        Cursor::start(self.plans, self.mission.prefix().len(), usize::MAX);
-                    self.pending.path =
-                        Cursor::start(self.plans, path_points, TELEMETRY_PATH_POINTS);
+                    self.d.pending.prefix =
+                        Cursor::start(self.d.plans, self.mission.prefix().len(), usize::MAX);
+                    self.d.pending.path =
+                        Cursor::start(self.d.plans, path_points, TELEMETRY_PATH_POINTS);
                 }
                 MissionEvent::Finished(_) => {
-                    self.state = RunState::Ended;
-                    self.plan_request = None;
-                    self.sonar_request = None;
-                    self.pending.finished = true;
+                    self.d.state = RunState::Ended;
+                    self.d.plan_request = None;
+                    self.d.sonar_request = None;
+                    self.d.pending.finished = true;
                 }
                 _ => {}
             }
         }
         let now = (self.mission.phase(), self.mission.status());
-        if now != self.reported {
-            self.reported = now;
-            self.pending.phase = true;
+        if now != self.d.reported {
+            self.d.reported = now;
+            self.d.pending.phase = true;
         }
     }
 
@@ -714,14 +734,14 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
     /// The mission report.
     pub fn report(&self) -> MissionReport {
         MissionReport {
-            state: self.state,
+            state: self.d.state,
             status: self.mission.status(),
             phase: self.mission.phase(),
             stats: self.mission.stats(),
-            max_control_instructions: self.max_control_instructions,
-            max_plan_instructions: self.max_plan_instructions,
-            stack_high_water_bytes: self.stack_high_water_bytes,
-            emergency_stop: self.emergency_stop,
+            max_control_instructions: self.d.max_control_instructions,
+            max_plan_instructions: self.d.max_plan_instructions,
+            stack_high_water_bytes: self.d.stack_high_water_bytes,
+            emergency_stop: self.d.emergency_stop,
         }
     }
 
@@ -729,18 +749,18 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
     /// its prefix, the sweep's hits, the plan's vertices, and last the final report (after
     /// everything the mission produced before it ended).
     pub fn next_telemetry(&mut self) -> Option<Telemetry> {
-        let p = &mut self.pending;
+        let p = &mut self.d.pending;
         if core::mem::take(&mut p.phase) {
             return Some(Telemetry::Phase {
                 t_ms: self.t_ms_cached(),
-                phase: self.reported.0,
-                status: self.reported.1,
+                phase: self.d.reported.0,
+                status: self.d.reported.1,
             });
         }
-        if let Some(pose) = self.pending.pose.take() {
+        if let Some(pose) = self.d.pending.pose.take() {
             return Some(Telemetry::Pose(pose));
         }
-        if let Some(n) = self.pending.planned.take() {
+        if let Some(n) = self.d.pending.planned.take() {
             return Some(Telemetry::Planned {
                 t_ms: n.t_ms,
                 plan: n.plan,
@@ -750,7 +770,8 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
                 instructions: n.instructions,
             });
         }
-        if let Some((plan, first, total, points)) = self.pending.prefix.chunk(self.mission.prefix())
+        if let Some((plan, first, total, points)) =
+            self.d.pending.prefix.chunk(self.mission.prefix())
         {
             return Some(Telemetry::Prefix {
                 plan,
@@ -759,7 +780,8 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
                 points,
             });
         }
-        if let Some((sweep, first, total, hits)) = self.pending.hits.chunk(self.mission.last_hits())
+        if let Some((sweep, first, total, hits)) =
+            self.d.pending.hits.chunk(self.mission.last_hits())
         {
             return Some(Telemetry::SweepHits {
                 sweep,
@@ -768,7 +790,7 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
                 hits,
             });
         }
-        if let Some((plan, first, total, points)) = self.pending.path.chunk(self.mission.path()) {
+        if let Some((plan, first, total, points)) = self.d.pending.path.chunk(self.mission.path()) {
             return Some(Telemetry::Path {
                 plan,
                 first,
@@ -776,7 +798,7 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
                 points,
             });
         }
-        if core::mem::take(&mut self.pending.finished) {
+        if core::mem::take(&mut self.d.pending.finished) {
             return Some(Telemetry::Finished(self.report()));
         }
         None

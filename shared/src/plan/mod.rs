@@ -2678,6 +2678,29 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         path: &mut Vec<PointM, P>,
     ) -> Result<PlanReport, PlanError> {
         path.clear();
+        let report = self.plan_at(kind, grid, start, goal)?;
+        let geometry = *grid.geometry();
+        for &c in self.cells.iter() {
+            if path.push(geometry.center_of(c)).is_err() {
+                path.clear();
+                return Err(PlanError::PathFull {
+                    capacity: P.min(MAX_PATH_POINTS) as u32,
+                });
+            }
+        }
+        Ok(report)
+    }
+
+    /// [`Planner::plan`] without the polyline in metres: it stays in [`Planner::path_cells`]
+    /// (until the next plan), so a caller that only reads it back needs no path buffer of its
+    /// own.
+    pub fn plan_at<const W: usize>(
+        &mut self,
+        kind: PlannerKind,
+        grid: &Grid<W>,
+        start: PointM,
+        goal: PointM,
+    ) -> Result<PlanReport, PlanError> {
         self.cells.clear();
         self.last = None;
         let geometry = *grid.geometry();
@@ -2688,16 +2711,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             self.last = Some(report);
             return Ok(report);
         };
-        let report = self.plan_cells(kind, grid, start_cell, goal_cell)?;
-        for &c in self.cells.iter() {
-            if path.push(geometry.center_of(c)).is_err() {
-                path.clear();
-                return Err(PlanError::PathFull {
-                    capacity: P.min(MAX_PATH_POINTS) as u32,
-                });
-            }
-        }
-        Ok(report)
+        self.plan_cells(kind, grid, start_cell, goal_cell)
     }
 
     /// Plan between two cells; the polyline (as cells) is then [`Planner::path_cells`].

@@ -20,6 +20,7 @@ type TestDevice = RobotDevice<{ words_for_cells(300 * 300) }, { words_for_cells(
 /// [`LocalRunner`] (pilot, mission, commands, plans at once, then the sonar).
 struct Bench {
     device: Box<TestDevice>,
+    mission: Box<Mission300>,
     planner: Box<MissionPlanner300>,
     world: Box<WorldUpload>,
     pilot: Option<Pilot>,
@@ -34,6 +35,7 @@ impl Bench {
     fn new() -> Self {
         Self {
             device: Box::new(TestDevice::new(DeviceInfo::default())),
+            mission: Box::new(Mission300::IDLE),
             planner: Box::new(MissionPlanner300::new()),
             world: Box::new(WorldUpload::new()),
             pilot: None,
@@ -59,7 +61,7 @@ impl Bench {
         .unwrap()
         .to_vec();
         let mut out = StdVec::new();
-        self.device.receive(
+        self.device.link(&mut self.mission).receive(
             &bytes,
             &mut *self.planner,
             &mut || 0,
@@ -112,11 +114,13 @@ impl Bench {
         loop {
             if let Some(command) = self.device.take_pilot_command() {
                 if let Some(pilot) = &mut self.pilot {
-                    let _ = pilot.command(command, self.device.prefix());
+                    let _ = pilot.command(command, self.mission.prefix());
                 }
             }
             if self.device.plan_pending() {
-                self.device.run_planner(&mut *self.planner, &mut || 0);
+                self.device
+                    .link(&mut self.mission)
+                    .run_planner(&mut *self.planner, &mut || 0);
                 continue;
             }
             let Some(request) = self.device.take_sonar_request() else {
@@ -125,15 +129,17 @@ impl Bench {
             let Some(plant) = &mut self.plant else {
                 return;
             };
-            let range = self.device.mission().config().robot.sonar_range_m;
+            let range = self.mission.config().robot.sonar_range_m;
             let range_m = plant.sonar_range_m(&self.world.obstacles, request.neck_angle_rad, range);
-            self.device.reading(request.neck_angle_rad, range_m);
+            self.device
+                .link(&mut self.mission)
+                .reading(request.neck_angle_rad, range_m);
         }
     }
 
     /// One control period; the telemetry it produced goes through the wire format.
     fn tick(&mut self) {
-        if let Some(config) = self.device.take_started() {
+        if let Some(config) = self.device.link(&mut self.mission).take_started() {
             self.pilot = Some(Pilot::new(&config));
             let plant = Plant::new(
                 &config.robot,
@@ -156,12 +162,12 @@ impl Bench {
             0.05,
         );
         self.previous_counts = counts;
-        self.device.tick(&report);
+        self.device.link(&mut self.mission).tick(&report);
         self.serve();
         let (left, right) = self.pilot.as_ref().unwrap().voltages_v();
         self.plant.as_mut().unwrap().step(0.05, left, right);
         let mut out = StdVec::new();
-        while let Some(t) = self.device.next_telemetry() {
+        while let Some(t) = self.device.link(&mut self.mission).next_telemetry() {
             TestDevice::send_telemetry(&t, &mut |b: &[u8]| out.extend_from_slice(b));
         }
         for frame in self.decode(&out) {
@@ -225,11 +231,11 @@ fn a_mission_over_the_link_runs_exactly_like_the_simulator_and_its_telemetry_reb
                 break;
             }
         }
-        let report = b.device.report();
+        let report = b.device.link(&mut b.mission).report();
         assert_eq!(report.status, MissionStatus::Reached, "{mode:?} {report:?}");
 
         // The same mission in the simulator's shell.
-        let config = *b.device.mission().config();
+        let config = *b.mission.config();
         let mut mission = Box::new(Mission300::new(config, GridGeometry::seed_default()).unwrap());
         let mut planner = Box::new(MissionPlanner300::new());
         let mut plant = Plant::new(
@@ -303,7 +309,7 @@ fn a_mission_over_the_link_runs_exactly_like_the_simulator_and_its_telemetry_reb
             sweeps == started || sweeps + 1 == started,
             "{mode:?}: {sweeps} of {started}"
         );
-        assert_eq!(&*map, b.device.mission().grid(), "{mode:?}");
+        assert_eq!(&*map, b.mission.grid(), "{mode:?}");
         let planned = b
             .telemetry
             .iter()
@@ -337,7 +343,10 @@ fn abort_and_emergency_stop_put_zero_volts_on_the_motors_at_the_next_tick() {
         b.tick();
         assert_eq!(b.pilot.as_ref().unwrap().voltages_v(), (0.0, 0.0));
         assert_eq!(b.device.state(), RunState::Ended);
-        assert_eq!(b.device.report().status, MissionStatus::Aborted);
+        assert_eq!(
+            b.device.link(&mut b.mission).report().status,
+            MissionStatus::Aborted
+        );
         // A new start is allowed after an abort, not after an emergency stop until cleared.
         let again = b.call(Request::StartMission);
         if stop_requested == Request::EmergencyStop {
@@ -426,14 +435,14 @@ fn requests_in_the_wrong_state_are_refused_and_change_nothing() {
     assert_eq!(b.call(Request::PauseMission), Reply::Ack);
     assert_eq!(b.device.take_pilot_command(), Some(PilotCommand::Hold));
     b.pilot.as_mut().unwrap().hold();
-    let t = b.device.mission().stats().time_s;
+    let t = b.mission.stats().time_s;
     for _ in 0..50 {
         b.tick();
     }
-    assert_eq!(b.device.mission().stats().time_s, t);
+    assert_eq!(b.mission.stats().time_s, t);
     assert_eq!(b.call(Request::ResumeMission), Reply::Ack);
     assert_eq!(
-        b.device.mission().phase(),
+        b.mission.phase(),
         crate::mission::MissionPhase::Sweep { full: false }
     );
     match b.call(Request::MissionStatus) {
@@ -445,6 +454,7 @@ fn requests_in_the_wrong_state_are_refused_and_change_nothing() {
 #[test]
 fn a_board_refuses_the_real_world() {
     let mut device = Box::new(TestDevice::new(DeviceInfo::default()));
+    let mut mission = Box::new(Mission300::IDLE);
     let mut planner = Box::new(MissionPlanner300::new());
     let mut wire = [0u8; MAX_FRAME_BYTES];
     let bytes = encode(
@@ -457,7 +467,7 @@ fn a_board_refuses_the_real_world() {
     .unwrap()
     .to_vec();
     let mut out = StdVec::new();
-    device.receive(
+    device.link(&mut mission).receive(
         &bytes,
         &mut *planner,
         &mut || 0,
