@@ -36,7 +36,6 @@ pub const MAX_ROBOT_RADIUS_M: f32 = 10.0;
 pub struct Handler<const GRID_WORDS: usize> {
     info: DeviceInfo,
     params: MapParams,
-    grid: Grid<GRID_WORDS>,
     obstacles: Obstacles,
     pending: Vec<PointM, MAX_PENDING_VERTICES>,
     path_points: u16,
@@ -64,35 +63,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
     pub const fn new(info: DeviceInfo) -> Self {
         #[allow(clippy::let_unit_value)]
         let () = Self::GRID_NOT_EMPTY;
-        let (grid, params) = match Grid::new_const(GridGeometry::seed_default()) {
-            Ok(grid) => (
-                grid,
-                MapParams {
-                    width_cells: crate::grid::DEFAULT_SIDE_CELLS,
-                    height_cells: crate::grid::DEFAULT_SIDE_CELLS,
-                    resolution_m: DEFAULT_RESOLUTION_M,
-                    robot_radius_m: 0.0,
-                },
-            ),
-            Err(_) => {
-                let one = match GridGeometry::new(1, 1, DEFAULT_RESOLUTION_M) {
-                    Ok(g) => g,
-                    Err(_) => panic!("a 1 x 1 geometry is valid"),
-                };
-                match Grid::new_const(one) {
-                    Ok(grid) => (
-                        grid,
-                        MapParams {
-                            width_cells: 1,
-                            height_cells: 1,
-                            resolution_m: DEFAULT_RESOLUTION_M,
-                            robot_radius_m: 0.0,
-                        },
-                    ),
-                    Err(_) => panic!("GRID_WORDS > 0 holds one cell"),
-                }
-            }
-        };
+        let params = Self::initial_params();
         let mut info = info;
         info.protocol_version = PROTOCOL_VERSION;
         info.grid_capacity_cells = Grid::<GRID_WORDS>::CAPACITY_CELLS as u32;
@@ -102,7 +73,6 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         Self {
             info,
             params,
-            grid,
             obstacles: Obstacles::new(),
             pending: Vec::new(),
             path_points: 0,
@@ -114,6 +84,37 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                 expanded: 0,
                 queue_peak: 0,
             },
+        }
+    }
+
+    /// The map a new handler starts with: the seed's 300 x 300 cells of 0.05 m when
+    /// `Grid<GRID_WORDS>` holds them, else one cell of 0.05 m (send `SetParams`).
+    pub const fn initial_params() -> MapParams {
+        let side =
+            if Grid::<GRID_WORDS>::CAPACITY_CELLS >= GridGeometry::seed_default().cell_count() {
+                crate::grid::DEFAULT_SIDE_CELLS
+            } else {
+                1
+            };
+        MapParams {
+            width_cells: side,
+            height_cells: side,
+            resolution_m: DEFAULT_RESOLUTION_M,
+            robot_radius_m: 0.0,
+        }
+    }
+
+    /// An empty map of [`Handler::initial_params`] (what a new handler's map must be).
+    pub const fn initial_grid() -> Grid<GRID_WORDS> {
+        let p = Self::initial_params();
+        let geometry =
+            match GridGeometry::new(p.width_cells as u32, p.height_cells as u32, p.resolution_m) {
+                Ok(g) => g,
+                Err(_) => panic!("the initial geometry is valid"),
+            };
+        match Grid::new_const(geometry) {
+            Ok(g) => g,
+            Err(_) => panic!("the grid holds the initial geometry"),
         }
     }
 
@@ -130,11 +131,6 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
     /// Set which program this is.
     pub fn set_build(&mut self, build: Build) {
         self.info.build = build;
-    }
-
-    /// The map.
-    pub fn grid(&self) -> &Grid<GRID_WORDS> {
-        &self.grid
     }
 
     /// The stored obstacles.
@@ -178,12 +174,13 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
     pub fn handle<const SCRATCH_WORDS: usize, const QUEUE: usize>(
         &mut self,
         request: &Request,
+        grid: &mut Grid<GRID_WORDS>,
         planner: &mut Planner<SCRATCH_WORDS, QUEUE>,
         clock: &mut impl FnMut() -> u64,
     ) -> Reply {
         self.requests = self.requests.saturating_add(1);
         self.info.planner_capacity_cells = Planner::<SCRATCH_WORDS, QUEUE>::CAPACITY_CELLS as u32;
-        match self.try_handle(request, planner, clock) {
+        match self.try_handle(request, grid, planner, clock) {
             Ok(reply) => reply,
             Err(error) => Reply::Error(error),
         }
@@ -192,6 +189,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
     fn try_handle<const SCRATCH_WORDS: usize, const QUEUE: usize>(
         &mut self,
         request: &Request,
+        grid: &mut Grid<GRID_WORDS>,
         planner: &mut Planner<SCRATCH_WORDS, QUEUE>,
         clock: &mut impl FnMut() -> u64,
     ) -> Result<Reply, ErrorReply> {
@@ -207,26 +205,25 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                 Ok(Reply::Hello(self.info))
             }
             Request::Ping { nonce } => Ok(Reply::Pong { nonce: *nonce }),
-            Request::SetParams(params) => self.set_params(*params).map(|()| Reply::Ack),
+            Request::SetParams(params) => self.set_params(*params, grid).map(|()| Reply::Ack),
             Request::ClearMap => {
                 self.obstacles.clear();
                 self.pending.clear();
                 self.path_points = 0;
-                self.grid.clear();
+                grid.clear();
                 Ok(Reply::Ack)
             }
             Request::ObstacleChunk {
                 first_vertex,
                 vertices,
                 last,
-            } => self.obstacle_chunk(*first_vertex, vertices, *last),
+            } => self.obstacle_chunk(*first_vertex, vertices, *last, grid),
             Request::WriteMap {
                 offset_words,
                 words,
             } => {
-                let used = words_for_cells(self.grid.geometry().cell_count());
-                self.grid
-                    .write_words(*offset_words as usize, words)
+                let used = words_for_cells(grid.geometry().cell_count());
+                grid.write_words(*offset_words as usize, words)
                     .map_err(|_| {
                         ErrorReply::new(
                             ErrorCode::OutOfRange,
@@ -239,7 +236,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             }
             Request::Plan { kind, start, goal } => {
                 let before = clock();
-                let result = planner.plan_at(*kind, &self.grid, *start, *goal);
+                let result = planner.plan_at(*kind, grid, *start, *goal);
                 let after = clock();
                 self.last_plan = LastPlan {
                     instructions: after.saturating_sub(before),
@@ -277,7 +274,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                     ))?
                     .iter()
                     .take(PATH_CHUNK_POINTS);
-                let geometry = self.grid.geometry();
+                let geometry = grid.geometry();
                 let mut points = Vec::new();
                 for c in chunk {
                     // at most PATH_CHUNK_POINTS: cannot fail
@@ -290,7 +287,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                 })
             }
             Request::ReadMap { offset_words } => {
-                let all = self.grid.words();
+                let all = grid.words();
                 let start = *offset_words as usize;
                 let chunk = all
                     .get(start..)
@@ -305,7 +302,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                 for w in chunk {
                     let _ = words.push(*w); // at most MAP_CHUNK_WORDS: cannot fail
                 }
-                let g = self.grid.geometry();
+                let g = grid.geometry();
                 Ok(Reply::MapChunk {
                     offset_words: *offset_words,
                     total_words: all.len() as u32,
@@ -314,7 +311,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                     words,
                 })
             }
-            Request::Status => Ok(Reply::Status(self.status())),
+            Request::Status => Ok(Reply::Status(self.status(grid))),
             // Missions and the real world are [`super::RobotDevice`]'s; a plain handler (the
             // planning service) does not run them.
             Request::SetMission(_)
@@ -330,14 +327,14 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         }
     }
 
-    /// The device state counters.
-    pub fn status(&self) -> DeviceStatus {
+    /// The device state counters (`grid`: the map).
+    pub fn status(&self, grid: &Grid<GRID_WORDS>) -> DeviceStatus {
         DeviceStatus {
             params: self.params,
             polygons: self.obstacles.len() as u16,
             vertices: self.obstacles.vertex_count() as u16,
             pending_vertices: self.pending.len() as u16,
-            occupied_cells: self.grid.count_occupied() as u32,
+            occupied_cells: grid.count_occupied() as u32,
             requests: self.requests,
             frame_errors: self.frame_errors,
             rx_dropped_bytes: self.rx_dropped_bytes,
@@ -347,7 +344,11 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         }
     }
 
-    fn set_params(&mut self, params: MapParams) -> Result<(), ErrorReply> {
+    fn set_params(
+        &mut self,
+        params: MapParams,
+        grid: &mut Grid<GRID_WORDS>,
+    ) -> Result<(), ErrorReply> {
         let r = params.robot_radius_m;
         if !(r.is_finite() && (0.0..=MAX_ROBOT_RADIUS_M).contains(&r)) {
             return Err(ErrorReply::new(ErrorCode::BadArgument, 3, 0));
@@ -365,7 +366,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                 params.height_cells as u32,
             ),
         })?;
-        self.grid.reset(geometry).map_err(|e| match e {
+        grid.reset(geometry).map_err(|e| match e {
             GridError::CapacityExceeded { cells, capacity } => {
                 ErrorReply::new(ErrorCode::GridCapacity, cells, capacity)
             }
@@ -377,18 +378,15 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         })?;
         self.params = params;
         self.path_points = 0;
-        self.mark_all();
+        self.mark_all(grid);
         Ok(())
     }
 
-    /// Mark every stored obstacle on the (cleared) map with the current radius.
-    fn mark_all(&mut self) {
-        let half = self
-            .grid
-            .geometry()
-            .expansion_cells(self.params.robot_radius_m);
+    /// Mark every stored obstacle on `grid` with the current radius.
+    pub fn mark_all(&self, grid: &mut Grid<GRID_WORDS>) {
+        let half = grid.geometry().expansion_cells(self.params.robot_radius_m);
         for polygon in self.obstacles.iter() {
-            mark_polygon(&mut self.grid, polygon, half);
+            mark_polygon(grid, polygon, half);
         }
     }
 
@@ -397,6 +395,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         first_vertex: u16,
         vertices: &[PointM],
         last: bool,
+        grid: &mut Grid<GRID_WORDS>,
     ) -> Result<Reply, ErrorReply> {
         if upload_chunk(
             &mut self.obstacles,
@@ -406,15 +405,12 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             last,
         )? {
             // The polygon closed: it is the last one stored.
-            let half = self
-                .grid
-                .geometry()
-                .expansion_cells(self.params.robot_radius_m);
+            let half = grid.geometry().expansion_cells(self.params.robot_radius_m);
             if let Some(polygon) = self
                 .obstacles
                 .polygon(self.obstacles.len().saturating_sub(1))
             {
-                mark_polygon(&mut self.grid, polygon, half);
+                mark_polygon(grid, polygon, half);
             }
             self.path_points = 0;
         }
@@ -528,6 +524,7 @@ pub struct Device<const GRID_WORDS: usize> {
     decoder: FrameDecoder,
     /// The handler (public so the firmware can set its build and RAM figures).
     pub handler: Handler<GRID_WORDS>,
+    grid: Grid<GRID_WORDS>,
 }
 
 impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
@@ -536,7 +533,18 @@ impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
         Self {
             decoder: FrameDecoder::new(),
             handler: Handler::new(info),
+            grid: Handler::<GRID_WORDS>::initial_grid(),
         }
+    }
+
+    /// The map.
+    pub fn grid(&self) -> &Grid<GRID_WORDS> {
+        &self.grid
+    }
+
+    /// The device state counters.
+    pub fn status(&self) -> DeviceStatus {
+        self.handler.status(&self.grid)
     }
 
     /// Feed received bytes; for every complete frame, call `send` once with the encoded reply
@@ -556,7 +564,8 @@ impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
                 None => continue,
                 Some(Ok(frame)) => (
                     Some(frame.seq),
-                    self.handler.handle(&frame.request, planner, clock),
+                    self.handler
+                        .handle(&frame.request, &mut self.grid, planner, clock),
                 ),
                 Some(Err(fault)) => self.handler.fault_reply(fault),
             };
@@ -738,7 +747,7 @@ mod tests {
         );
         let mut expected = Grid300::new(GridGeometry::seed_default()).unwrap();
         mark_polygon(&mut expected, &polygon, 8);
-        assert_eq!(d.handler.grid(), &expected);
+        assert_eq!(d.grid(), &expected);
 
         // The map read back in chunks equals the grid.
         let mut words = StdVec::new();
@@ -777,10 +786,10 @@ mod tests {
         assert_eq!(call(&mut d, 5, Request::SetParams(params)), Reply::Ack);
         let mut thin = Grid300::new(GridGeometry::seed_default()).unwrap();
         mark_polygon(&mut thin, &polygon, 2);
-        assert_eq!(d.handler.grid(), &thin);
+        assert_eq!(d.grid(), &thin);
 
         assert_eq!(call(&mut d, 6, Request::ClearMap), Reply::Ack);
-        assert_eq!(d.handler.grid().count_occupied(), 0);
+        assert_eq!(d.grid().count_occupied(), 0);
         assert!(d.handler.obstacles().is_empty());
     }
 
@@ -792,8 +801,8 @@ mod tests {
             1,
             chunk(0, &[PointM::new(1.0, 1.0), PointM::new(2.0, 1.0)], true),
         );
-        let before = d.handler.grid().clone();
-        let status_before = d.handler.status();
+        let before = d.grid().clone();
+        let status_before = d.status();
 
         // Out of order, not finite, too large a map, bad radius, read beyond the end.
         let r = call(&mut d, 2, chunk(5, &[PointM::new(1.0, 1.0)], true));
@@ -857,8 +866,8 @@ mod tests {
         let r = call(&mut d, 10, chunk(0, &[], true));
         assert_eq!(error_code(&r), Some(ErrorCode::EmptyPolygon));
 
-        assert_eq!(d.handler.grid(), &before);
-        let after = d.handler.status();
+        assert_eq!(d.grid(), &before);
+        let after = d.status();
         assert_eq!(
             (after.polygons, after.vertices, after.params),
             (
@@ -950,7 +959,7 @@ mod tests {
             .all(|(seq, code)| seq.is_none() && code.is_some()));
         assert_eq!(codes[3].1, Some(ErrorCode::FrameTooLong));
         assert_eq!(codes[4], (Some(40), None));
-        assert_eq!(d.handler.status().frame_errors, 4);
+        assert_eq!(d.status().frame_errors, 4);
     }
 
     #[test]
@@ -1038,7 +1047,7 @@ mod tests {
         );
         assert_eq!(error_code(&r), Some(ErrorCode::PlannerCapacity), "{r:?}");
         assert_eq!(d.handler.path_points(), 0);
-        assert_eq!(d.handler.status().last_plan_expanded, 0);
+        assert_eq!(d.status().last_plan_expanded, 0);
     }
 
     #[test]
@@ -1193,8 +1202,8 @@ mod tests {
                 let is_reply_to_seq =
                     matches!(frames[0], DeviceFrame::Reply { seq: Some(s), .. } if s == seq);
                 proptest::prop_assert!(is_reply_to_seq);
-                let g = *d.handler.grid().geometry();
-                proptest::prop_assert!(d.handler.grid().count_occupied() <= g.cell_count());
+                let g = *d.grid().geometry();
+                proptest::prop_assert!(d.grid().count_occupied() <= g.cell_count());
                 proptest::prop_assert!(d.handler.obstacles().len() <= MAX_POLYGONS);
             }
         }

@@ -170,12 +170,11 @@ struct PlannedNote {
 }
 
 /// The mission device: see the module documentation.
-pub struct RobotDevice<const GRID_WORDS: usize, const MISSION_WORDS: usize> {
-    _mission: core::marker::PhantomData<[u32; MISSION_WORDS]>,
+pub struct RobotDevice<const W: usize> {
     decoder: FrameDecoder,
     /// The planning service and the known map (public so the firmware can set its build and
     /// RAM figures).
-    pub handler: Handler<GRID_WORDS>,
+    pub handler: Handler<W>,
     setup: Option<MissionSetup>,
     state: RunState,
     emergency_stop: bool,
@@ -194,11 +193,10 @@ pub struct RobotDevice<const GRID_WORDS: usize, const MISSION_WORDS: usize> {
     pending: Pending,
 }
 
-impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS, MISSION_WORDS> {
+impl<const W: usize> RobotDevice<W> {
     /// A device with an empty known map and no mission (`const`: it lives in a `static`).
     pub const fn new(info: DeviceInfo) -> Self {
         Self {
-            _mission: core::marker::PhantomData,
             decoder: FrameDecoder::new(),
             handler: Handler::new(info),
             setup: None,
@@ -245,10 +243,7 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
 
     /// This device with `mission` (kept apart so the firmware can place it in its own memory
     /// region): what every call about the link or the mission goes through.
-    pub fn link<'a>(
-        &'a mut self,
-        mission: &'a mut Mission<MISSION_WORDS>,
-    ) -> RobotLink<'a, GRID_WORDS, MISSION_WORDS> {
+    pub fn link<'a>(&'a mut self, mission: &'a mut Mission<W>) -> RobotLink<'a, W> {
         RobotLink { d: self, mission }
     }
 
@@ -280,19 +275,19 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotDevice<GRID_WORDS
 
     /// Encode a telemetry message as a frame and pass the bytes to `send`.
     pub fn send_telemetry(telemetry: &Telemetry, send: &mut impl FnMut(&[u8])) {
-        Device::<GRID_WORDS>::send_encoded(&DeviceFrame::Telemetry(telemetry.clone()), send);
+        Device::<W>::send_encoded(&DeviceFrame::Telemetry(telemetry.clone()), send);
     }
 }
 
 /// A [`RobotDevice`] with its mission: see the module documentation.
-pub struct RobotLink<'a, const GRID_WORDS: usize, const MISSION_WORDS: usize> {
-    d: &'a mut RobotDevice<GRID_WORDS, MISSION_WORDS>,
-    mission: &'a mut Mission<MISSION_WORDS>,
+pub struct RobotLink<'a, const W: usize> {
+    d: &'a mut RobotDevice<W>,
+    mission: &'a mut Mission<W>,
 }
 
-impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotLink<'_, GRID_WORDS, MISSION_WORDS> {
+impl<const W: usize> RobotLink<'_, W> {
     /// The mission (its map, paths, stats).
-    pub fn mission(&self) -> &Mission<MISSION_WORDS> {
+    pub fn mission(&self) -> &Mission<W> {
         self.mission
     }
 
@@ -348,7 +343,7 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotLink<'_, GRID_WOR
                 }
                 Some(Err(fault)) => self.fault(fault),
             };
-            Device::<GRID_WORDS>::send_encoded(&DeviceFrame::Reply { seq, reply }, send);
+            Device::<W>::send_encoded(&DeviceFrame::Reply { seq, reply }, send);
         }
     }
 
@@ -391,7 +386,15 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotLink<'_, GRID_WOR
                         0,
                     ));
                 }
-                self.d.handler.handle(request, planner, clock)
+                match self.mission.service_map() {
+                    Some(grid) => self.d.handler.handle(request, grid, planner, clock),
+                    // Refused above while a mission runs; an ended one gives its map back.
+                    None => Reply::Error(ErrorReply::new(
+                        ErrorCode::WrongState,
+                        state_index(self.d.state),
+                        0,
+                    )),
+                }
             }
         }
     }
@@ -543,7 +546,7 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotLink<'_, GRID_WOR
                 _ => bad(100),
             });
         }
-        let geometry = *self.d.handler.grid().geometry();
+        let geometry = *self.mission.grid().geometry();
         if geometry.cell_of(setup.start).is_err() || geometry.cell_of(setup.goal).is_err() {
             return Err(ErrorReply {
                 code: ErrorCode::BadMission,
@@ -576,12 +579,15 @@ impl<const GRID_WORDS: usize, const MISSION_WORDS: usize> RobotLink<'_, GRID_WOR
         }
         // The map may have changed since SetMission: check again.
         let config = self.mission_config(&setup)?;
-        let geometry = *self.d.handler.grid().geometry();
+        let geometry = *self.mission.grid().geometry();
         self.mission.restart(config, geometry).map_err(|_| {
             ErrorReply::new(ErrorCode::GridCapacity, geometry.cell_count() as u32, 0)
         })?;
-        // What the robot knows: the uploaded obstacles, grown by the same radius.
-        let _ = self.mission.add_known_map(self.d.handler.grid());
+        // What the robot knows: the uploaded obstacles, grown by the same radius (the map of
+        // the previous mission, with what its sonar found, is forgotten).
+        for polygon in self.d.handler.obstacles().iter() {
+            self.mission.add_known_polygon(polygon);
+        }
         self.d.state = RunState::Running;
         self.d.started = true;
         self.d.ticks = 0;

@@ -755,6 +755,12 @@ impl<const W: usize> Mission<W> {
         self.pending_plan.is_some()
     }
 
+    /// The map, to change from outside while no mission runs (the link's planning service
+    /// keeps its known map here); `None` while one runs.
+    pub fn service_map(&mut self) -> Option<&mut Grid<W>> {
+        (self.status != MissionStatus::Running).then_some(&mut self.grid)
+    }
+
     /// Mark every occupied cell of `known` (a map of the same geometry, obstacles grown by the
     /// same radius: what the robot knows a priori). Errors, changing nothing, when the
     /// geometries differ.

@@ -14,7 +14,7 @@ use crate::plan::PlannerKind;
 use crate::plant::Plant;
 use crate::raster::mark_point_m;
 
-type TestDevice = RobotDevice<{ words_for_cells(300 * 300) }, { words_for_cells(300 * 300) }>;
+type TestDevice = RobotDevice<{ words_for_cells(300 * 300) }>;
 
 /// The host side and the simulated robot around a device, run in the order of
 /// [`LocalRunner`] (pilot, mission, commands, plans at once, then the sonar).
@@ -411,7 +411,7 @@ fn requests_in_the_wrong_state_are_refused_and_change_nothing() {
     );
     assert_eq!(b.call(Request::StartMission), Reply::Ack);
     // While it runs: no new setup, no map change, no planning service, no world upload.
-    let occupied = b.device.handler.grid().count_occupied();
+    let occupied = b.mission.grid().count_occupied();
     for request in [
         Request::SetMission(setup(&params, MissionMode::Stop)),
         Request::ClearMap,
@@ -426,7 +426,7 @@ fn requests_in_the_wrong_state_are_refused_and_change_nothing() {
     ] {
         assert_eq!(code(b.call(request)), Some(ErrorCode::WrongState));
     }
-    assert_eq!(b.device.handler.grid().count_occupied(), occupied);
+    assert_eq!(b.mission.grid().count_occupied(), occupied);
     assert_eq!(b.world.obstacles.len(), real.len());
     // Pause holds the robot and stops the mission's clock; resume sweeps afresh.
     for _ in 0..100 {
