@@ -169,6 +169,9 @@ pub struct Board {
     /// Top sonar (full sweeps in the seed).
     pub sonar_top: SonarTop,
     /// Bottom sonar (normal sweeps in the seed).
+    // The seed's second sonar: wired and built, not used by the mission yet (one sweeping
+    // sonar, as the simulator's).
+    #[allow(dead_code)]
     pub sonar_bottom: SonarBottom,
     /// The sonar neck (not homed yet).
     pub neck: Neck,
@@ -185,6 +188,7 @@ pub struct Board {
     /// Battery voltage.
     pub battery: BatteryMonitor,
     /// The PWM timer; kept so that it is never reconfigured behind the motors' back.
+    #[allow(dead_code)]
     pub pwm_timer: PwmHzManager<pac::TIM12>,
 }
 

@@ -1,39 +1,42 @@
-//! Twil firmware for the STM32F405: the link to the host on USART1 and the planner, on RTIC 2.
+//! Twil firmware for the STM32F405, on RTIC 2: the robot's brain. It sweeps the sonar, keeps the
+//! map, plans, drives the wheels with the 50 ms controller and repeats until the goal, by
+//! itself; the host sends the mission over USART1 and watches the telemetry. It also answers
+//! the planning service of protocol 1 (upload a map, plan, read back).
 //!
-//! All logic is in `twil-core`: this program owns a [`twil_core::link::Device`] (grid,
-//! obstacles, last path, framing) and a [`twil_core::plan::Planner`] in static memory and moves
-//! bytes between them and USART1.
-//!
-//! ## Memory
-//!
-//! - SRAM, top (`.data`, `.bss`, `.uninit`): the planner (4-bit scratch for 400 x 400 cells, a
-//!   [`QUEUE`]-entry open list, its path buffer), RTIC's state. Its size is what
-//!   `static_ram_bytes` reports and what the 112 KiB budget is about.
-//! - SRAM, bottom: the stack, below the statics (flip-link), so an overflow faults. Painted at
-//!   reset; its high-water mark is logged (see [`memory`]).
-//! - CCM (64 KiB at 0x1000_0000, `.ccmram`, see `build.rs`): the [`TwilDevice`] (the 400 x 400
-//!   grid, the obstacles, the last path, the frame decoder) and the receive queue. Their initial
-//!   values are stored in flash and copied by `init` before anything reads them.
+//! All logic is in `twil-core`: the pilot (`mission::Pilot`: odometry, supplier, controller),
+//! the mission and the link (`link::RobotDevice`), the planner. This program places them in
+//! memory and moves values between tasks, pins and the USART.
 //!
 //! ## Tasks (highest priority first)
 //!
-//! | task       | binds    | prio | does                                                        |
-//! |------------|----------|------|-------------------------------------------------------------|
-//! | `SysTick`  | SysTick  | -    | [`Mono`]'s tick (1 kHz, from `rtic-monotonics`): time, delays |
-//! | `usart1_rx`| USART1   | 2    | moves every received byte into the RX queue (never blocks)   |
-//! | `idle`     | -        | 0    | drains the queue into the `Device`, plans, writes replies    |
+//! | task | prio | period | does |
+//! |---|---|---|---|
+//! | `control` | 4 | 50 ms (`Mono::delay_until`) | encoders → `Pilot::tick` → motors; the stop flag (abort, e-stop) zeroes the motors; the report to `mission` |
+//! | `sonar` | 3 | per request | neck + trigger + echo (board) or a ray cast on the real world (QEMU); the reading to `mission` |
+//! | `usart1_rx` | 2 | per byte (USART1 interrupt) | bytes into the receive queue; an `AbortMission` / `EmergencyStop` frame sets the stop flag at once |
+//! | `mission` | 1 | event-driven | the link's requests and replies, the mission's steps, the planner, the pilot's commands, telemetry |
 //!
-//! The receive interrupt preempts everything that is slow (planning, writing replies), so no
-//! byte is lost at full rate: at 115200 baud a byte arrives every 87 µs and the interrupt needs
-//! well under 1 µs. The queue holds [`RX_QUEUE_BYTES`] - 1 bytes, several frames; bytes that do
-//! not fit are counted (`rx_dropped_bytes` in the `Status` reply), never silently lost.
+//! The control period never waits for the planner: the planner runs in `mission`, the lowest
+//! priority, and everything above preempts it. Values cross between tasks through `rtic-sync`
+//! channels (reports, sonar requests, readings) and two locked resources (the pilot, taken by
+//! `mission` only to hand it a command; the simulated body and world, QEMU build).
+//!
+//! ## Memory
+//!
+//! - SRAM (`.data`, `.bss`): the planner (framed scratch, open list, path cells), the device
+//!   (the planning service without a map of its own), the pilot, RTIC's state. Below it the
+//!   stack (flip-link), painted at reset; its high-water mark is reported.
+//! - CCM (64 KiB, `.ccmram`, see `build.rs`): the mission (its 300 x 300 map, which is also the
+//!   planning service's, the seen space, the paths), the receive queue and, under QEMU, the
+//!   real world. Copied from flash by `init` before anything reads it.
 //!
 //! ## Builds
 //!
-//! - default (`hardware`): PLL at 168 MHz from the HSI, defmt over RTT, `panic-probe`.
-//! - `--no-default-features --features qemu`: for QEMU's `netduinoplus2`; QEMU does not emulate
-//!   the RCC, so the clock stays on the HSI and nothing waits on a ready flag; defmt logs go
-//!   out over semihosting (decoded by `cargo xtask qemu`), panics as text over semihosting.
+//! - default (`hardware`): PLL at 168 MHz from the HSI, defmt over RTT, `panic-probe`, the
+//!   drivers of `board.rs` (Olimex STM32-H405).
+//! - `--no-default-features --features qemu`: QEMU's `netduinoplus2`; the clock stays on the
+//!   HSI (QEMU does not emulate the RCC); the simulated robot (`twil_core::plant`) stands in for
+//!   the drivers; defmt and panics over semihosting.
 #![no_std]
 #![no_main]
 
@@ -51,15 +54,14 @@ use panic_probe as _;
 #[cfg(feature = "qemu")]
 use panic_semihosting as _;
 
-// Wired into the app by the mission firmware; until then only its build is checked.
 #[cfg(feature = "hardware")]
-#[allow(dead_code)]
 mod board;
+mod body;
 
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use twil_core::link::{Build, PROTOCOL_VERSION};
-pub use twil_firmware::{memory, TwilDevice, RX_QUEUE_BYTES};
+pub use twil_firmware::{memory, TwilDevice, TwilMission, RX_QUEUE_BYTES};
 
 /// Log a line with defmt: over RTT on a board (probe-rs prints it), over semihosting under QEMU
 /// (`cargo xtask qemu` decodes it with the ELF's defmt table).
@@ -71,7 +73,7 @@ macro_rules! log {
 
 /// Planner open-list capacity, entries (`twil_core::link::mcu`, shared with the host).
 pub const QUEUE: usize = twil_core::link::mcu::PLANNER_QUEUE;
-/// The planner (scratch for 400 x 400 cells, [`QUEUE`] open-list entries).
+/// The planner (framed scratch for up to 362 x 362 cells, [`QUEUE`] open-list entries).
 pub type TwilPlanner = twil_core::link::mcu::McuPlanner;
 
 /// Rate of the monotonic [`Mono`], Hz: one SysTick interrupt per millisecond. At 168 MHz that
@@ -89,8 +91,6 @@ pub const SYSTICK_HZ: u32 = 168_000_000;
 /// SysTick counts per monotonic tick: SysTick's reload is this minus one.
 const SYSTICK_PER_MONO: u32 = SYSTICK_HZ / MONO_HZ;
 
-/// Bytes dropped by the receive interrupt (queue full or a line error).
-static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
 
 /// SysTick counts since [`Mono`] started: monotonic ticks × [`SYSTICK_PER_MONO`] + the count
 /// down of the current period. Differences of two readings are elapsed SysTick counts (the
@@ -126,11 +126,8 @@ defmt::timestamp!(
     systick_counts() / (SYSTICK_HZ / 1_000_000) as u64
 );
 
-/// Instructions (QEMU) or cycles (board) counted so far (see [`systick_counts`]).
-///
-/// QEMU's SysTick runs at 168 MHz of virtual time; with `-icount shift=0` one instruction takes
-/// 1 ns, so instructions = counts × 1000 / 168. On a board at 168 MHz, counts are core cycles.
-fn instructions() -> u64 {
+/// Virtual nanoseconds (QEMU) or cycles (board) counted so far (see [`systick_counts`]).
+fn raw_clock() -> u64 {
     let t = systick_counts();
     if cfg!(feature = "qemu") {
         t * 1000 / 168
@@ -139,20 +136,73 @@ fn instructions() -> u64 {
     }
 }
 
-#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
+/// Nanoseconds one instruction takes under QEMU (`-icount shift=N`: 2^N), measured at boot; 1
+/// on a board (the clock counts cycles there).
+static NS_PER_INSTRUCTION: AtomicU32 = AtomicU32::new(1);
+
+/// Instructions (QEMU) or cycles (board) counted so far (see [`systick_counts`]).
+///
+/// QEMU's SysTick runs at 168 MHz of virtual time; with `-icount shift=N` one instruction takes
+/// 2^N ns, so instructions = counts × 1000 / 168 / 2^N, N found at boot by timing a known
+/// number of instructions. On a board at 168 MHz, counts are core cycles.
+fn instructions() -> u64 {
+    raw_clock() / NS_PER_INSTRUCTION.load(Ordering::Relaxed).max(1) as u64
+}
+
+/// Bytes dropped by the receive interrupt (queue full or a line error).
+static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
+/// Set by the receive interrupt on `AbortMission` / `EmergencyStop` (and by the e-stop input):
+/// the control task zeroes the motors at its next tick, before the mission task answers.
+static STOP: AtomicBool = AtomicBool::new(false);
+/// A mission is running: the control task ticks the pilot (otherwise the motors stay at 0).
+static ACTIVE: AtomicBool = AtomicBool::new(false);
+/// Most instructions one control step took (the pilot's tick; not the simulated body's step).
+static MAX_CONTROL_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
+/// The mission's sonar range, metres (f32 bits), for the simulated sonar.
+static SONAR_RANGE_BITS: AtomicU32 = AtomicU32::new(0x3FC0_0000); // 1.5
+
+/// Reports queued from `control` to `mission` (8 periods, 400 ms).
+const REPORTS: usize = 8;
+/// Readings queued from `sonar` to `mission`.
+const READINGS: usize = 8;
+/// Sonar requests queued from `mission` to `sonar`.
+const SONAR_REQUESTS: usize = 2;
+
+/// The control period, milliseconds (`RobotConfig::controller_period_s`).
+const PERIOD_MS: u32 = 50;
+/// One simulated sonar reading takes the neck's step and the echo window (`neck_step_time_s`
+/// + `echo_wait_s`), milliseconds, as on the robot (the board's drivers wait them out).
+#[cfg(feature = "qemu")]
+const READING_MS: u32 = 36;
+
+#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [SPI1, SPI2, SPI3])]
 mod app {
     use super::*;
     use heapless::spsc::{Consumer, Producer};
+    use rtic_monotonics::rtic_time::monotonic::TimerQueueBasedInstant;
+    use rtic_monotonics::systick::prelude::*;
+    use rtic_sync::channel::{Receiver, Sender};
+    use rtic_sync::make_channel;
     use stm32f4xx_hal::{
         pac::USART1,
         prelude::*,
         rcc,
         serial::{Config, Rx, Serial, Tx},
     };
-    use twil_core::link::{DeviceFrame, Telemetry};
+    use twil_core::link::{
+        DeviceInfo, FrameDecoder, Request, RequestFrame, Telemetry, WorldAccess, WorldUpload,
+    };
+    use twil_core::mission::{Pilot, PilotReport, SonarRequest};
+
+    /// A sonar reading: the neck angle and the range (`None`: no echo).
+    pub type Reading = (f32, Option<f32>);
 
     #[shared]
-    struct Shared {}
+    struct Shared {
+        pilot: &'static mut Pilot,
+        body: body::Body,
+        world: body::World,
+    }
 
     #[local]
     struct Local {
@@ -162,10 +212,14 @@ mod app {
         consumer: Consumer<'static, u8>,
         device: &'static mut TwilDevice,
         planner: &'static mut TwilPlanner,
+        mission: &'static mut TwilMission,
+        head: body::Head,
     }
 
     #[init(local = [
         planner_memory: TwilPlanner = TwilPlanner::new(),
+        device_memory: TwilDevice = TwilDevice::new(DeviceInfo::for_build(Build::Hardware)),
+        pilot_memory: Pilot = Pilot::IDLE,
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         // QEMU: stay on the HSI (16 MHz), no PLL (its ready flag is never set under QEMU).
@@ -195,10 +249,10 @@ mod app {
         Mono::start(cx.core.SYST, SYSTICK_HZ);
 
         // SAFETY: the first thing that touches `.ccmram`: nothing has read or referenced a CCM
-        // static yet (the device and the queue are handed out just below).
+        // static yet (they are handed out just below).
         unsafe { memory::copy_ccm() };
-        let (device, rx_queue) =
-            twil_firmware::take_ccm_statics().expect("init takes the CCM statics once");
+        let ccm = twil_firmware::take_ccm_statics().expect("init takes the CCM statics once");
+        let device = cx.local.device_memory;
         device.handler.set_build(if cfg!(feature = "qemu") {
             Build::Qemu
         } else {
@@ -207,10 +261,10 @@ mod app {
         device
             .handler
             .set_static_ram_bytes(memory::static_ram_bytes());
-        device.send_frame(
-            &DeviceFrame::Telemetry(Telemetry::Boot {
+        TwilDevice::send_telemetry(
+            &Telemetry::Boot {
                 protocol_version: PROTOCOL_VERSION,
-            }),
+            },
             &mut |bytes: &[u8]| write_all(&mut tx, bytes),
         );
         log!(
@@ -218,9 +272,62 @@ mod app {
             memory::static_ram_bytes(),
             memory::stack_bytes()
         );
-        let (producer, consumer) = rx_queue.split();
+        let (producer, consumer) = ccm.rx_queue.split();
+
+        #[cfg(feature = "qemu")]
+        let (body, head, world) = (body::Body::new(), body::Head, ccm.world);
+        #[cfg(feature = "hardware")]
+        let (body, head, world) = {
+            let gpiob = cx.device.GPIOB.split(&mut rcc);
+            let gpioc = cx.device.GPIOC.split(&mut rcc);
+            let parts = board::BoardParts {
+                tim2: cx.device.TIM2,
+                tim3: cx.device.TIM3,
+                tim4: cx.device.TIM4,
+                tim5: cx.device.TIM5,
+                tim6: cx.device.TIM6,
+                tim7: cx.device.TIM7,
+                tim12: cx.device.TIM12,
+                tim13: cx.device.TIM13,
+                adc1: cx.device.ADC1,
+                pa1: gpioa.pa1,
+                pa5: gpioa.pa5,
+                pa6: gpioa.pa6,
+                pa7: gpioa.pa7,
+                pb0: gpiob.pb0,
+                pb1: gpiob.pb1,
+                pb6: gpiob.pb6,
+                pb7: gpiob.pb7,
+                pb12: gpiob.pb12,
+                pb13: gpiob.pb13,
+                pb14: gpiob.pb14,
+                pb15: gpiob.pb15,
+                pc0: gpioc.pc0,
+                pc8: gpioc.pc8,
+                pc9: gpioc.pc9,
+                pc10: gpioc.pc10,
+                pc11: gpioc.pc11,
+            };
+            let mut dcb = cx.core.DCB;
+            let mut dwt = cx.core.DWT;
+            let board = board::take(
+                parts,
+                &mut rcc,
+                &mut dcb,
+                &mut dwt,
+                &twil_core::robot::RobotConfig::DEFAULT,
+            );
+            let (body, head) = body::split(board);
+            (body, head, ())
+        };
+
+        mission::spawn().unwrap_or_else(|_| panic!("mission spawns once"));
         (
-            Shared {},
+            Shared {
+                pilot: cx.local.pilot_memory,
+                body,
+                world,
+            },
             Local {
                 rx,
                 tx,
@@ -228,18 +335,39 @@ mod app {
                 consumer,
                 device,
                 planner: cx.local.planner_memory,
+                mission: ccm.mission,
+                head,
             },
         )
     }
 
-    /// Every received byte goes into the queue; nothing here waits.
-    #[task(binds = USART1, priority = 2, local = [rx, producer])]
+    /// Nothing to do: sleep until the next interrupt (RTIC's default idle spins, which keeps
+    /// the core busy and QEMU's virtual clock at the pace of the emulation).
+    #[idle]
+    fn idle(_: idle::Context) -> ! {
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
+
+    /// Every received byte goes into the queue; a frame that asks to stop sets [`STOP`] at once
+    /// (the mission task, which may be planning, answers it later).
+    #[task(binds = USART1, priority = 2, local = [rx, producer, peek: FrameDecoder = FrameDecoder::new()])]
     fn usart1_rx(cx: usart1_rx::Context) {
         loop {
             match cx.local.rx.read() {
                 Ok(byte) => {
                     if cx.local.producer.enqueue(byte).is_err() {
                         RX_DROPPED.fetch_add(1, Ordering::Relaxed);
+                    }
+                    let (got, _) = cx.local.peek.feed::<RequestFrame>(&[byte]);
+                    if let Some(Ok(frame)) = got {
+                        if matches!(
+                            frame.request,
+                            Request::AbortMission | Request::EmergencyStop
+                        ) {
+                            STOP.store(true, Ordering::Release);
+                        }
                     }
                 }
                 Err(nb::Error::WouldBlock) => break,
@@ -251,24 +379,135 @@ mod app {
         }
     }
 
-    #[idle(local = [consumer, tx, device, planner])]
-    fn idle(cx: idle::Context) -> ! {
-        // Calibration of the instruction count: `asm::delay(n)` runs n + 1 times a two-instruction
-        // loop, so 500 000 gives 1 000 002 instructions (+ a few for the reads).
-        let before = instructions();
+    /// Every 50 ms: encoders → pilot → motors. Idle (motors at 0) while no mission runs.
+    #[task(priority = 4, shared = [pilot, body])]
+    async fn control(
+        mut cx: control::Context,
+        mut reports: Sender<'static, PilotReport, REPORTS>,
+    ) {
+        let period_s = PERIOD_MS as f32 / 1000.0;
+        let mut next = Mono::now();
+        let mut last = Mono::now();
+        loop {
+            next += ms(PERIOD_MS);
+            Mono::delay_until(next).await;
+            let now = Mono::now();
+            let elapsed_s = now.ticks().wrapping_sub(last.ticks()) as f32 / MONO_HZ as f32;
+            last = now;
+            if cx.shared.body.lock(|b| b.emergency_stop()) {
+                STOP.store(true, Ordering::Release);
+            }
+            if !ACTIVE.load(Ordering::Acquire) {
+                // No mission: the motors stay at 0 (a board's drivers are told so each period;
+                // the simulated robot stands still without being stepped).
+                #[cfg(feature = "hardware")]
+                cx.shared.body.lock(|b| b.drive(0.0, 0.0, period_s));
+                continue;
+            }
+            let (left, right) = cx.shared.body.lock(|b| b.encoder_deltas());
+            let before = instructions();
+            let report = cx.shared.pilot.lock(|pilot| {
+                if STOP.load(Ordering::Acquire) {
+                    pilot.stop();
+                }
+                pilot.tick(left, right, elapsed_s)
+            });
+            let spent = instructions().saturating_sub(before);
+            MAX_CONTROL_INSTRUCTIONS.fetch_max(spent.min(u32::MAX as u64) as u32, Ordering::Relaxed);
+            // The simulated body's own step is not the control step's cost.
+            cx.shared
+                .body
+                .lock(|b| b.drive(report.left_voltage_v, report.right_voltage_v, period_s));
+            // A full queue means the mission task is more than 400 ms behind: the report is
+            // dropped (the mission's clock then runs slow), the wheels are not affected.
+            let _ = reports.try_send(report);
+        }
+    }
+
+    /// One reading per request: it takes the neck's step and the echo window.
+    #[task(priority = 3, shared = [body, world], local = [head])]
+    async fn sonar(
+        mut cx: sonar::Context,
+        mut requests: Receiver<'static, SonarRequest, SONAR_REQUESTS>,
+        mut readings: Sender<'static, Reading, READINGS>,
+    ) {
+        while let Ok(request) = requests.recv().await {
+            let angle = request.neck_angle_rad;
+            #[cfg(feature = "qemu")]
+            let range_m = {
+                Mono::delay(ms(READING_MS)).await;
+                let mut plant = cx.shared.body.lock(|b| b.snapshot());
+                let range = f32::from_bits(SONAR_RANGE_BITS.load(Ordering::Relaxed));
+                cx.shared
+                    .world
+                    .lock(|w| body::sonar_range_m(&mut plant, w, angle, range))
+            };
+            #[cfg(feature = "hardware")]
+            let range_m = {
+                // The drivers wait out the neck's steps and the echo window themselves.
+                let _ = (&mut cx.shared.body, &mut cx.shared.world);
+                cx.local.head.read(angle)
+            };
+            if readings.send((angle, range_m)).await.is_err() {
+                return;
+            }
+        }
+    }
+
+    /// The world of a simulated build, reached through its lock.
+    struct LockedWorld<'a, M>(&'a mut M);
+
+    #[cfg(feature = "qemu")]
+    impl<M: rtic::Mutex<T = &'static mut WorldUpload>> WorldAccess for LockedWorld<'_, M> {
+        fn with_world(&mut self, f: &mut dyn FnMut(&mut WorldUpload)) {
+            self.0.lock(|w| f(w));
+        }
+    }
+
+    #[cfg(feature = "hardware")]
+    impl<M> WorldAccess for LockedWorld<'_, M> {
+        fn with_world(&mut self, _f: &mut dyn FnMut(&mut WorldUpload)) {
+            // A board has no real world to upload: the request is answered NotOnThisBuild.
+            let _ = &self.0;
+        }
+    }
+
+    /// The mission task: the link, the mission's steps and the planner, at the lowest priority.
+    #[task(priority = 1, shared = [pilot, body, world], local = [consumer, tx, device, planner, mission])]
+    async fn mission(mut cx: mission::Context) {
+        // Calibration of the instruction count: `asm::delay(n)` runs n + 1 times a
+        // two-instruction loop, so 500 000 gives 1 000 002 instructions (+ a few for the
+        // reads). Under QEMU the time it takes tells the icount shift: 1 ns per instruction at
+        // shift 0 (instruction counts), 8 ns at shift 3 (missions: the chip's pace or slower).
+        let before = raw_clock();
         cortex_m::asm::delay(500_000);
-        let after = instructions();
+        let measured = raw_clock() - before;
         log!(
             "calibration: 1000002 instructions measured as {}",
-            (after - before) as u32
+            measured as u32
         );
-        // The stack was painted at reset (cortex-m-rt's `paint-stack`); report its high-water
-        // mark now and whenever a request took it deeper.
+        if cfg!(feature = "qemu") {
+            let ns = (measured + 500_000) / 1_000_002;
+            NS_PER_INSTRUCTION.store(ns.clamp(1, 1024) as u32, Ordering::Relaxed);
+            log!("QEMU pace: {} ns per instruction", ns as u32);
+        }
         let mut high_water = memory::stack_high_water_bytes();
         log_stack(high_water);
 
+        let (reports_tx, mut reports) = make_channel!(PilotReport, REPORTS);
+        let (readings_tx, mut readings) = make_channel!(Reading, READINGS);
+        let (mut sonar_tx, sonar_rx) = make_channel!(SonarRequest, SONAR_REQUESTS);
+        control::spawn(reports_tx).unwrap_or_else(|_| panic!("control spawns once"));
+        sonar::spawn(sonar_rx, readings_tx).unwrap_or_else(|_| panic!("sonar spawns once"));
+
+        let device = &mut **cx.local.device;
+        let mission = &mut **cx.local.mission;
+        let planner = &mut **cx.local.planner;
+        let tx = &mut *cx.local.tx;
         let mut chunk = [0u8; 64];
         loop {
+            let mut busy = false;
+            // The link: requests in, replies out.
             let mut n = 0;
             while n < chunk.len() {
                 match cx.local.consumer.dequeue() {
@@ -279,33 +518,86 @@ mod app {
                     None => break,
                 }
             }
-            if n == 0 {
-                // Sleep until the next interrupt. Interrupts are masked while checking so a
-                // byte that arrives between the check and WFI still wakes the core.
-                cortex_m::interrupt::free(|_| {
-                    if !cx.local.consumer.ready() {
-                        cortex_m::asm::wfi();
-                    }
-                });
-                continue;
+            if n > 0 {
+                busy = true;
+                let dropped = RX_DROPPED.swap(0, Ordering::Relaxed);
+                if dropped > 0 {
+                    device.handler.note_rx_dropped(dropped);
+                }
+                let mut world = LockedWorld(&mut cx.shared.world);
+                device.link(mission).receive(
+                    &chunk[..n],
+                    planner,
+                    &mut instructions,
+                    &mut world,
+                    &mut |bytes: &[u8]| write_all(tx, bytes),
+                );
             }
-            let dropped = RX_DROPPED.swap(0, Ordering::Relaxed);
-            if dropped > 0 {
-                cx.local.device.handler.note_rx_dropped(dropped);
+            // A mission that starts: the pilot and the body at its start.
+            if let Some(config) = device.link(mission).take_started() {
+                SONAR_RANGE_BITS.store(config.robot.sonar_range_m.to_bits(), Ordering::Relaxed);
+                MAX_CONTROL_INSTRUCTIONS.store(0, Ordering::Relaxed);
+                cx.shared.body.lock(|b| b.restart(&config));
+                cx.shared.pilot.lock(|p| p.restart(&config));
+                STOP.store(false, Ordering::Release);
+                ACTIVE.store(true, Ordering::Release);
             }
-            let tx = &mut *cx.local.tx;
-            cx.local.device.receive(
-                &chunk[..n],
-                &mut **cx.local.planner,
-                &mut instructions,
-                &mut |bytes: &[u8]| write_all(tx, bytes),
+            device.note_timing(
+                MAX_CONTROL_INSTRUCTIONS.load(Ordering::Relaxed) as u64,
+                high_water,
             );
+            // What the other tasks sent.
+            while let Ok(report) = reports.try_recv() {
+                busy = true;
+                device.link(mission).tick(&report);
+            }
+            while let Ok((angle, range_m)) = readings.try_recv() {
+                busy = true;
+                device.link(mission).reading(angle, range_m);
+            }
+            // What the mission asks.
+            if let Some(command) = device.take_pilot_command() {
+                let prefix = mission.prefix();
+                cx.shared.pilot.lock(|p| {
+                    let _ = p.command(command, prefix);
+                });
+            }
+            if let Some(request) = device.take_sonar_request() {
+                // At most one is out at a time (the mission waits for its answer).
+                let _ = sonar_tx.try_send(request);
+            }
+            if device.plan_pending() {
+                device.link(mission).run_planner(planner, &mut instructions);
+                busy = true;
+            }
+            if device.state() != twil_core::link::RunState::Running {
+                ACTIVE.store(
+                    device.state() == twil_core::link::RunState::Paused,
+                    Ordering::Release,
+                );
+            }
+            // Telemetry, a few messages per round so that readings and reports are not held up.
+            for _ in 0..4 {
+                let Some(t) = device.link(mission).next_telemetry() else {
+                    break;
+                };
+                busy = true;
+                TwilDevice::send_telemetry(&t, &mut |bytes: &[u8]| write_all(tx, bytes));
+            }
             let now = memory::stack_high_water_bytes();
             if now > high_water {
                 high_water = now;
                 log_stack(high_water);
             }
+            if !busy {
+                Mono::delay(ms(1)).await;
+            }
         }
+    }
+
+    /// `n` milliseconds of [`Mono`] (one tick per millisecond).
+    fn ms(n: u32) -> fugit::Duration<u32, 1, { MONO_HZ as u64 }> {
+        fugit::Duration::<u32, 1, { MONO_HZ as u64 }>::from_ticks(n)
     }
 
     /// Log the stack's high-water mark and what is left below it.

@@ -71,11 +71,12 @@ mod tests {
             "{=usize:#x} not in the CCM section",
             addr
         );
-        // The firmware's own CCM statics: the device and the receive queue.
-        let (device, queue) = twil_firmware::take_ccm_statics().unwrap();
-        let device = device as *const _ as usize;
-        let queue = queue as *const _ as usize;
-        assert!(ccm.contains(&device) && ccm.contains(&queue));
+        // The firmware's own CCM statics: the mission, the receive queue, the real world.
+        let statics = twil_firmware::take_ccm_statics().unwrap();
+        let mission = statics.mission as *const _ as usize;
+        let queue = statics.rx_queue as *const _ as usize;
+        let world = statics.world as *const _ as usize;
+        assert!(ccm.contains(&mission) && ccm.contains(&queue) && ccm.contains(&world));
         assert!(twil_firmware::take_ccm_statics().is_none());
     }
 

@@ -11,8 +11,17 @@ use std::path::Path;
 pub const QEMU_ELF_NAME: &str = "twil-firmware-qemu";
 
 /// The `qemu-system-arm` arguments that run `elf` with USART1 on `serial` (a QEMU chardev
-/// spec, e.g. `tcp:127.0.0.1:4444,server=on,wait=on,nodelay=on`).
+/// spec, e.g. `tcp:127.0.0.1:4444,server=on,wait=on,nodelay=on`), one instruction per
+/// nanosecond (`-icount shift=0`: SysTick counts instructions).
 pub fn qemu_args(elf: &Path, serial: &str) -> Vec<String> {
+    qemu_args_paced(elf, serial, 0)
+}
+
+/// [`qemu_args`] at `-icount shift=SHIFT`: one instruction per 2^SHIFT ns of virtual time.
+/// Missions run at shift 3 (8 ns, 125 M instructions per second: no faster than the 168 MHz
+/// chip), so a deadline met under QEMU is met on the board.
+pub fn qemu_args_paced(elf: &Path, serial: &str, shift: u8) -> Vec<String> {
+    let icount = format!("shift={shift},sleep=off");
     [
         "-machine",
         "netduinoplus2",
@@ -25,7 +34,7 @@ pub fn qemu_args(elf: &Path, serial: &str) -> Vec<String> {
         "-semihosting-config",
         "enable=on,target=native",
         "-icount",
-        "shift=0,sleep=off",
+        &icount,
         "-kernel",
     ]
     .iter()

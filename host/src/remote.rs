@@ -95,9 +95,14 @@ impl Remote {
 
     /// Open the link without any exchange.
     pub fn open(spec: &RemoteSpec) -> Result<Self> {
+        Self::open_paced(spec, QEMU_ICOUNT_SHIFT.load(std::sync::atomic::Ordering::Relaxed))
+    }
+
+    /// [`Remote::open`]; a QEMU it starts runs at `-icount shift=SHIFT`.
+    pub fn open_paced(spec: &RemoteSpec, shift: u8) -> Result<Self> {
         let (io, qemu): (Box<dyn Io>, Option<Qemu>) = match spec {
             RemoteSpec::Qemu => {
-                let (qemu, stream) = Qemu::start(&Qemu::elf_path()?)?;
+                let (qemu, stream) = Qemu::start_paced(&Qemu::elf_path()?, shift)?;
                 stream.set_read_timeout(Some(Duration::from_millis(200)))?;
                 stream.set_nodelay(true)?;
                 (Box::new(stream), Some(qemu))
@@ -398,6 +403,16 @@ impl Remote {
     }
 }
 
+/// The `-icount shift` of the QEMU that `--remote qemu` starts: 0 (instruction counts) unless
+/// set with [`set_qemu_icount_shift`].
+static QEMU_ICOUNT_SHIFT: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
+
+/// Start QEMU at `-icount shift=SHIFT` from now on: 3 for missions (8 ns per instruction, no
+/// faster than the chip), 0 (the default) to count instructions.
+pub fn set_qemu_icount_shift(shift: u8) {
+    QEMU_ICOUNT_SHIFT.store(shift.min(10), std::sync::atomic::Ordering::Relaxed);
+}
+
 fn connect_tcp(addr: &str, patience: Duration) -> Result<TcpStream> {
     let deadline = Instant::now() + patience;
     loop {
@@ -469,6 +484,14 @@ impl Qemu {
     /// Start QEMU on `elf` and return it with the stream to its USART1. QEMU connects to a port
     /// this process listens on (port 0: the OS picks a free one, so parallel runs never clash).
     pub fn start(elf: &Path) -> Result<(Qemu, TcpStream)> {
+        Self::start_paced(
+            elf,
+            QEMU_ICOUNT_SHIFT.load(std::sync::atomic::Ordering::Relaxed),
+        )
+    }
+
+    /// [`Qemu::start`] at `-icount shift=SHIFT` (see [`set_qemu_icount_shift`]).
+    pub fn start_paced(elf: &Path, shift: u8) -> Result<(Qemu, TcpStream)> {
         let listener =
             TcpListener::bind("127.0.0.1:0").context("cannot listen on a local TCP port")?;
         let port = listener.local_addr()?.port();
@@ -480,9 +503,10 @@ impl Qemu {
             None => Stdio::null(),
         };
         let child = Command::new("qemu-system-arm")
-            .args(crate::qemu_cmd::qemu_args(
+            .args(crate::qemu_cmd::qemu_args_paced(
                 elf,
                 &format!("tcp:127.0.0.1:{port},nodelay=on"),
+                shift,
             ))
             .stdin(Stdio::null())
             .stdout(log)

@@ -197,6 +197,18 @@ pub struct WheelPid {
 }
 
 impl WheelPid {
+    /// [`WheelPid::new`], in `const` contexts.
+    pub const fn idle(config: &RobotConfig) -> Self {
+        Self {
+            kp: config.pid_kp_v_per_rad_s,
+            ki: config.pid_ki_v_per_rad,
+            kd: config.pid_kd_v_s2_per_rad,
+            limit_v: config.max_voltage_v,
+            integral_rad: 0.0,
+            previous_error_rad_s: None,
+        }
+    }
+
     /// A PID with the gains and saturation of `config`.
     pub fn new(config: &RobotConfig) -> Self {
         Self {
@@ -328,6 +340,46 @@ pub struct Controller {
 }
 
 impl Controller {
+    /// A controller at the origin, heading +x, holding there (`const`: the firmware keeps its
+    /// pilot in a `static`).
+    pub const fn at_origin(config: &RobotConfig) -> Self {
+        let pose = Pose {
+            x_m: 0.0,
+            y_m: 0.0,
+            heading_rad: 0.0,
+        };
+        let point = PointM {
+            x_m: config.point_offset_m,
+            y_m: 0.0,
+        };
+
+        Self {
+            config: *config,
+            odometry: Odometry {
+                pose,
+                metres_per_count: config.rad_per_count() * config.wheel_radius_m,
+                half_axle_m: config.half_axle_m,
+            },
+            model: point,
+            held: None,
+            left_pid: WheelPid::idle(config),
+            right_pid: WheelPid::idle(config),
+            last: ControlOutput {
+                left_voltage_v: 0.0,
+                right_voltage_v: 0.0,
+                pose,
+                control_point: point,
+                reference_model: point,
+                left_speed_ref_rad_s: 0.0,
+                right_speed_ref_rad_s: 0.0,
+                left_speed_rad_s: 0.0,
+                right_speed_rad_s: 0.0,
+                overrun: false,
+                saturated: false,
+            },
+        }
+    }
+
     /// A controller whose odometry starts at `initial_pose` and whose reference model starts
     /// at that pose's control point (so a first reference equal to it means "stay").
     pub fn new(config: &RobotConfig, initial_pose: Pose) -> Self {

@@ -61,14 +61,18 @@ pub use frame::{FrameDecoder, FrameFault, MAX_FRAME_BYTES};
 /// which A* pops equal keys, hence its expanded count, depends on the open-list capacity).
 pub mod mcu {
     use crate::grid::words_for_cells;
-    use crate::plan::{scratch_words_for_cells, Planner};
+    use crate::plan::{Planner, FRAMED_SCRATCH_WORDS};
 
-    /// Grid capacity, cells: 400 x 400 (the seed's map is 300 x 300).
-    pub const GRID_CELLS: usize = 400 * 400;
+    /// Grid capacity, cells: the seed's 300 x 300 map. One map serves the planning service and
+    /// the mission (the mission's, lent to the service while no mission runs), so that the
+    /// mission fits the chip: see `docs/firmware.md`, "Memory map".
+    pub const GRID_CELLS: usize = 300 * 300;
     /// Grid capacity, 32-bit words.
     pub const GRID_WORDS: usize = words_for_cells(GRID_CELLS);
-    /// Planner scratch, 32-bit words (4 bits per cell).
-    pub const PLANNER_SCRATCH_WORDS: usize = scratch_words_for_cells(GRID_CELLS);
+    /// Planner scratch, 32-bit words: the least the cell-by-cell A*'s framed layout needs
+    /// (2^14 + 1 words, 4 bits per cell for up to 131 080 cells); without it A* on cluttered
+    /// 300 x 300 maps would go over the 5 M-instruction budget.
+    pub const PLANNER_SCRATCH_WORDS: usize = FRAMED_SCRATCH_WORDS;
     /// Planner open-list capacity, entries (12 bytes each). A* needs at most 782 on the 300 x
     /// 300 benchmark grids (20 % random obstacles; 43 on the bundled worlds) and reclaims stale
     /// entries when the list fills; BFS needs none (its scalar restart in corridors, a few
@@ -76,8 +80,12 @@ pub mod mcu {
     pub const PLANNER_QUEUE: usize = 1024;
     /// The firmware's planner.
     pub type McuPlanner = Planner<PLANNER_SCRATCH_WORDS, PLANNER_QUEUE>;
-    /// The firmware's device.
+    /// The planning service alone, with a map of its own (host tests of the protocol).
     pub type McuDevice = super::Device<GRID_WORDS>;
+    /// The firmware's device: the planning service and the mission requests.
+    pub type McuRobotDevice = super::RobotDevice<GRID_WORDS>;
+    /// The firmware's mission (its map is the device's map).
+    pub type McuMission = crate::mission::Mission<GRID_WORDS>;
 }
 pub use handler::{Device, Handler};
 pub use message::*;

@@ -430,8 +430,13 @@ impl RobotConfig {
     }
 
     /// Wheel angle per encoder count, radians.
-    pub fn rad_per_count(&self) -> f32 {
-        2.0 * core::f32::consts::PI / self.encoder_pulses_per_rev.max(1) as f32
+    pub const fn rad_per_count(&self) -> f32 {
+        let pulses = if self.encoder_pulses_per_rev > 1 {
+            self.encoder_pulses_per_rev
+        } else {
+            1
+        };
+        2.0 * core::f32::consts::PI / pulses as f32
     }
 }
 

@@ -22,8 +22,10 @@ const USAGE: &str = "usage: cargo xtask <command>
 
 /// Target of the firmware.
 const THUMB: &str = "thumbv7em-none-eabihf";
-/// Static RAM budget of the firmware (SRAM1: the 112 KiB that are not SRAM2), bytes.
-const STATIC_RAM_BUDGET: u64 = 112 * 1024;
+/// Static RAM budget of the firmware, bytes: 120 KiB of the 128 KiB SRAM, so that the stack
+/// (below the statics, flip-link) has at least 8 KiB; its measured high-water mark is logged
+/// and must leave 4 KiB of it.
+const STATIC_RAM_BUDGET: u64 = 120 * 1024;
 /// SRAM of the STM32F405 (`memory.x`).
 const RAM: std::ops::Range<u64> = 0x2000_0000..0x2002_0000;
 /// CCM of the STM32F405 (`memory.x`), and where the QEMU build puts it (see firmware/build.rs).

@@ -76,6 +76,33 @@ pub struct Pilot {
 }
 
 impl Pilot {
+    /// A pilot for no mission yet (the default robot at the origin, holding): what a
+    /// `static` holds until [`Pilot::restart`] sets it up in place.
+    pub const IDLE: Self = Self {
+        robot: RobotConfig::DEFAULT,
+        supplier_config: SupplierConfig {
+            speed_m_s: 0.2,
+            turn_rate_rad_s: 0.8,
+            turn_in_place_above_rad: core::f32::consts::FRAC_PI_6,
+            settle_time_s: 4.0,
+        },
+        supplier: TrajectorySupplier::new(),
+        controller: Controller::at_origin(&RobotConfig::DEFAULT),
+        frame: FrameTransform::identity(),
+        reference: PointM {
+            x_m: RobotConfig::DEFAULT.point_offset_m,
+            y_m: 0.0,
+        },
+        pose_odom: Pose {
+            x_m: 0.0,
+            y_m: 0.0,
+            heading_rad: 0.0,
+        },
+        voltages_v: (0.0, 0.0),
+        supplying: false,
+        stopped: false,
+    };
+
     /// A pilot at the mission's start pose, holding.
     pub fn new(config: &MissionConfig) -> Self {
         Self {
@@ -90,6 +117,21 @@ impl Pilot {
             supplying: false,
             stopped: false,
         }
+    }
+
+    /// Set the pilot up afresh for the mission of `config`, in place (its trajectory buffer is
+    /// 8 KiB: no temporary of that size on the stack), holding at the start pose.
+    pub fn restart(&mut self, config: &MissionConfig) {
+        self.robot = config.robot;
+        self.supplier_config = config.supplier_config();
+        self.supplier.stop();
+        self.controller = Controller::new(&config.robot, Pose::default());
+        self.frame = FrameTransform::new(config.start, config.initial_heading_rad);
+        self.reference = PointM::new(config.robot.point_offset_m, 0.0);
+        self.pose_odom = Pose::default();
+        self.voltages_v = (0.0, 0.0);
+        self.supplying = false;
+        self.stopped = false;
     }
 
     /// One control period: the encoder counts since the previous tick and the real time

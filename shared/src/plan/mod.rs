@@ -875,6 +875,10 @@ impl CellMap for Flat<'_> {
 /// index, plus one so that the second word of a window needs no bounds test either.
 const FRAMED_WORDS: usize = (1 << 14) + 1;
 
+/// The least scratch (32-bit words) with which the cell-by-cell A* uses its framed layout
+/// (grids up to about 360 × 360 cells; see the module docs): the MCU's planner size.
+pub const FRAMED_SCRATCH_WORDS: usize = FRAMED_WORDS;
+
 /// The framed layout: rows padded to whole words with at least one [`BLOCKED`] nibble (the
 /// row stride is `width + 1` rounded up to 8 nibbles), cell `(x, y)` at nibble `(y + 1) ·
 /// stride + x + 1`, and a row of blocked nibbles below and above the map. So every cell, on
