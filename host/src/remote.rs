@@ -1,5 +1,5 @@
 //! The host end of the link: open a device (`--remote qemu`, `--remote tcp:HOST:PORT`,
-//! `--remote /dev/ttyUSB0`), send requests, collect replies.
+//! `--remote /dev/ttyUSB0`, or the in-process `--remote sim`), send requests, collect replies.
 //!
 //! The wire format and the messages are `twil_core::link`'s; this module only moves bytes.
 //! [`Remote::request`] sends one request and waits for the reply with the same sequence number,
@@ -33,6 +33,9 @@ pub enum RemoteSpec {
     Tcp(String),
     /// A serial port at 115200 8N1 (any other text: `/dev/ttyUSB0`, `COM3`).
     Serial(String),
+    /// The mission device in this process, with a simulated robot (`--remote sim`, see
+    /// [`crate::device_sim`]).
+    Sim,
 }
 
 impl FromStr for RemoteSpec {
@@ -41,13 +44,15 @@ impl FromStr for RemoteSpec {
     fn from_str(s: &str) -> Result<Self> {
         if s == "qemu" {
             Ok(RemoteSpec::Qemu)
+        } else if s == "sim" {
+            Ok(RemoteSpec::Sim)
         } else if let Some(addr) = s.strip_prefix("tcp:") {
             if !addr.contains(':') {
                 bail!("`--remote {s}`: expected tcp:HOST:PORT");
             }
             Ok(RemoteSpec::Tcp(addr.to_string()))
         } else if s.is_empty() {
-            bail!("`--remote` needs `qemu`, `tcp:HOST:PORT` or a serial port path")
+            bail!("`--remote` needs `qemu`, `sim`, `tcp:HOST:PORT` or a serial port path")
         } else {
             Ok(RemoteSpec::Serial(s.to_string()))
         }
@@ -118,6 +123,7 @@ impl Remote {
                     .with_context(|| format!("cannot open serial port {path}"))?;
                 (Box::new(port), None)
             }
+            RemoteSpec::Sim => (Box::new(crate::device_sim::SimLink::spawn()?), None),
         };
         let started_qemu = qemu.is_some();
         let mut remote = Self::with_io(io, qemu);
@@ -631,6 +637,7 @@ mod tests {
     #[test]
     fn remote_specs_parse() {
         assert_eq!("qemu".parse::<RemoteSpec>().unwrap(), RemoteSpec::Qemu);
+        assert_eq!("sim".parse::<RemoteSpec>().unwrap(), RemoteSpec::Sim);
         assert_eq!(
             "tcp:127.0.0.1:4000".parse::<RemoteSpec>().unwrap(),
             RemoteSpec::Tcp("127.0.0.1:4000".into())
