@@ -333,14 +333,36 @@ impl Remote {
 
     /// Upload one polygon in chunks of [`OBSTACLE_CHUNK_VERTICES`].
     pub fn upload_polygon(&mut self, polygon: &[PointM]) -> Result<()> {
+        self.upload_chunks(polygon, false)
+    }
+
+    /// Upload one polygon of the real world of a simulated device (`WorldChunk`), in chunks of
+    /// [`OBSTACLE_CHUNK_VERTICES`].
+    pub fn upload_world_polygon(&mut self, polygon: &[PointM]) -> Result<()> {
+        self.upload_chunks(polygon, true)
+    }
+
+    fn upload_chunks(&mut self, polygon: &[PointM], real_world: bool) -> Result<()> {
         let chunks = polygon.chunks(OBSTACLE_CHUNK_VERTICES);
         let n = chunks.len();
         for (i, chunk) in chunks.enumerate() {
-            let request = Request::ObstacleChunk {
-                first_vertex: (i * OBSTACLE_CHUNK_VERTICES) as u16,
-                vertices: heapless::Vec::from_slice(chunk)
-                    .map_err(|_| anyhow!("chunk larger than its capacity"))?,
-                last: i + 1 == n,
+            let first_vertex = u16::try_from(i * OBSTACLE_CHUNK_VERTICES)
+                .map_err(|_| anyhow!("a polygon of {} vertices is too long", polygon.len()))?;
+            let vertices = heapless::Vec::from_slice(chunk)
+                .map_err(|_| anyhow!("chunk larger than its capacity"))?;
+            let last = i + 1 == n;
+            let request = if real_world {
+                Request::WorldChunk {
+                    first_vertex,
+                    vertices,
+                    last,
+                }
+            } else {
+                Request::ObstacleChunk {
+                    first_vertex,
+                    vertices,
+                    last,
+                }
             };
             self.call(request)?;
         }
