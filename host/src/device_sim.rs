@@ -3,7 +3,8 @@
 //! [`WorldUpload`]), wired exactly as the `Bench` of `twil_core::link::robot`'s tests, runs on
 //! its own thread; [`SimLink`] is the byte stream between it and [`crate::remote::Remote`].
 //!
-//! The device runs as fast as it can in simulated time (50 ms per tick): it answers requests
+//! The device runs as fast as it can in simulated time (50 ms per tick; `sim:N` paces it at N
+//! times real time, to watch the live display or try Ctrl-C): it answers requests
 //! between ticks and sends the telemetry it pulls with [`RobotDevice::next_telemetry`]. The
 //! pipe towards the host is bounded ([`PIPE_CHUNKS`] writes), so a fast device waits for a slow
 //! reader rather than filling memory. It reports [`Build::Host`]. The thread ends when the host
@@ -45,14 +46,15 @@ pub struct SimLink {
 }
 
 impl SimLink {
-    /// Start the device on its own thread.
-    pub fn spawn() -> Result<Self> {
+    /// Start the device on its own thread: as fast as it can (`pace` 0) or `pace` times real
+    /// time.
+    pub fn spawn(pace: u32) -> Result<Self> {
         let (to_device, requests) = mpsc::channel::<Vec<u8>>();
         let (telemetry, from_device) = mpsc::sync_channel::<Vec<u8>>(PIPE_CHUNKS);
         let thread = std::thread::Builder::new()
             .name("twil-device-sim".into())
             .stack_size(STACK_BYTES)
-            .spawn(move || Shell::new().run(&requests, &telemetry))
+            .spawn(move || Shell::new(pace).run(&requests, &telemetry))
             .map_err(|e| anyhow!("cannot start the simulated device: {e}"))?;
         Ok(Self {
             to_device: Some(to_device),
@@ -117,10 +119,12 @@ struct Shell {
     pilot: Option<Pilot>,
     plant: Option<Plant>,
     previous_counts: (i32, i32),
+    /// Real time per tick (zero: as fast as it can).
+    tick_time: Duration,
 }
 
 impl Shell {
-    fn new() -> Self {
+    fn new(pace: u32) -> Self {
         Self {
             device: Box::new(SimDevice::new(DeviceInfo::for_build(Build::Host))),
             planner: Box::new(MissionPlanner300::new()),
@@ -128,6 +132,11 @@ impl Shell {
             pilot: None,
             plant: None,
             previous_counts: (0, 0),
+            tick_time: if pace == 0 {
+                Duration::ZERO
+            } else {
+                Duration::from_secs_f32(PERIOD_S / pace as f32)
+            },
         }
     }
 
@@ -167,6 +176,9 @@ impl Shell {
             }
             if matches!(self.device.state(), RunState::Running | RunState::Paused) {
                 self.tick();
+                if !self.tick_time.is_zero() {
+                    std::thread::sleep(self.tick_time);
+                }
             }
             while let Some(t) = self.device.next_telemetry() {
                 SimDevice::send_telemetry(&t, &mut |b: &[u8]| wire.extend_from_slice(b));
@@ -251,7 +263,7 @@ mod tests {
 
     #[test]
     fn hello_ping_and_a_short_mission_that_reaches_its_goal() {
-        let mut remote = Remote::over(SimLink::spawn().unwrap());
+        let mut remote = Remote::over(SimLink::spawn(0).unwrap());
         let info = remote.hello().unwrap();
         assert_eq!(info.build, Build::Host);
         assert_eq!(info.protocol_version, PROTOCOL_VERSION);

@@ -34,8 +34,8 @@ pub enum RemoteSpec {
     /// A serial port at 115200 8N1 (any other text: `/dev/ttyUSB0`, `COM3`).
     Serial(String),
     /// The mission device in this process, with a simulated robot (`--remote sim`, see
-    /// [`crate::device_sim`]).
-    Sim,
+    /// [`crate::device_sim`]): as fast as it can (0), or `sim:N`, N times real time.
+    Sim(u32),
 }
 
 impl FromStr for RemoteSpec {
@@ -45,7 +45,12 @@ impl FromStr for RemoteSpec {
         if s == "qemu" {
             Ok(RemoteSpec::Qemu)
         } else if s == "sim" {
-            Ok(RemoteSpec::Sim)
+            Ok(RemoteSpec::Sim(0))
+        } else if let Some(n) = s.strip_prefix("sim:") {
+            match n.parse::<u32>() {
+                Ok(n) if n > 0 => Ok(RemoteSpec::Sim(n)),
+                _ => bail!("`--remote {s}`: expected sim or sim:N, N (times real time) from 1"),
+            }
         } else if let Some(addr) = s.strip_prefix("tcp:") {
             if !addr.contains(':') {
                 bail!("`--remote {s}`: expected tcp:HOST:PORT");
@@ -123,7 +128,7 @@ impl Remote {
                     .with_context(|| format!("cannot open serial port {path}"))?;
                 (Box::new(port), None)
             }
-            RemoteSpec::Sim => (Box::new(crate::device_sim::SimLink::spawn()?), None),
+            RemoteSpec::Sim(pace) => (Box::new(crate::device_sim::SimLink::spawn(*pace)?), None),
         };
         let started_qemu = qemu.is_some();
         let mut remote = Self::with_io(io, qemu);
@@ -659,7 +664,10 @@ mod tests {
     #[test]
     fn remote_specs_parse() {
         assert_eq!("qemu".parse::<RemoteSpec>().unwrap(), RemoteSpec::Qemu);
-        assert_eq!("sim".parse::<RemoteSpec>().unwrap(), RemoteSpec::Sim);
+        assert_eq!("sim".parse::<RemoteSpec>().unwrap(), RemoteSpec::Sim(0));
+        assert_eq!("sim:10".parse::<RemoteSpec>().unwrap(), RemoteSpec::Sim(10));
+        assert!("sim:0".parse::<RemoteSpec>().is_err());
+        assert!("sim:fast".parse::<RemoteSpec>().is_err());
         assert_eq!(
             "tcp:127.0.0.1:4000".parse::<RemoteSpec>().unwrap(),
             RemoteSpec::Tcp("127.0.0.1:4000".into())

@@ -97,8 +97,20 @@ pub struct Args {
     pub gif_scale: u32,
 }
 
-/// Set by the Ctrl-C handler; the main loop then aborts the mission.
+/// Set by the Ctrl-C handler while a mission runs; the main loop then aborts the mission.
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// A mission runs: Ctrl-C aborts it (otherwise Ctrl-C ends the tool, exit code 130).
+static FOLLOWING: AtomicBool = AtomicBool::new(false);
+
+fn on_ctrl_c() {
+    if FOLLOWING.load(Ordering::SeqCst) {
+        INTERRUPTED.store(true, Ordering::SeqCst);
+    } else {
+        eprintln!("twil: interrupted");
+        std::process::exit(130);
+    }
+}
 
 /// What the files give, checked.
 pub struct Inputs {
@@ -567,7 +579,8 @@ fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value {
 fn remote_name(spec: &RemoteSpec) -> String {
     match spec {
         RemoteSpec::Qemu => "qemu".into(),
-        RemoteSpec::Sim => "sim".into(),
+        RemoteSpec::Sim(0) => "sim".into(),
+        RemoteSpec::Sim(n) => format!("sim:{n}"),
         RemoteSpec::Tcp(addr) => format!("tcp:{addr}"),
         RemoteSpec::Serial(path) => path.clone(),
     }
@@ -593,7 +606,7 @@ pub fn run(args: Args) -> Result<()> {
     let inputs = read_inputs(&args)?;
     // A simulated device is known before connecting: refuse early.
     match args.remote {
-        RemoteSpec::Sim => check_real(&args, Build::Host)?,
+        RemoteSpec::Sim(_) => check_real(&args, Build::Host)?,
         RemoteSpec::Qemu => check_real(&args, Build::Qemu)?,
         _ => {}
     }
@@ -630,16 +643,20 @@ pub fn run(args: Args) -> Result<()> {
     };
     // Ctrl-C from now on aborts the mission instead of killing the tool (a handler can only be
     // set once per process: a second run in the same process keeps the first).
-    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
     INTERRUPTED.store(false, Ordering::SeqCst);
-
-    match remote.call(Request::StartMission)? {
-        Reply::Ack => {}
-        other => bail!("unexpected reply to StartMission: {other:?}"),
-    }
+    FOLLOWING.store(true, Ordering::SeqCst);
+    let _ = ctrlc::set_handler(on_ctrl_c);
     let mut follower = Follower::new(&inputs, args.out.is_some())?;
-    let interrupted = follow(&args, &mut remote, &mut follower, &bar)?;
+    let followed = match remote.call(Request::StartMission) {
+        Ok(Reply::Ack) => follow(&args, &mut remote, &mut follower, &bar),
+        Ok(other) => Err(anyhow!("unexpected reply to StartMission: {other:?}")),
+        Err(e) => Err(e.context("starting the mission")),
+    };
+    FOLLOWING.store(false, Ordering::SeqCst);
     bar.finish_and_clear();
+    // Done with the device (QEMU, if any, ends here).
+    drop(remote);
+    let interrupted = followed?;
     let report = follower
         .finished
         .ok_or_else(|| anyhow!("the mission ended without a report"))?;
