@@ -863,3 +863,82 @@ fn write_outputs(
     .with_context(|| format!("{}: cannot write", path.display()))?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn args(extra: &[&str]) -> Args {
+        let par = concat!(env!("CARGO_MANIFEST_DIR"), "/../worlds/office.par");
+        let mut argv = vec!["twil", "--remote", "sim", "--params", par];
+        argv.extend_from_slice(extra);
+        Cli::parse_from(argv).args
+    }
+
+    /// A device that never says anything.
+    struct Silent;
+
+    impl std::io::Read for Silent {
+        fn read(&mut self, _: &mut [u8]) -> std::io::Result<usize> {
+            std::thread::sleep(Duration::from_millis(20));
+            Err(std::io::ErrorKind::TimedOut.into())
+        }
+    }
+
+    impl std::io::Write for Silent {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_silent_device_is_a_clear_error_after_the_silence_time() {
+        let args = args(&["--silence", "0.3"]);
+        let inputs = read_inputs(&args).unwrap();
+        let mut follower = Follower::new(&inputs, false).unwrap();
+        let mut remote = Remote::over(Silent);
+        let started = Instant::now();
+        let e = follow(&args, &mut remote, &mut follower, &ProgressBar::hidden()).unwrap_err();
+        assert!(started.elapsed() < Duration::from_secs(3));
+        assert!(
+            format!("{e:#}").contains("the device went silent: no telemetry for 0.3 s"),
+            "{e:#}"
+        );
+    }
+
+    #[test]
+    fn real_is_required_by_simulated_devices_and_refused_by_a_board() {
+        let without = args(&[]);
+        let with = args(&["--real", "R.da"]);
+        assert!(check_real(&without, Build::Host).is_err());
+        assert!(check_real(&without, Build::Qemu).is_err());
+        assert!(check_real(&with, Build::Host).is_ok());
+        assert!(check_real(&without, Build::Hardware).is_ok());
+        let e = check_real(&with, Build::Hardware).unwrap_err();
+        assert!(e.to_string().contains("is a real robot"), "{e}");
+    }
+
+    #[test]
+    fn refused_mission_fields_are_named() {
+        let a = args(&[]);
+        let speed = ErrorReply::new(ErrorCode::BadMission, 5, 0);
+        assert!(explain_bad_mission(&a, &speed).contains("speed ("));
+        let off = ErrorReply {
+            code: ErrorCode::BadMission,
+            value: 0,
+            limit: 0,
+            detail: 1,
+        };
+        assert!(explain_bad_mission(&a, &off).contains("lies off its map"));
+    }
+}
