@@ -815,7 +815,7 @@ fn write_outputs(
     std::fs::create_dir_all(dir)
         .with_context(|| format!("{}: cannot create directory", dir.display()))?;
     let setup = SimSetup {
-        real: inputs.real.clone().unwrap_or_else(Obstacles::new),
+        real: inputs.real.clone().unwrap_or_default(),
         known: inputs.known.clone(),
         params: inputs.params,
         geometry: inputs.geometry,
