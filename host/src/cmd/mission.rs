@@ -629,7 +629,7 @@ pub fn run(args: Args) -> Result<()> {
             info.grid_capacity_cells
         );
     }
-    upload(&args, &inputs, &mut remote)?;
+    upload(&args, &inputs, &mut remote, info.build)?;
 
     let bar = if args.json || !std::io::stderr().is_terminal() {
         ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden())
@@ -653,6 +653,12 @@ pub fn run(args: Args) -> Result<()> {
         Err(e) => Err(e.context("starting the mission")),
     };
     FOLLOWING.store(false, Ordering::SeqCst);
+    if followed.is_err() {
+        // The host gives up on a mission that may still be running: ask the device, once and
+        // briefly, to stop the motors (useless if the link is dead, harmless otherwise).
+        remote.set_timeout(Duration::from_secs(2));
+        let _ = remote.request(Request::AbortMission);
+    }
     bar.finish_and_clear();
     // Done with the device (QEMU, if any, ends here).
     drop(remote);
@@ -714,7 +720,7 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 /// Map, known obstacles, real world, mission setup.
-fn upload(args: &Args, inputs: &Inputs, remote: &mut Remote) -> Result<()> {
+fn upload(args: &Args, inputs: &Inputs, remote: &mut Remote, build: Build) -> Result<()> {
     let map = MapParams {
         width_cells: inputs.geometry.width(),
         height_cells: inputs.geometry.height(),
@@ -735,9 +741,18 @@ fn upload(args: &Args, inputs: &Inputs, remote: &mut Remote) -> Result<()> {
         }
     }
     if let (Some(real), Some(path)) = (&inputs.real, &args.real) {
-        remote
-            .call(Request::ClearWorld)
-            .context("clearing the device's real world")?;
+        match remote
+            .request(Request::ClearWorld)
+            .context("clearing the device's real world")?
+        {
+            Reply::Ack => {}
+            Reply::Error(e) if e.code == ErrorCode::NotOnThisBuild => bail!(
+                "--remote {}: this device (build {build:?}) keeps no real world, so it cannot run a simulated mission (a firmware without mission support?)",
+                remote_name(&args.remote)
+            ),
+            Reply::Error(e) => bail!("clearing the device's real world: {e}"),
+            other => bail!("unexpected reply to ClearWorld: {other:?}"),
+        }
         for (i, polygon) in real.iter().enumerate() {
             remote.upload_world_polygon(polygon).with_context(|| {
                 format!("{}: uploading real obstacle {}", path.display(), i + 1)
@@ -748,6 +763,15 @@ fn upload(args: &Args, inputs: &Inputs, remote: &mut Remote) -> Result<()> {
         Reply::Ack => Ok(()),
         Reply::Error(e) => bail!("{}", explain_bad_mission(args, &e)),
         other => bail!("unexpected reply to SetMission: {other:?}"),
+    }
+}
+
+/// A line on stderr, above the live display if there is one.
+fn note(bar: &ProgressBar, line: &str) {
+    if bar.is_hidden() {
+        eprintln!("{line}");
+    } else {
+        bar.println(line);
     }
 }
 
@@ -770,7 +794,7 @@ fn follow(
             return Ok(aborted);
         }
         if !aborted && INTERRUPTED.load(Ordering::SeqCst) {
-            bar.println("twil: Ctrl-C: aborting the mission…");
+            note(bar, "twil: Ctrl-C: aborting the mission…");
             aborted = true;
             match remote
                 .request(Request::AbortMission)
@@ -793,9 +817,10 @@ fn follow(
         match frame {
             Ok(DeviceFrame::Telemetry(t)) => follower.absorb(t),
             Ok(DeviceFrame::Reply { .. }) => {} // a stale reply
-            Err(fault) => bar.println(format!(
-                "twil: dropped a damaged frame from the device: {fault:?}"
-            )),
+            Err(fault) => note(
+                bar,
+                &format!("twil: dropped a damaged frame from the device: {fault:?}"),
+            ),
         }
         if last_draw.elapsed() >= Duration::from_millis(50) {
             last_draw = Instant::now();
