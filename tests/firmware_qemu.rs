@@ -62,7 +62,11 @@ fn ping_reports_the_version_and_the_round_trip() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "twil ping failed: {stderr}");
-    assert!(stdout.contains("protocol v1, build Qemu"), "{stdout}");
+    let version = format!(
+        "protocol v{}, build Qemu",
+        twil_core::link::PROTOCOL_VERSION
+    );
+    assert!(stdout.contains(&version), "{stdout}");
     assert_eq!(stdout.matches("round trip").count(), 2, "{stdout}");
 }
 

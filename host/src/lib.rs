@@ -3,6 +3,7 @@
 
 pub mod cmd;
 pub mod cspace;
+pub mod device_sim;
 pub mod qemu_cmd;
 pub mod remote;
 pub mod render;

@@ -22,6 +22,8 @@ enum Command {
     Plan(cmd::plan::Args),
     /// Simulate a whole mission: sonar sweeps, planning, the 50 ms controller, a robot model.
     Simulate(cmd::simulate::Args),
+    /// Run a mission on the device (firmware, QEMU or `--remote sim`) and follow its telemetry.
+    Mission(cmd::mission::Args),
     /// Plan for the two-link manipulator of seed 000 in its configuration space.
     Cspace(cmd::cspace::Args),
     /// Check the link to the firmware (QEMU, TCP or a serial port).
@@ -33,6 +35,7 @@ fn main() {
     let result = match cli.command {
         Command::Plan(args) => cmd::plan::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
+        Command::Mission(args) => cmd::mission::run(args),
         Command::Cspace(args) => cmd::cspace::run(args),
         Command::Ping(args) => cmd::ping::run(args),
     };

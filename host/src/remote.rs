@@ -1,5 +1,5 @@
 //! The host end of the link: open a device (`--remote qemu`, `--remote tcp:HOST:PORT`,
-//! `--remote /dev/ttyUSB0`), send requests, collect replies.
+//! `--remote /dev/ttyUSB0`, or the in-process `--remote sim`), send requests, collect replies.
 //!
 //! The wire format and the messages are `twil_core::link`'s; this module only moves bytes.
 //! [`Remote::request`] sends one request and waits for the reply with the same sequence number,
@@ -33,6 +33,9 @@ pub enum RemoteSpec {
     Tcp(String),
     /// A serial port at 115200 8N1 (any other text: `/dev/ttyUSB0`, `COM3`).
     Serial(String),
+    /// The mission device in this process, with a simulated robot (`--remote sim`, see
+    /// [`crate::device_sim`]): as fast as it can (0), or `sim:N`, N times real time.
+    Sim(u32),
 }
 
 impl FromStr for RemoteSpec {
@@ -41,13 +44,20 @@ impl FromStr for RemoteSpec {
     fn from_str(s: &str) -> Result<Self> {
         if s == "qemu" {
             Ok(RemoteSpec::Qemu)
+        } else if s == "sim" {
+            Ok(RemoteSpec::Sim(0))
+        } else if let Some(n) = s.strip_prefix("sim:") {
+            match n.parse::<u32>() {
+                Ok(n) if n > 0 => Ok(RemoteSpec::Sim(n)),
+                _ => bail!("`--remote {s}`: expected sim or sim:N, N (times real time) from 1"),
+            }
         } else if let Some(addr) = s.strip_prefix("tcp:") {
             if !addr.contains(':') {
                 bail!("`--remote {s}`: expected tcp:HOST:PORT");
             }
             Ok(RemoteSpec::Tcp(addr.to_string()))
         } else if s.is_empty() {
-            bail!("`--remote` needs `qemu`, `tcp:HOST:PORT` or a serial port path")
+            bail!("`--remote` needs `qemu`, `sim`, `tcp:HOST:PORT` or a serial port path")
         } else {
             Ok(RemoteSpec::Serial(s.to_string()))
         }
@@ -123,6 +133,7 @@ impl Remote {
                     .with_context(|| format!("cannot open serial port {path}"))?;
                 (Box::new(port), None)
             }
+            RemoteSpec::Sim(pace) => (Box::new(crate::device_sim::SimLink::spawn(*pace)?), None),
         };
         let started_qemu = qemu.is_some();
         let mut remote = Self::with_io(io, qemu);
@@ -332,14 +343,36 @@ impl Remote {
 
     /// Upload one polygon in chunks of [`OBSTACLE_CHUNK_VERTICES`].
     pub fn upload_polygon(&mut self, polygon: &[PointM]) -> Result<()> {
+        self.upload_chunks(polygon, false)
+    }
+
+    /// Upload one polygon of the real world of a simulated device (`WorldChunk`), in chunks of
+    /// [`OBSTACLE_CHUNK_VERTICES`].
+    pub fn upload_world_polygon(&mut self, polygon: &[PointM]) -> Result<()> {
+        self.upload_chunks(polygon, true)
+    }
+
+    fn upload_chunks(&mut self, polygon: &[PointM], real_world: bool) -> Result<()> {
         let chunks = polygon.chunks(OBSTACLE_CHUNK_VERTICES);
         let n = chunks.len();
         for (i, chunk) in chunks.enumerate() {
-            let request = Request::ObstacleChunk {
-                first_vertex: (i * OBSTACLE_CHUNK_VERTICES) as u16,
-                vertices: heapless::Vec::from_slice(chunk)
-                    .map_err(|_| anyhow!("chunk larger than its capacity"))?,
-                last: i + 1 == n,
+            let first_vertex = u16::try_from(i * OBSTACLE_CHUNK_VERTICES)
+                .map_err(|_| anyhow!("a polygon of {} vertices is too long", polygon.len()))?;
+            let vertices = heapless::Vec::from_slice(chunk)
+                .map_err(|_| anyhow!("chunk larger than its capacity"))?;
+            let last = i + 1 == n;
+            let request = if real_world {
+                Request::WorldChunk {
+                    first_vertex,
+                    vertices,
+                    last,
+                }
+            } else {
+                Request::ObstacleChunk {
+                    first_vertex,
+                    vertices,
+                    last,
+                }
             };
             self.call(request)?;
         }
@@ -655,6 +688,10 @@ mod tests {
     #[test]
     fn remote_specs_parse() {
         assert_eq!("qemu".parse::<RemoteSpec>().unwrap(), RemoteSpec::Qemu);
+        assert_eq!("sim".parse::<RemoteSpec>().unwrap(), RemoteSpec::Sim(0));
+        assert_eq!("sim:10".parse::<RemoteSpec>().unwrap(), RemoteSpec::Sim(10));
+        assert!("sim:0".parse::<RemoteSpec>().is_err());
+        assert!("sim:fast".parse::<RemoteSpec>().is_err());
         assert_eq!(
             "tcp:127.0.0.1:4000".parse::<RemoteSpec>().unwrap(),
             RemoteSpec::Tcp("127.0.0.1:4000".into())

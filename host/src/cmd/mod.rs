@@ -1,6 +1,7 @@
 //! One module per `twil` subcommand.
 
 pub mod cspace;
+pub mod mission;
 pub mod ping;
 pub mod plan;
 pub mod simulate;

@@ -82,6 +82,9 @@ pub enum SimStatus {
     Collision,
     /// The time limit ran out.
     Timeout,
+    /// Stopped from outside (`twil mission`: Ctrl-C, an abort from another host); the
+    /// simulator itself never ends so.
+    Aborted,
 }
 
 impl SimStatus {
@@ -92,6 +95,7 @@ impl SimStatus {
             SimStatus::Unreachable => "unreachable",
             SimStatus::Collision => "collision",
             SimStatus::Timeout => "timeout",
+            SimStatus::Aborted => "aborted",
         }
     }
 }

@@ -1,0 +1,334 @@
+//! `--remote sim`: the mission device in this process. A [`RobotDevice`] with the simulated
+//! robot around it ([`Pilot`], [`Plant`], the mission planner and the real world of
+//! [`WorldUpload`]), wired exactly as the `Bench` of `twil_core::link::robot`'s tests, runs on
+//! its own thread; [`SimLink`] is the byte stream between it and [`crate::remote::Remote`].
+//!
+//! The device runs as fast as it can in simulated time (50 ms per tick; `sim:N` paces it at N
+//! times real time, to watch the live display or try Ctrl-C): it answers requests
+//! between ticks and sends the telemetry it pulls with [`RobotDevice::next_telemetry`]. The
+//! pipe towards the host is bounded ([`PIPE_CHUNKS`] writes), so a fast device waits for a slow
+//! reader rather than filling memory. It reports [`Build::Host`]. The thread ends when the host
+//! drops its end of the link.
+
+use std::collections::VecDeque;
+use std::io::{Read, Write};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, SyncSender, TryRecvError};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use anyhow::{anyhow, Result};
+use twil_core::control::Pose;
+use twil_core::grid::words_for_cells;
+use twil_core::link::{Build, DeviceInfo, RobotDevice, RunState, WorldUpload};
+use twil_core::mission::{MissionPlanner300, Pilot};
+use twil_core::plant::Plant;
+
+/// The device: the seed's 300 x 300 map for the planning service and the mission.
+pub type SimDevice = RobotDevice<{ words_for_cells(300 * 300) }, { words_for_cells(300 * 300) }>;
+
+/// Writes (a request's reply, or one tick's telemetry) the pipe towards the host holds before
+/// the device waits.
+pub const PIPE_CHUNKS: usize = 64;
+
+/// Control period of the simulated robot, seconds.
+const PERIOD_S: f32 = 0.05;
+
+/// Stack of the device thread: the device and the planner are built before they are boxed.
+const STACK_BYTES: usize = 64 << 20;
+
+/// The host's end of the link to the in-process device. Reads time out after 200 ms
+/// (`TimedOut`), as a serial port's do.
+pub struct SimLink {
+    to_device: Option<Sender<Vec<u8>>>,
+    from_device: Receiver<Vec<u8>>,
+    pending: VecDeque<u8>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl SimLink {
+    /// Start the device on its own thread: as fast as it can (`pace` 0) or `pace` times real
+    /// time.
+    pub fn spawn(pace: u32) -> Result<Self> {
+        let (to_device, requests) = mpsc::channel::<Vec<u8>>();
+        let (telemetry, from_device) = mpsc::sync_channel::<Vec<u8>>(PIPE_CHUNKS);
+        let thread = std::thread::Builder::new()
+            .name("twil-device-sim".into())
+            .stack_size(STACK_BYTES)
+            .spawn(move || Shell::new(pace).run(&requests, &telemetry))
+            .map_err(|e| anyhow!("cannot start the simulated device: {e}"))?;
+        Ok(Self {
+            to_device: Some(to_device),
+            from_device,
+            pending: VecDeque::new(),
+            thread: Some(thread),
+        })
+    }
+}
+
+impl Read for SimLink {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.pending.is_empty() {
+            match self.from_device.recv_timeout(Duration::from_millis(200)) {
+                Ok(bytes) => self.pending.extend(bytes),
+                Err(RecvTimeoutError::Timeout) => return Err(std::io::ErrorKind::TimedOut.into()),
+                Err(RecvTimeoutError::Disconnected) => return Ok(0),
+            }
+        }
+        let n = buf.len().min(self.pending.len());
+        for (b, o) in buf.iter_mut().zip(self.pending.drain(..n)) {
+            *b = o;
+        }
+        Ok(n)
+    }
+}
+
+impl Write for SimLink {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        let sent = self
+            .to_device
+            .as_ref()
+            .map(|tx| tx.send(bytes.to_vec()).is_ok())
+            .unwrap_or(false);
+        if sent {
+            Ok(bytes.len())
+        } else {
+            Err(std::io::ErrorKind::BrokenPipe.into())
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Drop for SimLink {
+    fn drop(&mut self) {
+        // Closing both ends ends the device's loop (a blocked send fails once the receiver is
+        // gone, which needs `from_device` dropped: it is, after this body, so do not join a
+        // thread that may be blocked on it; detaching is enough).
+        self.to_device = None;
+        drop(self.thread.take());
+    }
+}
+
+/// The device and the simulated robot around it (the `Bench` of the core's tests).
+struct Shell {
+    device: Box<SimDevice>,
+    planner: Box<MissionPlanner300>,
+    world: Box<WorldUpload>,
+    pilot: Option<Pilot>,
+    plant: Option<Plant>,
+    previous_counts: (i32, i32),
+    /// Real time per tick (zero: as fast as it can).
+    tick_time: Duration,
+}
+
+impl Shell {
+    fn new(pace: u32) -> Self {
+        Self {
+            device: Box::new(SimDevice::new(DeviceInfo::for_build(Build::Host))),
+            planner: Box::new(MissionPlanner300::new()),
+            world: Box::new(WorldUpload::new()),
+            pilot: None,
+            plant: None,
+            previous_counts: (0, 0),
+            tick_time: if pace == 0 {
+                Duration::ZERO
+            } else {
+                Duration::from_secs_f32(PERIOD_S / pace as f32)
+            },
+        }
+    }
+
+    /// Serve requests and run the mission until the host goes away.
+    fn run(mut self, requests: &Receiver<Vec<u8>>, out: &SyncSender<Vec<u8>>) {
+        loop {
+            let running = matches!(self.device.state(), RunState::Running | RunState::Paused);
+            // Between ticks: every request that has arrived; idle, wait for one.
+            let mut received = Vec::new();
+            if running {
+                loop {
+                    match requests.try_recv() {
+                        Ok(bytes) => received.push(bytes),
+                        Err(TryRecvError::Empty) => break,
+                        Err(TryRecvError::Disconnected) => return,
+                    }
+                }
+            } else {
+                match requests.recv_timeout(Duration::from_millis(100)) {
+                    Ok(bytes) => received.push(bytes),
+                    Err(RecvTimeoutError::Timeout) => {}
+                    Err(RecvTimeoutError::Disconnected) => return,
+                }
+            }
+            let mut wire = Vec::new();
+            for bytes in received {
+                self.device.receive(
+                    &bytes,
+                    &mut *self.planner,
+                    &mut || 0,
+                    &mut *self.world,
+                    &mut |b: &[u8]| wire.extend_from_slice(b),
+                );
+                // A stop, hold or follow asked for by a request reaches the pilot before the
+                // next tick.
+                self.command_pilot();
+            }
+            if matches!(self.device.state(), RunState::Running | RunState::Paused) {
+                self.tick();
+                if !self.tick_time.is_zero() {
+                    std::thread::sleep(self.tick_time);
+                }
+            }
+            while let Some(t) = self.device.next_telemetry() {
+                SimDevice::send_telemetry(&t, &mut |b: &[u8]| wire.extend_from_slice(b));
+            }
+            if !wire.is_empty() && out.send(wire).is_err() {
+                return;
+            }
+        }
+    }
+
+    fn command_pilot(&mut self) {
+        if let Some(command) = self.device.take_pilot_command() {
+            if let Some(pilot) = &mut self.pilot {
+                let _ = pilot.command(command, self.device.prefix());
+            }
+        }
+    }
+
+    /// Carry out what the device asks: the pilot's command, plans (at once), sonar readings.
+    fn serve(&mut self) {
+        loop {
+            self.command_pilot();
+            if self.device.plan_pending() {
+                self.device.run_planner(&mut *self.planner, &mut || 0);
+                continue;
+            }
+            let Some(request) = self.device.take_sonar_request() else {
+                return;
+            };
+            let Some(plant) = &mut self.plant else {
+                return;
+            };
+            let range = self.device.mission().config().robot.sonar_range_m;
+            let range_m = plant.sonar_range_m(&self.world.obstacles, request.neck_angle_rad, range);
+            self.device.reading(request.neck_angle_rad, range_m);
+        }
+    }
+
+    /// One control period.
+    fn tick(&mut self) {
+        if let Some(config) = self.device.take_started() {
+            self.pilot = Some(Pilot::new(&config));
+            let plant = Plant::new(
+                &config.robot,
+                Pose::new(
+                    config.start.x_m,
+                    config.start.y_m,
+                    config.initial_heading_rad,
+                ),
+            );
+            self.previous_counts = plant.encoder_counts();
+            self.plant = Some(plant);
+        }
+        let (Some(plant), Some(pilot)) = (&mut self.plant, &mut self.pilot) else {
+            return;
+        };
+        let counts = plant.encoder_counts();
+        let report = pilot.tick(
+            counts.0.wrapping_sub(self.previous_counts.0),
+            counts.1.wrapping_sub(self.previous_counts.1),
+            PERIOD_S,
+        );
+        self.previous_counts = counts;
+        self.device.tick(&report);
+        self.serve();
+        if let (Some(pilot), Some(plant)) = (&self.pilot, &mut self.plant) {
+            let (left, right) = pilot.voltages_v();
+            plant.step(PERIOD_S, left, right);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::remote::Remote;
+    use std::time::Instant;
+    use twil_core::geom::PointM;
+    use twil_core::link::{MapParams, MissionSetup, Reply, Request, Telemetry, PROTOCOL_VERSION};
+    use twil_core::mission::{MissionMode, MissionStatus};
+    use twil_core::plan::PlannerKind;
+
+    #[test]
+    fn hello_ping_and_a_short_mission_that_reaches_its_goal() {
+        let mut remote = Remote::over(SimLink::spawn(0).unwrap());
+        let info = remote.hello().unwrap();
+        assert_eq!(info.build, Build::Host);
+        assert_eq!(info.protocol_version, PROTOCOL_VERSION);
+        assert!(info.grid_capacity_cells >= 300 * 300);
+        assert!(remote.ping(7).is_ok());
+
+        // A tiny world: one wall between start and goal, the same wall known and real.
+        let wall = [
+            PointM::new(2.0, 3.0),
+            PointM::new(4.0, 3.0),
+            PointM::new(4.0, 3.2),
+            PointM::new(2.0, 3.2),
+        ];
+        let map = MapParams {
+            robot_radius_m: 0.3,
+            ..MapParams::default()
+        };
+        remote.call(Request::SetParams(map)).unwrap();
+        let reply = remote
+            .call(Request::WorldChunk {
+                first_vertex: 0,
+                vertices: heapless::Vec::from_slice(&wall).unwrap(),
+                last: true,
+            })
+            .unwrap();
+        assert!(
+            matches!(reply, Reply::Obstacles { polygons: 1, .. }),
+            "{reply:?}"
+        );
+        let setup = MissionSetup {
+            mode: MissionMode::Continuous,
+            planner: PlannerKind::AStar,
+            start: PointM::new(3.0, 1.5),
+            initial_heading_rad: std::f32::consts::FRAC_PI_2,
+            goal: PointM::new(3.0, 5.0),
+            speed_m_s: 0.3,
+            sonar_range_m: 1.5,
+            time_limit_s: 300.0,
+            constant_depth_filter: false,
+            trust_seen_space: true,
+            noise_seed: 1,
+            sonar_noise_std_m: 0.0,
+        };
+        assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
+        assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);
+        let deadline = Instant::now() + Duration::from_secs(60);
+        let mut poses = 0;
+        let report = loop {
+            let t = if !remote.telemetry.is_empty() {
+                remote.telemetry.remove(0)
+            } else {
+                match remote.next_frame(deadline).unwrap().unwrap() {
+                    twil_core::link::DeviceFrame::Telemetry(t) => t,
+                    other => panic!("unasked reply {other:?}"),
+                }
+            };
+            match t {
+                Telemetry::Pose(_) => poses += 1,
+                Telemetry::Finished(report) => break report,
+                _ => {}
+            }
+        };
+        assert_eq!(report.status, MissionStatus::Reached, "{report:?}");
+        assert!(poses > 10, "{poses} poses");
+        // The device answers after the mission too.
+        assert!(remote.ping(8).is_ok());
+    }
+}

@@ -1,0 +1,292 @@
+//! End-to-end tests of `twil mission` against the in-process device (`--remote sim`): whole
+//! missions on the bundled worlds agree with `twil simulate`, the JSON and the files have the
+//! simulator's shape plus `mcu`, bad inputs are named, Ctrl-C aborts.
+
+mod common;
+
+use std::collections::BTreeSet;
+use std::process::Output;
+
+use serde_json::Value;
+
+fn world(name: &str) -> String {
+    common::world(name).display().to_string()
+}
+
+fn run(args: &[&str]) -> Output {
+    common::twil().args(args).output().expect("run twil")
+}
+
+/// Run and parse the one JSON line on stdout.
+fn json_of(args: &[&str]) -> Value {
+    let out = run(args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "twil {args:?}: {}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(stdout.lines().count(), 1, "one line: {stdout}");
+    serde_json::from_str(stdout.trim()).expect("valid JSON")
+}
+
+fn mission(name: &str, mode: &str, extra: &[&str]) -> Value {
+    let (da, par) = (world(&format!("{name}.da")), world(&format!("{name}.par")));
+    let mut args = vec![
+        "mission",
+        "--remote",
+        "sim",
+        "--real",
+        &da,
+        "--params",
+        &par,
+        "--mode",
+        mode,
+        "--planner",
+        "astar",
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    json_of(&args)
+}
+
+fn simulate(name: &str, mode: &str) -> Value {
+    let (da, par) = (world(&format!("{name}.da")), world(&format!("{name}.par")));
+    json_of(&[
+        "simulate",
+        "--real",
+        &da,
+        "--params",
+        &par,
+        "--mode",
+        mode,
+        "--planner",
+        "astar",
+        "--plan-latency-ms",
+        "0",
+        "--json",
+    ])
+}
+
+fn num(v: &Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} is not a number in {v}"))
+}
+
+#[test]
+fn bundled_worlds_reach_the_goal_and_agree_with_the_simulator_in_both_modes() {
+    for name in ["office", "corridor", "pillars"] {
+        for mode in ["stop", "continuous"] {
+            let device = mission(name, mode, &[]);
+            let host = simulate(name, mode);
+            let what = format!("{name} {mode}:\n device {device}\n simulate {host}");
+            assert_eq!(device["status"], "reached", "{what}");
+            assert_eq!(device["status"], host["status"], "{what}");
+            let (ds, hs) = (num(&device, "stops"), num(&host, "stops"));
+            assert!((ds - hs).abs() <= 0.1 * hs, "stops: {what}");
+            let (dd, hd) = (num(&device, "distance_m"), num(&host, "distance_m"));
+            assert!(dd > 1.0 && (dd - hd).abs() <= 0.05 * hd, "distance: {what}");
+            // The clearance along the reported poses to the real world, body radius off.
+            let clearance = num(&device, "min_clearance_m");
+            assert!(
+                clearance > 0.0 && (clearance - num(&host, "min_clearance_m")).abs() < 0.02,
+                "clearance: {what}"
+            );
+        }
+    }
+}
+
+#[test]
+fn json_has_exactly_the_simulator_keys_plus_mcu() {
+    let device = mission("pillars", "continuous", &[]);
+    let host = simulate("pillars", "continuous");
+    let keys = |v: &Value| -> BTreeSet<String> {
+        v.as_object().expect("an object").keys().cloned().collect()
+    };
+    let mut expected = keys(&host);
+    expected.insert("mcu".into());
+    assert_eq!(keys(&device), expected);
+    let mcu: BTreeSet<String> = keys(&device["mcu"]);
+    let want: BTreeSet<String> = [
+        "max_control_instructions",
+        "max_plan_instructions",
+        "static_ram_bytes",
+        "stack_high_water_bytes",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    assert_eq!(mcu, want);
+    // The host device measures nothing: zeros, not missing values.
+    for k in &want {
+        assert_eq!(device["mcu"][k], 0, "{k}");
+    }
+}
+
+#[test]
+fn out_writes_summary_trajectory_plan_pictures_and_the_gif() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let out_s = out.display().to_string();
+    let (da, par) = (world("corridor.da"), world("corridor.par"));
+    let o = run(&[
+        "mission",
+        "--remote",
+        "sim",
+        "--real",
+        &da,
+        "--params",
+        &par,
+        "--mode",
+        "continuous",
+        "--out",
+        &out_s,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.starts_with("reached: "), "{stdout}");
+    assert!(stdout.contains("mcu: "), "{stdout}");
+
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "reached");
+    assert_eq!(summary["build"], "host");
+    assert_eq!(summary["remote"], "sim");
+    assert!(summary["mcu"].is_object());
+
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("t,x,y,theta"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    // Poses at 5 Hz over the whole mission.
+    let expected = num(&summary, "sim_time_s") * 5.0;
+    assert!(
+        (rows.len() as f64 - expected).abs() <= 3.0,
+        "{} rows for {expected}",
+        rows.len()
+    );
+    assert!(rows.iter().all(|r| r.len() == 4));
+
+    let plans = summary["plans"].as_u64().unwrap() as usize;
+    assert!(plans > 0);
+    let pngs = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("plan-") && n.ends_with(".png"))
+        .count();
+    assert_eq!(pngs, plans);
+    let png = std::fs::read(out.join("plan-001.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let gif = std::fs::read(out.join("mission.gif")).unwrap();
+    assert_eq!(&gif[..6], b"GIF89a");
+    assert!(gif.len() > 10_000);
+}
+
+#[test]
+fn a_simulated_device_needs_the_real_world() {
+    let par = world("office.par");
+    let o = run(&["mission", "--remote", "sim", "--params", &par]);
+    assert_eq!(o.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("--real R.da is required with --remote sim"),
+        "{stderr}"
+    );
+    assert!(o.stdout.is_empty());
+}
+
+#[test]
+fn bad_files_are_named_with_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let par = dir.path().join("bad.par");
+    std::fs::write(&par, "0.3\n0.3\n90\n1 1\n").unwrap();
+    let par_s = par.display().to_string();
+    let da = world("office.da");
+    let o = run(&[
+        "mission", "--remote", "sim", "--real", &da, "--params", &par_s,
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains(&format!("{par_s}: line ")), "{stderr}");
+
+    let bad_da = dir.path().join("bad.da");
+    std::fs::write(&bad_da, "1 1\n2 x\n").unwrap();
+    let bad_da_s = bad_da.display().to_string();
+    let good_par = world("office.par");
+    for flag in ["--real", "--known"] {
+        let mut args = vec!["mission", "--remote", "sim", "--params", &good_par];
+        if flag == "--known" {
+            args.extend_from_slice(&["--real", &da]);
+        }
+        args.extend_from_slice(&[flag, &bad_da_s]);
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(1), "{flag}");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            stderr.contains(&format!("{bad_da_s}: line 2")),
+            "{flag}: {stderr}"
+        );
+    }
+}
+
+#[test]
+fn a_goal_off_the_map_is_refused_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let par = dir.path().join("far.par");
+    std::fs::write(&par, "0.3\n0.3\n90\n1.5 1.5\n40 1\n").unwrap();
+    let par_s = par.display().to_string();
+    let o = run(&[
+        "mission",
+        "--remote",
+        "sim",
+        "--real",
+        &world("office.da"),
+        "--params",
+        &par_s,
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains(&par_s) && stderr.contains("goal"),
+        "{stderr}"
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_aborts_the_mission_and_waits_for_its_report() {
+    use std::time::{Duration, Instant};
+    let (da, par) = (world("office.da"), world("office.par"));
+    // 20 times real time: the office mission takes about 20 s.
+    let child = common::twil()
+        .args([
+            "mission", "--remote", "sim:20", "--real", &da, "--params", &par, "--json",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let started = Instant::now();
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    assert!(started.elapsed() < Duration::from_secs(10));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("the mission was aborted and the device stopped the motors"),
+        "{stderr}"
+    );
+    let v: Value = serde_json::from_str(String::from_utf8_lossy(&out.stdout).trim()).unwrap();
+    assert_eq!(v["status"], "aborted");
+    let t = num(&v, "sim_time_s");
+    assert!(t > 5.0 && t < 300.0, "{t}");
+}
