@@ -532,21 +532,27 @@ fn simulated_mission(
     config.mode = mode;
     config.planner = PlannerKind::AStar;
     config.time_limit_s = 900.0;
-    let mut mission = Box::new(
-        Mission300::new(config, twil_core::grid::GridGeometry::seed_default()).unwrap(),
-    );
+    let mut mission =
+        Box::new(Mission300::new(config, twil_core::grid::GridGeometry::seed_default()).unwrap());
     let mut planner = Box::new(MissionPlanner300::new());
     let mut plant = twil_core::plant::Plant::new(
         &config.robot,
-        Pose::new(params.start.x_m, params.start.y_m, config.initial_heading_rad),
+        Pose::new(
+            params.start.x_m,
+            params.start.y_m,
+            config.initial_heading_rad,
+        ),
     );
     let mut runner = LocalRunner::new(&mut mission, &mut planner, 1);
     let mut previous = plant.encoder_counts();
     loop {
         let counts = plant.encoder_counts();
-        let o = runner.tick(counts.0 - previous.0, counts.1 - previous.1, 0.05, &mut |a| {
-            plant.sonar_range_m(&real, a, 1.5)
-        });
+        let o = runner.tick(
+            counts.0 - previous.0,
+            counts.1 - previous.1,
+            0.05,
+            &mut |a| plant.sonar_range_m(&real, a, 1.5),
+        );
         previous = counts;
         if o.status != twil_core::mission::MissionStatus::Running {
             return runner.mission().stats();
@@ -562,7 +568,10 @@ fn missions_on_the_device_reach_the_goal_like_the_simulator_with_no_overrun() {
     // `TWIL_MISSION_WORLDS=office` runs one world (when debugging).
     let only = std::env::var("TWIL_MISSION_WORLDS").ok();
     for world in ["office", "corridor", "pillars"] {
-        if only.as_deref().is_some_and(|o| !o.split(',').any(|w| w == world)) {
+        if only
+            .as_deref()
+            .is_some_and(|o| !o.split(',').any(|w| w == world))
+        {
             continue;
         }
         for mode in [MissionMode::Stop, MissionMode::Continuous] {
@@ -584,7 +593,8 @@ fn missions_on_the_device_reach_the_goal_like_the_simulator_with_no_overrun() {
                 sim.stops,
                 sim.odometry_distance_m
             );
-            let stops_ok = (s.stops as f32 - sim.stops as f32).abs() <= 0.1 * sim.stops as f32 + 0.5;
+            let stops_ok =
+                (s.stops as f32 - sim.stops as f32).abs() <= 0.1 * sim.stops as f32 + 0.5;
             let distance_ok = (s.odometry_distance_m - sim.odometry_distance_m).abs()
                 <= 0.05 * sim.odometry_distance_m;
             if r.status != MissionStatus::Reached
@@ -599,7 +609,11 @@ fn missions_on_the_device_reach_the_goal_like_the_simulator_with_no_overrun() {
                 .iter()
                 .filter(|t| matches!(t, twil_core::link::Telemetry::Pose(_)))
                 .count() as f32;
-            assert!(poses >= 4.0 * s.time_s, "{world} {mode:?}: {poses} poses in {} s", s.time_s);
+            assert!(
+                poses >= 4.0 * s.time_s,
+                "{world} {mode:?}: {poses} poses in {} s",
+                s.time_s
+            );
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");

@@ -164,8 +164,14 @@ mod board_body {
         /// error stops both motors.
         pub fn drive(&mut self, left_voltage_v: f32, right_voltage_v: f32, _period_s: f32) {
             let battery_v = self.battery.read_battery_v();
-            let ok = self.motor_left.set_voltage(left_voltage_v, battery_v).is_ok()
-                && self.motor_right.set_voltage(right_voltage_v, battery_v).is_ok();
+            let ok = self
+                .motor_left
+                .set_voltage(left_voltage_v, battery_v)
+                .is_ok()
+                && self
+                    .motor_right
+                    .set_voltage(right_voltage_v, battery_v)
+                    .is_ok();
             if !ok {
                 let _ = self.motor_left.stop();
                 let _ = self.motor_right.stop();

@@ -91,7 +91,6 @@ pub const SYSTICK_HZ: u32 = 168_000_000;
 /// SysTick counts per monotonic tick: SysTick's reload is this minus one.
 const SYSTICK_PER_MONO: u32 = SYSTICK_HZ / MONO_HZ;
 
-
 /// SysTick counts since [`Mono`] started: monotonic ticks × [`SYSTICK_PER_MONO`] + the count
 /// down of the current period. Differences of two readings are elapsed SysTick counts (the
 /// 32-bit tick count wraps after 2^32 ms, 49.7 days: a reading across that goes back to 0).
@@ -381,10 +380,7 @@ mod app {
 
     /// Every 50 ms: encoders → pilot → motors. Idle (motors at 0) while no mission runs.
     #[task(priority = 4, shared = [pilot, body])]
-    async fn control(
-        mut cx: control::Context,
-        mut reports: Sender<'static, PilotReport, REPORTS>,
-    ) {
+    async fn control(mut cx: control::Context, mut reports: Sender<'static, PilotReport, REPORTS>) {
         let period_s = PERIOD_MS as f32 / 1000.0;
         let mut next = Mono::now();
         let mut last = Mono::now();
@@ -413,7 +409,11 @@ mod app {
                 pilot.tick(left, right, elapsed_s)
             });
             let spent = instructions().saturating_sub(before);
-            MAX_CONTROL_INSTRUCTIONS.fetch_max(spent.min(u32::MAX as u64) as u32, Ordering::Relaxed);
+            let spent = spent.min(u32::MAX as u64) as u32;
+            let worst = MAX_CONTROL_INSTRUCTIONS.fetch_max(spent, Ordering::Relaxed);
+            if spent > worst {
+                log!("worst control step so far: {} instructions", spent);
+            }
             // The simulated body's own step is not the control step's cost.
             cx.shared
                 .body

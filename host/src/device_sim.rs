@@ -20,11 +20,11 @@ use anyhow::{anyhow, Result};
 use twil_core::control::Pose;
 use twil_core::grid::words_for_cells;
 use twil_core::link::{Build, DeviceInfo, RobotDevice, RunState, WorldUpload};
-use twil_core::mission::{MissionPlanner300, Pilot};
+use twil_core::mission::{Mission300, MissionPlanner300, Pilot};
 use twil_core::plant::Plant;
 
 /// The device: the seed's 300 x 300 map for the planning service and the mission.
-pub type SimDevice = RobotDevice<{ words_for_cells(300 * 300) }, { words_for_cells(300 * 300) }>;
+pub type SimDevice = RobotDevice<{ words_for_cells(300 * 300) }>;
 
 /// Writes (a request's reply, or one tick's telemetry) the pipe towards the host holds before
 /// the device waits.
@@ -114,6 +114,7 @@ impl Drop for SimLink {
 /// The device and the simulated robot around it (the `Bench` of the core's tests).
 struct Shell {
     device: Box<SimDevice>,
+    mission: Box<Mission300>,
     planner: Box<MissionPlanner300>,
     world: Box<WorldUpload>,
     pilot: Option<Pilot>,
@@ -127,6 +128,7 @@ impl Shell {
     fn new(pace: u32) -> Self {
         Self {
             device: Box::new(SimDevice::new(DeviceInfo::for_build(Build::Host))),
+            mission: Box::new(Mission300::IDLE),
             planner: Box::new(MissionPlanner300::new()),
             world: Box::new(WorldUpload::new()),
             pilot: None,
@@ -163,7 +165,7 @@ impl Shell {
             }
             let mut wire = Vec::new();
             for bytes in received {
-                self.device.receive(
+                self.device.link(&mut self.mission).receive(
                     &bytes,
                     &mut *self.planner,
                     &mut || 0,
@@ -180,7 +182,7 @@ impl Shell {
                     std::thread::sleep(self.tick_time);
                 }
             }
-            while let Some(t) = self.device.next_telemetry() {
+            while let Some(t) = self.device.link(&mut self.mission).next_telemetry() {
                 SimDevice::send_telemetry(&t, &mut |b: &[u8]| wire.extend_from_slice(b));
             }
             if !wire.is_empty() && out.send(wire).is_err() {
@@ -192,7 +194,7 @@ impl Shell {
     fn command_pilot(&mut self) {
         if let Some(command) = self.device.take_pilot_command() {
             if let Some(pilot) = &mut self.pilot {
-                let _ = pilot.command(command, self.device.prefix());
+                let _ = pilot.command(command, self.mission.prefix());
             }
         }
     }
@@ -202,7 +204,9 @@ impl Shell {
         loop {
             self.command_pilot();
             if self.device.plan_pending() {
-                self.device.run_planner(&mut *self.planner, &mut || 0);
+                self.device
+                    .link(&mut self.mission)
+                    .run_planner(&mut *self.planner, &mut || 0);
                 continue;
             }
             let Some(request) = self.device.take_sonar_request() else {
@@ -211,15 +215,17 @@ impl Shell {
             let Some(plant) = &mut self.plant else {
                 return;
             };
-            let range = self.device.mission().config().robot.sonar_range_m;
+            let range = self.mission.config().robot.sonar_range_m;
             let range_m = plant.sonar_range_m(&self.world.obstacles, request.neck_angle_rad, range);
-            self.device.reading(request.neck_angle_rad, range_m);
+            self.device
+                .link(&mut self.mission)
+                .reading(request.neck_angle_rad, range_m);
         }
     }
 
     /// One control period.
     fn tick(&mut self) {
-        if let Some(config) = self.device.take_started() {
+        if let Some(config) = self.device.link(&mut self.mission).take_started() {
             self.pilot = Some(Pilot::new(&config));
             let plant = Plant::new(
                 &config.robot,
@@ -242,7 +248,7 @@ impl Shell {
             PERIOD_S,
         );
         self.previous_counts = counts;
-        self.device.tick(&report);
+        self.device.link(&mut self.mission).tick(&report);
         self.serve();
         if let (Some(pilot), Some(plant)) = (&self.pilot, &mut self.plant) {
             let (left, right) = pilot.voltages_v();

@@ -105,7 +105,10 @@ impl Remote {
 
     /// Open the link without any exchange.
     pub fn open(spec: &RemoteSpec) -> Result<Self> {
-        Self::open_paced(spec, QEMU_ICOUNT_SHIFT.load(std::sync::atomic::Ordering::Relaxed))
+        Self::open_paced(
+            spec,
+            QEMU_ICOUNT_SHIFT.load(std::sync::atomic::Ordering::Relaxed),
+        )
     }
 
     /// [`Remote::open`]; a QEMU it starts runs at `-icount shift=SHIFT`.
