@@ -15,7 +15,7 @@ use crate::mission::{MissionMode, MissionPhase, MissionStats, MissionStatus};
 use crate::plan::{PlanStatus, PlannerKind};
 
 /// Version of this protocol. A host and a device only talk when their versions are equal
-/// ([`Request::Hello`]). 2: missions (requests 10–18, telemetry 3–8, the pose report).
+/// ([`Request::Hello`]). 2: missions (requests 10–19, telemetry 3–8, the pose report).
 pub const PROTOCOL_VERSION: u16 = 2;
 
 /// Points carried by one telemetry chunk of hits, prefix or path.
