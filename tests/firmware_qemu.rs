@@ -462,7 +462,25 @@ struct DeviceMission {
 /// no faster than the chip) on a bundled world: upload the real world, set up, start, follow
 /// the telemetry until the mission ends.
 fn device_mission(world: &str, mode: twil_core::mission::MissionMode) -> DeviceMission {
-    use twil_core::link::{MissionSetup, Telemetry};
+    use twil_core::link::Telemetry;
+    let mut remote = start_device_mission(world, mode);
+    let mut telemetry = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(300);
+    loop {
+        match remote.next_frame(deadline).expect("telemetry") {
+            Ok(DeviceFrame::Telemetry(Telemetry::Finished(report))) => {
+                return DeviceMission { report, telemetry };
+            }
+            Ok(DeviceFrame::Telemetry(t)) => telemetry.push(t),
+            Ok(other) => panic!("unasked: {other:?}"),
+            Err(fault) => panic!("damaged frame from the device: {fault:?}"),
+        }
+    }
+}
+
+/// Start a mission on the firmware under QEMU at `-icount shift=3`; the telemetry follows.
+fn start_device_mission(world: &str, mode: twil_core::mission::MissionMode) -> Remote {
+    use twil_core::link::MissionSetup;
     let real = twil_host::cmd::simulate::read_da(&common::world(&format!("{world}.da"))).unwrap();
     let params =
         twil_host::cmd::simulate::read_par(&common::world(&format!("{world}.par"))).unwrap();
@@ -502,17 +520,60 @@ fn device_mission(world: &str, mode: twil_core::mission::MissionMode) -> DeviceM
     };
     assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
     assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);
-    let mut telemetry = Vec::new();
-    let deadline = Instant::now() + Duration::from_secs(300);
     remote.set_timeout(Duration::from_secs(30));
-    loop {
-        match remote.next_frame(deadline).expect("telemetry") {
-            Ok(DeviceFrame::Telemetry(Telemetry::Finished(report))) => {
-                return DeviceMission { report, telemetry };
+    remote
+}
+
+#[test]
+fn abort_and_emergency_stop_zero_the_motors_at_the_next_control_tick() {
+    use twil_core::link::{MissionReport, RunState, Telemetry};
+    use twil_core::mission::{MissionMode, MissionStatus};
+    for stop in [Request::AbortMission, Request::EmergencyStop] {
+        let mut remote = start_device_mission("office", MissionMode::Continuous);
+        // Wait until both wheels are driven.
+        let deadline = Instant::now() + Duration::from_secs(120);
+        loop {
+            if let Ok(DeviceFrame::Telemetry(Telemetry::Pose(p))) =
+                remote.next_frame(deadline).unwrap()
+            {
+                if p.left_voltage_v.abs() > 1.0 && p.right_voltage_v.abs() > 1.0 {
+                    break;
+                }
             }
-            Ok(DeviceFrame::Telemetry(t)) => telemetry.push(t),
-            Ok(other) => panic!("unasked: {other:?}"),
-            Err(fault) => panic!("damaged frame from the device: {fault:?}"),
+        }
+        assert_eq!(remote.request(stop.clone()).unwrap(), Reply::Ack);
+        let finished = loop {
+            match remote.next_frame(deadline).unwrap() {
+                Ok(DeviceFrame::Telemetry(Telemetry::Finished(r))) => break r,
+                Ok(DeviceFrame::Telemetry(Telemetry::Pose(p))) => {
+                    assert_eq!((p.left_voltage_v, p.right_voltage_v), (0.0, 0.0), "{p:?}")
+                }
+                _ => {}
+            }
+        };
+        assert_eq!(finished.status, MissionStatus::Aborted);
+        // A period later the control task has measured the stop (mission time runs on, so
+        // wait in wall time for a few periods).
+        std::thread::sleep(Duration::from_millis(300));
+        let report: MissionReport = match remote.request(Request::MissionStatus).unwrap() {
+            Reply::Mission(r) => r,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(report.state, RunState::Ended);
+        assert_eq!(
+            report.stop_ticks, 1,
+            "{stop:?}: the motors went to zero volts {} control periods after the frame",
+            report.stop_ticks
+        );
+        let again = remote.request(Request::StartMission).unwrap();
+        if stop == Request::EmergencyStop {
+            assert!(report.emergency_stop);
+            assert!(
+                matches!(again, Reply::Error(ref e) if e.code == ErrorCode::WrongState && e.detail == 1),
+                "{again:?}"
+            );
+        } else {
+            assert_eq!(again, Reply::Ack);
         }
     }
 }

@@ -157,6 +157,13 @@ static STOP: AtomicBool = AtomicBool::new(false);
 static ACTIVE: AtomicBool = AtomicBool::new(false);
 /// Most instructions one control step took (the pilot's tick; not the simulated body's step).
 static MAX_CONTROL_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
+/// Control ticks so far (counted while a mission runs).
+static CONTROL_TICKS: AtomicU32 = AtomicU32::new(0);
+/// [`CONTROL_TICKS`] when the last stop frame arrived.
+static STOP_ASKED_AT_TICK: AtomicU32 = AtomicU32::new(0);
+/// Control periods from the last stop frame to the tick that zeroed the motors (see
+/// `MissionReport::stop_ticks`).
+static STOP_TICKS: AtomicU32 = AtomicU32::new(0);
 /// The mission's sonar range, metres (f32 bits), for the simulated sonar.
 static SONAR_RANGE_BITS: AtomicU32 = AtomicU32::new(0x3FC0_0000); // 1.5
 
@@ -364,8 +371,11 @@ mod app {
                         if matches!(
                             frame.request,
                             Request::AbortMission | Request::EmergencyStop
-                        ) {
-                            STOP.store(true, Ordering::Release);
+                        ) && !STOP.swap(true, Ordering::AcqRel)
+                        {
+                            STOP_ASKED_AT_TICK
+                                .store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
+                            STOP_TICKS.store(0, Ordering::Release);
                         }
                     }
                 }
@@ -393,21 +403,28 @@ mod app {
             if cx.shared.body.lock(|b| b.emergency_stop()) {
                 STOP.store(true, Ordering::Release);
             }
+            let tick = CONTROL_TICKS.fetch_add(1, Ordering::AcqRel).wrapping_add(1);
             if !ACTIVE.load(Ordering::Acquire) {
                 // No mission: the motors stay at 0 (a board's drivers are told so each period;
                 // the simulated robot stands still without being stepped).
                 #[cfg(feature = "hardware")]
                 cx.shared.body.lock(|b| b.drive(0.0, 0.0, period_s));
+                note_stop(tick, true);
                 continue;
             }
             let (left, right) = cx.shared.body.lock(|b| b.encoder_deltas());
             let before = instructions();
+            let stopping = STOP.load(Ordering::Acquire);
             let report = cx.shared.pilot.lock(|pilot| {
-                if STOP.load(Ordering::Acquire) {
+                if stopping {
                     pilot.stop();
                 }
                 pilot.tick(left, right, elapsed_s)
             });
+            note_stop(
+                tick,
+                stopping && report.left_voltage_v == 0.0 && report.right_voltage_v == 0.0,
+            );
             let spent = instructions().saturating_sub(before);
             let spent = spent.min(u32::MAX as u64) as u32;
             let worst = MAX_CONTROL_INSTRUCTIONS.fetch_max(spent, Ordering::Relaxed);
@@ -545,6 +562,7 @@ mod app {
             device.note_timing(
                 MAX_CONTROL_INSTRUCTIONS.load(Ordering::Relaxed) as u64,
                 high_water,
+                STOP_TICKS.load(Ordering::Acquire),
             );
             // What the other tasks sent.
             while let Ok(report) = reports.try_recv() {
@@ -592,6 +610,15 @@ mod app {
             if !busy {
                 Mono::delay(ms(1)).await;
             }
+        }
+    }
+
+    /// At control tick `tick`, with zero volts on the motors (`motors_off`): if a stop frame
+    /// came and this is the first such tick since, note how many periods it took.
+    fn note_stop(tick: u32, motors_off: bool) {
+        if motors_off && STOP.load(Ordering::Acquire) && STOP_TICKS.load(Ordering::Acquire) == 0 {
+            let asked = STOP_ASKED_AT_TICK.load(Ordering::Acquire);
+            STOP_TICKS.store(tick.wrapping_sub(asked), Ordering::Release);
         }
     }
 

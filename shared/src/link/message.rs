@@ -231,6 +231,10 @@ pub struct MissionReport {
     pub max_plan_instructions: u64,
     /// Deepest stack use seen (painted stack), bytes (firmware; 0 elsewhere).
     pub stack_high_water_bytes: u32,
+    /// Control periods from the last `AbortMission` / `EmergencyStop` frame's arrival to the
+    /// tick that put zero volts on the motors, that tick included (1: the next tick; firmware,
+    /// 0 when none came or elsewhere).
+    pub stop_ticks: u32,
     /// The emergency stop is latched.
     pub emergency_stop: bool,
 }

@@ -189,6 +189,7 @@ pub struct RobotDevice<const W: usize> {
     max_plan_instructions: u64,
     max_control_instructions: u64,
     stack_high_water_bytes: u32,
+    stop_ticks: u32,
     reported: (MissionPhase, MissionStatus),
     pending: Pending,
 }
@@ -213,6 +214,7 @@ impl<const W: usize> RobotDevice<W> {
             max_plan_instructions: 0,
             max_control_instructions: 0,
             stack_high_water_bytes: 0,
+            stop_ticks: 0,
             reported: (MissionPhase::Done, MissionStatus::Aborted),
             pending: Pending {
                 finished: false,
@@ -268,9 +270,15 @@ impl<const W: usize> RobotDevice<W> {
     }
 
     /// The firmware's measurements, for the mission report.
-    pub fn note_timing(&mut self, max_control_instructions: u64, stack_high_water_bytes: u32) {
+    pub fn note_timing(
+        &mut self,
+        max_control_instructions: u64,
+        stack_high_water_bytes: u32,
+        stop_ticks: u32,
+    ) {
         self.max_control_instructions = max_control_instructions;
         self.stack_high_water_bytes = stack_high_water_bytes;
+        self.stop_ticks = stop_ticks;
     }
 
     /// Encode a telemetry message as a frame and pass the bytes to `send`.
@@ -747,6 +755,7 @@ impl<const W: usize> RobotLink<'_, W> {
             max_control_instructions: self.d.max_control_instructions,
             max_plan_instructions: self.d.max_plan_instructions,
             stack_high_water_bytes: self.d.stack_high_water_bytes,
+            stop_ticks: self.d.stop_ticks,
             emergency_stop: self.d.emergency_stop,
         }
     }

@@ -513,6 +513,7 @@ fn the_largest_mission_messages_fit_a_frame() {
         max_control_instructions: u64::MAX,
         max_plan_instructions: u64::MAX,
         stack_high_water_bytes: u32::MAX,
+        stop_ticks: u32::MAX,
         emergency_stop: true,
     };
     let frames = [
