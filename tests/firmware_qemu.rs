@@ -525,6 +525,67 @@ fn start_device_mission(world: &str, mode: twil_core::mission::MissionMode) -> R
 }
 
 #[test]
+fn a_garbage_frame_flood_during_a_mission_changes_nothing_in_its_result() {
+    use twil_core::link::Telemetry;
+    use twil_core::mission::{MissionMode, MissionStatus};
+    let mut remote = start_device_mission("office", MissionMode::Stop);
+    let sim = simulated_mission("office", MissionMode::Stop);
+    // Every 20 frames of telemetry, a burst of garbage: random bytes, a frame with a bad CRC,
+    // an oversized one; each is a damaged frame the device must answer with an error.
+    let mut rng = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        rng
+    };
+    let deadline = Instant::now() + Duration::from_secs(300);
+    let (mut frames, mut bursts, mut errors) = (0u32, 0u32, 0u32);
+    let report = loop {
+        match remote.next_frame(deadline).expect("telemetry") {
+            Ok(DeviceFrame::Telemetry(Telemetry::Finished(r))) => break r,
+            Ok(DeviceFrame::Reply {
+                reply: Reply::Error(_),
+                ..
+            })
+            | Err(_) => errors += 1,
+            Ok(_) => {}
+        }
+        frames += 1;
+        if frames % 20 == 0 && bursts < 40 {
+            bursts += 1;
+            let mut garbage: Vec<u8> = (0..40).map(|_| (next() % 255 + 1) as u8).collect();
+            garbage.push(0);
+            garbage.extend(std::iter::repeat_n(7u8, MAX_FRAME_BYTES + 10));
+            garbage.push(0);
+            remote.send_raw(&garbage).unwrap();
+        }
+    };
+    assert!(bursts >= 10, "{bursts} bursts");
+    let s = report.stats;
+    assert_eq!(report.status, MissionStatus::Reached, "{report:?}");
+    assert_eq!(s.controller_overruns, 0);
+    assert!(
+        (s.stops as f32 - sim.stops as f32).abs() <= 0.1 * sim.stops as f32 + 0.5,
+        "{s:?} vs {sim:?}"
+    );
+    assert!(
+        (s.odometry_distance_m - sim.odometry_distance_m).abs() <= 0.05 * sim.odometry_distance_m
+    );
+    // Every damaged frame was answered (two per burst), and the device counted them.
+    let status = match remote.request(Request::Status).unwrap() {
+        Reply::Status(st) => st,
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(
+        status.frame_errors,
+        2 * bursts,
+        "{errors} error replies seen"
+    );
+    assert_eq!(status.rx_dropped_bytes, 0);
+}
+
+#[test]
 fn abort_and_emergency_stop_zero_the_motors_at_the_next_control_tick() {
     use twil_core::link::{MissionReport, RunState, Telemetry};
     use twil_core::mission::{MissionMode, MissionStatus};
