@@ -157,6 +157,19 @@ static STOP: AtomicBool = AtomicBool::new(false);
 static ACTIVE: AtomicBool = AtomicBool::new(false);
 /// Most instructions one control step took (the pilot's tick; not the simulated body's step).
 static MAX_CONTROL_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
+/// Most instructions one sonar reading's work took (QEMU: the ray cast; board: the drivers'
+/// blocking neck move and echo, in cycles), one receive interrupt took, and one step of the
+/// body took (QEMU: the simulated robot, not charged to the control step). Logged when a
+/// mission ends.
+static WORST_SONAR_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
+static WORST_RX_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
+static WORST_BODY_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
+
+/// Note `spent` instructions in `worst` if it is the most so far.
+fn note_worst(worst: &AtomicU32, spent: u64) {
+    worst.fetch_max(spent.min(u32::MAX as u64) as u32, Ordering::Relaxed);
+}
+
 /// Control ticks so far (counted while a mission runs).
 static CONTROL_TICKS: AtomicU32 = AtomicU32::new(0);
 /// [`CONTROL_TICKS`] when the last stop frame arrived.
@@ -360,6 +373,7 @@ mod app {
     /// (the mission task, which may be planning, answers it later).
     #[task(binds = USART1, priority = 2, local = [rx, producer, peek: FrameDecoder = FrameDecoder::new()])]
     fn usart1_rx(cx: usart1_rx::Context) {
+        let before = instructions();
         loop {
             match cx.local.rx.read() {
                 Ok(byte) => {
@@ -386,6 +400,10 @@ mod app {
                 }
             }
         }
+        note_worst(
+            &WORST_RX_INSTRUCTIONS,
+            instructions().saturating_sub(before),
+        );
     }
 
     /// Every 50 ms: encoders → pilot → motors. Idle (motors at 0) while no mission runs.
@@ -432,9 +450,14 @@ mod app {
                 log!("worst control step so far: {} instructions", spent);
             }
             // The simulated body's own step is not the control step's cost.
+            let before = instructions();
             cx.shared
                 .body
                 .lock(|b| b.drive(report.left_voltage_v, report.right_voltage_v, period_s));
+            note_worst(
+                &WORST_BODY_INSTRUCTIONS,
+                instructions().saturating_sub(before),
+            );
             // A full queue means the mission task is more than 400 ms behind: the report is
             // dropped (the mission's clock then runs slow), the wheels are not affected.
             let _ = reports.try_send(report);
@@ -453,17 +476,30 @@ mod app {
             #[cfg(feature = "qemu")]
             let range_m = {
                 Mono::delay(ms(READING_MS)).await;
+                let before = instructions();
                 let mut plant = cx.shared.body.lock(|b| b.snapshot());
                 let range = f32::from_bits(SONAR_RANGE_BITS.load(Ordering::Relaxed));
-                cx.shared
+                let range_m = cx
+                    .shared
                     .world
-                    .lock(|w| body::sonar_range_m(&mut plant, w, angle, range))
+                    .lock(|w| body::sonar_range_m(&mut plant, w, angle, range));
+                note_worst(
+                    &WORST_SONAR_INSTRUCTIONS,
+                    instructions().saturating_sub(before),
+                );
+                range_m
             };
             #[cfg(feature = "hardware")]
             let range_m = {
                 // The drivers wait out the neck's steps and the echo window themselves.
                 let _ = (&mut cx.shared.body, &mut cx.shared.world);
-                cx.local.head.read(angle)
+                let before = instructions();
+                let range_m = cx.local.head.read(angle);
+                note_worst(
+                    &WORST_SONAR_INSTRUCTIONS,
+                    instructions().saturating_sub(before),
+                );
+                range_m
             };
             if readings.send((angle, range_m)).await.is_err() {
                 return;
@@ -522,6 +558,7 @@ mod app {
         let planner = &mut **cx.local.planner;
         let tx = &mut *cx.local.tx;
         let mut chunk = [0u8; 64];
+        let mut reported_end = false;
         loop {
             let mut busy = false;
             // The link: requests in, replies out.
@@ -588,6 +625,20 @@ mod app {
                 device.link(mission).run_planner(planner, &mut instructions);
                 busy = true;
             }
+            let ended = device.state() == twil_core::link::RunState::Ended;
+            if ended && !reported_end {
+                let r = device.link(mission).report();
+                log!(
+                    "mission done: worst instructions: control step {}, plan {}, sonar reading {}, receive interrupt {}, body step {}; stack {} bytes",
+                    r.max_control_instructions as u32,
+                    r.max_plan_instructions as u32,
+                    WORST_SONAR_INSTRUCTIONS.load(Ordering::Relaxed),
+                    WORST_RX_INSTRUCTIONS.load(Ordering::Relaxed),
+                    WORST_BODY_INSTRUCTIONS.load(Ordering::Relaxed),
+                    r.stack_high_water_bytes
+                );
+            }
+            reported_end = ended;
             if device.state() != twil_core::link::RunState::Running {
                 ACTIVE.store(
                     device.state() == twil_core::link::RunState::Paused,
