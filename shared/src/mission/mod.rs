@@ -247,24 +247,14 @@ impl MissionConfig {
     /// radius is replaced by the `.par` radius), stop mode, A*, a 600 s time limit.
     pub fn from_params(params: &Params, robot: RobotConfig) -> Self {
         let robot = robot.with_planning_radius_m(params.robot_radius_m);
+        // Every other value is the mission defaults of [`MissionConfig::IDLE`].
         Self {
-            mode: MissionMode::Stop,
-            planner: PlannerKind::AStar,
             robot,
             start: params.start,
             initial_heading_rad: params.initial_heading_deg * (core::f32::consts::PI / 180.0),
             goal: params.goal,
             speed_m_s: params.speed_m_s,
-            turn_rate_rad_s: 0.8,
-            turn_in_place_above_rad: core::f32::consts::FRAC_PI_6,
-            time_limit_s: 600.0,
-            goal_tolerance_m: 0.10,
-            max_stalled_plans: 6,
-            stall_distance_m: 0.10,
-            constant_depth_filter: false,
-            trust_seen_space: true,
-            max_trusted_path_m: 30.0,
-            moving_half_sweep_deg: 95.0,
+            ..Self::IDLE
         }
     }
 
