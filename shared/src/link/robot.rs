@@ -767,7 +767,7 @@ impl<const W: usize> RobotLink<'_, W> {
         let p = &mut self.d.pending;
         if core::mem::take(&mut p.phase) {
             return Some(Telemetry::Phase {
-                t_ms: self.t_ms_cached(),
+                t_ms: self.t_ms(),
                 phase: self.d.reported.0,
                 status: self.d.reported.1,
             });
@@ -817,10 +817,6 @@ impl<const W: usize> RobotLink<'_, W> {
             return Some(Telemetry::Finished(self.report()));
         }
         None
-    }
-
-    fn t_ms_cached(&self) -> u32 {
-        self.t_ms()
     }
 }
 
