@@ -39,7 +39,7 @@ use heapless::{String, Vec};
 
 use super::geometry::{bounding_box, boxes_overlap, polygons_intersect, Frame, WorkPoint};
 use super::rob::{Joint, Polygon, Robot, MAX_OBSTACLE_POLYGONS};
-use super::text::{clip_fmt, FileError, Lexer, Place};
+use super::text::{clip_fmt, readable, FileError, Lexer, Place};
 use crate::grid::{words_for_cells, Grid, GridGeometry};
 use crate::math;
 use crate::world::ParseErrorKind;
@@ -83,15 +83,23 @@ impl Axis {
         } else {
             (joint.max - joint.min) / increment
         };
+        let too_many = |values: Option<u32>| MapError::TooManyValues {
+            joint: number,
+            values,
+            min: joint.min,
+            max: joint.max,
+            increment,
+            wraps,
+            line: joint.limit_lines[1],
+            field: joint.limit_fields()[1],
+        };
         if steps.is_nan() || steps >= MAX_AXIS_CELLS as f32 {
-            return Err(MapError::TooManyValues {
-                joint: number,
-                values: if steps.is_finite() {
-                    steps as u64
-                } else {
-                    u64::MAX
-                },
-            });
+            // Counted only while f32 holds every integer; beyond, "more than" says enough.
+            return Err(too_many(if steps < 16_777_216.0 {
+                Some(steps as u32 + u32::from(!wraps))
+            } else {
+                None
+            }));
         }
         let cells = if wraps {
             let n = math::floor(steps + 0.5);
@@ -106,10 +114,7 @@ impl Axis {
             math::floor(steps + 1e-4) as u32 + 1
         };
         if cells as usize > MAX_AXIS_CELLS {
-            return Err(MapError::TooManyValues {
-                joint: number,
-                values: cells as u64,
-            });
+            return Err(too_many(Some(cells)));
         }
         Ok(Axis {
             min: joint.min,
@@ -180,34 +185,92 @@ pub enum MapError {
     TooManyValues {
         /// Joint number, 1 or 2.
         joint: u8,
-        /// Values it would need.
-        values: u64,
+        /// Values it would need; `None` when too many to count exactly.
+        values: Option<u32>,
+        /// The joint's limits, as read.
+        min: f32,
+        /// Upper limit.
+        max: f32,
+        /// The increment given.
+        increment: f32,
+        /// `true` for a full-turn joint, whose count is `360 / increment`.
+        wraps: bool,
+        /// `.ROB` line of the upper limit (0: not from a file).
+        line: u32,
+        /// `.ROB` field of the upper limit.
+        field: &'static str,
     },
     /// The map would have more than [`MAX_MAP_CELLS`] cells.
     TooManyCells {
-        /// Cells it would need.
-        cells: u64,
+        /// Values of joint 1 and of joint 2 (each within [`MAX_AXIS_CELLS`]).
+        values: [u16; 2],
+        /// `.ROB` lines of the upper limits of joint 1 and joint 2 (0: not from a file).
+        lines: [u32; 2],
+        /// `.ROB` fields of those limits.
+        fields: [&'static str; 2],
     },
 }
 
 impl fmt::Display for MapError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            MapError::BadIncrement { joint, increment } => {
-                write!(f, "increment {increment} of joint {joint} is not a number above 0")
-            }
+            MapError::BadIncrement { joint, increment } => write!(
+                f,
+                "increment {} of joint {joint} is not a number above 0",
+                readable(increment)
+            ),
             MapError::WrapIncrement { joint, increment } => write!(
                 f,
-                "joint {joint} turns a full circle, so its increment must divide 360, not {increment}"
+                "joint {joint} turns a full circle, so its increment must divide 360, not {}",
+                readable(increment)
             ),
-            MapError::TooManyValues { joint, values } => write!(
-                f,
-                "joint {joint} would need {values} values, more than the {MAX_AXIS_CELLS} this build holds; use a larger increment"
-            ),
-            MapError::TooManyCells { cells } => write!(
-                f,
-                "the map would need {cells} cells, more than the {MAX_MAP_CELLS} this build holds; use larger increments"
-            ),
+            MapError::TooManyValues {
+                joint,
+                values,
+                min,
+                max,
+                increment,
+                wraps,
+                line,
+                field,
+            } => {
+                if line > 0 {
+                    write!(f, "line {line}: ")?;
+                }
+                write!(f, "field `{field}` of joint {joint}: ")?;
+                if wraps {
+                    write!(f, "a full turn ({} to {})", readable(min), readable(max))?;
+                } else {
+                    write!(f, "the limits {} to {}", readable(min), readable(max))?;
+                }
+                write!(f, " in steps of {} need ", readable(increment))?;
+                match values {
+                    Some(n) => write!(f, "{n} values, more than the {MAX_AXIS_CELLS}")?,
+                    None => write!(f, "more than the {MAX_AXIS_CELLS} values")?,
+                }
+                write!(
+                    f,
+                    " this build holds; use a larger increment or narrower limits"
+                )
+            }
+            MapError::TooManyCells {
+                values,
+                lines,
+                fields,
+            } => {
+                if lines[0] > 0 && lines[1] > 0 {
+                    write!(f, "lines {} and {}: ", lines[0], lines[1])?;
+                }
+                write!(
+                    f,
+                    "fields `{}` of joint 1 and `{}` of joint 2: the map would need {} x {} = {} cells, more than the {MAX_MAP_CELLS} this build holds; use larger increments or narrower limits",
+                    fields[0],
+                    fields[1],
+                    values[0],
+                    values[1],
+                    values[0] as u32 * values[1] as u32
+                )
+            }
         }
     }
 }
@@ -307,13 +370,18 @@ pub fn occupancy_at(robot: &Robot, q: [f32; 2]) -> Occupancy {
 impl ConfigMap {
     /// An all-free map with the given sampling.
     pub fn empty(axes: [Axis; 2]) -> Result<Self, MapError> {
+        let too_many = MapError::TooManyCells {
+            values: [axes[0].cells, axes[1].cells],
+            lines: [0, 0],
+            fields: ["values of joint 1", "values of joint 2"],
+        };
         let cells = axes[0].cells as u64 * axes[1].cells as u64;
         if cells > MAX_MAP_CELLS as u64 {
-            return Err(MapError::TooManyCells { cells });
+            return Err(too_many);
         }
         let geometry = GridGeometry::new(axes[0].cells as u32, axes[1].cells as u32, 1.0)
-            .map_err(|_| MapError::TooManyCells { cells })?;
-        let bits = MapBits::new(geometry).map_err(|_| MapError::TooManyCells { cells })?;
+            .map_err(|_| too_many)?;
+        let bits = MapBits::new(geometry).map_err(|_| too_many)?;
         Ok(Self {
             axes,
             bits,
@@ -327,7 +395,15 @@ impl ConfigMap {
             Axis::for_joint(&robot.joints[0], increments[0], 1)?,
             Axis::for_joint(&robot.joints[1], increments[1], 2)?,
         ];
-        let mut map = Self::empty(axes)?;
+        // Too many cells is the joints' limits' doing (with the increments): name them.
+        let mut map = Self::empty(axes).map_err(|e| match e {
+            MapError::TooManyCells { values, .. } => MapError::TooManyCells {
+                values,
+                lines: robot.joints.each_ref().map(|j| j.limit_lines[1]),
+                fields: robot.joints.each_ref().map(|j| j.limit_fields()[1]),
+            },
+            e => e,
+        })?;
         let mut boxes = Boxed::new();
         for o in &robot.obstacles {
             let _ = boxes.push(bounding_box(o).unwrap_or_default());
@@ -532,6 +608,7 @@ mod tests {
     use super::*;
     use crate::cspace::rob::parse_rob;
     use std::string::String as StdString;
+    use std::string::ToString;
 
     const NAV: &str = include_str!("../../../worlds/seed000-nav.ROB");
 
@@ -625,6 +702,57 @@ mod tests {
             ConfigMap::build(&robot, [f32::NAN, 1.0]).unwrap_err(),
             MapError::BadIncrement { joint: 1, .. }
         ));
+    }
+
+    #[test]
+    fn huge_limits_name_the_line_and_field_and_print_no_absurd_number() {
+        let robot = parse_rob("0\n2\nP -1e30\n 1e30 0\n0\n% arm 2\nR 1\n-90 90\n0\n").unwrap();
+        assert_eq!(robot.joints[0].limit_lines, [3, 4]);
+        assert_eq!(robot.joints[1].limit_lines, [8, 8]);
+        let e = ConfigMap::build(&robot, [2.0, 2.0]).unwrap_err();
+        assert!(matches!(e, MapError::TooManyValues { values: None, .. }));
+        assert_eq!(
+            e.to_string(),
+            "line 4: field `maximum length` of joint 1: the limits -1e30 to 1e30 in steps of 2 \
+             need more than the 4096 values this build holds; use a larger increment or \
+             narrower limits"
+        );
+        // A countable excess is counted; a full turn names its increment.
+        let robot = parse_rob("0 2 R 1 -180 180 0 P 0\n5000 0 0").unwrap();
+        let e = ConfigMap::build(&robot, [10.0, 1.0])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("line 2: field `maximum length` of joint 2:"),
+            "{e}"
+        );
+        assert!(e.contains("need 5001 values, more than the 4096"), "{e}");
+        let e = ConfigMap::build(&robot, [1e-9, 1.0])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("joint 1: a full turn (-180 to 180) in steps of 1e-9 need more than"),
+            "{e}"
+        );
+        // Too many cells in all: both upper limits named.
+        let robot = parse_rob("0 2 P 0 1000 0 0\nP 0\n1000 90 0").unwrap();
+        let e = ConfigMap::build(&robot, [1.0, 1.0]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "lines 1 and 3: fields `maximum length` of joint 1 and `maximum length` of joint 2: \
+             the map would need 1001 x 1001 = 1002001 cells, more than the 131072 this build \
+             holds; use larger increments or narrower limits"
+        );
+        for m in [f32::MAX, 1e38] {
+            let robot = parse_rob(&std::format!("0 2 P {} {m} 0 0 P 0 1 0 0", -m)).unwrap();
+            let e = ConfigMap::build(&robot, [1e-30, 1.0])
+                .unwrap_err()
+                .to_string();
+            assert!(
+                !e.contains("18446744073709551615") && e.contains("more than"),
+                "{e}"
+            );
+        }
     }
 
     #[test]

@@ -66,6 +66,9 @@ pub struct Joint {
     pub max: f32,
     /// The arm's polygons in its own frame (origin at the arm's far end, §2.2).
     pub polygons: Vec<Polygon, MAX_ARM_POLYGONS>,
+    /// 1-based lines of `min` and `max` in the `.ROB` text (0 when not read from a file), so
+    /// that a map too large for its limits can name them.
+    pub limit_lines: [u32; 2],
 }
 
 impl Joint {
@@ -79,6 +82,14 @@ impl Joint {
         match self.kind {
             JointKind::Rotational => super::geometry::Frame::joint(q, self.length),
             JointKind::Prismatic => super::geometry::Frame::joint(self.angle_deg, q),
+        }
+    }
+
+    /// Names of the `.ROB` fields of `min` and `max`, for messages.
+    pub fn limit_fields(&self) -> [&'static str; 2] {
+        match self.kind {
+            JointKind::Rotational => ["minimum angle", "maximum angle"],
+            JointKind::Prismatic => ["minimum length", "maximum length"],
         }
     }
 
@@ -135,9 +146,11 @@ fn read_limits(
     field_min: &'static str,
     field_max: &'static str,
     place: Place,
-) -> Result<(f32, f32), FileError> {
+) -> Result<(f32, f32, [u32; 2]), FileError> {
     let min = l.f32(field_min, place)?;
+    let min_line = l.line();
     let max = l.f32(field_max, place)?;
+    let lines = [min_line, l.line()];
     if max <= min {
         return Err(l.error(
             field_max,
@@ -148,7 +161,7 @@ fn read_limits(
             },
         ));
     }
-    Ok((min, max))
+    Ok((min, max, lines))
 }
 
 fn read_joint(l: &mut Lexer<'_>, number: u32) -> Result<Joint, FileError> {
@@ -171,16 +184,16 @@ fn read_joint(l: &mut Lexer<'_>, number: u32) -> Result<Joint, FileError> {
             })
         }
     };
-    let (length, angle_deg, min, max) = match kind {
+    let (length, angle_deg, min, max, limit_lines) = match kind {
         JointKind::Rotational => {
             let length = l.f32("length", place)?;
-            let (min, max) = read_limits(l, "minimum angle", "maximum angle", place)?;
-            (length, 0.0, min, max)
+            let (min, max, lines) = read_limits(l, "minimum angle", "maximum angle", place)?;
+            (length, 0.0, min, max, lines)
         }
         JointKind::Prismatic => {
-            let (min, max) = read_limits(l, "minimum length", "maximum length", place)?;
+            let (min, max, lines) = read_limits(l, "minimum length", "maximum length", place)?;
             let angle = l.f32("angle", place)?;
-            (0.0, angle, min, max)
+            (0.0, angle, min, max, lines)
         }
     };
     let count = l.count(
@@ -208,6 +221,7 @@ fn read_joint(l: &mut Lexer<'_>, number: u32) -> Result<Joint, FileError> {
         min,
         max,
         polygons,
+        limit_lines,
     })
 }
 

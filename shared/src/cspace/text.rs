@@ -68,15 +68,66 @@ impl fmt::Display for FileError {
         )?;
         match &self.kind {
             ParseErrorKind::Missing => write!(f, ": the file ends before this value"),
-            ParseErrorKind::NotANumber(t) => write!(f, ": `{t}` is not a number"),
-            ParseErrorKind::OutOfRange { value, expected } => {
-                write!(f, ": `{value}` is out of range (expected {expected})")
-            }
+            ParseErrorKind::NotANumber(t) => write!(f, ": `{}` is not a number", Escaped(t)),
+            ParseErrorKind::OutOfRange { value, expected } => write!(
+                f,
+                ": `{}` is out of range (expected {expected})",
+                Escaped(value)
+            ),
+            // A count too long for a u64 is stored as u64::MAX; its digits say nothing useful.
+            ParseErrorKind::TooMany { count, capacity } if *count == u64::MAX => write!(
+                f,
+                ": the count is more than the {capacity} this build can hold"
+            ),
             ParseErrorKind::TooMany { count, capacity } => write!(
                 f,
                 ": {count} is more than the {capacity} this build can hold"
             ),
-            ParseErrorKind::Trailing(t) => write!(f, ": unexpected `{t}` after the last value"),
+            ParseErrorKind::Trailing(t) => {
+                write!(f, ": unexpected `{}` after the last value", Escaped(t))
+            }
+        }
+    }
+}
+
+/// A value quoted from a file, written so that it cannot act on a terminal: control and other
+/// non-printable characters (ESC, C1 controls, bidi overrides, ...) appear as `\u{1b}`-style
+/// escapes, as [`char::escape_debug`] writes them. Quotes and backslashes stay as they are (a
+/// Windows path such as `ex\nav.ROB` reads as written).
+pub struct Escaped<'a>(pub &'a str);
+
+impl fmt::Display for Escaped<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use fmt::Write as _;
+        for c in self.0.chars() {
+            if matches!(c, '\\' | '\'' | '"') {
+                f.write_char(c)?;
+            } else {
+                for e in c.escape_debug() {
+                    f.write_char(e)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A number for a message: plain when of a readable size, otherwise in `1e30` notation, so
+/// that a huge limit does not print as thirty digits.
+pub(crate) fn readable(v: f32) -> Readable {
+    Readable(v)
+}
+
+/// See [`readable`].
+pub(crate) struct Readable(f32);
+
+impl fmt::Display for Readable {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let a = self.0.abs();
+        if a == 0.0 || (1e-3..1e7).contains(&a) {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
         }
     }
 }
@@ -283,6 +334,13 @@ impl<'a> Lexer<'a> {
                 value: clip(token),
                 expected,
             },
+            // Digits beyond u64: a count, only far too large (see the Display of `TooMany`).
+            Err(_) if !token.is_empty() && token.bytes().all(|b| b.is_ascii_digit()) => {
+                ParseErrorKind::TooMany {
+                    count: u64::MAX,
+                    capacity,
+                }
+            }
             Err(_) => ParseErrorKind::NotANumber(clip(token)),
         };
         Err(FileError {
@@ -293,7 +351,6 @@ impl<'a> Lexer<'a> {
         })
     }
 
-    /// Fail if any token is left.
     /// The header shared by `.MAP` and `.TRA` files: the input file name (line 1), the minima
     /// of both joints and their increments (each above 0).
     pub(crate) fn grid_header(&mut self) -> Result<(&'a str, [f32; 2], [f32; 2]), FileError> {
@@ -325,6 +382,7 @@ impl<'a> Lexer<'a> {
         Ok((name, min, increments))
     }
 
+    /// Fail if any token is left.
     pub(crate) fn finish(&mut self, field: &'static str) -> Result<(), FileError> {
         match self.next_token() {
             None => Ok(()),
@@ -368,6 +426,60 @@ mod tests {
         assert!(matches!(e.kind, ParseErrorKind::NotANumber(_)));
         let e = l.count("n", Place::Top, 1, 2, "1 to 2").unwrap_err();
         assert!(matches!(e.kind, ParseErrorKind::OutOfRange { .. }));
+    }
+}
+
+#[cfg(test)]
+mod message_tests {
+    extern crate std;
+    use crate::cspace::{map::ConfigMap, rob::parse_rob, tra::Trajectory};
+    use std::string::ToString;
+
+    /// No raw control character reaches a message, and the quoted value is escaped.
+    fn assert_clean(msg: &str, escaped: &str) {
+        assert!(!msg.chars().any(char::is_control), "{msg:?}");
+        assert!(msg.contains(escaped), "{msg:?} lacks {escaped:?}");
+    }
+
+    #[test]
+    fn values_quoted_from_files_are_escaped() {
+        // ESC [ 2 J (clear screen) as a vertex count, a joint type and a path index.
+        let e = parse_rob("1\n\u{1b}[2J\n").unwrap_err().to_string();
+        assert_clean(&e, "`\\u{1b}[2J` is not a number");
+        let e = parse_rob("0 2 \u{9b}31m 1 2 3").unwrap_err().to_string();
+        assert_clean(&e, "`\\u{9b}31m` is out of range");
+        let e = Trajectory::parse("n\n0 0\n1 1\n1 2\u{7}\n")
+            .unwrap_err()
+            .to_string();
+        assert_clean(&e, "`2\\u{7}`");
+        let e = ConfigMap::parse_map("n\n0 0\n1 1\n1 1\nx\n\u{202e}x\n", [false; 2])
+            .unwrap_err()
+            .to_string();
+        assert_clean(&e, "\\u{202e}");
+        assert!(!e.contains('\u{202e}'), "{e}");
+        // Backslashes and quotes of ordinary values stay readable.
+        let e = parse_rob("1 2 0 0 1 \"a\\b'").unwrap_err().to_string();
+        assert!(e.contains("`\"a\\b'` is not a number"), "{e}");
+    }
+
+    #[test]
+    fn a_long_value_is_clipped() {
+        let long = "x".repeat(10_000);
+        let e = parse_rob(&long).unwrap_err().to_string();
+        assert!(e.len() < 120, "{e}");
+    }
+
+    #[test]
+    fn a_count_beyond_u64_says_more_than() {
+        let e = parse_rob("123456789012345678901234567890").unwrap_err();
+        assert!(matches!(
+            e.kind,
+            crate::world::ParseErrorKind::TooMany { .. }
+        ));
+        assert_eq!(
+            e.to_string(),
+            "line 1: field `obstacle polygon count`: the count is more than the 64 this build can hold"
+        );
     }
 }
 

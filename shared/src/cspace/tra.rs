@@ -23,10 +23,13 @@ use core::fmt;
 
 use heapless::Vec;
 
-use super::map::{name_of, Name};
+use super::map::{name_of, Name, MAX_AXIS_CELLS};
 use super::search::MAX_PATH_POINTS;
-use super::text::{FileError, Lexer, Place};
+use super::text::{clip_fmt, FileError, Lexer, Place};
 use crate::world::ParseErrorKind;
+
+// The step bound's message spells the number out (a `&'static str`).
+const _: () = assert!(MAX_AXIS_CELLS == 4096);
 
 /// A path in map indices with the header that gives them meaning.
 #[derive(Clone, Debug, PartialEq)]
@@ -73,8 +76,8 @@ impl Trajectory {
     pub fn value(&self, k: usize) -> Option<[f32; 2]> {
         let p = self.points.get(k)?;
         Some([
-            self.min[0] + (p[0] - 1) as f32 * self.increments[0],
-            self.min[1] + (p[1] - 1) as f32 * self.increments[1],
+            self.min[0] + (p[0] as i64 - 1) as f32 * self.increments[0],
+            self.min[1] + (p[1] as i64 - 1) as f32 * self.increments[1],
         ])
     }
 
@@ -82,7 +85,7 @@ impl Trajectory {
     pub fn parse(text: &str) -> Result<Self, FileError> {
         let mut l = Lexer::new(text);
         let (name, min, increments) = l.grid_header()?;
-        let mut points = Vec::new();
+        let mut points: Vec<[i32; 2], MAX_PATH_POINTS> = Vec::new();
         loop {
             let place = Place::PathPoint(points.len() as u32 + 1);
             let mut probe = l.clone();
@@ -90,7 +93,28 @@ impl Trajectory {
                 break;
             }
             let i = l.i32("index of joint 1", place)?;
+            let i_line = l.line();
             let j = l.i32("index of joint 2", place)?;
+            // A step longer than a map axis is no path of ours (a wrapping joint's steps stay
+            // within one turn), and checking it would trace billions of cells: refuse it.
+            if let Some(prev) = points.last() {
+                for (k, (field, v)) in [("index of joint 1", i), ("index of joint 2", j)]
+                    .into_iter()
+                    .enumerate()
+                {
+                    if (v as i64 - prev[k] as i64).abs() > MAX_AXIS_CELLS as i64 {
+                        return Err(FileError {
+                            line: if k == 0 { i_line } else { l.line() },
+                            field,
+                            place,
+                            kind: ParseErrorKind::OutOfRange {
+                                value: clip_fmt(format_args!("{v}")),
+                                expected: "at most 4096 cells from the previous point",
+                            },
+                        });
+                    }
+                }
+            }
             if points.push([i, j]).is_err() {
                 return Err(l.error(
                     "index of joint 1",
@@ -168,5 +192,22 @@ mod tests {
         let e = Trajectory::parse("n\n0 0\n1 1\n").unwrap_err();
         assert!(matches!(e.kind, ParseErrorKind::Missing));
         assert!(Trajectory::parse("").is_err());
+    }
+
+    #[test]
+    fn far_steps_are_refused_and_extreme_indices_do_not_overflow() {
+        // Checking a 4-billion-cell step would take seconds: refused with its line and field.
+        let e = Trajectory::parse("n\n0 0\n1 1\n1 1\n2 1\n% far\n3 -2147483648\n").unwrap_err();
+        assert_eq!(
+            (e.line, e.field, e.place),
+            (7, "index of joint 2", Place::PathPoint(3))
+        );
+        assert!(matches!(e.kind, ParseErrorKind::OutOfRange { .. }));
+        let e = Trajectory::parse("n\n0 0 1 1 1 1 4098 1").unwrap_err();
+        assert_eq!(e.field, "index of joint 1");
+        assert!(Trajectory::parse("n\n0 0 1 1 1 1 4097 1").is_ok());
+        let t = Trajectory::parse("n\n0 0 1 1 -2147483648 2147483647").unwrap();
+        assert_eq!(t.value(0), Some([-2147483649.0, 2147483646.0]));
+        assert_eq!(t.to_map_indices()[0], [i32::MIN, 2147483646]);
     }
 }
