@@ -1,10 +1,10 @@
 //! Reading the seed's world files from disk, with errors that name the file.
 //!
 //! The parsers in [`twil_core::world`] work on text and report the line, the field and the value;
-//! this module adds the file: it reads bytes (refusing directories and anything larger than a
-//! limit, so `/dev/zero` cannot make it hang), checks that text files are UTF-8 (naming the line
-//! of the first bad byte), and turns every failure into one [`FileError`] whose message reads
-//! `worlds/x.da: line 4: field ...`.
+//! this module adds the file: it reads it through [`crate::files`] (refusing directories and
+//! anything larger than the format's cap, so `/dev/zero` cannot make it hang; checking that text
+//! files are UTF-8, naming the line and offset of the first bad byte), and turns every failure
+//! into one [`FileError`] whose message reads `worlds/x.da: line 4: field ...`.
 //!
 //! Formats:
 //!
@@ -23,125 +23,35 @@
 //! assert_eq!(params.robot_radius_m, 0.4);
 //! ```
 
-use std::fmt;
-use std::io::Read;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use twil_core::grid::Grid;
 use twil_core::world::{parse_da, parse_par, Obstacles, Params, ParseError};
 
-/// Largest `.da` / `.par` file read, bytes.
-pub const MAX_TEXT_BYTES: u64 = 4 * 1024 * 1024;
+pub use crate::files::FileError;
+use crate::files::{read_capped, read_text, DA, PAR};
 
 /// Value the seed wrote for an occupied cell in a saved map.
 pub const SAVED_MAP_OCCUPIED: u8 = 127;
 
-/// A file could not be used: which file, which line (when known) and why.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FileError {
-    /// The file as given on the command line.
-    pub path: PathBuf,
-    /// 1-based line of the problem, when it is about a line.
-    pub line: Option<u32>,
-    /// What is wrong (already includes `line N: ` when `line` is set).
-    pub detail: String,
-}
-
-impl fmt::Display for FileError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.path.display(), self.detail)
-    }
-}
-
-impl std::error::Error for FileError {}
-
-impl FileError {
-    fn new(path: &Path, line: Option<u32>, detail: impl Into<String>) -> Self {
-        Self {
-            path: path.to_path_buf(),
-            line,
-            detail: printable(&detail.into()),
-        }
-    }
-
-    /// A parse error of `text`. The core's tokenizer counts the newline that ends the last
-    /// line, so "the file ends before this value" would name a line after the last one; such
-    /// errors are reported on the file's last line.
-    fn parse(path: &Path, text: &str, error: &ParseError) -> Self {
-        let mut error = error.clone();
-        let lines = text.lines().count().max(1) as u32;
-        error.line = error.line.min(lines);
-        Self::new(path, Some(error.line), error.to_string())
-    }
-}
-
-/// Control characters (from a binary file's "tokens") shown as escapes, so that a message is
-/// one readable line.
-fn printable(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        if c.is_control() {
-            out.extend(c.escape_default());
-        } else {
-            out.push(c);
-        }
-    }
-    out
-}
-
-/// Read at most `limit` bytes of a regular file; a directory, an unreadable file or a larger
-/// file is an error naming the file.
-pub fn read_bytes(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> {
-    let meta = std::fs::metadata(path)
-        .map_err(|e| FileError::new(path, None, format!("cannot open: {e}")))?;
-    if meta.is_dir() {
-        return Err(FileError::new(path, None, "is a directory, not a file"));
-    }
-    let file = std::fs::File::open(path)
-        .map_err(|e| FileError::new(path, None, format!("cannot open: {e}")))?;
-    let mut bytes = Vec::new();
-    file.take(limit.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(|e| FileError::new(path, None, format!("cannot read: {e}")))?;
-    if bytes.len() as u64 > limit {
-        return Err(FileError::new(
-            path,
-            None,
-            format!("is larger than {limit} bytes"),
-        ));
-    }
-    Ok(bytes)
-}
-
-/// Read a text file (UTF-8, at most [`MAX_TEXT_BYTES`]). Invalid UTF-8 is an error naming the
-/// line of the first bad byte.
-pub fn read_text(path: &Path) -> Result<String, FileError> {
-    let bytes = read_bytes(path, MAX_TEXT_BYTES)?;
-    String::from_utf8(bytes).map_err(|e| {
-        let good = e.utf8_error().valid_up_to();
-        let bytes = e.as_bytes();
-        let line = bytes[..good].iter().filter(|b| **b == b'\n').count() as u32 + 1;
-        let bad = bytes.get(good).copied().unwrap_or(0);
-        FileError::new(
-            path,
-            Some(line),
-            format!("line {line}: not text: byte 0x{bad:02x} at offset {good} is not UTF-8"),
-        )
-    })
+/// A parse error of `text`, named with the file (the line brought back onto the file's last
+/// line when the text ended early).
+fn parse_error(path: &Path, text: &str, error: &ParseError) -> FileError {
+    FileError::at_line(path, text, error.line, &error.to_string())
 }
 
 /// Read a `.da` environment file.
 pub fn read_da(path: &Path) -> Result<Obstacles, FileError> {
-    let text = read_text(path)?;
+    let text = read_text(path, DA)?;
     let mut obstacles = Obstacles::new();
-    parse_da(&text, &mut obstacles).map_err(|e| FileError::parse(path, &text, &e))?;
+    parse_da(&text, &mut obstacles).map_err(|e| parse_error(path, &text, &e))?;
     Ok(obstacles)
 }
 
 /// Read a `.par` parameter file.
 pub fn read_par(path: &Path) -> Result<Params, FileError> {
-    let text = read_text(path)?;
-    parse_par(&text).map_err(|e| FileError::parse(path, &text, &e))
+    let text = read_text(path, PAR)?;
+    parse_par(&text).map_err(|e| parse_error(path, &text, &e))
 }
 
 /// Mark in `grid` every cell that a saved map (see the module doc) marks occupied, for the
@@ -152,20 +62,13 @@ pub fn read_saved_map<const W: usize>(path: &Path, grid: &mut Grid<W>) -> Result
     let g = *grid.geometry();
     let (w, h) = (g.width() as usize, g.height() as usize);
     let expected = w * h;
-    let bytes = read_bytes(path, expected as u64).map_err(|e| {
-        if e.detail.starts_with("is larger") {
-            FileError::new(
-                path,
-                None,
-                format!(
-                    "saved map is larger than {expected} bytes, the size of a {w}x{h} map \
-                         (one byte per cell, x-major); check --size and --resolution"
-                ),
-            )
-        } else {
-            e
-        }
-    })?;
+    let bytes = read_capped(
+        path,
+        &format!(
+            "a saved {w}x{h} map (one byte per cell, x-major); check --size and --resolution"
+        ),
+        expected as u64,
+    )?;
     if bytes.len() != expected {
         return Err(FileError::new(
             path,
@@ -207,6 +110,7 @@ pub fn write_saved_map<const W: usize>(path: &Path, grid: &Grid<W>) -> Result<()
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::PathBuf;
     use twil_core::grid::{Grid400, GridGeometry};
 
     fn temp(name: &str, bytes: &[u8]) -> (tempfile::TempDir, PathBuf) {
@@ -267,7 +171,7 @@ mod tests {
     fn saved_map_of_wrong_size_names_sizes_and_changes_nothing() {
         let g = GridGeometry::new(4, 3, 0.5).unwrap();
         let mut grid = Grid400::new(g).unwrap();
-        for (len, word) in [(11, "has 11 bytes"), (13, "larger than 12")] {
+        for (len, word) in [(11, "has 11 bytes"), (13, "is 13 bytes, more than the 12 bytes")] {
             let (_d, p) = temp("m.map", &vec![1u8; len]);
             let e = read_saved_map(&p, &mut grid).unwrap_err();
             let msg = e.to_string();
@@ -284,7 +188,7 @@ mod tests {
         let zero = Path::new("/dev/zero");
         if zero.exists() {
             let e = read_da(zero).unwrap_err();
-            assert!(e.to_string().contains("larger than"), "{e}");
+            assert!(e.to_string().contains("more than the 4194304 bytes"), "{e}");
         }
     }
 

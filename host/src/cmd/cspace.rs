@@ -15,13 +15,15 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context};
 use serde::Serialize;
 use twil_core::cspace::{
-    map::ConfigMap,
+    map::{ConfigMap, MapError},
     rob::{parse_rob, Robot},
     search::{path_is_free, path_length, NodeSet, Search, SearchReport, SearchStatus},
+    text::FileError as TextError,
     tra::Trajectory,
 };
 
 use crate::cspace::render::{self, Ink, Scene};
+use crate::files::{self, FileError};
 
 /// Which cells become search nodes.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -130,9 +132,6 @@ pub struct CompareSummary {
     pub free: bool,
 }
 
-fn read(path: &Path) -> anyhow::Result<String> {
-    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
-}
 
 /// Parse `A,B` into two finite numbers.
 pub fn parse_pair(s: &str) -> Result<[f32; 2], String> {
@@ -145,25 +144,44 @@ pub fn parse_pair(s: &str) -> Result<[f32; 2], String> {
     }
 }
 
-/// Read and check a `.ROB` file; errors name the file, line, field and value.
-pub fn load_robot(path: &Path) -> anyhow::Result<Robot> {
-    let text = read(path)?;
-    parse_rob(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+/// A reader's error named with the file (escaped, on the file's last line at most).
+fn file_error(path: &Path, text: &str, e: &TextError) -> FileError {
+    FileError::at_line(path, text, e.line, &e.to_string())
 }
 
-/// Read a `.MAP` file; which joints wrap comes from the robot.
-pub fn load_map(path: &Path, robot: &Robot) -> anyhow::Result<ConfigMap> {
-    let text = read(path)?;
+/// Read and check a `.ROB` file (at most [`files::ROB`] bytes); errors name the file, line,
+/// field and value.
+pub fn load_robot(path: &Path) -> Result<Robot, FileError> {
+    let text = files::read_text(path, files::ROB)?;
+    parse_rob(&text).map_err(|e| file_error(path, &text, &e))
+}
+
+/// Read a `.MAP` file (at most [`files::MAP`] bytes); which joints wrap comes from the robot.
+pub fn load_map(path: &Path, robot: &Robot) -> Result<ConfigMap, FileError> {
+    let text = files::read_text(path, files::MAP)?;
     let wraps = [robot.joints[0].wraps(), robot.joints[1].wraps()];
-    let (_, map) = ConfigMap::parse_map(&text, wraps)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let (_, map) = ConfigMap::parse_map(&text, wraps).map_err(|e| file_error(path, &text, &e))?;
     Ok(map)
 }
 
-/// Read a `.TRA` file.
-pub fn load_tra(path: &Path) -> anyhow::Result<Trajectory> {
-    let text = read(path)?;
-    Trajectory::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+/// Read a `.TRA` file (at most [`files::TRA`] bytes).
+pub fn load_tra(path: &Path) -> Result<Trajectory, FileError> {
+    let text = files::read_text(path, files::TRA)?;
+    Trajectory::parse(&text).map_err(|e| file_error(path, &text, &e))
+}
+
+/// Build the map of `robot` (read from `rob`). A map too large for its joint limits names the
+/// `.ROB` file with the lines and fields of the limits; a bad increment names `--increments`.
+pub fn build_map(rob: &Path, robot: &Robot, increments: [f32; 2]) -> anyhow::Result<ConfigMap> {
+    ConfigMap::build(robot, increments).map_err(|e| match e {
+        MapError::TooManyValues { line, .. } => {
+            anyhow::Error::new(FileError::new(rob, Some(line), e.to_string()))
+        }
+        MapError::TooManyCells { .. } => anyhow::Error::new(FileError::whole(rob, e)),
+        MapError::BadIncrement { .. } | MapError::WrapIncrement { .. } => {
+            anyhow::anyhow!("--increments: {e}")
+        }
+    })
 }
 
 /// Run `twil cspace`.
@@ -180,16 +198,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     "--increments {},{} disagree with {} ({},{})",
                     inc[0],
                     inc[1],
-                    path.display(),
+                    files::printable(&path.display().to_string()),
                     own[0],
                     own[1]
                 );
             }
             map
         }
-        (None, Some(increments)) => {
-            ConfigMap::build(&robot, increments).map_err(|e| anyhow::anyhow!("{e}"))?
-        }
+        (None, Some(increments)) => build_map(&args.rob, &robot, increments)?,
         (None, None) => bail!("--increments is needed unless --from-map is given"),
     };
     let increments = [map.axes()[0].increment, map.axes()[1].increment];
