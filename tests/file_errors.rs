@@ -15,7 +15,10 @@ fn fails(args: &[&str]) -> String {
     let t = Instant::now();
     let out: Output = common::twil().args(args).output().unwrap();
     let elapsed = t.elapsed();
-    assert!(elapsed < Duration::from_secs(10), "{args:?} took {elapsed:?}");
+    assert!(
+        elapsed < Duration::from_secs(10),
+        "{args:?} took {elapsed:?}"
+    );
     assert_eq!(
         out.status.code(),
         Some(1),
@@ -64,24 +67,41 @@ fn every_file_option(file: &Path) -> Vec<(&'static str, Vec<String>)> {
     let own = |p: &Path| p.to_str().unwrap().to_owned();
     let f = own(file);
     let cs = |opt: &str, rob: &str| {
-        let mut v = vec!["cspace", "--rob", rob, "--start", "-60,-35", "--goal", "140,-5"];
+        let mut v = vec![
+            "cspace", "--rob", rob, "--start", "-60,-35", "--goal", "140,-5",
+        ];
         if opt != "--from-map" {
             v.extend_from_slice(&["--increments", "2,2"]);
         }
         v.into_iter().map(str::to_owned).collect::<Vec<_>>()
     };
-    let plan = |a: &[&str]| -> Vec<String> {
-        ["plan"].iter().chain(a).map(|x| x.to_string()).collect()
-    };
+    let plan =
+        |a: &[&str]| -> Vec<String> { ["plan"].iter().chain(a).map(|x| x.to_string()).collect() };
     let sim = |a: &[&str]| -> Vec<String> {
-        ["simulate"].iter().chain(a).map(|x| x.to_string()).collect()
+        ["simulate"]
+            .iter()
+            .chain(a)
+            .map(|x| x.to_string())
+            .collect()
     };
     vec![
-        ("plan --world", plan(&["--world", &f, "--params", &own(&par)])),
-        ("plan --params", plan(&["--world", &own(&da), "--params", &f])),
+        (
+            "plan --world",
+            plan(&["--world", &f, "--params", &own(&par)]),
+        ),
+        (
+            "plan --params",
+            plan(&["--world", &own(&da), "--params", &f]),
+        ),
         ("plan --map", plan(&["--map", &f, "--params", &own(&par)])),
-        ("simulate --real", sim(&["--real", &f, "--params", &own(&par)])),
-        ("simulate --params", sim(&["--real", &own(&da), "--params", &f])),
+        (
+            "simulate --real",
+            sim(&["--real", &f, "--params", &own(&par)]),
+        ),
+        (
+            "simulate --params",
+            sim(&["--real", &own(&da), "--params", &f]),
+        ),
         (
             "simulate --known",
             sim(&["--real", &own(&da), "--params", &own(&par), "--known", &f]),
@@ -89,11 +109,19 @@ fn every_file_option(file: &Path) -> Vec<(&'static str, Vec<String>)> {
         ("cspace --rob", cs("--rob", &f)),
         (
             "cspace --from-map",
-            [cs("--from-map", &own(&rob)), vec!["--from-map".into(), f.clone()]].concat(),
+            [
+                cs("--from-map", &own(&rob)),
+                vec!["--from-map".into(), f.clone()],
+            ]
+            .concat(),
         ),
         (
             "cspace --compare",
-            [cs("--compare", &own(&rob)), vec!["--compare".into(), f.clone()]].concat(),
+            [
+                cs("--compare", &own(&rob)),
+                vec!["--compare".into(), f.clone()],
+            ]
+            .concat(),
         ),
     ]
 }
@@ -109,7 +137,8 @@ fn an_endless_device_is_refused_at_the_cap_by_every_reader() {
         let err = fails(&args);
         assert!(err.starts_with("twil: /dev/zero: "), "{option}: {err}");
         assert!(
-            err.contains("goes on beyond the cap, more than the") && err.contains("bytes allowed for"),
+            err.contains("goes on beyond the cap, more than the")
+                && err.contains("bytes allowed for"),
             "{option}: {err}"
         );
     }
@@ -125,11 +154,16 @@ fn a_10_mb_file_is_refused_by_its_size_before_reading() {
     for (option, args) in every_file_option(&big) {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let err = fails(&args);
-        assert!(err.contains("big.txt: is 10000000 bytes, more than the "), "{option}: {err}");
+        assert!(
+            err.contains("big.txt: is 10000000 bytes, more than the "),
+            "{option}: {err}"
+        );
     }
     let err = cspace(&big, &[]);
     assert!(
-        err.ends_with("big.txt: is 10000000 bytes, more than the 1048576 bytes allowed for a .ROB file\n"),
+        err.ends_with(
+            "big.txt: is 10000000 bytes, more than the 1048576 bytes allowed for a .ROB file\n"
+        ),
         "{err}"
     );
 }
@@ -151,14 +185,29 @@ fn escape_sequences_in_files_are_shown_escaped() {
     );
     let map = write("esc.MAP", "nav\n-180 -75\n2 2\n\u{1b}[31m 111\n");
     let err = cspace(&world("seed000-nav.ROB"), &["--from-map", s(&map)]);
-    assert!(err.contains("esc.MAP: line 4: field `values of joint 1`: `\\u{1b}[31m`"), "{err}");
+    assert!(
+        err.contains("esc.MAP: line 4: field `values of joint 1`: `\\u{1b}[31m`"),
+        "{err}"
+    );
     let tra = write("esc.TRA", "nav\n-180 -75\n2 2\n61 21\n\u{9b}6n 1\n");
     let err = cspace(&world("seed000-nav.ROB"), &["--compare", s(&tra)]);
-    assert!(err.contains("esc.TRA: line 5: field `index of joint 1` of path point 2: `\\u{9b}6n`"), "{err}");
+    assert!(
+        err.contains("esc.TRA: line 5: field `index of joint 1` of path point 2: `\\u{9b}6n`"),
+        "{err}"
+    );
     // The .da reader too (through the same escaping).
     let da = write("esc.da", "1\n3\n0 0\n1 \u{1b}[0m\n");
-    let err = fails(&["plan", "--world", s(&da), "--params", s(&world("office.par"))]);
-    assert!(err.contains("esc.da: line 4") && err.contains("\\u{1b}[0m"), "{err}");
+    let err = fails(&[
+        "plan",
+        "--world",
+        s(&da),
+        "--params",
+        s(&world("office.par")),
+    ]);
+    assert!(
+        err.contains("esc.da: line 4") && err.contains("\\u{1b}[0m"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -189,7 +238,9 @@ fn bytes_that_are_not_utf8_are_named_by_line_and_offset() {
         std::fs::write(&p, b"nav\n-180 -75\n\xc3(\n").unwrap();
         let err = cspace(&world("seed000-nav.ROB"), &[opt, s(&p)]);
         assert!(
-            err.ends_with(&format!("{name}: line 3: not text: byte 0xc3 at offset 13 is not UTF-8\n")),
+            err.ends_with(&format!(
+                "{name}: line 3: not text: byte 0xc3 at offset 13 is not UTF-8\n"
+            )),
             "{err}"
         );
     }
@@ -223,5 +274,8 @@ fn huge_joint_limits_name_the_file_line_and_field() {
     );
     // A bad increment is the command line's, not the file's.
     let err = cspace(&world("seed000-nav.ROB"), &["--increments", "0,2"]);
-    assert!(err.starts_with("twil: --increments: increment 0 of joint 1"), "{err}");
+    assert!(
+        err.starts_with("twil: --increments: increment 0 of joint 1"),
+        "{err}"
+    );
 }

@@ -263,8 +263,14 @@ mod tests {
         let p = dir.path().join("a\u{1b}[31mb.ROB");
         let e = FileError::new(&p, Some(1), "line 1: `\u{1b}]0;x\u{7}` \u{9b}2J \u{202e}");
         let msg = e.to_string();
-        assert!(!msg.chars().any(|c| c.is_control() || c == '\u{202e}'), "{msg:?}");
-        assert!(msg.contains("a\\u{1b}[31mb.ROB: line 1: `\\u{1b}]0;x\\u{7}` \\u{9b}2J \\u{202e}"), "{msg}");
+        assert!(
+            !msg.chars().any(|c| c.is_control() || c == '\u{202e}'),
+            "{msg:?}"
+        );
+        assert!(
+            msg.contains("a\\u{1b}[31mb.ROB: line 1: `\\u{1b}]0;x\\u{7}` \\u{9b}2J \\u{202e}"),
+            "{msg}"
+        );
         assert_eq!(printable(r#"ex\nav.ROB 'a' "b""#), r#"ex\nav.ROB 'a' "b""#);
     }
 

@@ -64,9 +64,7 @@ pub fn read_saved_map<const W: usize>(path: &Path, grid: &mut Grid<W>) -> Result
     let expected = w * h;
     let bytes = read_capped(
         path,
-        &format!(
-            "a saved {w}x{h} map (one byte per cell, x-major); check --size and --resolution"
-        ),
+        &format!("a saved {w}x{h} map (one byte per cell, x-major); check --size and --resolution"),
         expected as u64,
     )?;
     if bytes.len() != expected {
@@ -171,7 +169,10 @@ mod tests {
     fn saved_map_of_wrong_size_names_sizes_and_changes_nothing() {
         let g = GridGeometry::new(4, 3, 0.5).unwrap();
         let mut grid = Grid400::new(g).unwrap();
-        for (len, word) in [(11, "has 11 bytes"), (13, "is 13 bytes, more than the 12 bytes")] {
+        for (len, word) in [
+            (11, "has 11 bytes"),
+            (13, "is 13 bytes, more than the 12 bytes"),
+        ] {
             let (_d, p) = temp("m.map", &vec![1u8; len]);
             let e = read_saved_map(&p, &mut grid).unwrap_err();
             let msg = e.to_string();

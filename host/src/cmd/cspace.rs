@@ -132,7 +132,6 @@ pub struct CompareSummary {
     pub free: bool,
 }
 
-
 /// Parse `A,B` into two finite numbers.
 pub fn parse_pair(s: &str) -> Result<[f32; 2], String> {
     let mut it = s.split(',').map(|t| t.trim().parse::<f32>());

@@ -240,10 +240,11 @@ impl fmt::Display for MapError {
                 write!(f, "field `{field}` of joint {joint}: ")?;
                 if wraps {
                     write!(f, "a full turn ({} to {})", readable(min), readable(max))?;
+                    write!(f, " in steps of {} needs ", readable(increment))?;
                 } else {
                     write!(f, "the limits {} to {}", readable(min), readable(max))?;
+                    write!(f, " in steps of {} need ", readable(increment))?;
                 }
-                write!(f, " in steps of {} need ", readable(increment))?;
                 match values {
                     Some(n) => write!(f, "{n} values, more than the {MAX_AXIS_CELLS}")?,
                     None => write!(f, "more than the {MAX_AXIS_CELLS} values")?,
@@ -731,7 +732,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("joint 1: a full turn (-180 to 180) in steps of 1e-9 need more than"),
+            e.contains("joint 1: a full turn (-180 to 180) in steps of 1e-9 needs more than"),
             "{e}"
         );
         // Too many cells in all: both upper limits named.
