@@ -344,3 +344,46 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         _ => Ok(()),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+        /// Any bytes given as a `.ROB`, `.MAP` or `.TRA` file give a value or one line of error
+        /// that starts with the file, holds no control character and names a line of the file.
+        #[test]
+        fn any_bytes_give_a_value_or_a_clean_error_naming_the_file(
+            bytes in proptest::collection::vec(any::<u8>(), 0..300),
+            picks in proptest::collection::vec(0usize..24, 0..300),
+        ) {
+            // Raw bytes, and text from digits, separators, joint letters, ESC, BEL and C1 CSI.
+            let alphabet = ["0", "1", "2", "9", " ", "\n", "-", ".", "%", "R", "P", "e", "\u{1b}",
+                "\u{7}", "\u{9b}", "[", "A", " ", "\n", "4", "3", "\r", "\t", "x"];
+            let text: String = picks.iter().map(|i| alphabet[*i]).collect();
+            let robot = parse_rob("0 2 P 0 4 0 0 P 0 4 90 0").unwrap();
+            let dir = tempfile::tempdir().unwrap();
+            for content in [&bytes[..], text.as_bytes()] {
+                let path = dir.path().join("in.ROB");
+                std::fs::write(&path, content).unwrap();
+                let errors = [
+                    load_robot(&path).err(),
+                    load_map(&path, &robot).err(),
+                    load_tra(&path).err(),
+                ];
+                for e in errors.into_iter().flatten() {
+                    let msg = e.to_string();
+                    prop_assert!(msg.starts_with(&path.display().to_string()), "{}", msg);
+                    prop_assert!(!msg.chars().any(char::is_control), "{:?}", msg);
+                    prop_assert!(msg.len() < 400, "{}", msg);
+                    let lines = content.iter().filter(|b| **b == b'\n').count() as u32 + 1;
+                    if let Some(line) = e.line {
+                        prop_assert!((1..=lines).contains(&line), "{} of {}: {}", line, lines, msg);
+                    }
+                }
+            }
+        }
+    }
+}
