@@ -52,6 +52,7 @@
 pub mod frame;
 pub mod handler;
 pub mod message;
+pub mod replay;
 pub mod robot;
 
 pub use frame::{FrameDecoder, FrameFault, MAX_FRAME_BYTES};

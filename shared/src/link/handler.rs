@@ -525,6 +525,7 @@ pub struct Device<const GRID_WORDS: usize> {
     /// The handler (public so the firmware can set its build and RAM figures).
     pub handler: Handler<GRID_WORDS>,
     grid: Grid<GRID_WORDS>,
+    replay: super::replay::ReplayCache,
 }
 
 impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
@@ -534,6 +535,7 @@ impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
             decoder: FrameDecoder::new(),
             handler: Handler::new(info),
             grid: Handler::<GRID_WORDS>::initial_grid(),
+            replay: super::replay::ReplayCache::new(),
         }
     }
 
@@ -562,11 +564,20 @@ impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
             rest = r;
             let (seq, reply) = match got {
                 None => continue,
-                Some(Ok(frame)) => (
-                    Some(frame.seq),
-                    self.handler
-                        .handle(&frame.request, &mut self.grid, planner, clock),
-                ),
+                Some(Ok(frame)) => match self.replay.lookup(frame.seq, &frame.request) {
+                    // A retry of the last request: its reply again, not a second execution.
+                    Some(reply) => {
+                        self.handler.count_request();
+                        (Some(frame.seq), reply)
+                    }
+                    None => {
+                        let reply =
+                            self.handler
+                                .handle(&frame.request, &mut self.grid, planner, clock);
+                        self.replay.record(frame.seq, &frame.request, &reply);
+                        (Some(frame.seq), reply)
+                    }
+                },
                 Some(Err(fault)) => self.handler.fault_reply(fault),
             };
             self.send_frame(&DeviceFrame::Reply { seq, reply }, send);
