@@ -320,7 +320,6 @@ impl Remote {
                 Ok(DeviceFrame::Telemetry(t)) => self.telemetry.push(t),
                 Err(fault) => {
                     // Perhaps the reply: ask again now rather than wait.
-                    self.damaged_frames = self.damaged_frames.saturating_add(1);
                     if debug {
                         eprintln!("twil: link: dropped a damaged frame: {fault:?}");
                     }
@@ -346,7 +345,7 @@ impl Remote {
         self.retries
     }
 
-    /// Damaged frames from the device dropped so far by [`Remote::request`].
+    /// Damaged frames from the device seen so far (dropped).
     pub fn damaged_frames(&self) -> u32 {
         self.damaged_frames
     }
@@ -368,6 +367,9 @@ impl Remote {
                 let (got, rest) = self.decoder.feed::<DeviceFrame>(&backlog);
                 self.backlog = rest.to_vec();
                 if let Some(got) = got {
+                    if got.is_err() {
+                        self.damaged_frames = self.damaged_frames.saturating_add(1);
+                    }
                     return Ok(got);
                 }
             }
