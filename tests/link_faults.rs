@@ -71,7 +71,10 @@ fn a_hundred_plans_complete_through_a_bad_line_to_the_in_process_device() {
         remote.damaged_frames(),
         started.elapsed().as_secs_f32()
     );
-    assert!(damaged as f64 >= 0.008 * bytes as f64, "the line did damage");
+    assert!(
+        damaged as f64 >= 0.008 * bytes as f64,
+        "the line did damage"
+    );
     assert!(remote.retries() > 0);
     assert_eq!(completed, plans);
 }

@@ -26,7 +26,10 @@ pub const POLL_AFTER: Duration = Duration::from_secs(1);
 /// Ask `MissionStatus`; if the mission has ended, hand its report to `follower` as the final
 /// report (the `Finished` telemetry was lost) and return `true`. A failed request (no reply)
 /// returns `false`: the caller's silence limit decides.
-pub(super) fn recover_final_report(remote: &mut Remote, follower: &mut super::mission::Follower) -> bool {
+pub(super) fn recover_final_report(
+    remote: &mut Remote,
+    follower: &mut super::mission::Follower,
+) -> bool {
     let reply = remote.request(Request::MissionStatus);
     // Telemetry that came in meanwhile goes first, in order.
     for t in std::mem::take(&mut remote.telemetry) {

@@ -144,6 +144,11 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         self.path_points
     }
 
+    /// The vertices of the polygon being uploaded (`ObstacleChunk`s not closed yet).
+    pub fn pending(&self) -> &[PointM] {
+        &self.pending
+    }
+
     /// Forget the last path (the planner has been used for something else since).
     pub fn forget_path(&mut self) {
         self.path_points = 0;
@@ -243,10 +248,8 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                     expanded: planner.last_report().map(|r| r.expanded).unwrap_or(0),
                     queue_peak: planner.queue_peak(),
                 };
-                let report = result.map_err(|e| {
-                    self.path_points = 0;
-                    plan_error(e)
-                })?;
+                // A planner error keeps the last path in the planner (and its count here).
+                let report = result.map_err(plan_error)?;
                 self.path_points = if report.status == crate::plan::PlanStatus::Found {
                     planner.path_cells().len().min(u16::MAX as usize) as u16
                 } else {

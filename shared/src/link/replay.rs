@@ -204,7 +204,11 @@ mod tests {
         // A read in between replaces the entry: the old seq is no longer matched.
         cache.record(6, &Request::Status, &Reply::Ack);
         assert_eq!(cache.lookup(5, &clear), None);
-        assert_eq!(cache.lookup(6, &Request::Status), None, "reads are executed again");
+        assert_eq!(
+            cache.lookup(6, &Request::Status),
+            None,
+            "reads are executed again"
+        );
         // Errors are replayed too.
         let e = Reply::Error(ErrorReply::new(ErrorCode::WrongState, 2, 0));
         cache.record(7, &Request::StartMission, &e);

@@ -850,3 +850,6 @@ fn state_index(state: RunState) -> u32 {
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod promise_tests;
