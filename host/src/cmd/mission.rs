@@ -833,11 +833,15 @@ fn follow(
             }
             // Quiet: the final report may have been lost on the way (see mission_link).
             Err(e) if Instant::now() >= wait_until => {
-                if super::mission_link::recover_final_report(remote, follower) {
-                    continue;
-                }
-                if last_heard.elapsed() < silence {
-                    continue;
+                use super::mission_link::{recover_final_report, Poll};
+                match recover_final_report(remote, follower) {
+                    Poll::Finished => continue,
+                    Poll::Alive => {
+                        last_heard = Instant::now();
+                        continue;
+                    }
+                    Poll::NoReply if last_heard.elapsed() < silence => continue,
+                    Poll::NoReply => {}
                 }
                 return Err(e).with_context(|| {
                     format!(
@@ -973,6 +977,75 @@ mod tests {
         assert!(
             format!("{e:#}").contains("the device went silent: no telemetry for 0.3 s"),
             "{e:#}"
+        );
+    }
+
+    /// A device whose mission has ended and whose `Finished` telemetry was lost: it answers
+    /// every request with its report.
+    struct Ended(Vec<u8>);
+    impl std::io::Write for Ended {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            let mut decoder = twil_core::link::FrameDecoder::new();
+            let mut rest = b;
+            while !rest.is_empty() {
+                let (got, r) = decoder.feed::<twil_core::link::RequestFrame>(rest);
+                rest = r;
+                if let Some(Ok(frame)) = got {
+                    let report = MissionReport {
+                        state: twil_core::link::RunState::Ended,
+                        status: MissionStatus::Reached,
+                        phase: MissionPhase::Done,
+                        stats: Default::default(),
+                        max_control_instructions: 0,
+                        max_plan_instructions: 0,
+                        stack_high_water_bytes: 0,
+                        stop_ticks: 0,
+                        emergency_stop: false,
+                    };
+                    let mut out = [0u8; twil_core::link::MAX_FRAME_BYTES];
+                    let reply = DeviceFrame::Reply {
+                        seq: Some(frame.seq),
+                        reply: Reply::Mission(report),
+                    };
+                    let bytes = twil_core::link::frame::encode(&reply, &mut out).unwrap();
+                    self.0.extend_from_slice(bytes);
+                }
+            }
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    impl std::io::Read for Ended {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            if self.0.is_empty() {
+                std::thread::sleep(Duration::from_millis(5));
+                return Err(std::io::ErrorKind::WouldBlock.into());
+            }
+            let n = buf.len().min(self.0.len());
+            buf[..n].copy_from_slice(&self.0[..n]);
+            self.0.drain(..n);
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn a_lost_final_report_is_asked_for_after_a_second_of_quiet() {
+        let args = args(&[]);
+        let inputs = read_inputs(&args).unwrap();
+        let mut follower = Follower::new(&inputs, false).unwrap();
+        let mut remote = Remote::over(Ended(Vec::new()));
+        let started = Instant::now();
+        follow(&args, &mut remote, &mut follower, &ProgressBar::hidden()).unwrap();
+        let waited = started.elapsed();
+        assert!(
+            waited >= super::super::mission_link::POLL_AFTER && waited < Duration::from_secs(3),
+            "{waited:?}"
+        );
+        assert_eq!(
+            follower.finished.map(|r| r.status),
+            Some(MissionStatus::Reached)
         );
     }
 

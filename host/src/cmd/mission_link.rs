@@ -23,27 +23,38 @@ use crate::remote::Remote;
 /// reports its pose every 200 ms, so a second of quiet means lost frames or an ended mission.
 pub const POLL_AFTER: Duration = Duration::from_secs(1);
 
+/// What [`recover_final_report`] learnt.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Poll {
+    /// The mission has ended: the follower has its final report.
+    Finished,
+    /// The device answered: the mission goes on (the link is alive, only quiet).
+    Alive,
+    /// No reply within the timeout: the caller's silence limit decides.
+    NoReply,
+}
+
 /// Ask `MissionStatus`; if the mission has ended, hand its report to `follower` as the final
-/// report (the `Finished` telemetry was lost) and return `true`. A failed request (no reply)
-/// returns `false`: the caller's silence limit decides.
+/// report (the `Finished` telemetry was lost).
 pub(super) fn recover_final_report(
     remote: &mut Remote,
     follower: &mut super::mission::Follower,
-) -> bool {
+) -> Poll {
     let reply = remote.request(Request::MissionStatus);
     // Telemetry that came in meanwhile goes first, in order.
     for t in std::mem::take(&mut remote.telemetry) {
         follower.absorb(t);
     }
     if follower.finished.is_some() {
-        return true;
+        return Poll::Finished;
     }
     match reply {
         Ok(Reply::Mission(report)) if report.state == RunState::Ended => {
             follower.absorb(Telemetry::Finished(report));
-            true
+            Poll::Finished
         }
-        _ => false,
+        Ok(_) => Poll::Alive,
+        Err(_) => Poll::NoReply,
     }
 }
 
