@@ -2853,9 +2853,12 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             self.last = Some(report);
             return Ok(report);
         }
-        // A path that may not fit is counted first, so that `PathFull` keeps the last path.
-        // Only long paths need it: a path of `steps` moves has at most `steps + 2` vertices
-        // (any-angle adds at most one per run of the A* path and the final one).
+        // `PathFull` must keep the last path. Only long paths may not fit: a path of `steps`
+        // moves has at most `steps + 2` vertices (any-angle adds at most one per run of the
+        // A* path, and the final one). For those the last path is first put aside in the
+        // queue, free once the search is over (the firmware's 1 024 entries hold all 3 072
+        // vertices, 3 a entry), and put back if the new one does not fit; a planner whose
+        // queue is too small counts the new path before writing it (its rebuild twice).
         let steps_bound = match kind {
             PlannerKind::Bfs if search.cost > 0 => search.cost,
             PlannerKind::Bfs => u32::MAX, // the layered BFS does not count its steps
@@ -2870,10 +2873,15 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             },
             _ => planner.rebuild_merged(&geometry, goal, count_only),
         };
-        let counted = if may_overflow && !self.cells.is_empty() {
-            Some(rebuild(self, true))
-        } else {
-            None
+        let last_path = self.cells.len();
+        let kept = match may_overflow && last_path > 0 {
+            false => Kept::Nothing,
+            true if self.stash_path() => Kept::InQueue(last_path),
+            true => Kept::Counted,
+        };
+        let counted = match kept {
+            Kept::Counted => Some(rebuild(self, true)),
+            _ => None,
         };
         let (length_cells, steps, fits) = match counted {
             Some(counted) if !counted.2 => counted,
@@ -2882,6 +2890,13 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 rebuild(self, false)
             }
         };
+        if !fits {
+            match kept {
+                Kept::InQueue(n) => self.unstash_path(n),
+                Kept::Counted => {} // not written
+                Kept::Nothing => self.cells.clear(),
+            }
+        }
         let report = PlanReport {
             status: PlanStatus::Found,
             expanded: search.expanded,
@@ -2893,10 +2908,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         };
         self.last = Some(report);
         if !fits {
-            if counted.is_none() {
-                // Written and did not fit (there was no last path to keep).
-                self.cells.clear();
-            }
             return Err(PlanError::PathFull {
                 capacity: MAX_PATH_POINTS as u32,
             });
@@ -2908,6 +2919,33 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     /// plan that found no path; an error ([`PlanError`]) leaves the previous path.
     pub fn path_cells(&self) -> &[Cell] {
         &self.cells
+    }
+
+    /// Copy the last path into the queue (3 cells an entry); `false` when it does not fit.
+    /// Only after a search: the queue is free until the next one.
+    fn stash_path(&mut self) -> bool {
+        if self.cells.len().div_ceil(3) > QUEUE {
+            return false;
+        }
+        let pack = |c: Option<&Cell>| c.map_or(0, |c| (c.x as u32) << 16 | c.y as u32);
+        for (entry, chunk) in self.queue.iter_mut().zip(self.cells.chunks(3)) {
+            entry.f = pack(chunk.first());
+            entry.node = pack(chunk.get(1));
+            entry.next = pack(chunk.get(2));
+        }
+        true
+    }
+
+    /// Put back the `n` cells of the path [`Planner::stash_path`] copied.
+    fn unstash_path(&mut self, n: usize) {
+        self.cells.clear();
+        for entry in self.queue.iter().take(n.div_ceil(3)) {
+            for word in [entry.f, entry.node, entry.next] {
+                if self.cells.len() < n {
+                    let _ = self.cells.push(Cell::new((word >> 16) as u16, word as u16));
+                }
+            }
+        }
     }
 
     /// The report of the last planning request, also when it ended in
@@ -3501,6 +3539,17 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         out.reverse(&mut self.cells);
         (length, steps, fits)
     }
+}
+
+/// How a plan that may overflow the path keeps the last one.
+#[derive(Clone, Copy, Debug)]
+enum Kept {
+    /// No last path, or the new one surely fits.
+    Nothing,
+    /// Copied into the queue: this many cells.
+    InQueue(usize),
+    /// The new path is counted before it is written.
+    Counted,
 }
 
 /// Where a path rebuild puts its vertices: the planner's cells, or only a count of them (to

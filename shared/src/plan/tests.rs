@@ -434,6 +434,26 @@ fn path_full_keeps_the_report() {
         );
         assert_eq!(p.path_cells(), &serpentine[..], "{kind:?}");
     }
+    // A planner whose queue cannot hold the last path counts the new one before writing it.
+    let mut small = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 32>::new());
+    small
+        .plan_at(
+            PlannerKind::Bfs,
+            &g,
+            geometry.center_of(Cell::new(0, 0)),
+            geometry.center_of(Cell::new(198, 0)),
+        )
+        .unwrap();
+    let small_path = small.path_cells().to_vec();
+    assert!(small_path.len() > 3 * 32, "{} vertices", small_path.len());
+    let err = small.plan_at(
+        PlannerKind::Bfs,
+        &g2,
+        long.center_of(Cell::new(0, 0)),
+        long.center_of(Cell::new(0, 3)),
+    );
+    assert!(matches!(err, Err(PlanError::PathFull { .. })), "{err:?}");
+    assert_eq!(small.path_cells(), &small_path[..]);
     // With no last path the overflowing one is not kept either.
     let mut fresh = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 8192>::new());
     let err = fresh.plan_at(
