@@ -216,6 +216,13 @@ mod tests {
     }
 
     #[test]
+    fn the_cache_is_small() {
+        // The firmware's RAM is tight: no copy of a 270-byte reply.
+        assert!(core::mem::size_of::<ReplayCache>() <= 64);
+        assert!(core::mem::size_of::<CachedReply>() <= 48);
+    }
+
+    #[test]
     fn fingerprints_tell_requests_apart() {
         assert_ne!(
             fingerprint(&Request::ClearMap),
