@@ -68,6 +68,21 @@ impl FromStr for RemoteSpec {
 /// frame in at most 45 ms).
 pub const REPLY_TIMEOUT: Duration = Duration::from_secs(20);
 
+/// Silence after which a request is sent again. The longest legitimate wait: a request frame
+/// and its reply frame at 115200 baud (2 x 512 bytes x 10 bits = 89 ms) plus the slowest
+/// request (a plan within the 5 M-instruction budget: 30 ms at 168 MHz, 40 ms under QEMU at
+/// `-icount shift=3`), about 130 ms; 500 ms leaves room for a loaded host running QEMU. A
+/// retry that comes too early only costs a repeated reply.
+pub const RETRY_AFTER: Duration = Duration::from_millis(500);
+
+/// Longest silence between two sends of one request (the wait doubles from [`RETRY_AFTER`]).
+pub const RETRY_AFTER_MAX: Duration = Duration::from_secs(2);
+
+/// Sends of one request at most. A resend follows at once every damaged frame, so this is
+/// high: with 1 % of bytes damaged a 270-byte reply (a path or map chunk) arrives whole with
+/// probability 0.99^270 = 6.6 %, and 200 tries all fail with probability 0.934^200 < 1e-5.
+pub const MAX_ATTEMPTS: u32 = 200;
+
 trait Io: Read + Write + Send {}
 impl<T: Read + Write + Send> Io for T {}
 
@@ -91,6 +106,8 @@ pub struct Remote {
     pub telemetry: Vec<Telemetry>,
     /// Error replies to damaged frames (no sequence number) seen while waiting.
     pub unmatched_errors: Vec<Reply>,
+    retries: u32,
+    damaged_frames: u32,
     /// Kept last so that the socket closes before QEMU is killed.
     qemu: Option<Qemu>,
 }
@@ -183,6 +200,8 @@ impl Remote {
             timeout: REPLY_TIMEOUT,
             telemetry: Vec::new(),
             unmatched_errors: Vec::new(),
+            retries: 0,
+            damaged_frames: 0,
             qemu,
         }
     }
@@ -237,7 +256,14 @@ impl Remote {
     }
 
     /// Send one request and return the device's reply to it (an error reply is returned as
-    /// `Reply::Error`, not as `Err`). `Err` means the link failed (timeout, closed).
+    /// `Reply::Error`, not as `Err`). `Err` means the link failed: no reply within the timeout
+    /// ([`Remote::set_timeout`]) after up to [`MAX_ATTEMPTS`] sends, or the link closed.
+    ///
+    /// The request is sent again under the same sequence number (the device answers a repeat
+    /// from its replay cache and never executes it twice, see `twil_core::link::replay`) at
+    /// once when the device reports a frame it could not read or a frame from the device
+    /// arrives damaged (it may have been the reply), and after [`RETRY_AFTER`] of silence
+    /// (doubling up to [`RETRY_AFTER_MAX`]). Each resend counts in [`Remote::retries`].
     pub fn request(&mut self, request: Request) -> Result<Reply> {
         self.seq = self.seq.wrapping_add(1);
         let seq = self.seq;
@@ -248,23 +274,35 @@ impl Remote {
         let mut wire = Vec::with_capacity(bytes.len() + 1);
         wire.push(0);
         wire.extend_from_slice(bytes);
-        if std::env::var_os("TWIL_LINK_DEBUG").is_some() {
+        let debug = std::env::var_os("TWIL_LINK_DEBUG").is_some();
+        if debug {
             eprintln!("twil: link: -> seq {seq} ({} bytes)", wire.len());
         }
         self.send_raw(&wire)?;
         let deadline = Instant::now() + self.timeout;
-        // The leading 0x00 can end at most one stale partial frame, answered by one error without
-        // a sequence number; a second such error is the answer to this request's frame.
-        let mut unnumbered_errors = 0;
+        let mut attempts = 1u32;
+        let mut quiet = RETRY_AFTER;
+        let mut resend_at = Instant::now() + quiet;
+        let mut last_error: Option<Reply> = None;
         loop {
-            let frame = match self.next_frame(deadline) {
+            let now = Instant::now();
+            if now >= resend_at && now < deadline {
+                if attempts >= MAX_ATTEMPTS {
+                    return Err(self.gave_up(seq, attempts, last_error.as_ref()));
+                }
+                attempts += 1;
+                self.retries = self.retries.saturating_add(1);
+                if debug {
+                    eprintln!("twil: link: -> seq {seq} again (attempt {attempts})");
+                }
+                self.send_raw(&wire)?;
+                quiet = (quiet * 2).min(RETRY_AFTER_MAX);
+                resend_at = Instant::now() + quiet;
+            }
+            let frame = match self.next_frame(resend_at.min(deadline)) {
                 Ok(frame) => frame,
-                Err(e) => match self.unmatched_errors.last() {
-                    Some(Reply::Error(last)) if unnumbered_errors > 0 => {
-                        return Err(e.context(format!("the device last reported: {last}")))
-                    }
-                    _ => return Err(e),
-                },
+                Err(_) if Instant::now() < deadline => continue, // quiet: resend
+                Err(_) => return Err(self.gave_up(seq, attempts, last_error.as_ref())),
             };
             match frame {
                 Ok(DeviceFrame::Reply {
@@ -272,19 +310,44 @@ impl Remote {
                     reply,
                 }) if s == seq => return Ok(reply),
                 Ok(DeviceFrame::Reply { seq: None, reply }) => {
-                    unnumbered_errors += 1;
-                    if unnumbered_errors >= 2 {
-                        if let Reply::Error(e) = &reply {
-                            bail!("the device could not read request {seq}: {e}");
-                        }
-                    }
-                    self.unmatched_errors.push(reply);
+                    // The device could not read a frame: perhaps this request's. Send it again
+                    // now (a repeat is answered, not executed twice).
+                    self.unmatched_errors.push(reply.clone());
+                    last_error = Some(reply);
+                    resend_at = Instant::now();
                 }
                 Ok(DeviceFrame::Reply { .. }) => {} // a stale reply to an earlier request
                 Ok(DeviceFrame::Telemetry(t)) => self.telemetry.push(t),
-                Err(fault) => eprintln!("twil: dropped a damaged frame from the device: {fault:?}"),
+                Err(fault) => {
+                    // Perhaps the reply: ask again now rather than wait.
+                    if debug {
+                        eprintln!("twil: link: dropped a damaged frame: {fault:?}");
+                    }
+                    resend_at = Instant::now();
+                }
             }
         }
+    }
+
+    fn gave_up(&self, seq: u16, attempts: u32, last_error: Option<&Reply>) -> anyhow::Error {
+        let last = match last_error {
+            Some(Reply::Error(last)) => format!("; the device last reported: {last}"),
+            _ => String::new(),
+        };
+        anyhow!(
+            "no reply from the device within {} s (request {seq} sent {attempts} times){last}",
+            self.timeout.as_secs_f32()
+        )
+    }
+
+    /// Requests sent again so far (see [`Remote::request`]).
+    pub fn retries(&self) -> u32 {
+        self.retries
+    }
+
+    /// Damaged frames from the device seen so far (dropped).
+    pub fn damaged_frames(&self) -> u32 {
+        self.damaged_frames
     }
 
     /// Like [`Remote::request`], but an error reply becomes `Err` with the device's message.
@@ -304,6 +367,9 @@ impl Remote {
                 let (got, rest) = self.decoder.feed::<DeviceFrame>(&backlog);
                 self.backlog = rest.to_vec();
                 if let Some(got) = got {
+                    if got.is_err() {
+                        self.damaged_frames = self.damaged_frames.saturating_add(1);
+                    }
                     return Ok(got);
                 }
             }
@@ -714,6 +780,8 @@ mod tests {
         out: std::collections::VecDeque<u8>,
         /// Flip a bit in the next write (a line error).
         corrupt_next: std::sync::Arc<std::sync::atomic::AtomicBool>,
+        /// Lose the device's next replies (this many).
+        lose_replies: std::sync::Arc<std::sync::atomic::AtomicU32>,
     }
 
     impl Loopback {
@@ -723,6 +791,7 @@ mod tests {
                 planner: Box::new(twil_core::link::mcu::McuPlanner::new()),
                 out: Default::default(),
                 corrupt_next: Default::default(),
+                lose_replies: Default::default(),
             }
         }
     }
@@ -738,9 +807,19 @@ mod tests {
                 bytes[last] ^= 0x08;
             }
             let out = &mut self.out;
+            let lose = &self.lose_replies;
             self.device
                 .receive(&bytes, &mut *self.planner, &mut || 0, &mut |b: &[u8]| {
-                    out.extend(b)
+                    let lost = lose
+                        .fetch_update(
+                            std::sync::atomic::Ordering::Relaxed,
+                            std::sync::atomic::Ordering::Relaxed,
+                            |n| n.checked_sub(1),
+                        )
+                        .is_ok();
+                    if !lost {
+                        out.extend(b)
+                    }
                 });
             Ok(bytes.len())
         }
@@ -813,29 +892,90 @@ mod tests {
     }
 
     #[test]
-    fn a_request_damaged_on_the_line_is_reported() {
+    fn a_request_damaged_on_the_line_is_sent_again_and_answered() {
         let loopback = Loopback::new();
         let corrupt = loopback.corrupt_next.clone();
         let mut remote = Remote::over(loopback);
-        remote.set_timeout(Duration::from_millis(300));
-        // Damaged alone: the device's unnumbered error is named when the wait times out.
+        // Damaged: the device's unnumbered error makes the host send it again at once.
         corrupt.store(true, std::sync::atomic::Ordering::Relaxed);
-        let e = remote.request(Request::Ping { nonce: 1 }).unwrap_err();
-        assert!(
-            format!("{e:#}")
-                .contains("the device last reported: the device received a frame with a bad CRC"),
-            "{e:#}"
+        assert_eq!(
+            remote.request(Request::Ping { nonce: 1 }).unwrap(),
+            Reply::Pong { nonce: 1 }
         );
-        // After a stale partial frame: two unnumbered errors, the second is ours: no waiting.
+        assert_eq!(remote.retries(), 1);
+        match remote.unmatched_errors.last() {
+            Some(Reply::Error(e)) => assert_eq!(e.code, twil_core::link::ErrorCode::BadCrc),
+            other => panic!("{other:?}"),
+        }
+        // After a stale partial frame as well.
         remote.send_raw(&[0x05, 0x01, 0x02]).unwrap();
         corrupt.store(true, std::sync::atomic::Ordering::Relaxed);
-        let e = remote.request(Request::Ping { nonce: 2 }).unwrap_err();
-        assert!(
-            e.to_string()
-                .starts_with("the device could not read request"),
-            "{e:#}"
+        assert_eq!(
+            remote.request(Request::Ping { nonce: 2 }).unwrap(),
+            Reply::Pong { nonce: 2 }
         );
         assert!(remote.ping(3).is_ok());
+    }
+
+    #[test]
+    fn a_lost_reply_is_asked_again_and_the_request_runs_once() {
+        let loopback = Loopback::new();
+        let lose = loopback.lose_replies.clone();
+        let mut remote = Remote::over(loopback);
+        remote.hello().unwrap();
+        let square = [
+            PointM::new(1.0, 1.0),
+            PointM::new(2.0, 1.0),
+            PointM::new(2.0, 2.0),
+            PointM::new(1.0, 2.0),
+        ];
+        // The reply to the closing chunk is lost: the host sends it again after the silence
+        // and gets the same reply, where a second execution would be out of order.
+        lose.store(1, std::sync::atomic::Ordering::Relaxed);
+        let t0 = Instant::now();
+        remote.upload_polygon(&square).unwrap();
+        assert!(t0.elapsed() >= RETRY_AFTER, "{:?}", t0.elapsed());
+        assert_eq!(remote.retries(), 1);
+        match remote.call(Request::Status).unwrap() {
+            Reply::Status(s) => {
+                assert_eq!((s.polygons, s.vertices, s.pending_vertices), (1, 4, 0));
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// A device that never answers: the host gives up after the timeout, having sent again.
+    struct Silent(std::sync::Arc<std::sync::atomic::AtomicU32>);
+    impl Write for Silent {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    impl Read for Silent {
+        fn read(&mut self, _: &mut [u8]) -> std::io::Result<usize> {
+            std::thread::sleep(Duration::from_millis(5));
+            Err(std::io::ErrorKind::WouldBlock.into())
+        }
+    }
+
+    #[test]
+    fn a_silent_device_gets_the_request_again_then_a_clear_error() {
+        let writes = std::sync::Arc::new(std::sync::atomic::AtomicU32::new(0));
+        let mut remote = Remote::over(Silent(writes.clone()));
+        remote.set_timeout(Duration::from_millis(1600));
+        let e = remote.request(Request::Status).unwrap_err();
+        // Sends at 0, 0.5 s and 1.5 s (the wait doubles).
+        assert_eq!(writes.load(std::sync::atomic::Ordering::Relaxed), 3);
+        assert_eq!(remote.retries(), 2);
+        assert!(
+            e.to_string()
+                .starts_with("no reply from the device within 1.6 s (request 1 sent 3 times)"),
+            "{e:#}"
+        );
     }
 
     #[test]

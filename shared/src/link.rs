@@ -25,6 +25,8 @@
 //!   `None` unless the CRC was good and the sequence number could be read).
 //! - A request that fails changes nothing: the map, the obstacles and the last path stay as they
 //!   were.
+//! - A request sent again under the same sequence number (its reply was lost) is answered
+//!   again and never executed twice ([`replay`]).
 //!
 //! ```
 //! use twil_core::link::{frame, Device, DeviceFrame, Reply, Request, RequestFrame};
@@ -52,6 +54,7 @@
 pub mod frame;
 pub mod handler;
 pub mod message;
+pub mod replay;
 pub mod robot;
 
 pub use frame::{FrameDecoder, FrameFault, MAX_FRAME_BYTES};

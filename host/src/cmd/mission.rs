@@ -265,7 +265,7 @@ impl PlanRecord {
 }
 
 /// Everything gathered from the telemetry.
-struct Follower {
+pub(super) struct Follower {
     half: u16,
     pictures: bool,
     grid: Box<Grid400>,
@@ -281,7 +281,10 @@ struct Follower {
     plan_snapshots: Vec<Snapshot>,
     frames: Vec<Snapshot>,
     next_frame_s: f32,
-    finished: Option<MissionReport>,
+    pub(super) finished: Option<MissionReport>,
+    /// Telemetry chunks that arrived after a gap (a lost chunk before them): the pictured map
+    /// and plans miss what was lost (see `mission_link`).
+    telemetry_gaps: u32,
 }
 
 /// Seconds between two frames of `mission.gif`.
@@ -316,6 +319,7 @@ impl Follower {
             frames: Vec::new(),
             next_frame_s: 0.0,
             finished: None,
+            telemetry_gaps: 0,
         })
     }
 
@@ -366,7 +370,7 @@ impl Follower {
         }
     }
 
-    fn absorb(&mut self, telemetry: Telemetry) {
+    pub(super) fn absorb(&mut self, telemetry: Telemetry) {
         match telemetry {
             Telemetry::Pose(report) => {
                 if let Some(last) = self.poses.last() {
@@ -402,6 +406,9 @@ impl Follower {
                     self.sweep = sweep;
                     self.hits.clear();
                 }
+                if first as usize != self.hits.len() {
+                    self.telemetry_gaps += 1;
+                }
                 for p in &hits {
                     twil_core::raster::mark_point_m(&mut self.grid, *p, self.half);
                 }
@@ -429,6 +436,8 @@ impl Follower {
                 if let Some(p) = self.plan.as_mut().filter(|p| p.number == plan) {
                     if first as usize == p.prefix.len() {
                         p.prefix.extend_from_slice(&points);
+                    } else {
+                        self.telemetry_gaps += 1;
                     }
                     p.prefix_total = Some(total);
                 }
@@ -443,6 +452,8 @@ impl Follower {
                 if let Some(p) = self.plan.as_mut().filter(|p| p.number == plan) {
                     if first as usize == p.path.len() {
                         p.path.extend_from_slice(&points);
+                    } else {
+                        self.telemetry_gaps += 1;
                     }
                     p.path_total = Some(total);
                 }
@@ -518,6 +529,8 @@ pub struct Outcome {
     pub poses: usize,
     /// Ctrl-C aborted the mission.
     pub interrupted: bool,
+    /// What the link lost and repaired (`summary.json`).
+    pub link: super::mission_link::LinkReport,
 }
 
 /// The `--json` object: the keys of `twil simulate --json` plus `mcu`.
@@ -567,6 +580,7 @@ fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value {
         "plan_errors": s.plan_errors,
         "poses_reported": outcome.poses,
         "interrupted": outcome.interrupted,
+        "link": outcome.link.json(),
     });
     if let (Some(obj), Some(extra)) = (v.as_object_mut(), extra.as_object()) {
         for (k, val) in extra {
@@ -663,6 +677,7 @@ pub fn run(args: Args) -> Result<()> {
         let _ = remote.request(Request::AbortMission);
     }
     bar.finish_and_clear();
+    let link = super::mission_link::LinkReport::of(&remote, follower.telemetry_gaps);
     // Done with the device (QEMU, if any, ends here).
     drop(remote);
     let interrupted = followed?;
@@ -684,6 +699,7 @@ pub fn run(args: Args) -> Result<()> {
         min_clearance_m,
         poses: follower.poses.len(),
         interrupted,
+        link,
     };
     if let Some(dir) = &args.out {
         write_outputs(dir, &args, &inputs, &outcome, follower)?;
@@ -789,6 +805,7 @@ fn follow(
     remote.set_timeout(silence);
     let mut aborted = false;
     let mut last_draw = Instant::now();
+    let mut last_heard = Instant::now();
     loop {
         for t in std::mem::take(&mut remote.telemetry) {
             follower.absorb(t);
@@ -808,15 +825,34 @@ fn follow(
             }
             continue;
         }
-        let frame = remote
-            .next_frame(Instant::now() + silence)
-            .with_context(|| {
-                format!(
-                    "the device went silent: no telemetry for {} s (mission time {:.1} s)",
-                    args.silence,
-                    follower.t_s()
-                )
-            })?;
+        let wait_until = Instant::now() + silence.min(super::mission_link::POLL_AFTER);
+        let frame = match remote.next_frame(wait_until) {
+            Ok(frame) => {
+                last_heard = Instant::now();
+                frame
+            }
+            // Quiet: the final report may have been lost on the way (see mission_link).
+            Err(e) if Instant::now() >= wait_until => {
+                use super::mission_link::{recover_final_report, Poll};
+                match recover_final_report(remote, follower) {
+                    Poll::Finished => continue,
+                    Poll::Alive => {
+                        last_heard = Instant::now();
+                        continue;
+                    }
+                    Poll::NoReply if last_heard.elapsed() < silence => continue,
+                    Poll::NoReply => {}
+                }
+                return Err(e).with_context(|| {
+                    format!(
+                        "the device went silent: no telemetry for {} s (mission time {:.1} s)",
+                        args.silence,
+                        follower.t_s()
+                    )
+                });
+            }
+            Err(e) => return Err(e).context("reading the mission's telemetry"),
+        };
         match frame {
             Ok(DeviceFrame::Telemetry(t)) => follower.absorb(t),
             Ok(DeviceFrame::Reply { .. }) => {} // a stale reply
@@ -941,6 +977,75 @@ mod tests {
         assert!(
             format!("{e:#}").contains("the device went silent: no telemetry for 0.3 s"),
             "{e:#}"
+        );
+    }
+
+    /// A device whose mission has ended and whose `Finished` telemetry was lost: it answers
+    /// every request with its report.
+    struct Ended(Vec<u8>);
+    impl std::io::Write for Ended {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            let mut decoder = twil_core::link::FrameDecoder::new();
+            let mut rest = b;
+            while !rest.is_empty() {
+                let (got, r) = decoder.feed::<twil_core::link::RequestFrame>(rest);
+                rest = r;
+                if let Some(Ok(frame)) = got {
+                    let report = MissionReport {
+                        state: twil_core::link::RunState::Ended,
+                        status: MissionStatus::Reached,
+                        phase: MissionPhase::Done,
+                        stats: Default::default(),
+                        max_control_instructions: 0,
+                        max_plan_instructions: 0,
+                        stack_high_water_bytes: 0,
+                        stop_ticks: 0,
+                        emergency_stop: false,
+                    };
+                    let mut out = [0u8; twil_core::link::MAX_FRAME_BYTES];
+                    let reply = DeviceFrame::Reply {
+                        seq: Some(frame.seq),
+                        reply: Reply::Mission(report),
+                    };
+                    let bytes = twil_core::link::frame::encode(&reply, &mut out).unwrap();
+                    self.0.extend_from_slice(bytes);
+                }
+            }
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    impl std::io::Read for Ended {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            if self.0.is_empty() {
+                std::thread::sleep(Duration::from_millis(5));
+                return Err(std::io::ErrorKind::WouldBlock.into());
+            }
+            let n = buf.len().min(self.0.len());
+            buf[..n].copy_from_slice(&self.0[..n]);
+            self.0.drain(..n);
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn a_lost_final_report_is_asked_for_after_a_second_of_quiet() {
+        let args = args(&[]);
+        let inputs = read_inputs(&args).unwrap();
+        let mut follower = Follower::new(&inputs, false).unwrap();
+        let mut remote = Remote::over(Ended(Vec::new()));
+        let started = Instant::now();
+        follow(&args, &mut remote, &mut follower, &ProgressBar::hidden()).unwrap();
+        let waited = started.elapsed();
+        assert!(
+            waited >= super::super::mission_link::POLL_AFTER && waited < Duration::from_secs(3),
+            "{waited:?}"
+        );
+        assert_eq!(
+            follower.finished.map(|r| r.status),
+            Some(MissionStatus::Reached)
         );
     }
 

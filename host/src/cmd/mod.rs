@@ -2,6 +2,7 @@
 
 pub mod cspace;
 pub mod mission;
+pub mod mission_link;
 pub mod ping;
 pub mod plan;
 pub mod simulate;

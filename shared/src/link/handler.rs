@@ -144,6 +144,11 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         self.path_points
     }
 
+    /// The vertices of the polygon being uploaded (`ObstacleChunk`s not closed yet).
+    pub fn pending(&self) -> &[PointM] {
+        &self.pending
+    }
+
     /// Forget the last path (the planner has been used for something else since).
     pub fn forget_path(&mut self) {
         self.path_points = 0;
@@ -243,10 +248,8 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                     expanded: planner.last_report().map(|r| r.expanded).unwrap_or(0),
                     queue_peak: planner.queue_peak(),
                 };
-                let report = result.map_err(|e| {
-                    self.path_points = 0;
-                    plan_error(e)
-                })?;
+                // A planner error keeps the last path in the planner (and its count here).
+                let report = result.map_err(plan_error)?;
                 self.path_points = if report.status == crate::plan::PlanStatus::Found {
                     planner.path_cells().len().min(u16::MAX as usize) as u16
                 } else {
@@ -525,6 +528,7 @@ pub struct Device<const GRID_WORDS: usize> {
     /// The handler (public so the firmware can set its build and RAM figures).
     pub handler: Handler<GRID_WORDS>,
     grid: Grid<GRID_WORDS>,
+    replay: super::replay::ReplayCache,
 }
 
 impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
@@ -534,6 +538,7 @@ impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
             decoder: FrameDecoder::new(),
             handler: Handler::new(info),
             grid: Handler::<GRID_WORDS>::initial_grid(),
+            replay: super::replay::ReplayCache::new(),
         }
     }
 
@@ -562,11 +567,20 @@ impl<const GRID_WORDS: usize> Device<GRID_WORDS> {
             rest = r;
             let (seq, reply) = match got {
                 None => continue,
-                Some(Ok(frame)) => (
-                    Some(frame.seq),
-                    self.handler
-                        .handle(&frame.request, &mut self.grid, planner, clock),
-                ),
+                Some(Ok(frame)) => match self.replay.lookup(frame.seq, &frame.request) {
+                    // A retry of the last request: its reply again, not a second execution.
+                    Some(reply) => {
+                        self.handler.count_request();
+                        (Some(frame.seq), reply)
+                    }
+                    None => {
+                        let reply =
+                            self.handler
+                                .handle(&frame.request, &mut self.grid, planner, clock);
+                        self.replay.record(frame.seq, &frame.request, &reply);
+                        (Some(frame.seq), reply)
+                    }
+                },
                 Some(Err(fault)) => self.handler.fault_reply(fault),
             };
             self.send_frame(&DeviceFrame::Reply { seq, reply }, send);

@@ -39,6 +39,7 @@ use heapless::Vec;
 use super::frame::{FrameDecoder, FrameFault};
 use super::handler::{upload_chunk, Handler, MAX_PENDING_VERTICES};
 use super::message::*;
+use super::replay::ReplayCache;
 use super::Device;
 use crate::geom::PointM;
 use crate::mission::{
@@ -192,6 +193,7 @@ pub struct RobotDevice<const W: usize> {
     stop_ticks: u32,
     reported: (MissionPhase, MissionStatus),
     pending: Pending,
+    replay: ReplayCache,
 }
 
 impl<const W: usize> RobotDevice<W> {
@@ -240,6 +242,7 @@ impl<const W: usize> RobotDevice<W> {
                     active: false,
                 },
             },
+            replay: ReplayCache::new(),
         }
     }
 
@@ -332,6 +335,19 @@ impl<const W: usize> RobotLink<'_, W> {
             let (seq, reply) = match got {
                 None => continue,
                 Some(Ok(frame)) => {
+                    if let Some(reply) = self.d.replay.lookup(frame.seq, &frame.request) {
+                        // A retry of the last request: its reply again, not a second
+                        // execution (see [`super::replay`]).
+                        self.d.handler.count_request();
+                        Device::<W>::send_encoded(
+                            &DeviceFrame::Reply {
+                                seq: Some(frame.seq),
+                                reply,
+                            },
+                            send,
+                        );
+                        continue;
+                    }
                     let reply = if matches!(
                         frame.request,
                         Request::WorldChunk { .. } | Request::ClearWorld
@@ -347,6 +363,7 @@ impl<const W: usize> RobotLink<'_, W> {
                     } else {
                         self.handle(&frame.request, planner, clock)
                     };
+                    self.d.replay.record(frame.seq, &frame.request, &reply);
                     (Some(frame.seq), reply)
                 }
                 Some(Err(fault)) => self.fault(fault),
@@ -833,3 +850,6 @@ fn state_index(state: RunState) -> u32 {
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod promise_tests;

@@ -35,8 +35,8 @@
 //! [`super`] and the queue.
 
 use super::{
-    scratch_words_for_cells, set_nibble, PathCells, PlanError, Planner, Search, CODE_START, E, N,
-    NE, NIBBLE_WINDOWS, NW, S, SE, STEPS, SW, W,
+    scratch_words_for_cells, set_nibble, PathCells, PathOut, PlanError, Planner, Search,
+    CODE_START, E, N, NE, NIBBLE_WINDOWS, NW, S, SE, STEPS, SW, W,
 };
 use crate::geom::Cell;
 use crate::grid::{Grid, GridGeometry};
@@ -445,8 +445,11 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         grid: &Grid<GW>,
         goal: Cell,
         meet: Meet,
+        count_only: bool,
     ) -> (f32, u32, bool) {
-        self.cells.clear();
+        if !count_only {
+            self.cells.clear();
+        }
         let layout = match BfsLayout::new(grid.geometry(), SCRATCH_WORDS) {
             Ok(layout) => layout,
             Err(_) => return (0.0, 0, false),
@@ -532,6 +535,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         };
         let mut path = PathBuilder {
             cells: &mut self.cells,
+            out: PathOut::new(count_only),
             at: (ux, uy),
             dir: None,
             first_dir: None,
@@ -539,10 +543,10 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             straight: 0,
             diagonal: 0,
         };
-        path.fits &= path.cells.push(Cell::new(ux as u16, uy as u16)).is_ok();
+        path.fits &= path.out.push(path.cells, Cell::new(ux as u16, uy as u16));
         // Start side: from u back to the start, then turned round.
         walk(&mut path, u_layer, false);
-        path.cells.reverse();
+        path.out.reverse(path.cells);
         path.dir = path.first_dir.map(|(dx, dy)| (-dx, -dy));
         path.at = (ux, uy);
         if let Some((vx, vy, v_layer)) = v {
@@ -576,6 +580,8 @@ pub(super) struct Meet {
 /// last vertex, any other adds one.
 struct PathBuilder<'c> {
     cells: &'c mut PathCells,
+    /// Writes to `cells`, or only counts.
+    out: PathOut,
     at: (i32, i32),
     dir: Option<(i32, i32)>,
     /// Direction of the first move.
@@ -589,9 +595,13 @@ impl PathBuilder<'_> {
     fn push(&mut self, (dx, dy): (i32, i32)) {
         self.at = (self.at.0 + dx, self.at.1 + dy);
         let c = Cell::new(self.at.0 as u16, self.at.1 as u16);
-        match (self.dir == Some((dx, dy)), self.cells.last_mut()) {
-            (true, Some(last)) => *last = c,
-            _ => self.fits &= self.cells.push(c).is_ok(),
+        // A move in the same direction moves the last vertex (counting: the count stays).
+        if self.dir == Some((dx, dy)) && self.out.count() > 0 {
+            if let Some(last) = self.cells.last_mut().filter(|_| !self.out.is_counting()) {
+                *last = c;
+            }
+        } else {
+            self.fits &= self.out.push(self.cells, c);
         }
         if self.first_dir.is_none() {
             self.first_dir = Some((dx, dy));

@@ -2705,12 +2705,12 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         start: PointM,
         goal: PointM,
     ) -> Result<PlanReport, PlanError> {
-        self.cells.clear();
         self.last = None;
         let geometry = *grid.geometry();
         let (Ok(start_cell), Ok(goal_cell)) = (geometry.cell_of(start), geometry.cell_of(goal))
         else {
             self.check_scratch(&geometry)?;
+            self.cells.clear();
             let report = PlanReport::empty(PlanStatus::OutOfBounds);
             self.last = Some(report);
             return Ok(report);
@@ -2742,7 +2742,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         goal: Cell,
         bfs_jump_points: bool,
     ) -> Result<PlanReport, PlanError> {
-        self.cells.clear();
+        // The last path stays until this plan has a result: an error (scratch, queue or path
+        // capacity) leaves it as it was.
         self.last = None;
         self.queue_peak = 0;
         self.layout = Layout::Flat;
@@ -2759,6 +2760,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             None
         };
         if let Some(status) = status {
+            self.cells.clear();
             let report = PlanReport::empty(status);
             self.last = Some(report);
             return Ok(report);
@@ -2841,6 +2843,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             }
         };
         if !search.found {
+            self.cells.clear();
             let report = PlanReport {
                 status: PlanStatus::Unreachable,
                 expanded: search.expanded,
@@ -2850,14 +2853,50 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             self.last = Some(report);
             return Ok(report);
         }
-        let (length_cells, steps, fits) = match kind {
-            PlannerKind::AnyAngle => self.rebuild_any_angle(grid, goal),
-            PlannerKind::Bfs => match bfs_meet {
-                Some(meet) => self.bfs_rebuild(grid, goal, meet),
-                None => self.rebuild_merged(&geometry, goal),
-            },
-            _ => self.rebuild_merged(&geometry, goal),
+        // `PathFull` must keep the last path. Only long paths may not fit: a path of `steps`
+        // moves has at most `steps + 2` vertices (any-angle adds at most one per run of the
+        // A* path, and the final one). For those the last path is first put aside in the
+        // queue, free once the search is over (the firmware's 1 024 entries hold all 3 072
+        // vertices, 3 a entry), and put back if the new one does not fit; a planner whose
+        // queue is too small counts the new path before writing it (its rebuild twice).
+        let steps_bound = match kind {
+            PlannerKind::Bfs if search.cost > 0 => search.cost,
+            PlannerKind::Bfs => u32::MAX, // the layered BFS does not count its steps
+            _ => search.cost / STRAIGHT_COST,
         };
+        let may_overflow = steps_bound.saturating_add(2) as usize > MAX_PATH_POINTS;
+        let rebuild = |planner: &mut Self, count_only: bool| match kind {
+            PlannerKind::AnyAngle => planner.rebuild_any_angle(grid, goal, count_only),
+            PlannerKind::Bfs => match bfs_meet {
+                Some(meet) => planner.bfs_rebuild(grid, goal, meet, count_only),
+                None => planner.rebuild_merged(&geometry, goal, count_only),
+            },
+            _ => planner.rebuild_merged(&geometry, goal, count_only),
+        };
+        let last_path = self.cells.len();
+        let kept = match may_overflow && last_path > 0 {
+            false => Kept::Nothing,
+            true if self.stash_path() => Kept::InQueue(last_path),
+            true => Kept::Counted,
+        };
+        let counted = match kept {
+            Kept::Counted => Some(rebuild(self, true)),
+            _ => None,
+        };
+        let (length_cells, steps, fits) = match counted {
+            Some(counted) if !counted.2 => counted,
+            _ => {
+                self.cells.clear();
+                rebuild(self, false)
+            }
+        };
+        if !fits {
+            match kept {
+                Kept::InQueue(n) => self.unstash_path(n),
+                Kept::Counted => {} // not written
+                Kept::Nothing => self.cells.clear(),
+            }
+        }
         let report = PlanReport {
             status: PlanStatus::Found,
             expanded: search.expanded,
@@ -2869,7 +2908,6 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         };
         self.last = Some(report);
         if !fits {
-            self.cells.clear();
             return Err(PlanError::PathFull {
                 capacity: MAX_PATH_POINTS as u32,
             });
@@ -2878,9 +2916,36 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     }
 
     /// The polyline of the last successful plan, as cells (start cell first). Empty after a
-    /// failed plan or an error.
+    /// plan that found no path; an error ([`PlanError`]) leaves the previous path.
     pub fn path_cells(&self) -> &[Cell] {
         &self.cells
+    }
+
+    /// Copy the last path into the queue (3 cells an entry); `false` when it does not fit.
+    /// Only after a search: the queue is free until the next one.
+    fn stash_path(&mut self) -> bool {
+        if self.cells.len().div_ceil(3) > QUEUE {
+            return false;
+        }
+        let pack = |c: Option<&Cell>| c.map_or(0, |c| (c.x as u32) << 16 | c.y as u32);
+        for (entry, chunk) in self.queue.iter_mut().zip(self.cells.chunks(3)) {
+            entry.f = pack(chunk.first());
+            entry.node = pack(chunk.get(1));
+            entry.next = pack(chunk.get(2));
+        }
+        true
+    }
+
+    /// Put back the `n` cells of the path [`Planner::stash_path`] copied.
+    fn unstash_path(&mut self, n: usize) {
+        self.cells.clear();
+        for entry in self.queue.iter().take(n.div_ceil(3)) {
+            for word in [entry.f, entry.node, entry.next] {
+                if self.cells.len() < n {
+                    let _ = self.cells.push(Cell::new((word >> 16) as u16, word as u16));
+                }
+            }
+        }
     }
 
     /// The report of the last planning request, also when it ended in
@@ -3340,8 +3405,17 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     /// Rebuild the BFS / A* path from the parent steps, run by run ([`Planner::run_back`]), so
     /// collinear cells are merged. Returns the length in cells, the number of steps and whether
     /// every vertex fitted.
-    fn rebuild_merged(&mut self, geometry: &GridGeometry, goal: Cell) -> (f32, u32, bool) {
-        let mut fits = self.cells.push(goal).is_ok();
+    ///
+    /// With `count_only` the cells are counted, not written (`fits` and the figures are the
+    /// same).
+    fn rebuild_merged(
+        &mut self,
+        geometry: &GridGeometry,
+        goal: Cell,
+        count_only: bool,
+    ) -> (f32, u32, bool) {
+        let mut out = PathOut::new(count_only);
+        let mut fits = out.push(&mut self.cells, goal);
         let (mut straight, mut diagonal) = (0u32, 0u32);
         let mut cell = goal;
         // A parent chain never revisits a cell; the bound only guards against a corrupt one.
@@ -3356,9 +3430,9 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 straight += 1 + more;
             }
             cell = end;
-            fits &= self.cells.push(cell).is_ok();
+            fits &= out.push(&mut self.cells, cell);
         }
-        self.cells.reverse();
+        out.reverse(&mut self.cells);
         let length = straight as f32 + diagonal as f32 * core::f32::consts::SQRT_2;
         (length, straight + diagonal, fits)
     }
@@ -3374,9 +3448,11 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         &mut self,
         grid: &Grid<GW>,
         goal: Cell,
+        count_only: bool,
     ) -> (f32, u32, bool) {
         let geometry = *grid.geometry();
-        let mut fits = self.cells.push(goal).is_ok();
+        let mut out = PathOut::new(count_only);
+        let mut fits = out.push(&mut self.cells, goal);
         let mut length = 0.0f32;
         let mut anchor = goal;
         let mut cur = goal;
@@ -3413,7 +3489,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     break;
                 };
                 if grid.is_occupied_xy(cur.x as i32 + px - dx, cur.y as i32 + py - dy) {
-                    fits &= self.cells.push(cur).is_ok();
+                    fits &= out.push(&mut self.cells, cur);
                     length += cells_distance(anchor, cur);
                     anchor = cur;
                     cur = end;
@@ -3450,18 +3526,73 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             // The step after the anchor is an A* move, always visible; never stall.
             let cut = if lo == 0 && cur == anchor { 1 } else { lo };
             let vertex = at(cut);
-            fits &= self.cells.push(vertex).is_ok();
+            fits &= out.push(&mut self.cells, vertex);
             length += cells_distance(anchor, vertex);
             anchor = vertex;
             cur = vertex;
             steps += cut;
         }
         if cur != anchor {
-            fits &= self.cells.push(cur).is_ok();
+            fits &= out.push(&mut self.cells, cur);
             length += cells_distance(anchor, cur);
         }
-        self.cells.reverse();
+        out.reverse(&mut self.cells);
         (length, steps, fits)
+    }
+}
+
+/// How a plan that may overflow the path keeps the last one.
+#[derive(Clone, Copy, Debug)]
+enum Kept {
+    /// No last path, or the new one surely fits.
+    Nothing,
+    /// Copied into the queue: this many cells.
+    InQueue(usize),
+    /// The new path is counted before it is written.
+    Counted,
+}
+
+/// Where a path rebuild puts its vertices: the planner's cells, or only a count of them (to
+/// learn whether a path fits before the last one is overwritten).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PathOut {
+    count_only: bool,
+    count: usize,
+}
+
+impl PathOut {
+    pub(super) fn new(count_only: bool) -> Self {
+        Self {
+            count_only,
+            count: 0,
+        }
+    }
+
+    /// Add a vertex; `false` when it does not fit.
+    pub(super) fn push(&mut self, cells: &mut PathCells, cell: Cell) -> bool {
+        self.count += 1;
+        if self.count_only {
+            self.count <= MAX_PATH_POINTS
+        } else {
+            cells.push(cell).is_ok()
+        }
+    }
+
+    /// Vertices added so far.
+    pub(super) fn count(&self) -> usize {
+        self.count
+    }
+
+    /// Only counting.
+    pub(super) fn is_counting(&self) -> bool {
+        self.count_only
+    }
+
+    /// Turn the written path round (nothing to do when counting).
+    pub(super) fn reverse(&self, cells: &mut PathCells) {
+        if !self.count_only {
+            cells.reverse();
+        }
     }
 }
 

@@ -316,12 +316,15 @@ fn scratch_too_small_and_queue_full_are_errors() {
             pillars.set_xy(x, y, true);
         }
     }
+    // An error keeps the last path (the open floor's).
+    let kept = short.path_cells().to_vec();
+    assert!(kept.len() >= 2);
     for kind in [PlannerKind::AStar, PlannerKind::AnyAngle] {
         assert_eq!(
             short.plan_cells(kind, &pillars, Cell::new(20, 20), Cell::new(0, 38)),
             Err(PlanError::QueueFull { capacity: 4 })
         );
-        assert!(short.path_cells().is_empty());
+        assert_eq!(short.path_cells(), &kept[..]);
     }
     let r = short
         .plan_cells(
@@ -376,6 +379,7 @@ fn path_full_keeps_the_report() {
     let r = r.unwrap();
     assert_eq!(r.status, PlanStatus::Found);
     assert!(path.len() > 150, "{} vertices", path.len());
+    let serpentine = p.path_cells().to_vec();
     // Two 2-row corridors 4000 cells long, joined at the east end, whose odd columns are open
     // in alternate rows: the path turns every two cells, about 4000 vertices (> MAX_PATH_POINTS).
     let long = GridGeometry::new(4000, 5, 0.05).unwrap();
@@ -414,8 +418,52 @@ fn path_full_keeps_the_report() {
     assert_eq!(last.status, PlanStatus::Found);
     // At least 3999 steps east and 3999 back west.
     assert!(last.cost >= 2 * 3999, "{}", last.cost);
-    assert!(p.path_cells().is_empty());
+    // The error kept the last path (the serpentine's), for every planner.
+    assert_eq!(p.path_cells(), &serpentine[..]);
     assert!(last.expanded > 100);
+    for kind in [PlannerKind::AStar, PlannerKind::AnyAngle] {
+        let err = p.plan_at(
+            kind,
+            &g2,
+            long.center_of(Cell::new(0, 0)),
+            long.center_of(Cell::new(0, 3)),
+        );
+        assert!(
+            matches!(err, Err(PlanError::PathFull { .. })),
+            "{kind:?}: {err:?}"
+        );
+        assert_eq!(p.path_cells(), &serpentine[..], "{kind:?}");
+    }
+    // A planner whose queue cannot hold the last path counts the new one before writing it.
+    let mut small = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 32>::new());
+    small
+        .plan_at(
+            PlannerKind::Bfs,
+            &g,
+            geometry.center_of(Cell::new(0, 0)),
+            geometry.center_of(Cell::new(198, 0)),
+        )
+        .unwrap();
+    let small_path = small.path_cells().to_vec();
+    assert!(small_path.len() > 3 * 32, "{} vertices", small_path.len());
+    let err = small.plan_at(
+        PlannerKind::Bfs,
+        &g2,
+        long.center_of(Cell::new(0, 0)),
+        long.center_of(Cell::new(0, 3)),
+    );
+    assert!(matches!(err, Err(PlanError::PathFull { .. })), "{err:?}");
+    assert_eq!(small.path_cells(), &small_path[..]);
+    // With no last path the overflowing one is not kept either.
+    let mut fresh = Box::new(Planner::<{ scratch_words_for_cells(CELLS) }, 8192>::new());
+    let err = fresh.plan_at(
+        PlannerKind::AStar,
+        &g2,
+        long.center_of(Cell::new(0, 0)),
+        long.center_of(Cell::new(0, 3)),
+    );
+    assert!(matches!(err, Err(PlanError::PathFull { .. })), "{err:?}");
+    assert!(fresh.path_cells().is_empty());
 }
 
 #[test]
@@ -959,7 +1007,7 @@ proptest! {
         prop_assert_eq!(search.found, expected.is_some());
         if let Some(cost) = expected {
             prop_assert_eq!(search.cost, cost);
-            let (_, _, fits) = p.rebuild_merged(g.geometry(), t);
+            let (_, _, fits) = p.rebuild_merged(g.geometry(), t, false);
             prop_assert!(fits);
             prop_assert_eq!(steps_and_cost(p.path_cells()).1, cost);
             assert_collision_free(&g, p.path_cells());
@@ -1249,7 +1297,7 @@ fn jump_point_search_alone<const W: usize, const S: usize, const Q: usize>(
     if !search.found {
         return Some(None);
     }
-    let (_, _, fits) = p.rebuild_merged(&geometry, t);
+    let (_, _, fits) = p.rebuild_merged(&geometry, t, false);
     assert!(fits);
     assert_eq!(steps_and_cost(p.path_cells()).1, search.cost);
     assert_collision_free(g, p.path_cells());
@@ -1295,7 +1343,7 @@ fn jump_point_steps_alone<const W: usize, const S: usize, const Q: usize>(
     if !search.found {
         return Some(None);
     }
-    let (_, steps, fits) = p.rebuild_merged(&geometry, t);
+    let (_, steps, fits) = p.rebuild_merged(&geometry, t, false);
     assert!(fits);
     assert_eq!(steps, search.cost);
     assert_eq!(legal_moves(g, p.path_cells()), search.cost);
@@ -1619,7 +1667,7 @@ fn corridor_walk_ending_far_above_the_last_key_keeps_the_optimal_cost() {
     let search = p.astar(&g, si, t).unwrap();
     assert_eq!(Some(search.cost), oracle_astar(&g, s, t));
     assert_eq!(search.cost, 125_317);
-    p.rebuild_merged(g.geometry(), t);
+    p.rebuild_merged(g.geometry(), t, false);
     assert_eq!(steps_and_cost(p.path_cells()).1, search.cost);
     assert_collision_free(&g, p.path_cells());
 }
@@ -1730,7 +1778,7 @@ fn check_corridor_case(g: &SmallGrid, s: Cell, t: Cell) -> Result<(), TestCaseEr
         let search = p.astar(g, si, t).unwrap();
         prop_assert_eq!(search.found.then_some(search.cost), expected);
         if search.found {
-            let (_, _, fits) = p.rebuild_merged(g.geometry(), t);
+            let (_, _, fits) = p.rebuild_merged(g.geometry(), t, false);
             prop_assert!(fits);
             prop_assert_eq!(steps_and_cost(p.path_cells()).1, search.cost);
             assert_collision_free(g, p.path_cells());
@@ -2445,7 +2493,7 @@ proptest! {
                 prop_assert_eq!(search.found, expected.is_some());
                 if let Some(cost) = expected {
                     prop_assert_eq!(search.cost, cost);
-                    p.rebuild_merged(g.geometry(), t);
+                    p.rebuild_merged(g.geometry(), t, false);
                     prop_assert_eq!(steps_and_cost(p.path_cells()).1, cost);
                     assert_collision_free(&g, p.path_cells());
                 }
@@ -2577,8 +2625,8 @@ proptest! {
         prop_assert!(framed.queue_peak() <= 4096);
         prop_assert_eq!(a.found.then_some(a.cost), oracle_astar(&g, s, t));
         if a.found {
-            framed.rebuild_merged(g.geometry(), t);
-            flat.rebuild_merged(g.geometry(), t);
+            framed.rebuild_merged(g.geometry(), t, false);
+            flat.rebuild_merged(g.geometry(), t, false);
             prop_assert_eq!(framed.path_cells(), flat.path_cells());
             prop_assert_eq!(steps_and_cost(framed.path_cells()).1, a.cost);
             assert_collision_free(&g, framed.path_cells());

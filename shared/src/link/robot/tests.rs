@@ -18,21 +18,21 @@ type TestDevice = RobotDevice<{ words_for_cells(300 * 300) }>;
 
 /// The host side and the simulated robot around a device, run in the order of
 /// [`LocalRunner`] (pilot, mission, commands, plans at once, then the sonar).
-struct Bench {
-    device: Box<TestDevice>,
-    mission: Box<Mission300>,
-    planner: Box<MissionPlanner300>,
-    world: Box<WorldUpload>,
-    pilot: Option<Pilot>,
-    plant: Option<Plant>,
-    previous_counts: (i32, i32),
-    decoder: FrameDecoder,
-    seq: u16,
-    telemetry: StdVec<Telemetry>,
+pub(super) struct Bench {
+    pub(super) device: Box<TestDevice>,
+    pub(super) mission: Box<Mission300>,
+    pub(super) planner: Box<MissionPlanner300>,
+    pub(super) world: Box<WorldUpload>,
+    pub(super) pilot: Option<Pilot>,
+    pub(super) plant: Option<Plant>,
+    pub(super) previous_counts: (i32, i32),
+    pub(super) decoder: FrameDecoder,
+    pub(super) seq: u16,
+    pub(super) telemetry: StdVec<Telemetry>,
 }
 
 impl Bench {
-    fn new() -> Self {
+    pub(super) fn new() -> Self {
         Self {
             device: Box::new(TestDevice::new(DeviceInfo::default())),
             mission: Box::new(Mission300::IDLE),
@@ -48,7 +48,7 @@ impl Bench {
     }
 
     /// One request through the wire format; its reply (telemetry on the way is kept).
-    fn call(&mut self, request: Request) -> Reply {
+    pub(super) fn call(&mut self, request: Request) -> Reply {
         self.seq = self.seq.wrapping_add(1);
         let mut wire = [0u8; MAX_FRAME_BYTES];
         let bytes = encode(
@@ -95,7 +95,7 @@ impl Bench {
         frames
     }
 
-    fn upload_world(&mut self, world: &Obstacles) {
+    pub(super) fn upload_world(&mut self, world: &Obstacles) {
         for polygon in world.iter() {
             let chunks: StdVec<&[PointM]> = polygon.chunks(OBSTACLE_CHUNK_VERTICES).collect();
             for (i, chunk) in chunks.iter().enumerate() {
@@ -138,7 +138,7 @@ impl Bench {
     }
 
     /// One control period; the telemetry it produced goes through the wire format.
-    fn tick(&mut self) {
+    pub(super) fn tick(&mut self) {
         if let Some(config) = self.device.link(&mut self.mission).take_started() {
             self.pilot = Some(Pilot::new(&config));
             let plant = Plant::new(
@@ -179,14 +179,14 @@ impl Bench {
     }
 }
 
-fn office() -> (Obstacles, crate::world::Params) {
+pub(super) fn office() -> (Obstacles, crate::world::Params) {
     let mut real = Obstacles::new();
     crate::world::parse_da(include_str!("../../../../worlds/office.da"), &mut real).unwrap();
     let params = crate::world::parse_par(include_str!("../../../../worlds/office.par")).unwrap();
     (real, params)
 }
 
-fn setup(params: &crate::world::Params, mode: MissionMode) -> MissionSetup {
+pub(super) fn setup(params: &crate::world::Params, mode: MissionMode) -> MissionSetup {
     MissionSetup {
         mode,
         planner: PlannerKind::AStar,
@@ -204,7 +204,7 @@ fn setup(params: &crate::world::Params, mode: MissionMode) -> MissionSetup {
 }
 
 /// A ready bench: map, radius, real world, the mission set up.
-fn ready(mode: MissionMode) -> (Bench, Obstacles, crate::world::Params) {
+pub(super) fn ready(mode: MissionMode) -> (Bench, Obstacles, crate::world::Params) {
     let (real, params) = office();
     let mut b = Bench::new();
     let map = MapParams {
