@@ -517,6 +517,7 @@ fn start_device_mission(world: &str, mode: twil_core::mission::MissionMode) -> R
         trust_seen_space: true,
         noise_seed: 1,
         sonar_noise_std_m: 0.0,
+        link_loss: twil_core::failsafe::LinkLossPolicy::NEVER,
     };
     assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
     assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);

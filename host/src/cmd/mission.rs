@@ -24,6 +24,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 use twil_core::control::Pose;
+use twil_core::failsafe::{LinkLossPolicy, LinkLossReaction, StopCause};
 use twil_core::geom::PointM;
 use twil_core::grid::{Grid400, GridGeometry, DEFAULT_RESOLUTION_M};
 use twil_core::link::{
@@ -95,6 +96,43 @@ pub struct Args {
     /// GIF scale, pixels per cell.
     #[arg(long, default_value_t = 2)]
     pub gif_scale: u32,
+    /// The device reacts (--on-link-loss) when it hears nothing from the host for this long,
+    /// milliseconds: 0 (never) or 200 to 3 600 000. The host sends a heartbeat
+    /// (`MissionStatus`) every quarter of it, at most every 500 ms.
+    #[arg(long, default_value_t = 2_000, value_name = "MS")]
+    pub link_timeout_ms: u32,
+    /// What the device does when the link is lost: stop (end the mission, motors at zero, hold)
+    /// or continue to the goal.
+    #[arg(long, value_enum, default_value_t = LinkLossArg::Stop)]
+    pub on_link_loss: LinkLossArg,
+}
+
+/// `--on-link-loss`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinkLossArg {
+    /// End the mission (`aborted`, cause "link lost"), motors at zero.
+    Stop,
+    /// Go on to the goal.
+    Continue,
+}
+
+impl Args {
+    /// The link-loss policy of `--link-timeout-ms` and `--on-link-loss`.
+    pub fn link_loss(&self) -> LinkLossPolicy {
+        LinkLossPolicy {
+            timeout_ms: self.link_timeout_ms,
+            reaction: match self.on_link_loss {
+                LinkLossArg::Stop => LinkLossReaction::StopAndHold,
+                LinkLossArg::Continue => LinkLossReaction::Continue,
+            },
+        }
+    }
+}
+
+/// Time between two heartbeats for a link timeout of `timeout_ms` (0: none): a quarter of it,
+/// at most 500 ms, so that three may be lost before the device reacts.
+pub fn heartbeat_period(timeout_ms: u32) -> Option<Duration> {
+    (timeout_ms > 0).then(|| Duration::from_millis((timeout_ms / 4).min(500) as u64))
 }
 
 /// Set by the Ctrl-C handler while a mission runs; the main loop then aborts the mission.
@@ -165,6 +203,14 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
             args.silence
         );
     }
+    if !args.link_loss().is_valid() {
+        bail!(
+            "--link-timeout-ms: must be 0 (never) or {} to {} milliseconds, got {}",
+            LinkLossPolicy::MIN_TIMEOUT_MS,
+            LinkLossPolicy::MAX_TIMEOUT_MS,
+            args.link_timeout_ms
+        );
+    }
     for (which, p) in [("start", params.start), ("goal", params.goal)] {
         if geometry.cell_of(p).is_err() {
             bail!(
@@ -200,6 +246,7 @@ pub fn mission_setup(args: &Args, params: &Params) -> MissionSetup {
         trust_seen_space: !args.seed_prune,
         noise_seed: args.seed,
         sonar_noise_std_m: args.sonar_noise,
+        link_loss: args.link_loss(),
     }
 }
 
@@ -240,6 +287,7 @@ fn explain_bad_mission(args: &Args, error: &ErrorReply) -> String {
         6 => format!("sonar range (--sonar-range {})", args.sonar_range),
         7 => format!("time limit (--time-limit {})", args.time_limit),
         11 => format!("sonar noise (--sonar-noise {})", args.sonar_noise),
+        12 => format!("link timeout (--link-timeout-ms {})", args.link_timeout_ms),
         v if v >= 100 => format!("robot configuration field {} (see the device log)", v - 100),
         v => format!("field {v}"),
     };
@@ -488,6 +536,17 @@ pub fn phase_name(phase: MissionPhase) -> &'static str {
     }
 }
 
+/// The JSON name of a stop cause.
+pub fn stop_cause_name(cause: StopCause) -> Option<&'static str> {
+    match cause {
+        StopCause::None => None,
+        StopCause::Host => Some("host"),
+        StopCause::EmergencyStop => Some("emergency_stop"),
+        StopCause::LinkLost => Some("link_lost"),
+        StopCause::ControllerOverrun => Some("controller_overrun"),
+    }
+}
+
 /// The JSON name of a mission status.
 pub fn status_name(status: MissionStatus) -> &'static str {
     match status {
@@ -566,6 +625,8 @@ fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value {
         "unreachable_reason": s.unreachable_reason.map(|r| format!("{r:?}")),
         "plan_errors": s.plan_errors,
         "poses_reported": outcome.poses,
+        "stop_cause": stop_cause_name(outcome.report.stop_cause),
+        "stop_latency_us": outcome.report.stop_latency_us,
         "interrupted": outcome.interrupted,
     });
     if let (Some(obj), Some(extra)) = (v.as_object_mut(), extra.as_object()) {
@@ -712,6 +773,9 @@ pub fn run(args: Args) -> Result<()> {
             info.static_ram_bytes,
             report.stack_high_water_bytes
         );
+        if report.stop_cause != StopCause::None {
+            println!("stopped by the device: {}", report.stop_cause.describe());
+        }
         if let Some(dir) = &args.out {
             println!("wrote {}", dir.display());
         }
@@ -789,6 +853,9 @@ fn follow(
     remote.set_timeout(silence);
     let mut aborted = false;
     let mut last_draw = Instant::now();
+    let heartbeat = heartbeat_period(args.link_timeout_ms);
+    let mut last_beat = Instant::now();
+    let mut last_heard = Instant::now();
     loop {
         for t in std::mem::take(&mut remote.telemetry) {
             follower.absorb(t);
@@ -808,15 +875,37 @@ fn follow(
             }
             continue;
         }
-        let frame = remote
-            .next_frame(Instant::now() + silence)
-            .with_context(|| {
-                format!(
-                    "the device went silent: no telemetry for {} s (mission time {:.1} s)",
-                    args.silence,
-                    follower.t_s()
-                )
-            })?;
+        // The heartbeat tells the device the host is there (its link-loss policy); the reply
+        // is not needed, and a failed one is left to the silence check below.
+        let mut deadline = last_heard + silence;
+        if let Some(period) = heartbeat {
+            if last_beat.elapsed() >= period {
+                last_beat = Instant::now();
+                match remote.request(Request::MissionStatus) {
+                    Ok(_) => last_heard = Instant::now(),
+                    Err(e) => note(bar, &format!("twil: heartbeat unanswered: {e:#}")),
+                }
+                continue;
+            }
+            deadline = deadline.min(last_beat + period);
+        }
+        let frame = match remote.next_frame(deadline) {
+            Ok(frame) => frame,
+            // The wait ended for the heartbeat, not for the silence: go round.
+            Err(_) if Instant::now() >= deadline && Instant::now() < last_heard + silence => {
+                continue
+            }
+            Err(e) => {
+                return Err(e).with_context(|| {
+                    format!(
+                        "the device went silent: no telemetry for {} s (mission time {:.1} s)",
+                        args.silence,
+                        follower.t_s()
+                    )
+                })
+            }
+        };
+        last_heard = Instant::now();
         match frame {
             Ok(DeviceFrame::Telemetry(t)) => follower.absorb(t),
             Ok(DeviceFrame::Reply { .. }) => {} // a stale reply
