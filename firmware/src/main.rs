@@ -390,7 +390,9 @@ mod app {
             let mut w = stm32f4xx_hal::watchdog::IndependentWatchdog::new(cx.device.IWDG);
             // A core halted by the debugger must not be reset under it.
             w.stop_on_debug(&cx.device.DBGMCU, true);
-            w.start(stm32f4xx_hal::prelude::_fugit_ExtU32::millis(WATCHDOG_TIMEOUT_MS));
+            w.start(stm32f4xx_hal::prelude::_fugit_ExtU32::millis(
+                WATCHDOG_TIMEOUT_MS,
+            ));
             w
         };
         #[cfg(feature = "qemu")]
@@ -446,8 +448,7 @@ mod app {
                         {
                             STOP_ASKED_AT_TICK
                                 .store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
-                            STOP_ASKED_AT_COUNTS
-                                .store(systick_counts() as u32, Ordering::Release);
+                            STOP_ASKED_AT_COUNTS.store(systick_counts() as u32, Ordering::Release);
                             STOP_TICKS.store(0, Ordering::Release);
                         }
                     }
