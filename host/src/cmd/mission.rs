@@ -373,6 +373,11 @@ impl Follower {
         })
     }
 
+    /// The mission time of the latest pose, milliseconds.
+    fn t_ms(&self) -> u32 {
+        self.poses.last().map_or(0, |p| p.t_ms)
+    }
+
     fn t_s(&self) -> f32 {
         self.poses.last().map_or(0.0, |p| p.t_ms as f32 / 1000.0)
     }
@@ -855,6 +860,10 @@ fn follow(
     let mut last_draw = Instant::now();
     let heartbeat = heartbeat_period(args.link_timeout_ms);
     let mut last_beat = Instant::now();
+    // The device measures the silence on its own clock, which under QEMU (`sleep=off`) runs
+    // ahead of the host's: a heartbeat is also due when the mission time of its telemetry
+    // has advanced by a period.
+    let mut last_beat_mission_ms = 0u32;
     let mut last_heard = Instant::now();
     loop {
         for t in std::mem::take(&mut remote.telemetry) {
@@ -879,8 +888,12 @@ fn follow(
         // is not needed, and a failed one is left to the silence check below.
         let mut deadline = last_heard + silence;
         if let Some(period) = heartbeat {
-            if last_beat.elapsed() >= period {
+            let mission_ms = follower.t_ms();
+            if last_beat.elapsed() >= period
+                || mission_ms.saturating_sub(last_beat_mission_ms) as u128 >= period.as_millis()
+            {
                 last_beat = Instant::now();
+                last_beat_mission_ms = mission_ms;
                 match remote.request(Request::MissionStatus) {
                     Ok(_) => last_heard = Instant::now(),
                     Err(e) => note(bar, &format!("twil: heartbeat unanswered: {e:#}")),
