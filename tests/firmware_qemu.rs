@@ -877,3 +877,30 @@ fn a_silent_host_stops_the_mission_within_the_link_timeout_plus_a_period() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn twil_mission_on_qemu_keeps_the_link_alive_with_its_heartbeat() {
+    // QEMU's clock runs ahead of the host's (`sleep=off`): the heartbeat must follow the
+    // device's mission time, or the default 2 s link timeout fires within seconds.
+    let dir = tempfile::tempdir().unwrap();
+    let da = dir.path().join("wall.da");
+    let par = dir.path().join("short.par");
+    std::fs::write(&da, "1\n4\n2.0 3.0\n4.0 3.0\n4.0 3.2\n2.0 3.2\n").unwrap();
+    std::fs::write(&par, "0.3\n0.3\n90\n3.0 1.5\n3.0 5.0\n").unwrap();
+    let out = common::twil()
+        .args(["mission", "--remote", "qemu", "--real"])
+        .arg(&da)
+        .arg("--params")
+        .arg(&par)
+        .args(["--mode", "continuous", "--planner", "astar", "--json"])
+        .output()
+        .expect("run twil");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON line");
+    assert_eq!(v["status"], "reached", "{v}");
+}
