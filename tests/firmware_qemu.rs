@@ -480,6 +480,15 @@ fn device_mission(world: &str, mode: twil_core::mission::MissionMode) -> DeviceM
 
 /// Start a mission on the firmware under QEMU at `-icount shift=3`; the telemetry follows.
 fn start_device_mission(world: &str, mode: twil_core::mission::MissionMode) -> Remote {
+    start_device_mission_with(world, mode, twil_core::failsafe::LinkLossPolicy::NEVER)
+}
+
+/// [`start_device_mission`] with a link-loss policy.
+fn start_device_mission_with(
+    world: &str,
+    mode: twil_core::mission::MissionMode,
+    link_loss: twil_core::failsafe::LinkLossPolicy,
+) -> Remote {
     use twil_core::link::MissionSetup;
     let real = twil_host::cmd::simulate::read_da(&common::world(&format!("{world}.da"))).unwrap();
     let params =
@@ -517,6 +526,7 @@ fn start_device_mission(world: &str, mode: twil_core::mission::MissionMode) -> R
         trust_seen_space: true,
         noise_seed: 1,
         sonar_noise_std_m: 0.0,
+        link_loss,
     };
     assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
     assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);
@@ -626,6 +636,26 @@ fn abort_and_emergency_stop_zero_the_motors_at_the_next_control_tick() {
             "{stop:?}: the motors went to zero volts {} control periods after the frame",
             report.stop_ticks
         );
+        // In time: from the receive interrupt that saw the frame to the control step that
+        // zeroed the motors: at most one control period (50 ms). The interrupt cannot preempt
+        // the control task, so it lands after a step's end; the stopping step's own work (at
+        // most the worst step, 8 ns per instruction at shift 3) is the only slack.
+        let step_us = report.max_control_instructions * 8 / 1_000 + 1;
+        eprintln!(
+            "{stop:?}: stop latency {} us ({} control tick; worst control step {} us), cause {:?}",
+            report.stop_latency_us, report.stop_ticks, step_us, report.stop_cause
+        );
+        assert!(
+            report.stop_latency_us > 0 && report.stop_latency_us as u64 <= 50_000 + step_us,
+            "{stop:?}: stop latency {} us",
+            report.stop_latency_us
+        );
+        let cause = if stop == Request::EmergencyStop {
+            twil_core::failsafe::StopCause::EmergencyStop
+        } else {
+            twil_core::failsafe::StopCause::Host
+        };
+        assert_eq!(report.stop_cause, cause);
         let again = remote.request(Request::StartMission).unwrap();
         if stop == Request::EmergencyStop {
             assert!(report.emergency_stop);
@@ -803,4 +833,74 @@ fn pipelined_requests_are_all_answered_in_order_without_losing_bytes() {
         Reply::Status(s) => assert_eq!((s.rx_dropped_bytes, s.frame_errors), (0, 0)),
         other => panic!("{other:?}"),
     }
+}
+
+#[test]
+fn a_silent_host_stops_the_mission_within_the_link_timeout_plus_a_period() {
+    use twil_core::failsafe::{LinkLossPolicy, LinkLossReaction, ResetCause, StopCause};
+    use twil_core::link::{RunState, Telemetry};
+    use twil_core::mission::{MissionMode, MissionStatus};
+    let policy = LinkLossPolicy {
+        timeout_ms: 1_000,
+        reaction: LinkLossReaction::StopAndHold,
+    };
+    // StartMission is the host's last frame: from then on it only listens.
+    let mut remote = start_device_mission_with("office", MissionMode::Continuous, policy);
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let report = loop {
+        match remote.next_frame(deadline).expect("telemetry") {
+            Ok(DeviceFrame::Telemetry(Telemetry::Finished(r))) => break r,
+            Ok(_) => {}
+            Err(fault) => panic!("damaged frame from the device: {fault:?}"),
+        }
+    };
+    // Mission time counts control periods from the start: the timeout, plus at most one
+    // period for the control task to act, plus one for the start's own hand-over.
+    let t_s = report.stats.time_s;
+    eprintln!(
+        "link lost: mission stopped at {t_s:.3} s of mission time (timeout {} ms)",
+        policy.timeout_ms
+    );
+    assert_eq!(report.status, MissionStatus::Aborted, "{report:?}");
+    assert_eq!(report.stop_cause, StopCause::LinkLost, "{report:?}");
+    assert!((0.95..=1.101).contains(&t_s), "stopped at {t_s} s");
+    // The device answers again, the mission has ended, and QEMU cannot tell why it reset.
+    match remote.request(Request::MissionStatus).unwrap() {
+        Reply::Mission(r) => {
+            assert_eq!(r.state, RunState::Ended);
+            assert_eq!(r.stop_cause, StopCause::LinkLost);
+        }
+        other => panic!("{other:?}"),
+    }
+    match remote.request(Request::Status).unwrap() {
+        Reply::Status(st) => assert_eq!(st.reset_cause, ResetCause::Unknown),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn twil_mission_on_qemu_keeps_the_link_alive_with_its_heartbeat() {
+    // QEMU's clock runs ahead of the host's (`sleep=off`): the heartbeat must follow the
+    // device's mission time, or the default 2 s link timeout fires within seconds.
+    let dir = tempfile::tempdir().unwrap();
+    let da = dir.path().join("wall.da");
+    let par = dir.path().join("short.par");
+    std::fs::write(&da, "1\n4\n2.0 3.0\n4.0 3.0\n4.0 3.2\n2.0 3.2\n").unwrap();
+    std::fs::write(&par, "0.3\n0.3\n90\n3.0 1.5\n3.0 5.0\n").unwrap();
+    let out = common::twil()
+        .args(["mission", "--remote", "qemu", "--real"])
+        .arg(&da)
+        .arg("--params")
+        .arg(&par)
+        .args(["--mode", "continuous", "--planner", "astar", "--json"])
+        .output()
+        .expect("run twil");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}\n{stdout}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON line");
+    assert_eq!(v["status"], "reached", "{v}");
 }

@@ -234,6 +234,38 @@ fn bad_files_are_named_with_their_line() {
 }
 
 #[test]
+fn the_heartbeat_keeps_a_short_link_timeout_from_firing() {
+    // 200 ms of silence would stop the mission (it takes seconds of wall time): the host's
+    // heartbeat every 50 ms keeps it going to the goal.
+    let device = mission("office", "continuous", &["--link-timeout-ms", "200"]);
+    assert_eq!(device["status"], "reached", "{device}");
+}
+
+#[test]
+fn a_link_timeout_out_of_range_is_refused_naming_the_option() {
+    let (da, par) = (world("office.da"), world("office.par"));
+    for bad in ["50", "3600001"] {
+        let o = run(&[
+            "mission",
+            "--remote",
+            "sim",
+            "--real",
+            &da,
+            "--params",
+            &par,
+            "--link-timeout-ms",
+            bad,
+        ]);
+        assert_eq!(o.status.code(), Some(1));
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            stderr.contains("--link-timeout-ms") && stderr.contains(bad),
+            "{stderr}"
+        );
+    }
+}
+
+#[test]
 fn a_goal_off_the_map_is_refused_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let par = dir.path().join("far.par");

@@ -60,6 +60,7 @@ mod body;
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
+use twil_core::failsafe::{ResetCause, StopCause, WatchdogDecision, WatchdogGate};
 use twil_core::link::{Build, PROTOCOL_VERSION};
 pub use twil_firmware::{memory, TwilDevice, TwilMission, RX_QUEUE_BYTES};
 
@@ -177,6 +178,26 @@ static STOP_ASKED_AT_TICK: AtomicU32 = AtomicU32::new(0);
 /// Control periods from the last stop frame to the tick that zeroed the motors (see
 /// `MissionReport::stop_ticks`).
 static STOP_TICKS: AtomicU32 = AtomicU32::new(0);
+/// [`systick_counts`] (low 32 bits) when the last stop frame arrived (or the e-stop input
+/// tripped): the start of the stop latency.
+static STOP_ASKED_AT_COUNTS: AtomicU32 = AtomicU32::new(0);
+/// Microseconds from the stop frame's receive interrupt to the control step that put zero
+/// volts on the motors (see `MissionReport::stop_latency_us`).
+static STOP_LATENCY_US: AtomicU32 = AtomicU32::new(0);
+/// [`Mono`] milliseconds when the mission task last turned its loop (the watchdog gate's
+/// progress mark of that task).
+static MISSION_TURN_MS: AtomicU32 = AtomicU32::new(0);
+/// Set by the control task when a step missed its period (motors already zeroed); the mission
+/// task ends the mission with `StopCause::ControllerOverrun`.
+static OVERRUN: AtomicBool = AtomicBool::new(false);
+/// The watchdog gate refused to feed (logged once; on QEMU, which has no IWDG, nothing resets).
+static WATCHDOG_STARVED: AtomicBool = AtomicBool::new(false);
+
+/// Independent watchdog timeout, milliseconds (hardware build): ten control periods. The gate
+/// ([`WatchdogGate`]) stops feeding it when a task makes no progress for
+/// [`WatchdogGate::MISSION_LIMIT_MS`], so a stall resets the chip within that plus this.
+pub const WATCHDOG_TIMEOUT_MS: u32 = 500;
+
 /// The mission's sonar range, metres (f32 bits), for the simulated sonar.
 static SONAR_RANGE_BITS: AtomicU32 = AtomicU32::new(0x3FC0_0000); // 1.5
 
@@ -213,6 +234,14 @@ mod app {
     };
     use twil_core::mission::{Pilot, PilotReport, SonarRequest};
 
+    /// The independent watchdog (hardware); QEMU 7.2 does not emulate the IWDG (writes to it
+    /// are ignored), so the QEMU build has none and only logs the gate's decision.
+    #[cfg(feature = "hardware")]
+    pub type Watchdog = stm32f4xx_hal::watchdog::IndependentWatchdog;
+    /// No watchdog under QEMU (see above).
+    #[cfg(feature = "qemu")]
+    pub type Watchdog = ();
+
     /// A sonar reading: the neck angle and the range (`None`: no echo).
     pub type Reading = (f32, Option<f32>);
 
@@ -233,6 +262,7 @@ mod app {
         planner: &'static mut TwilPlanner,
         mission: &'static mut TwilMission,
         head: body::Head,
+        watchdog: Watchdog,
     }
 
     #[init(local = [
@@ -241,6 +271,16 @@ mod app {
         pilot_memory: Pilot = Pilot::IDLE,
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
+        // Why the chip reset: RCC_CSR's flags, then cleared (RMVF) so the next reset reports
+        // its own. QEMU does not emulate the RCC: unknown.
+        #[cfg(feature = "hardware")]
+        let reset_cause = {
+            let csr = cx.device.RCC.csr().read().bits();
+            cx.device.RCC.csr().modify(|_, w| w.rmvf().set_bit());
+            ResetCause::from_rcc_csr(csr)
+        };
+        #[cfg(feature = "qemu")]
+        let reset_cause = ResetCause::Unknown;
         // QEMU: stay on the HSI (16 MHz), no PLL (its ready flag is never set under QEMU).
         #[cfg(feature = "qemu")]
         let mut rcc = cx.device.RCC.freeze(rcc::Config::hsi());
@@ -280,16 +320,19 @@ mod app {
         device
             .handler
             .set_static_ram_bytes(memory::static_ram_bytes());
+        device.handler.set_reset_cause(reset_cause);
         TwilDevice::send_telemetry(
             &Telemetry::Boot {
                 protocol_version: PROTOCOL_VERSION,
+                reset_cause,
             },
             &mut |bytes: &[u8]| write_all(&mut tx, bytes),
         );
         log!(
-            "twil firmware up: static RAM {} bytes, stack {} bytes",
+            "twil firmware up: static RAM {} bytes, stack {} bytes, reset cause {}",
             memory::static_ram_bytes(),
-            memory::stack_bytes()
+            memory::stack_bytes(),
+            reset_cause
         );
         let (producer, consumer) = ccm.rx_queue.split();
 
@@ -340,6 +383,21 @@ mod app {
             (body, head, ())
         };
 
+        // The independent watchdog, last: from here the control task must feed it every
+        // WATCHDOG_TIMEOUT_MS (its first tick comes 50 ms after the mission task's start-up).
+        #[cfg(feature = "hardware")]
+        let watchdog = {
+            let mut w = stm32f4xx_hal::watchdog::IndependentWatchdog::new(cx.device.IWDG);
+            // A core halted by the debugger must not be reset under it.
+            w.stop_on_debug(&cx.device.DBGMCU, true);
+            w.start(stm32f4xx_hal::prelude::_fugit_ExtU32::millis(
+                WATCHDOG_TIMEOUT_MS,
+            ));
+            w
+        };
+        #[cfg(feature = "qemu")]
+        let watchdog = ();
+
         mission::spawn().unwrap_or_else(|_| panic!("mission spawns once"));
         (
             Shared {
@@ -356,6 +414,7 @@ mod app {
                 planner: cx.local.planner_memory,
                 mission: ccm.mission,
                 head,
+                watchdog,
             },
         )
     }
@@ -389,6 +448,7 @@ mod app {
                         {
                             STOP_ASKED_AT_TICK
                                 .store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
+                            STOP_ASKED_AT_COUNTS.store(systick_counts() as u32, Ordering::Release);
                             STOP_TICKS.store(0, Ordering::Release);
                         }
                     }
@@ -406,20 +466,44 @@ mod app {
         );
     }
 
-    /// Every 50 ms: encoders → pilot → motors. Idle (motors at 0) while no mission runs.
-    #[task(priority = 4, shared = [pilot, body])]
+    /// Every 50 ms: encoders → pilot → motors. Idle (motors at 0) while no mission runs. It
+    /// feeds the watchdog while the gate allows it, and zeroes the motors when a step misses
+    /// its period.
+    #[task(priority = 4, shared = [pilot, body], local = [watchdog])]
     async fn control(mut cx: control::Context, mut reports: Sender<'static, PilotReport, REPORTS>) {
         let period_s = PERIOD_MS as f32 / 1000.0;
         let mut next = Mono::now();
         let mut last = Mono::now();
+        let mut gate = WatchdogGate::new(WatchdogGate::MISSION_LIMIT_MS, next.ticks());
         loop {
             next += ms(PERIOD_MS);
             Mono::delay_until(next).await;
             let now = Mono::now();
             let elapsed_s = now.ticks().wrapping_sub(last.ticks()) as f32 / MONO_HZ as f32;
             last = now;
-            if cx.shared.body.lock(|b| b.emergency_stop()) {
-                STOP.store(true, Ordering::Release);
+            gate.control_ticked(now.ticks());
+            gate.mission_turned(MISSION_TURN_MS.load(Ordering::Acquire));
+            match gate.check(now.ticks()) {
+                WatchdogDecision::Feed => feed(cx.local.watchdog),
+                WatchdogDecision::Starve {
+                    control_silent_ms,
+                    mission_silent_ms,
+                } => {
+                    if !WATCHDOG_STARVED.swap(true, Ordering::AcqRel) {
+                        log!(
+                            "watchdog: not fed (control silent {} ms, mission silent {} ms): the IWDG resets the board{}",
+                            control_silent_ms,
+                            mission_silent_ms,
+                            if cfg!(feature = "qemu") { " (QEMU has no IWDG: nothing resets)" } else { "" }
+                        );
+                    }
+                }
+            }
+            if cx.shared.body.lock(|b| b.emergency_stop()) && !STOP.swap(true, Ordering::AcqRel) {
+                // The e-stop input: the stop is measured from this tick.
+                STOP_ASKED_AT_TICK.store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
+                STOP_ASKED_AT_COUNTS.store(systick_counts() as u32, Ordering::Release);
+                STOP_TICKS.store(0, Ordering::Release);
             }
             let tick = CONTROL_TICKS.fetch_add(1, Ordering::AcqRel).wrapping_add(1);
             if !ACTIVE.load(Ordering::Acquire) {
@@ -439,10 +523,8 @@ mod app {
                 }
                 pilot.tick(left, right, elapsed_s)
             });
-            note_stop(
-                tick,
-                stopping && report.left_voltage_v == 0.0 && report.right_voltage_v == 0.0,
-            );
+            let motors_off =
+                stopping && report.left_voltage_v == 0.0 && report.right_voltage_v == 0.0;
             let spent = instructions().saturating_sub(before);
             let spent = spent.min(u32::MAX as u64) as u32;
             let worst = MAX_CONTROL_INSTRUCTIONS.fetch_max(spent, Ordering::Relaxed);
@@ -458,6 +540,20 @@ mod app {
                 &WORST_BODY_INSTRUCTIONS,
                 instructions().saturating_sub(before),
             );
+            // The motors have their voltages now: a stop is measured to here.
+            note_stop(tick, motors_off);
+            // A step that ends after the next one was due: the controller cannot be trusted to
+            // hold the robot on its path. Motors to zero now, the mission ends (mission task).
+            if twil_core::failsafe::control_period_missed(
+                next.ticks(),
+                Mono::now().ticks(),
+                PERIOD_MS,
+            ) && !OVERRUN.swap(true, Ordering::AcqRel)
+            {
+                cx.shared.pilot.lock(|p| p.stop());
+                cx.shared.body.lock(|b| b.drive(0.0, 0.0, period_s));
+                log!("controller overrun at tick {}: motors zeroed", tick);
+            }
             // A full queue means the mission task is more than 400 ms behind: the report is
             // dropped (the mission's clock then runs slow), the wheels are not affected.
             let _ = reports.try_send(report);
@@ -561,6 +657,10 @@ mod app {
         let mut reported_end = false;
         loop {
             let mut busy = false;
+            // Progress mark for the watchdog gate; the link's clock for its silence.
+            let now_ms = Mono::now().ticks();
+            MISSION_TURN_MS.store(now_ms, Ordering::Release);
+            device.set_now_ms(now_ms);
             // The link: requests in, replies out.
             let mut n = 0;
             while n < chunk.len() {
@@ -587,6 +687,18 @@ mod app {
                     &mut |bytes: &[u8]| write_all(tx, bytes),
                 );
             }
+            // Failsafes: a control step that missed its period (motors already zeroed), a host
+            // silent for longer than the mission's link-loss timeout.
+            if OVERRUN.swap(false, Ordering::AcqRel) {
+                device.link(mission).fail(StopCause::ControllerOverrun);
+            }
+            if let Some(reaction) = device.link(mission).watch_link() {
+                log!(
+                    "link lost: the host silent for {} ms: {}",
+                    device.link(mission).link_silent_ms(),
+                    reaction
+                );
+            }
             // A mission that starts: the pilot and the body at its start.
             if let Some(config) = device.link(mission).take_started() {
                 SONAR_RANGE_BITS.store(config.robot.sonar_range_m.to_bits(), Ordering::Relaxed);
@@ -594,6 +706,7 @@ mod app {
                 cx.shared.body.lock(|b| b.restart(&config));
                 cx.shared.pilot.lock(|p| p.restart(&config));
                 STOP.store(false, Ordering::Release);
+                STOP_LATENCY_US.store(0, Ordering::Release);
                 ACTIVE.store(true, Ordering::Release);
             }
             device.note_timing(
@@ -601,6 +714,7 @@ mod app {
                 high_water,
                 STOP_TICKS.load(Ordering::Acquire),
             );
+            device.note_stop_latency_us(STOP_LATENCY_US.load(Ordering::Acquire));
             // What the other tasks sent.
             while let Ok(report) = reports.try_recv() {
                 busy = true;
@@ -629,13 +743,15 @@ mod app {
             if ended && !reported_end {
                 let r = device.link(mission).report();
                 log!(
-                    "mission done: worst instructions: control step {}, plan {}, sonar reading {}, receive interrupt {}, body step {}; stack {} bytes",
+                    "mission done: worst instructions: control step {}, plan {}, sonar reading {}, receive interrupt {}, body step {}; stack {} bytes; stop cause {}, stop latency {} us",
                     r.max_control_instructions as u32,
                     r.max_plan_instructions as u32,
                     WORST_SONAR_INSTRUCTIONS.load(Ordering::Relaxed),
                     WORST_RX_INSTRUCTIONS.load(Ordering::Relaxed),
                     WORST_BODY_INSTRUCTIONS.load(Ordering::Relaxed),
-                    r.stack_high_water_bytes
+                    r.stack_high_water_bytes,
+                    r.stop_cause,
+                    r.stop_latency_us
                 );
             }
             reported_end = ended;
@@ -670,8 +786,22 @@ mod app {
         if motors_off && STOP.load(Ordering::Acquire) && STOP_TICKS.load(Ordering::Acquire) == 0 {
             let asked = STOP_ASKED_AT_TICK.load(Ordering::Acquire);
             STOP_TICKS.store(tick.wrapping_sub(asked), Ordering::Release);
+            // SysTick counts at 168 MHz on both builds (QEMU: virtual time).
+            let counts = (systick_counts() as u32)
+                .wrapping_sub(STOP_ASKED_AT_COUNTS.load(Ordering::Acquire));
+            STOP_LATENCY_US.store(counts / (SYSTICK_HZ / 1_000_000), Ordering::Release);
         }
     }
+
+    /// Feed the independent watchdog (hardware; QEMU has none).
+    #[cfg(feature = "hardware")]
+    fn feed(watchdog: &mut Watchdog) {
+        watchdog.feed();
+    }
+
+    /// QEMU: no watchdog to feed.
+    #[cfg(feature = "qemu")]
+    fn feed(_: &mut Watchdog) {}
 
     /// `n` milliseconds of [`Mono`] (one tick per millisecond).
     fn ms(n: u32) -> fugit::Duration<u32, 1, { MONO_HZ as u64 }> {
@@ -696,4 +826,23 @@ mod app {
             let _ = nb::block!(tx.write(b));
         }
     }
+}
+
+/// A HardFault (a bus or usage fault escalated, or a stack overflow: flip-link puts the stack
+/// below the statics, so an overflow faults instead of corrupting them): zero the motors with
+/// raw register writes (no driver state is trusted any more), then reset the chip (the next
+/// boot reports `ResetCause::Software`). If the fault left no stack to run this handler, the
+/// core locks up and the independent watchdog resets it within [`WATCHDOG_TIMEOUT_MS`].
+#[cortex_m_rt::exception]
+unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    #[cfg(feature = "hardware")]
+    {
+        // TIM12 drives both motors' PWM (board.rs): duty 0 and both outputs disabled.
+        let tim12 = &*stm32f4xx_hal::pac::TIM12::ptr();
+        tim12.ccr1().write(|w| w.bits(0));
+        tim12.ccr2().write(|w| w.bits(0));
+        tim12.ccer().write(|w| w.bits(0));
+    }
+    defmt::error!("hard fault: motors zeroed, resetting");
+    cortex_m::peripheral::SCB::sys_reset()
 }

@@ -122,6 +122,9 @@ struct Shell {
     previous_counts: (i32, i32),
     /// Real time per tick (zero: as fast as it can).
     tick_time: Duration,
+    /// The device's clock for the host's silence (link-loss policy): wall time, as on the
+    /// firmware, since the host's heartbeats are paced in wall time too.
+    started: std::time::Instant,
 }
 
 impl Shell {
@@ -139,6 +142,7 @@ impl Shell {
             } else {
                 Duration::from_secs_f32(PERIOD_S / pace as f32)
             },
+            started: std::time::Instant::now(),
         }
     }
 
@@ -163,6 +167,8 @@ impl Shell {
                     Err(RecvTimeoutError::Disconnected) => return,
                 }
             }
+            let now_ms = self.started.elapsed().as_millis() as u32;
+            self.device.set_now_ms(now_ms);
             let mut wire = Vec::new();
             for bytes in received {
                 self.device.link(&mut self.mission).receive(
@@ -174,6 +180,10 @@ impl Shell {
                 );
                 // A stop, hold or follow asked for by a request reaches the pilot before the
                 // next tick.
+                self.command_pilot();
+            }
+            // The host silent for longer than the mission's link timeout: its reaction.
+            if self.device.link(&mut self.mission).watch_link().is_some() {
                 self.command_pilot();
             }
             if matches!(self.device.state(), RunState::Running | RunState::Paused) {
@@ -267,6 +277,74 @@ mod tests {
     use twil_core::mission::{MissionMode, MissionStatus};
     use twil_core::plan::PlannerKind;
 
+    /// A mission on the tiny world at real-time pace (`sim:1`, 12 s to the goal) that reacts
+    /// to `timeout_ms` of silence by stopping; started.
+    fn paced_mission_with_link_timeout(timeout_ms: u32) -> Remote {
+        let mut remote = Remote::over(SimLink::spawn(1).unwrap());
+        remote.hello().unwrap();
+        let map = MapParams {
+            robot_radius_m: 0.3,
+            ..MapParams::default()
+        };
+        remote.call(Request::SetParams(map)).unwrap();
+        let setup = MissionSetup {
+            mode: MissionMode::Continuous,
+            planner: PlannerKind::AStar,
+            start: PointM::new(3.0, 1.5),
+            initial_heading_rad: std::f32::consts::FRAC_PI_2,
+            goal: PointM::new(3.0, 5.0),
+            speed_m_s: 0.3,
+            sonar_range_m: 1.5,
+            time_limit_s: 300.0,
+            constant_depth_filter: false,
+            trust_seen_space: true,
+            noise_seed: 1,
+            sonar_noise_std_m: 0.0,
+            link_loss: twil_core::failsafe::LinkLossPolicy {
+                timeout_ms,
+                reaction: twil_core::failsafe::LinkLossReaction::StopAndHold,
+            },
+        };
+        assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
+        assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);
+        remote
+    }
+
+    #[test]
+    fn heartbeats_keep_a_mission_alive_and_silence_stops_it_as_link_lost() {
+        use twil_core::failsafe::StopCause;
+        use twil_core::link::{DeviceFrame, RunState};
+        let mut remote = paced_mission_with_link_timeout(300);
+        // 1.5 s of heartbeats every 100 ms: still running.
+        let mut last_sent = Instant::now();
+        for _ in 0..15 {
+            std::thread::sleep(Duration::from_millis(100));
+            last_sent = Instant::now();
+            match remote.call(Request::MissionStatus).unwrap() {
+                Reply::Mission(r) => assert_eq!(r.state, RunState::Running, "{r:?}"),
+                other => panic!("{other:?}"),
+            }
+        }
+        // Silence: the device ends the mission 300 ms (plus a tick) after the last request
+        // reached it (its reply leaves at the end of the device's tick, up to 50 ms later).
+        let deadline = Instant::now() + Duration::from_secs(10);
+        remote.telemetry.clear();
+        let report = loop {
+            match remote.next_frame(deadline).unwrap() {
+                Ok(DeviceFrame::Telemetry(Telemetry::Finished(r))) => break r,
+                Ok(_) => {}
+                Err(fault) => panic!("{fault:?}"),
+            }
+        };
+        let waited = last_sent.elapsed();
+        assert!(
+            waited >= Duration::from_millis(299) && waited < Duration::from_millis(1_500),
+            "stopped {waited:?} after the last request"
+        );
+        assert_eq!(report.status, MissionStatus::Aborted, "{report:?}");
+        assert_eq!(report.stop_cause, StopCause::LinkLost);
+    }
+
     #[test]
     fn hello_ping_and_a_short_mission_that_reaches_its_goal() {
         let mut remote = Remote::over(SimLink::spawn(0).unwrap());
@@ -312,6 +390,7 @@ mod tests {
             trust_seen_space: true,
             noise_seed: 1,
             sonar_noise_std_m: 0.0,
+            link_loss: twil_core::failsafe::LinkLossPolicy::NEVER,
         };
         assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
         assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);

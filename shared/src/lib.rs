@@ -17,6 +17,8 @@
 //!   the simulated robot it can drive.
 //! - [`link`]: the host <-> firmware protocol.
 //! - [`cspace`]: the two-link manipulator planner of seed 000.
+//! - [`failsafe`]: the robot's failsafes (watchdog gate, reset cause, link loss, overrun) as
+//!   pure step functions the firmware wires.
 //! - [`drivers`]: the logic of the drivers for Twil's boards (sonar, neck, motors, encoders,
 //!   emergency stop) over embedded-hal 1.0 traits.
 //!
@@ -28,6 +30,7 @@
 pub mod control;
 pub mod cspace;
 pub mod drivers;
+pub mod failsafe;
 pub mod geom;
 pub mod grid;
 pub mod link;

@@ -24,6 +24,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 use twil_core::control::Pose;
+use twil_core::failsafe::{LinkLossPolicy, LinkLossReaction, StopCause};
 use twil_core::geom::PointM;
 use twil_core::grid::{Grid400, GridGeometry, DEFAULT_RESOLUTION_M};
 use twil_core::link::{
@@ -95,6 +96,43 @@ pub struct Args {
     /// GIF scale, pixels per cell.
     #[arg(long, default_value_t = 2)]
     pub gif_scale: u32,
+    /// The device reacts (--on-link-loss) when it hears nothing from the host for this long,
+    /// milliseconds: 0 (never) or 200 to 3 600 000. The host sends a heartbeat
+    /// (`MissionStatus`) every quarter of it, at most every 500 ms.
+    #[arg(long, default_value_t = 2_000, value_name = "MS")]
+    pub link_timeout_ms: u32,
+    /// What the device does when the link is lost: stop (end the mission, motors at zero, hold)
+    /// or continue to the goal.
+    #[arg(long, value_enum, default_value_t = LinkLossArg::Stop)]
+    pub on_link_loss: LinkLossArg,
+}
+
+/// `--on-link-loss`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinkLossArg {
+    /// End the mission (`aborted`, cause "link lost"), motors at zero.
+    Stop,
+    /// Go on to the goal.
+    Continue,
+}
+
+impl Args {
+    /// The link-loss policy of `--link-timeout-ms` and `--on-link-loss`.
+    pub fn link_loss(&self) -> LinkLossPolicy {
+        LinkLossPolicy {
+            timeout_ms: self.link_timeout_ms,
+            reaction: match self.on_link_loss {
+                LinkLossArg::Stop => LinkLossReaction::StopAndHold,
+                LinkLossArg::Continue => LinkLossReaction::Continue,
+            },
+        }
+    }
+}
+
+/// Time between two heartbeats for a link timeout of `timeout_ms` (0: none): a quarter of it,
+/// at most 500 ms, so that three may be lost before the device reacts.
+pub fn heartbeat_period(timeout_ms: u32) -> Option<Duration> {
+    (timeout_ms > 0).then(|| Duration::from_millis((timeout_ms / 4).min(500) as u64))
 }
 
 /// Set by the Ctrl-C handler while a mission runs; the main loop then aborts the mission.
@@ -165,6 +203,14 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
             args.silence
         );
     }
+    if !args.link_loss().is_valid() {
+        bail!(
+            "--link-timeout-ms: must be 0 (never) or {} to {} milliseconds, got {}",
+            LinkLossPolicy::MIN_TIMEOUT_MS,
+            LinkLossPolicy::MAX_TIMEOUT_MS,
+            args.link_timeout_ms
+        );
+    }
     for (which, p) in [("start", params.start), ("goal", params.goal)] {
         if geometry.cell_of(p).is_err() {
             bail!(
@@ -200,6 +246,7 @@ pub fn mission_setup(args: &Args, params: &Params) -> MissionSetup {
         trust_seen_space: !args.seed_prune,
         noise_seed: args.seed,
         sonar_noise_std_m: args.sonar_noise,
+        link_loss: args.link_loss(),
     }
 }
 
@@ -240,6 +287,7 @@ fn explain_bad_mission(args: &Args, error: &ErrorReply) -> String {
         6 => format!("sonar range (--sonar-range {})", args.sonar_range),
         7 => format!("time limit (--time-limit {})", args.time_limit),
         11 => format!("sonar noise (--sonar-noise {})", args.sonar_noise),
+        12 => format!("link timeout (--link-timeout-ms {})", args.link_timeout_ms),
         v if v >= 100 => format!("robot configuration field {} (see the device log)", v - 100),
         v => format!("field {v}"),
     };
@@ -327,6 +375,11 @@ impl Follower {
         self.poses.last().map_or(Pose::default(), |p| {
             Pose::new(p.position.x_m, p.position.y_m, p.heading_rad)
         })
+    }
+
+    /// The mission time of the latest pose, milliseconds.
+    fn t_ms(&self) -> u32 {
+        self.poses.last().map_or(0, |p| p.t_ms)
     }
 
     fn t_s(&self) -> f32 {
@@ -499,6 +552,17 @@ pub fn phase_name(phase: MissionPhase) -> &'static str {
     }
 }
 
+/// The JSON name of a stop cause.
+pub fn stop_cause_name(cause: StopCause) -> Option<&'static str> {
+    match cause {
+        StopCause::None => None,
+        StopCause::Host => Some("host"),
+        StopCause::EmergencyStop => Some("emergency_stop"),
+        StopCause::LinkLost => Some("link_lost"),
+        StopCause::ControllerOverrun => Some("controller_overrun"),
+    }
+}
+
 /// The JSON name of a mission status.
 pub fn status_name(status: MissionStatus) -> &'static str {
     match status {
@@ -579,6 +643,8 @@ fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value {
         "unreachable_reason": s.unreachable_reason.map(|r| format!("{r:?}")),
         "plan_errors": s.plan_errors,
         "poses_reported": outcome.poses,
+        "stop_cause": stop_cause_name(outcome.report.stop_cause),
+        "stop_latency_us": outcome.report.stop_latency_us,
         "interrupted": outcome.interrupted,
         "link": outcome.link.json(),
     });
@@ -728,6 +794,9 @@ pub fn run(args: Args) -> Result<()> {
             info.static_ram_bytes,
             report.stack_high_water_bytes
         );
+        if report.stop_cause != StopCause::None {
+            println!("stopped by the device: {}", report.stop_cause.describe());
+        }
         if let Some(dir) = &args.out {
             println!("wrote {}", dir.display());
         }
@@ -805,6 +874,12 @@ fn follow(
     remote.set_timeout(silence);
     let mut aborted = false;
     let mut last_draw = Instant::now();
+    let heartbeat = heartbeat_period(args.link_timeout_ms);
+    let mut last_beat = Instant::now();
+    // The device measures the silence on its own clock, which under QEMU (`sleep=off`) runs
+    // ahead of the host's: a heartbeat is also due when the mission time of its telemetry
+    // has advanced by a period.
+    let mut last_beat_mission_ms = 0u32;
     let mut last_heard = Instant::now();
     loop {
         for t in std::mem::take(&mut remote.telemetry) {
@@ -825,24 +900,50 @@ fn follow(
             }
             continue;
         }
-        let wait_until = Instant::now() + silence.min(super::mission_link::POLL_AFTER);
-        let frame = match remote.next_frame(wait_until) {
+        // Ask `MissionStatus` when the heartbeat is due (the device's link-loss policy needs
+        // to hear from the host) or when the device has been quiet for `POLL_AFTER` (its final
+        // report may have been lost on the way, see mission_link). Under QEMU (`sleep=off`)
+        // the device's clock runs ahead of the host's, so the heartbeat is also due when the
+        // mission time of its telemetry has advanced by a period.
+        use super::mission_link::{recover_final_report, Poll, POLL_AFTER};
+        let mission_ms = follower.t_ms();
+        let beat_due = heartbeat.is_some_and(|period| {
+            last_beat.elapsed() >= period
+                || u128::from(mission_ms.saturating_sub(last_beat_mission_ms)) >= period.as_millis()
+        });
+        let quiet = last_heard.elapsed() >= POLL_AFTER && last_beat.elapsed() >= POLL_AFTER;
+        if beat_due || quiet {
+            last_beat = Instant::now();
+            last_beat_mission_ms = mission_ms;
+            match recover_final_report(remote, follower) {
+                Poll::Finished => continue,
+                Poll::Alive => {
+                    last_heard = Instant::now();
+                    continue;
+                }
+                Poll::NoReply if last_heard.elapsed() < silence => {
+                    note(bar, "twil: MissionStatus unanswered, still listening");
+                    continue;
+                }
+                Poll::NoReply => bail!(
+                    "the device went silent: no telemetry for {} s (mission time {:.1} s)",
+                    args.silence,
+                    follower.t_s()
+                ),
+            }
+        }
+        let mut deadline = (last_heard + silence).min(last_beat.max(last_heard) + POLL_AFTER);
+        if let Some(period) = heartbeat {
+            deadline = deadline.min(last_beat + period);
+        }
+        let frame = match remote.next_frame(deadline) {
             Ok(frame) => {
                 last_heard = Instant::now();
                 frame
             }
-            // Quiet: the final report may have been lost on the way (see mission_link).
-            Err(e) if Instant::now() >= wait_until => {
-                use super::mission_link::{recover_final_report, Poll};
-                match recover_final_report(remote, follower) {
-                    Poll::Finished => continue,
-                    Poll::Alive => {
-                        last_heard = Instant::now();
-                        continue;
-                    }
-                    Poll::NoReply if last_heard.elapsed() < silence => continue,
-                    Poll::NoReply => {}
-                }
+            // The wait ended for a heartbeat or a poll, not for the silence: go round.
+            Err(_) if Instant::now() >= deadline && last_heard.elapsed() < silence => continue,
+            Err(e) if Instant::now() >= deadline => {
                 return Err(e).with_context(|| {
                     format!(
                         "the device went silent: no telemetry for {} s (mission time {:.1} s)",
@@ -1000,6 +1101,8 @@ mod tests {
                         max_plan_instructions: 0,
                         stack_high_water_bytes: 0,
                         stop_ticks: 0,
+                        stop_latency_us: 0,
+                        stop_cause: twil_core::failsafe::StopCause::None,
                         emergency_stop: false,
                     };
                     let mut out = [0u8; twil_core::link::MAX_FRAME_BYTES];
@@ -1032,7 +1135,8 @@ mod tests {
 
     #[test]
     fn a_lost_final_report_is_asked_for_after_a_second_of_quiet() {
-        let args = args(&[]);
+        // No heartbeat (it would ask sooner): the quiet poll alone must find the report.
+        let args = args(&["--link-timeout-ms", "0"]);
         let inputs = read_inputs(&args).unwrap();
         let mut follower = Follower::new(&inputs, false).unwrap();
         let mut remote = Remote::over(Ended(Vec::new()));

@@ -43,6 +43,7 @@ pub struct Handler<const GRID_WORDS: usize> {
     frame_errors: u32,
     rx_dropped_bytes: u32,
     last_plan: LastPlan,
+    reset_cause: crate::failsafe::ResetCause,
 }
 
 /// What the status reports about the last plan.
@@ -84,6 +85,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                 expanded: 0,
                 queue_peak: 0,
             },
+            reset_cause: crate::failsafe::ResetCause::Unknown,
         }
     }
 
@@ -126,6 +128,11 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
     /// Set the statically allocated RAM reported by [`Request::Hello`] (firmware only).
     pub fn set_static_ram_bytes(&mut self, bytes: u32) {
         self.info.static_ram_bytes = bytes;
+    }
+
+    /// Set why the chip last reset (read at boot; `Status` reports it).
+    pub fn set_reset_cause(&mut self, cause: crate::failsafe::ResetCause) {
+        self.reset_cause = cause;
     }
 
     /// Set which program this is.
@@ -344,6 +351,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             last_plan_instructions: self.last_plan.instructions,
             last_plan_expanded: self.last_plan.expanded,
             last_plan_queue_peak: self.last_plan.queue_peak,
+            reset_cause: self.reset_cause,
         }
     }
 

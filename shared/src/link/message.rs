@@ -10,13 +10,16 @@
 use heapless::Vec;
 use serde::{Deserialize, Serialize};
 
+use crate::failsafe::{LinkLossPolicy, ResetCause, StopCause};
 use crate::geom::PointM;
 use crate::mission::{MissionMode, MissionPhase, MissionStats, MissionStatus};
 use crate::plan::{PlanStatus, PlannerKind};
 
 /// Version of this protocol. A host and a device only talk when their versions are equal
-/// ([`Request::Hello`]). 2: missions (requests 10–19, telemetry 3–8, the pose report).
-pub const PROTOCOL_VERSION: u16 = 2;
+/// ([`Request::Hello`]). 2: missions (requests 10–19, telemetry 3–8, the pose report). 3:
+/// failsafes (`MissionSetup::link_loss`, `MissionReport::stop_cause` / `stop_latency_us`,
+/// the reset cause in `DeviceStatus` and `Telemetry::Boot`).
+pub const PROTOCOL_VERSION: u16 = 3;
 
 /// Points carried by one telemetry chunk of hits, prefix or path.
 pub const TELEMETRY_CHUNK_POINTS: usize = 32;
@@ -212,6 +215,8 @@ pub struct MissionSetup {
     pub noise_seed: u64,
     /// Standard deviation of the simulated sonar's noise, metres (simulated builds).
     pub sonar_noise_std_m: f32,
+    /// What the mission does when the host falls silent (timeout 0: nothing).
+    pub link_loss: LinkLossPolicy,
 }
 
 /// How the device's mission stands ([`Reply::Mission`], [`Telemetry::Finished`]).
@@ -237,6 +242,12 @@ pub struct MissionReport {
     pub stop_ticks: u32,
     /// The emergency stop is latched.
     pub emergency_stop: bool,
+    /// Why the mission was stopped from outside its own logic (abort, e-stop, link lost,
+    /// controller overrun); `None` when it ended by itself.
+    pub stop_cause: StopCause,
+    /// Time from the receive interrupt that saw the last stop frame to the control step that
+    /// put zero volts on the motors, microseconds (firmware, SysTick at 168 MHz; 0 elsewhere).
+    pub stop_latency_us: u32,
 }
 
 /// The device's mission, as a whole.
@@ -377,6 +388,8 @@ pub struct DeviceStatus {
     pub last_plan_expanded: u32,
     /// Largest number of open-list entries the last search used.
     pub last_plan_queue_peak: u32,
+    /// Why the chip last reset (firmware on a board; `Unknown` under QEMU and on the host).
+    pub reset_cause: ResetCause,
 }
 
 /// What the device answers.
@@ -583,6 +596,8 @@ pub enum Telemetry {
     Boot {
         /// Its [`PROTOCOL_VERSION`].
         protocol_version: u16,
+        /// Why the chip reset (`Unknown` under QEMU).
+        reset_cause: ResetCause,
     },
     /// The robot's pose estimate, five times a second while a mission runs.
     Pose(PoseReport),

@@ -41,6 +41,7 @@ use super::handler::{upload_chunk, Handler, MAX_PENDING_VERTICES};
 use super::message::*;
 use super::replay::ReplayCache;
 use super::Device;
+use crate::failsafe::{LinkLossReaction, LinkWatch, StopCause};
 use crate::geom::PointM;
 use crate::mission::{
     Mission, MissionConfig, MissionError, MissionEvent, MissionInput, MissionOutput, MissionPhase,
@@ -191,6 +192,9 @@ pub struct RobotDevice<const W: usize> {
     max_control_instructions: u64,
     stack_high_water_bytes: u32,
     stop_ticks: u32,
+    stop_latency_us: u32,
+    stop_cause: StopCause,
+    link_watch: LinkWatch,
     reported: (MissionPhase, MissionStatus),
     pending: Pending,
     replay: ReplayCache,
@@ -217,6 +221,9 @@ impl<const W: usize> RobotDevice<W> {
             max_control_instructions: 0,
             stack_high_water_bytes: 0,
             stop_ticks: 0,
+            stop_latency_us: 0,
+            stop_cause: StopCause::None,
+            link_watch: LinkWatch::new(),
             reported: (MissionPhase::Done, MissionStatus::Aborted),
             pending: Pending {
                 finished: false,
@@ -284,6 +291,18 @@ impl<const W: usize> RobotDevice<W> {
         self.stop_ticks = stop_ticks;
     }
 
+    /// The firmware's measured stop latency (receive interrupt to motors off), microseconds.
+    pub fn note_stop_latency_us(&mut self, stop_latency_us: u32) {
+        self.stop_latency_us = stop_latency_us;
+    }
+
+    /// The shell's monotonic clock, milliseconds (wrapping): call it before
+    /// [`RobotLink::receive`] and [`RobotLink::watch_link`]. Frames are stamped with it to
+    /// measure the host's silence; a shell that never calls it never sees a lost link.
+    pub fn set_now_ms(&mut self, now_ms: u32) {
+        self.link_watch.set_now_ms(now_ms);
+    }
+
     /// Encode a telemetry message as a frame and pass the bytes to `send`.
     pub fn send_telemetry(telemetry: &Telemetry, send: &mut impl FnMut(&[u8])) {
         Device::<W>::send_encoded(&DeviceFrame::Telemetry(telemetry.clone()), send);
@@ -335,6 +354,7 @@ impl<const W: usize> RobotLink<'_, W> {
             let (seq, reply) = match got {
                 None => continue,
                 Some(Ok(frame)) => {
+                    self.d.link_watch.heard();
                     if let Some(reply) = self.d.replay.lookup(frame.seq, &frame.request) {
                         // A retry of the last request: its reply again, not a second
                         // execution (see [`super::replay`]).
@@ -503,12 +523,12 @@ impl<const W: usize> RobotLink<'_, W> {
                 }
             }
             Request::AbortMission => {
-                self.stop_mission();
+                self.stop_mission_for(StopCause::Host);
                 Ok(Reply::Ack)
             }
             Request::EmergencyStop => {
                 self.d.emergency_stop = true;
-                self.stop_mission();
+                self.stop_mission_for(StopCause::EmergencyStop);
                 Ok(Reply::Ack)
             }
             Request::ClearEmergencyStop => {
@@ -546,7 +566,10 @@ impl<const W: usize> RobotLink<'_, W> {
         config.constant_depth_filter = setup.constant_depth_filter;
         config.trust_seen_space = setup.trust_seen_space;
         // Field indices of MissionSetup: 2 start, 3 heading, 4 goal, 5 speed, 6 sonar range,
-        // 7 time limit, 11 noise.
+        // 7 time limit, 11 noise, 12 link-loss policy.
+        if !setup.link_loss.is_valid() {
+            return Err(bad(12));
+        }
         if !setup.start.is_finite() {
             return Err(bad(2));
         }
@@ -615,6 +638,9 @@ impl<const W: usize> RobotLink<'_, W> {
         }
         self.d.state = RunState::Running;
         self.d.started = true;
+        self.d.stop_cause = StopCause::None;
+        self.d.stop_latency_us = 0;
+        self.d.link_watch.start();
         self.d.ticks = 0;
         self.d.sweeps = 0;
         self.d.plans = 0;
@@ -628,13 +654,41 @@ impl<const W: usize> RobotLink<'_, W> {
         Ok(Reply::Ack)
     }
 
-    fn stop_mission(&mut self) {
+    /// Stop the mission (if one runs: `cause` is reported) and the motors.
+    fn stop_mission_for(&mut self, cause: StopCause) {
         if matches!(self.d.state, RunState::Running | RunState::Paused) {
+            self.d.stop_cause = cause;
             let out = self.mission.step(MissionInput::Abort);
             self.absorb(out);
         }
         self.d.pilot_command = Some(PilotCommand::Stop);
         self.d.sonar_request = None;
+    }
+
+    /// A failsafe of the shell fired (e.g. [`StopCause::ControllerOverrun`]): a running
+    /// mission ends `Aborted` with `cause`, the pilot is told to stop.
+    pub fn fail(&mut self, cause: StopCause) {
+        self.stop_mission_for(cause);
+    }
+
+    /// Apply the mission's link-loss policy (`MissionSetup::link_loss`) to the host's silence
+    /// at the time of [`RobotDevice::set_now_ms`]: `StopAndHold` ends a running or paused
+    /// mission with [`StopCause::LinkLost`]. Returns the reaction taken, once per mission.
+    pub fn watch_link(&mut self) -> Option<LinkLossReaction> {
+        if !matches!(self.d.state, RunState::Running | RunState::Paused) {
+            return None;
+        }
+        let policy = self.d.setup.map(|s| s.link_loss)?;
+        let reaction = self.d.link_watch.check(&policy)?;
+        if reaction == LinkLossReaction::StopAndHold {
+            self.stop_mission_for(StopCause::LinkLost);
+        }
+        Some(reaction)
+    }
+
+    /// Milliseconds since the host was last heard (see [`RobotDevice::set_now_ms`]).
+    pub fn link_silent_ms(&self) -> u32 {
+        self.d.link_watch.silent_ms()
     }
 
     /// One control period of the pilot.
@@ -774,6 +828,8 @@ impl<const W: usize> RobotLink<'_, W> {
             stack_high_water_bytes: self.d.stack_high_water_bytes,
             stop_ticks: self.d.stop_ticks,
             emergency_stop: self.d.emergency_stop,
+            stop_cause: self.d.stop_cause,
+            stop_latency_us: self.d.stop_latency_us,
         }
     }
 

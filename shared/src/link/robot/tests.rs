@@ -29,6 +29,8 @@ pub(super) struct Bench {
     pub(super) decoder: FrameDecoder,
     pub(super) seq: u16,
     pub(super) telemetry: StdVec<Telemetry>,
+    /// The shell's clock, milliseconds: one control period per tick.
+    pub(super) now_ms: u32,
 }
 
 impl Bench {
@@ -44,6 +46,7 @@ impl Bench {
             decoder: FrameDecoder::new(),
             seq: 0,
             telemetry: StdVec::new(),
+            now_ms: 0,
         }
     }
 
@@ -139,6 +142,9 @@ impl Bench {
 
     /// One control period; the telemetry it produced goes through the wire format.
     pub(super) fn tick(&mut self) {
+        self.now_ms += 50;
+        self.device.set_now_ms(self.now_ms);
+        self.device.link(&mut self.mission).watch_link();
         if let Some(config) = self.device.link(&mut self.mission).take_started() {
             self.pilot = Some(Pilot::new(&config));
             let plant = Plant::new(
@@ -200,6 +206,7 @@ pub(super) fn setup(params: &crate::world::Params, mode: MissionMode) -> Mission
         trust_seen_space: true,
         noise_seed: 1,
         sonar_noise_std_m: 0.0,
+        link_loss: crate::failsafe::LinkLossPolicy::NEVER,
     }
 }
 
@@ -343,10 +350,14 @@ fn abort_and_emergency_stop_put_zero_volts_on_the_motors_at_the_next_tick() {
         b.tick();
         assert_eq!(b.pilot.as_ref().unwrap().voltages_v(), (0.0, 0.0));
         assert_eq!(b.device.state(), RunState::Ended);
-        assert_eq!(
-            b.device.link(&mut b.mission).report().status,
-            MissionStatus::Aborted
-        );
+        let report = b.device.link(&mut b.mission).report();
+        assert_eq!(report.status, MissionStatus::Aborted);
+        let cause = if stop_requested == Request::EmergencyStop {
+            crate::failsafe::StopCause::EmergencyStop
+        } else {
+            crate::failsafe::StopCause::Host
+        };
+        assert_eq!(report.stop_cause, cause);
         // A new start is allowed after an abort, not after an emergency stop until cleared.
         let again = b.call(Request::StartMission);
         if stop_requested == Request::EmergencyStop {
@@ -515,6 +526,8 @@ fn the_largest_mission_messages_fit_a_frame() {
         stack_high_water_bytes: u32::MAX,
         stop_ticks: u32::MAX,
         emergency_stop: true,
+        stop_cause: crate::failsafe::StopCause::ControllerOverrun,
+        stop_latency_us: u32::MAX,
     };
     let frames = [
         DeviceFrame::Telemetry(Telemetry::SweepHits {
@@ -552,6 +565,10 @@ fn the_largest_mission_messages_fit_a_frame() {
         trust_seen_space: true,
         noise_seed: u64::MAX,
         sonar_noise_std_m: f32::MAX,
+        link_loss: crate::failsafe::LinkLossPolicy {
+            timeout_ms: u32::MAX,
+            reaction: crate::failsafe::LinkLossReaction::StopAndHold,
+        },
     };
     let mut out = [0u8; MAX_FRAME_BYTES];
     assert!(encode(
@@ -563,3 +580,5 @@ fn the_largest_mission_messages_fit_a_frame() {
     )
     .is_ok());
 }
+
+mod failsafe_tests;
