@@ -394,30 +394,35 @@ impl<const WORDS: usize> Grid<WORDS> {
     }
 
     /// Mark occupied the cells `x0..=x1` of row `y`, clipped to the grid, a word at a time.
-    pub fn fill_row(&mut self, y: i32, x0: i32, x1: i32) {
+    /// Returns the number of words written (0 when nothing of the run is on the grid).
+    pub fn fill_row(&mut self, y: i32, x0: i32, x1: i32) -> usize {
         let w = self.geometry.width as i32;
         if y < 0 || y >= self.geometry.height as i32 {
-            return;
+            return 0;
         }
         let (x0, x1) = (x0.max(0), x1.min(w - 1));
         if x0 > x1 {
-            return;
+            return 0;
         }
         let row = y as usize * w as usize;
-        let (mut i, end) = (row + x0 as usize, row + x1 as usize);
-        while i <= end {
-            let bit = i % 32;
-            let n = (32 - bit).min(end - i + 1);
-            let mask = if n == 32 {
-                u32::MAX
-            } else {
-                ((1u32 << n) - 1) << bit
-            };
-            if let Some(word) = self.bits.get_mut(i / 32) {
-                *word |= mask;
+        let (first, last) = (row + x0 as usize, row + x1 as usize);
+        let (first_word, last_word) = (first / 32, last / 32);
+        // Bits from `first % 32` up in the first word, up to `last % 32` in the last one.
+        let head = u32::MAX << (first % 32);
+        let tail = u32::MAX >> (31 - last % 32);
+        let Some(words) = self.bits.get_mut(first_word..=last_word) else {
+            return 0; // cannot happen: the geometry fits the capacity
+        };
+        match words {
+            [only] => *only |= head & tail,
+            [start, middle @ .., end] => {
+                *start |= head;
+                middle.fill(u32::MAX);
+                *end |= tail;
             }
-            i += n;
+            [] => {}
         }
+        words.len()
     }
 
     /// Number of occupied cells.
