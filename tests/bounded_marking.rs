@@ -61,8 +61,7 @@ fn assert_within_bound(da: &Path, par: &Path, radius_m: f32) {
     let vertices = world.obstacles.vertex_count();
     let half = geometry.expansion_cells(radius_m);
     assert_eq!(world.expansion_cells, half);
-    let bound = polygon_work_bound(&geometry, half, vertices)
-        + polygon_work_bound(&geometry, 0, vertices);
+    let bound = polygon_work_bound(&geometry, vertices) + polygon_work_bound(&geometry, vertices);
     assert!(
         world.marking_work <= bound,
         "{}: work {} above the bound {bound}",
@@ -72,7 +71,12 @@ fn assert_within_bound(da: &Path, par: &Path, radius_m: f32) {
     // And `twil plan` itself answers (it reports the start blocked or a plan).
     let out = common::twil()
         .arg("plan")
-        .args(["--world", da.to_str().unwrap(), "--params", par.to_str().unwrap()])
+        .args([
+            "--world",
+            da.to_str().unwrap(),
+            "--params",
+            par.to_str().unwrap(),
+        ])
         .arg("--json")
         .output()
         .unwrap();
@@ -115,10 +119,13 @@ fn radius_ten_metres_costs_the_map() {
         for polygon in obstacles.iter() {
             work += mark_polygon(&mut grid, polygon, half);
         }
-        let bound = polygon_work_bound(&geometry, half, obstacles.vertex_count());
+        let bound = polygon_work_bound(&geometry, obstacles.vertex_count());
         assert!(work <= bound, "{name}: work {work} above the bound {bound}");
         // Every edge crosses the map and grows by 200 cells: the whole map is marked.
         assert_eq!(grid.count_occupied(), geometry.cell_count(), "{name}");
-        eprintln!("{name}: {} vertices, work {work} (bound {bound})", obstacles.vertex_count());
+        eprintln!(
+            "{name}: {} vertices, work {work} (bound {bound})",
+            obstacles.vertex_count()
+        );
     }
 }

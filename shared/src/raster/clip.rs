@@ -13,11 +13,12 @@
 /// A Bresenham line in closed form (coordinates already clamped as the walk clamps them).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct LineSteps {
-    from: (i64, i64),
+    /// The first cell.
+    pub(super) from: (i64, i64),
     /// +1 or -1 per axis, as the walk steps.
-    sign: (i64, i64),
+    pub(super) sign: (i64, i64),
     /// Absolute differences, x and y.
-    delta: (i64, i64),
+    pub(super) delta: (i64, i64),
 }
 
 impl LineSteps {
@@ -33,7 +34,7 @@ impl LineSteps {
     }
 
     /// `true` when x is the major axis (the walk steps x at every step).
-    fn x_major(&self) -> bool {
+    pub(super) fn x_major(&self) -> bool {
         self.delta.0 >= self.delta.1
     }
 

@@ -1,13 +1,16 @@
-//! Growing a line by a square, one run per row.
+//! Growing a line by a square, one run per row, in time bounded by the rows.
 //!
 //! Every cell of the walk marks a square of half-side `h`. Row `y` of the union is the union of
 //! `[x − h, x + h]` over the walk cells whose row is within `h` of `y`. Those cells are
-//! consecutive along the walk (its rows are monotone) and their `x` are monotone and 8-connected,
-//! so the union is the single run from the smaller to the larger `x` of the first and last of
-//! them, widened by `h`. Two cursors over the walk (the first cell within `h` behind the row, the
-//! last within `h` ahead) find those two cells; both only move forward as the row advances.
+//! consecutive along the walk (its rows are monotone) and their `x` are monotone and
+//! 8-connected, so the union is the single run from the smaller to the larger `x` of the first
+//! and last of them, widened by `h`. Their step indices follow from the closed form of the walk
+//! (see `clip.rs`): each is `floor((s·v + c) / d)` in the row number `v`, stepped from one row
+//! to the next by additions ([`FloorStep`]), so a row costs a few additions and its words,
+//! whatever the length of the edge or the size of `h`.
 
-use super::{BresenhamLine, Work};
+use super::clip::LineSteps;
+use super::{clamp_cell, Work};
 use crate::grid::Grid;
 
 /// Mark cells `x0..=x1` of `row` (any integers: clipped to the grid here). Returns the words
@@ -22,7 +25,46 @@ pub(super) fn fill_row<const W: usize>(grid: &mut Grid<W>, row: i64, x0: i64, x1
     grid.fill_row(row as i32, x0 as i32, x1 as i32) as Work
 }
 
+/// `floor((s·t + c) / d)` for `t = t0, t0 + 1, …`, with `d > 0`: one division to start, then
+/// additions (the firmware's 64-bit division is a library call; an addition is two
+/// instructions).
+struct FloorStep {
+    quotient: i64,
+    remainder: i64,
+    step_quotient: i64,
+    step_remainder: i64,
+    divisor: i64,
+}
+
+impl FloorStep {
+    fn new(s: i64, c: i64, d: i64, t0: i64) -> Self {
+        let n = s * t0 + c;
+        Self {
+            quotient: n.div_euclid(d),
+            remainder: n.rem_euclid(d),
+            step_quotient: s.div_euclid(d),
+            step_remainder: s.rem_euclid(d),
+            divisor: d,
+        }
+    }
+
+    fn value(&self) -> i64 {
+        self.quotient
+    }
+
+    fn advance(&mut self) {
+        self.quotient += self.step_quotient;
+        self.remainder += self.step_remainder;
+        if self.remainder >= self.divisor {
+            self.remainder -= self.divisor;
+            self.quotient += 1;
+        }
+    }
+}
+
 /// Mark the Bresenham line from `from` to `to` grown by `half_side` cells (see the module doc).
+/// Work: one for the edge, then one per row visited (at most the grid's height) plus the words
+/// written.
 pub(super) fn mark_grown_line<const W: usize>(
     grid: &mut Grid<W>,
     from: (i32, i32),
@@ -30,53 +72,99 @@ pub(super) fn mark_grown_line<const W: usize>(
     half_side: u16,
 ) -> Work {
     let g = *grid.geometry();
-    let h = half_side as i32;
-    let (width, height) = (g.width() as i32, g.height() as i32);
-    // Only cells whose square reaches the grid matter.
-    let Some(mut lead) =
-        BresenhamLine::clipped(from, to, (-h, width - 1 + h), (-h, height - 1 + h))
-    else {
-        return 0;
+    let h = half_side as i64;
+    let (width, height) = (g.width() as i64, g.height() as i64);
+    let line = LineSteps::new(clamp_cell(from), clamp_cell(to));
+    // Only the steps whose square reaches the grid matter.
+    let Some((k0, k1)) = line.steps_within((-h, width - 1 + h), (-h, height - 1 + h)) else {
+        return 1;
     };
-    let mut trail = lead.clone();
-    let (Some(mut lead_cell), Some(mut trail_cell)) = (lead.next(), trail.next()) else {
-        return 0;
-    };
-    let mut work: Work = 2;
-    // Rows are visited in the walk's direction, from the first grid row the first cell's square
-    // reaches, until the walk is left behind or the grid ends.
-    let sy = lead.sy as i64;
-    let (h, last_row) = (h as i64, height as i64 - 1);
-    let mut y = if sy > 0 {
-        (lead_cell.1 as i64 - h).max(0)
+    let (first, last) = (line.cell(k0), line.cell(k1));
+    let (x0, y0) = line.from;
+    let (sx, sy) = line.sign;
+    let (adx, ady) = line.delta;
+    // Rows in the walk's direction, as offsets `v` from the first cell's row (`y = y0 + sy·v`):
+    // from the first cell's row − h to the last's + h, clipped to the grid.
+    let offset = |y: i64| (y - y0) * sy;
+    let (v_first, v_last) = if sy > 0 {
+        (
+            offset((first.1 - h).max(0)),
+            offset((last.1 + h).min(height - 1)),
+        )
     } else {
-        (lead_cell.1 as i64 + h).min(last_row)
+        (
+            offset((first.1 + h).min(height - 1)),
+            offset((last.1 - h).max(0)),
+        )
     };
-    // How far a cell's row is ahead of row `y`, along the walk.
-    let ahead = |cell: (i32, i32), y: i64| (cell.1 as i64 - y) * sy;
-    while (0..=last_row).contains(&y) {
-        while let Some(next) = lead.peek() {
-            if ahead(next, y) > h {
-                break;
+    let mut work: Work = 1;
+    if v_first > v_last {
+        return work;
+    }
+    // The window of row v: steps whose row offset is within [v − h, v + h].
+    let x_major = line.x_major();
+    let (mut trail, mut lead) = if x_major {
+        // Row offset n(k) = floor((2·ady·k + adx) / (2·adx)); n(k) ≥ t ⇔ k ≥ ceil((2·adx·t −
+        // adx) / (2·ady)), n(k) ≤ t ⇔ k ≤ floor((2·adx·t + adx − 1) / (2·ady)).
+        let d = (2 * ady).max(1);
+        (
+            FloorStep::new(2 * adx, -2 * adx * h - adx + d - 1, d, v_first),
+            FloorStep::new(2 * adx, 2 * adx * h + adx - 1, d, v_first),
+        )
+    } else {
+        // Row offset k: the window is [v − h, v + h]; these step x, floor((2·adx·k + ady) /
+        // (2·ady)) at k = v − h and v + h.
+        (
+            FloorStep::new(2 * adx, ady, 2 * ady, v_first - h),
+            FloorStep::new(2 * adx, ady, 2 * ady, v_first + h),
+        )
+    };
+    for v in v_first..=v_last {
+        let (x_trail, x_lead) = if x_major {
+            let (kt, kl) = if ady == 0 {
+                // A horizontal line: every step is on row offset 0.
+                if v - h <= 0 && 0 <= v + h {
+                    (k0, k1)
+                } else {
+                    (1, 0)
+                }
+            } else {
+                (trail.value().max(k0), lead.value().min(k1))
+            };
+            if kt > kl {
+                trail.advance();
+                lead.advance();
+                work += 1;
+                continue;
             }
-            lead_cell = next;
-            lead.next();
-            work += 1;
-        }
-        while ahead(trail_cell, y) < -h {
-            match trail.next() {
-                Some(cell) => trail_cell = cell,
-                // Every cell is more than `h` rows behind: this row and the next are free.
-                None => return work,
+            (x0 + sx * kt, x0 + sx * kl)
+        } else {
+            let (kt, kl) = (v - h, v + h);
+            let x_at = |k: i64, step: &FloorStep| {
+                if k < k0 {
+                    first.0
+                } else if k > k1 {
+                    last.0
+                } else {
+                    x0 + sx * step.value()
+                }
+            };
+            if kt.max(k0) > kl.min(k1) {
+                trail.advance();
+                lead.advance();
+                work += 1;
+                continue;
             }
-            work += 1;
-        }
-        work += 1;
-        if ahead(trail_cell, y) <= h {
-            let (xa, xb) = (trail_cell.0 as i64, lead_cell.0 as i64);
-            work += fill_row(grid, y, xa.min(xb) - h, xa.max(xb) + h);
-        }
-        y += sy;
+            (x_at(kt, &trail), x_at(kl, &lead))
+        };
+        work += 1 + fill_row(
+            grid,
+            y0 + sy * v,
+            x_trail.min(x_lead) - h,
+            x_trail.max(x_lead) + h,
+        );
+        trail.advance();
+        lead.advance();
     }
     work
 }

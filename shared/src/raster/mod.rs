@@ -14,17 +14,17 @@
 //!   enlarged by the growth margin (`half_side` cells on every side): only the cells whose
 //!   square can reach the map are walked, however far away the vertices are;
 //! - the union of the squares along the clipped walk is marked row by row: in each row it is
-//!   one run of cells (the walk is monotone and 8-connected), filled a word at a time
-//!   ([`Grid::fill_row`]). Two cursors slide along the walk as the row advances, so each cell of
-//!   the walk is visited at most twice.
+//!   one run of cells (the walk is monotone and 8-connected), found from the closed form of the
+//!   walk with a few additions per row and filled a word at a time ([`Grid::fill_row`]). An
+//!   edge costs its rows on the grid, not its length nor the growth.
 //!
 //! The marked cells are exactly those of the seed's definition (every walk cell grown to a
 //! square, clipped to the grid); the tests compare with that definition, kept as a test-only
-//! reference. Every marking function returns its [`Work`]: cursor steps, rows and words
-//! written, a count that tests bound without timers. For one edge on a `W` × `H` grid grown by
-//! `h` cells it is at most [`edge_work_bound`]`= 2·(max(W, H) + 2h + 2) + H·(W/32 + 3)`,
-//! whatever the coordinates (±1e30, infinities and NaN included: non-finite vertices are
-//! skipped, far ones clamped to ±1e6 cells and then clipped).
+//! reference. Every marking function returns its [`Work`]: edges, rows visited and words
+//! written, a count that tests bound without timers. For one edge on a `W` × `H` grid it is at
+//! most [`edge_work_bound`]` = 1 + H·(W/32 + 3)`, whatever the coordinates (±1e30, infinities
+//! and NaN included: non-finite vertices are skipped, far ones clamped to ±1e6 cells and then
+//! clipped) and whatever the growth.
 
 mod clip;
 mod grow;
@@ -37,26 +37,23 @@ use crate::geom::PointM;
 use crate::grid::{Grid, GridGeometry};
 use clip::LineSteps;
 
-/// Work done by a marking function: Bresenham steps walked, rows visited and grid words written.
-/// A count, not a time: tests bound it (see the module doc).
+/// Work done by a marking function: edges, rows visited and grid words written. A count, not a
+/// time: tests bound it (see the module doc).
 pub type Work = u64;
 
-/// Largest [`Work`] one edge (or one square) may cost on a grid of `geometry` grown by
-/// `half_side` cells: `2·(max(W, H) + 2h + 2) + H·(W/32 + 3)`. The first term bounds the
-/// two cursors' steps over the clipped walk (along its major axis it crosses at most the grid
-/// plus the margin on both sides); the second bounds the rows (at most `H`), each one visit and
-/// at most `W/32 + 2` words.
-pub fn edge_work_bound(geometry: &GridGeometry, half_side: u16) -> Work {
-    let (w, h_cells) = (geometry.width() as u64, geometry.height() as u64);
-    let side = w.max(h_cells);
-    2 * (side + 2 * half_side as u64 + 2) + h_cells * (w / 32 + 3)
+/// Largest [`Work`] one edge (or one square) may cost on a grid of `geometry`: `1 + H·(W/32 +
+/// 3)` (one for the edge; at most `H` rows, each one visit and at most `W/32 + 2` words). The
+/// growth does not enter: a row costs the same however wide its run.
+pub fn edge_work_bound(geometry: &GridGeometry) -> Work {
+    let (w, h) = (geometry.width() as u64, geometry.height() as u64);
+    1 + h * (w / 32 + 3)
 }
 
 /// Largest [`Work`] of [`mark_polygon`] with `vertices` vertices: one [`edge_work_bound`] per
 /// edge (a polygon of `n` vertices has `n` edges, the closing one included; one vertex marks
 /// one square).
-pub fn polygon_work_bound(geometry: &GridGeometry, half_side: u16, vertices: usize) -> Work {
-    vertices.max(1) as u64 * edge_work_bound(geometry, half_side)
+pub fn polygon_work_bound(geometry: &GridGeometry, vertices: usize) -> Work {
+    vertices.max(1) as u64 * edge_work_bound(geometry)
 }
 
 /// The cells of a Bresenham line from `from` to `to`, both ends included, in order.
@@ -141,11 +138,6 @@ impl BresenhamLine {
             remaining: (last - first + 1) as u32,
             ..whole
         })
-    }
-
-    /// The next cell the walk will yield, without taking it.
-    fn peek(&self) -> Option<(i32, i32)> {
-        (self.remaining > 0).then_some((self.x, self.y))
     }
 }
 

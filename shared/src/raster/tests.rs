@@ -150,7 +150,7 @@ mod properties {
             let work = mark_line(&mut fast, from, to, half);
             reference::mark_line(&mut slow, from, to, half);
             prop_assert!(fast == slow, "edge {:?} -> {:?}, half-side {}", from, to, half);
-            prop_assert!(work <= edge_work_bound(fast.geometry(), half));
+            prop_assert!(work <= edge_work_bound(fast.geometry()));
             let (mut fast, mut slow) = (grid(size.0, size.1), grid(size.0, size.1));
             mark_square(&mut fast, from.0, from.1, half);
             reference::mark_square(&mut slow, from.0, from.1, half);
@@ -169,7 +169,7 @@ mod properties {
             let work = mark_polygon(&mut fast, &vertices, half);
             reference::mark_polygon(&mut slow, &vertices, half);
             prop_assert!(fast == slow);
-            prop_assert!(work <= polygon_work_bound(fast.geometry(), half, vertices.len()));
+            prop_assert!(work <= polygon_work_bound(fast.geometry(), vertices.len()));
         }
     }
 
@@ -187,7 +187,7 @@ mod properties {
         #![proptest_config(ProptestConfig::with_cases(256))]
 
         /// The input-cost property: whatever the numbers, a polygon of `n` vertices costs at
-        /// most `n · edge_work_bound` (grid and growth only).
+        /// most `n · edge_work_bound` (the grid only).
         #[test]
         fn work_is_bounded_by_the_map(
             size in (1u32..100, 1u32..100),
@@ -199,7 +199,7 @@ mod properties {
             let vertices: std::vec::Vec<PointM> =
                 vertices.iter().map(|&(x, y)| PointM::new(x, y)).collect();
             let work = mark_polygon(&mut g, &vertices, half);
-            prop_assert!(work <= polygon_work_bound(g.geometry(), half, vertices.len()));
+            prop_assert!(work <= polygon_work_bound(g.geometry(), vertices.len()));
         }
     }
 
@@ -285,7 +285,7 @@ fn polygon_at_a_billion_metres_costs_the_map_not_the_numbers() {
     let work = mark_polygon(&mut grid, &polygon, half);
     // Rows 100 and 120 grown by 200 cover the map.
     assert_eq!(grid.count_occupied(), 300 * 300);
-    let bound = polygon_work_bound(&geometry, half, 4);
+    let bound = polygon_work_bound(&geometry, 4);
     assert!(work <= bound, "work {work} > bound {bound}");
     assert!(work < 20_000, "work {work}");
 }
