@@ -405,7 +405,22 @@ impl<const WORDS: usize> Grid<WORDS> {
             return 0;
         }
         let row = y as usize * w as usize;
-        let (first, last) = (row + x0 as usize, row + x1 as usize);
+        self.fill_bits(row + x0 as usize, row + x1 as usize)
+    }
+
+    /// Mark occupied every cell of rows `y0..=y1`, clipped to the grid: one run of bits, since
+    /// consecutive rows are consecutive in memory. Returns the number of words written.
+    pub fn fill_rows(&mut self, y0: i32, y1: i32) -> usize {
+        let (y0, y1) = (y0.max(0), y1.min(self.geometry.height as i32 - 1));
+        if y0 > y1 {
+            return 0;
+        }
+        let w = self.geometry.width as usize;
+        self.fill_bits(y0 as usize * w, (y1 as usize + 1) * w - 1)
+    }
+
+    /// Set the bits `first..=last` (row-major indices below the cell count).
+    fn fill_bits(&mut self, first: usize, last: usize) -> usize {
         let (first_word, last_word) = (first / 32, last / 32);
         // Bits from `first % 32` up in the first word, up to `last % 32` in the last one.
         let head = u32::MAX << (first % 32);
@@ -555,6 +570,7 @@ mod tests {
         grid.fill_row(2, -5, 100);
         assert_eq!(grid.count_occupied(), 37);
         grid.fill_row(7, 0, 10); // outside: ignored
+        assert_eq!(grid.fill_rows(5, 9), 0, "outside: ignored");
         grid.set_xy(-1, 0, true); // outside: ignored
         assert_eq!(grid.count_occupied(), 37);
         assert!(grid.is_occupied_xy(36, 2));
@@ -563,6 +579,10 @@ mod tests {
         grid.set(Cell::new(3, 3), false);
         grid.set(Cell::new(3, 2), false);
         assert_eq!(grid.count_occupied(), 36);
+        // Rows 3 and 4 (cells 111..=184): words 3 to 5.
+        assert_eq!(grid.fill_rows(3, 9), 3);
+        assert_eq!(grid.count_occupied(), 36 + 2 * 37);
+        assert!(!grid.is_occupied_xy(36, 0) && grid.is_occupied_xy(0, 3));
     }
 
     #[test]

@@ -80,8 +80,8 @@ pub(super) fn mark_grown_line<const W: usize>(
         return 1;
     };
     let (first, last) = (line.cell(k0), line.cell(k1));
-    let (x0, y0) = line.from;
-    let (sx, sy) = line.sign;
+    let y0 = line.from.1;
+    let sy = line.sign.1;
     let (adx, ady) = line.delta;
     // Rows in the walk's direction, as offsets `v` from the first cell's row (`y = y0 + sy·v`):
     // from the first cell's row − h to the last's + h, clipped to the grid.
@@ -102,8 +102,7 @@ pub(super) fn mark_grown_line<const W: usize>(
         return work;
     }
     // The window of row v: steps whose row offset is within [v − h, v + h].
-    let x_major = line.x_major();
-    let (mut trail, mut lead) = if x_major {
+    let (mut trail, mut lead) = if line.x_major() {
         // Row offset n(k) = floor((2·ady·k + adx) / (2·adx)); n(k) ≥ t ⇔ k ≥ ceil((2·adx·t −
         // adx) / (2·ady)), n(k) ≤ t ⇔ k ≤ floor((2·adx·t + adx − 1) / (2·ady)).
         let d = (2 * ady).max(1);
@@ -119,52 +118,80 @@ pub(super) fn mark_grown_line<const W: usize>(
             FloorStep::new(2 * adx, ady, 2 * ady, v_first + h),
         )
     };
+    // Consecutive rows whose run is the whole row, not yet written: one fill for all of them.
+    let mut full_rows: Option<(i64, i64)> = None;
     for v in v_first..=v_last {
-        let (x_trail, x_lead) = if x_major {
-            let (kt, kl) = if ady == 0 {
-                // A horizontal line: every step is on row offset 0.
-                if v - h <= 0 && 0 <= v + h {
-                    (k0, k1)
-                } else {
-                    (1, 0)
-                }
-            } else {
-                (trail.value().max(k0), lead.value().min(k1))
-            };
-            if kt > kl {
-                trail.advance();
-                lead.advance();
-                work += 1;
-                continue;
-            }
-            (x0 + sx * kt, x0 + sx * kl)
-        } else {
-            let (kt, kl) = (v - h, v + h);
-            let x_at = |k: i64, step: &FloorStep| {
-                if k < k0 {
-                    first.0
-                } else if k > k1 {
-                    last.0
-                } else {
-                    x0 + sx * step.value()
-                }
-            };
-            if kt.max(k0) > kl.min(k1) {
-                trail.advance();
-                lead.advance();
-                work += 1;
-                continue;
-            }
-            (x_at(kt, &trail), x_at(kl, &lead))
-        };
-        work += 1 + fill_row(
-            grid,
-            y0 + sy * v,
-            x_trail.min(x_lead) - h,
-            x_trail.max(x_lead) + h,
-        );
+        let run = window_run(&line, (k0, k1), (first.0, last.0), v, h, (&trail, &lead));
         trail.advance();
         lead.advance();
+        work += 1;
+        let Some((lo, hi)) = run else {
+            continue;
+        };
+        let y = y0 + sy * v;
+        if lo <= 0 && hi >= width - 1 {
+            full_rows = Some(match full_rows {
+                Some((a, b)) => (a.min(y), b.max(y)),
+                None => (y, y),
+            });
+            continue;
+        }
+        if let Some((a, b)) = full_rows.take() {
+            work += grid.fill_rows(a as i32, b as i32) as Work;
+        }
+        work += fill_row(grid, y, lo, hi);
+    }
+    if let Some((a, b)) = full_rows {
+        work += grid.fill_rows(a as i32, b as i32) as Work;
     }
     work
+}
+
+/// The run of row offset `v`: from the smaller to the larger x of the first and last steps of
+/// `steps` whose row offset is within `h` of `v`, widened by `h`; `None` when there is none.
+/// `ends_x` are the x of the first and last step, `floors` the trail's and lead's
+/// [`FloorStep`] at `v`.
+fn window_run(
+    line: &LineSteps,
+    steps: (i64, i64),
+    ends_x: (i64, i64),
+    v: i64,
+    h: i64,
+    floors: (&FloorStep, &FloorStep),
+) -> Option<(i64, i64)> {
+    let (k0, k1) = steps;
+    let (x0, sx) = (line.from.0, line.sign.0);
+    let (xa, xb) = if line.x_major() {
+        let (kt, kl) = if line.delta.1 == 0 {
+            // A horizontal line: every step is on row offset 0.
+            if v - h <= 0 && 0 <= v + h {
+                (k0, k1)
+            } else {
+                return None;
+            }
+        } else {
+            (floors.0.value().max(k0), floors.1.value().min(k1))
+        };
+        if kt > kl {
+            return None;
+        }
+        (x0 + sx * kt, x0 + sx * kl)
+    } else {
+        // Steps are row offsets: the window is [v − h, v + h].
+        let (kt, kl) = (v - h, v + h);
+        if kt.max(k0) > kl.min(k1) {
+            return None;
+        }
+        let x_at = |k: i64, step: &FloorStep| {
+            if k < k0 {
+                ends_x.0
+            } else if k > k1 {
+                ends_x.1
+            } else {
+                x0 + sx * step.value()
+            }
+        };
+        (x_at(kt, floors.0), x_at(kl, floors.1))
+    };
+    Some((xa.min(xb) - h, xa.max(xb) + h))
 }
