@@ -13,7 +13,8 @@
 mod common;
 
 use twil_core::geom::PointM;
-use twil_core::link::{MapParams, Reply, Request, MAX_VERTICES};
+use twil_core::link::{MapParams, Reply, Request};
+use twil_core::world::MAX_VERTICES;
 use twil_host::remote::{Remote, RemoteSpec};
 
 /// Budget of one request (other than `Plan`), instructions.
@@ -70,9 +71,8 @@ fn last_request_instructions(remote: &mut Remote) -> u64 {
 
 /// Send `request`, read its cost, check that a ping right after it is answered.
 fn measure(remote: &mut Remote, request: Request) -> u64 {
-    match remote.request(request).expect("link") {
-        Reply::Error(e) => panic!("refused: {e}"),
-        _ => {}
+    if let Reply::Error(e) = remote.request(request).expect("link") {
+        panic!("refused: {e}");
     }
     let n = last_request_instructions(remote);
     remote

@@ -5,9 +5,10 @@
 //! consecutive along the walk (its rows are monotone) and their `x` are monotone and
 //! 8-connected, so the union is the single run from the smaller to the larger `x` of the first
 //! and last of them, widened by `h`. Their step indices follow from the closed form of the walk
-//! (see `clip.rs`): each is `floor((s·v + c) / d)` in the row number `v`, stepped from one row
-//! to the next by additions ([`FloorStep`]), so a row costs a few additions and its words,
-//! whatever the length of the edge or the size of `h`.
+//! (see `clip.rs`), stepped from one row to the next by additions ([`FloorStep`]), so a row
+//! costs a few additions and its words, whatever the length of the edge or the size of `h`.
+//! The per-row arithmetic is `i32` (the MCU is 32-bit; `i64` doubles its cost): each quotient
+//! is only evaluated on the rows and steps of the clipped walk, whose values fit.
 
 use super::clip::LineSteps;
 use super::{clamp_cell, Work};
@@ -15,40 +16,33 @@ use crate::grid::Grid;
 
 /// Mark cells `x0..=x1` of `row` (any integers: clipped to the grid here). Returns the words
 /// written.
-pub(super) fn fill_row<const W: usize>(grid: &mut Grid<W>, row: i64, x0: i64, x1: i64) -> Work {
-    let g = grid.geometry();
-    let (last_x, last_row) = (g.width() as i64 - 1, g.height() as i64 - 1);
-    let (x0, x1) = (x0.max(0), x1.min(last_x));
-    if x0 > x1 || !(0..=last_row).contains(&row) {
-        return 0;
-    }
-    grid.fill_row(row as i32, x0 as i32, x1 as i32) as Work
+fn fill_row<const W: usize>(grid: &mut Grid<W>, row: i32, x0: i32, x1: i32) -> u32 {
+    grid.fill_row(row, x0, x1) as u32
 }
 
 /// `floor((s·t + c) / d)` for `t = t0, t0 + 1, …`, with `d > 0`: one division to start, then
-/// additions (the firmware's 64-bit division is a library call; an addition is two
-/// instructions).
+/// additions. Started in `i64`, stepped in `i32`: callers only step it over values that fit.
 struct FloorStep {
-    quotient: i64,
-    remainder: i64,
-    step_quotient: i64,
-    step_remainder: i64,
-    divisor: i64,
+    quotient: i32,
+    remainder: i32,
+    step_quotient: i32,
+    step_remainder: i32,
+    divisor: i32,
 }
 
 impl FloorStep {
     fn new(s: i64, c: i64, d: i64, t0: i64) -> Self {
         let n = s * t0 + c;
         Self {
-            quotient: n.div_euclid(d),
-            remainder: n.rem_euclid(d),
-            step_quotient: s.div_euclid(d),
-            step_remainder: s.rem_euclid(d),
-            divisor: d,
+            quotient: n.div_euclid(d) as i32,
+            remainder: n.rem_euclid(d) as i32,
+            step_quotient: s.div_euclid(d) as i32,
+            step_remainder: s.rem_euclid(d) as i32,
+            divisor: d as i32,
         }
     }
 
-    fn value(&self) -> i64 {
+    fn value(&self) -> i32 {
         self.quotient
     }
 
@@ -58,6 +52,37 @@ impl FloorStep {
         if self.remainder >= self.divisor {
             self.remainder -= self.divisor;
             self.quotient += 1;
+        }
+    }
+}
+
+/// One end of the window (the trail or the lead): an index `t` clamped to `[lo, hi]` that moves
+/// by at most one per row, and the [`FloorStep`] evaluated at `t` (plus `offset`).
+struct WindowEnd {
+    t: i32,
+    lo: i32,
+    hi: i32,
+    floor: FloorStep,
+}
+
+impl WindowEnd {
+    /// The end at index `t` (clamped), for `floor((s·(t + offset) + c) / d)`.
+    fn new(t: i64, lo: i64, hi: i64, f: (i64, i64, i64), offset: i64) -> Self {
+        let t = t.clamp(lo, hi);
+        Self {
+            t: t as i32,
+            lo: lo as i32,
+            hi: hi as i32,
+            floor: FloorStep::new(f.0, f.1, f.2, t + offset),
+        }
+    }
+
+    /// Move to index `t` (clamped), one more than before at most.
+    fn move_to(&mut self, t: i32) {
+        let t = t.clamp(self.lo, self.hi);
+        if t > self.t {
+            self.t = t;
+            self.floor.advance();
         }
     }
 }
@@ -80,11 +105,11 @@ pub(super) fn mark_grown_line<const W: usize>(
         return 1;
     };
     let (first, last) = (line.cell(k0), line.cell(k1));
-    let y0 = line.from.1;
-    let sy = line.sign.1;
+    let (x0, y0) = line.from;
+    let (sx, sy) = line.sign;
     let (adx, ady) = line.delta;
-    // Rows in the walk's direction, as offsets `v` from the first cell's row (`y = y0 + sy·v`):
-    // from the first cell's row − h to the last's + h, clipped to the grid.
+    // Rows in the walk's direction, as offsets `v` from the start's row (`y = y0 + sy·v`): from
+    // the first cell's row − h to the last's + h, clipped to the grid. All fit an `i32`.
     let offset = |y: i64| (y - y0) * sy;
     let (v_first, v_last) = if sy > 0 {
         (
@@ -97,37 +122,59 @@ pub(super) fn mark_grown_line<const W: usize>(
             offset((last.1 - h).max(0)),
         )
     };
-    let mut work: Work = 1;
+    let mut work: u32 = 1;
     if v_first > v_last {
-        return work;
+        return work as Work;
     }
-    // The window of row v: steps whose row offset is within [v − h, v + h].
+    // The clipped walk's rows, as offsets.
+    let (r_a, r_b) = (offset(first.1), offset(last.1));
+    // The window of row v holds the walk's steps on rows v − h ..= v + h. Its ends' x:
+    let horizontal = ady == 0;
     let (mut trail, mut lead) = if line.x_major() {
-        // Row offset n(k) = floor((2·ady·k + adx) / (2·adx)); n(k) ≥ t ⇔ k ≥ ceil((2·adx·t −
-        // adx) / (2·ady)), n(k) ≤ t ⇔ k ≤ floor((2·adx·t + adx − 1) / (2·ady)).
+        // One row holds many steps. K(r) = ceil((2·adx·r − adx) / (2·ady)) is the first step
+        // on row offset r; the trail is K(row), the lead K(row + 1) − 1.
         let d = (2 * ady).max(1);
+        let k_of_row = (2 * adx, -adx + d - 1, d);
         (
-            FloorStep::new(2 * adx, -2 * adx * h - adx + d - 1, d, v_first),
-            FloorStep::new(2 * adx, 2 * adx * h + adx - 1, d, v_first),
+            WindowEnd::new(v_first - h, r_a, r_b, k_of_row, 0),
+            WindowEnd::new(v_first + h, r_a, r_b, k_of_row, 1),
         )
     } else {
-        // Row offset k: the window is [v − h, v + h]; these step x, floor((2·adx·k + ady) /
-        // (2·ady)) at k = v − h and v + h.
+        // Steps are row offsets; x moves floor((2·adx·k + ady) / (2·ady)) after step k.
+        let x_moves = (2 * adx, ady, 2 * ady);
         (
-            FloorStep::new(2 * adx, ady, 2 * ady, v_first - h),
-            FloorStep::new(2 * adx, ady, 2 * ady, v_first + h),
+            WindowEnd::new(v_first - h, k0, k1, x_moves, 0),
+            WindowEnd::new(v_first + h, k0, k1, x_moves, 0),
         )
     };
+    let (k0, k1) = (k0 as i32, k1 as i32);
+    let (x0, sx, h) = (x0 as i32, sx as i32, h as i32);
+    let x_major = line.x_major();
+    let (width, sy) = (width as i32, sy as i32);
+    let y0 = y0 as i32;
     // Consecutive rows whose run is the whole row, not yet written: one fill for all of them.
-    let mut full_rows: Option<(i64, i64)> = None;
-    for v in v_first..=v_last {
-        let run = window_run(&line, (k0, k1), (first.0, last.0), v, h, (&trail, &lead));
-        trail.advance();
-        lead.advance();
+    let mut full_rows: Option<(i32, i32)> = None;
+    for v in v_first as i32..=v_last as i32 {
         work += 1;
-        let Some((lo, hi)) = run else {
-            continue;
+        trail.move_to(v - h);
+        lead.move_to(v + h);
+        let (xa, xb) = if x_major {
+            let (kt, kl) = if horizontal {
+                if v - h > 0 || v + h < 0 {
+                    continue;
+                }
+                (k0, k1)
+            } else {
+                (
+                    trail.floor.value().max(k0),
+                    (lead.floor.value() - 1).min(k1),
+                )
+            };
+            (x0 + sx * kt, x0 + sx * kl)
+        } else {
+            (x0 + sx * trail.floor.value(), x0 + sx * lead.floor.value())
         };
+        let (lo, hi) = (xa.min(xb) - h, xa.max(xb) + h);
         let y = y0 + sy * v;
         if lo <= 0 && hi >= width - 1 {
             full_rows = Some(match full_rows {
@@ -137,61 +184,12 @@ pub(super) fn mark_grown_line<const W: usize>(
             continue;
         }
         if let Some((a, b)) = full_rows.take() {
-            work += grid.fill_rows(a as i32, b as i32) as Work;
+            work += grid.fill_rows(a, b) as u32;
         }
         work += fill_row(grid, y, lo, hi);
     }
     if let Some((a, b)) = full_rows {
-        work += grid.fill_rows(a as i32, b as i32) as Work;
+        work += grid.fill_rows(a, b) as u32;
     }
-    work
-}
-
-/// The run of row offset `v`: from the smaller to the larger x of the first and last steps of
-/// `steps` whose row offset is within `h` of `v`, widened by `h`; `None` when there is none.
-/// `ends_x` are the x of the first and last step, `floors` the trail's and lead's
-/// [`FloorStep`] at `v`.
-fn window_run(
-    line: &LineSteps,
-    steps: (i64, i64),
-    ends_x: (i64, i64),
-    v: i64,
-    h: i64,
-    floors: (&FloorStep, &FloorStep),
-) -> Option<(i64, i64)> {
-    let (k0, k1) = steps;
-    let (x0, sx) = (line.from.0, line.sign.0);
-    let (xa, xb) = if line.x_major() {
-        let (kt, kl) = if line.delta.1 == 0 {
-            // A horizontal line: every step is on row offset 0.
-            if v - h <= 0 && 0 <= v + h {
-                (k0, k1)
-            } else {
-                return None;
-            }
-        } else {
-            (floors.0.value().max(k0), floors.1.value().min(k1))
-        };
-        if kt > kl {
-            return None;
-        }
-        (x0 + sx * kt, x0 + sx * kl)
-    } else {
-        // Steps are row offsets: the window is [v − h, v + h].
-        let (kt, kl) = (v - h, v + h);
-        if kt.max(k0) > kl.min(k1) {
-            return None;
-        }
-        let x_at = |k: i64, step: &FloorStep| {
-            if k < k0 {
-                ends_x.0
-            } else if k > k1 {
-                ends_x.1
-            } else {
-                x0 + sx * step.value()
-            }
-        };
-        (x_at(kt, floors.0), x_at(kl, floors.1))
-    };
-    Some((xa.min(xb) - h, xa.max(xb) + h))
+    work as Work
 }

@@ -170,13 +170,13 @@ impl Iterator for BresenhamLine {
 /// Mark the square of half-side `half_side` cells centred on cell (`x`, `y`) (seed `marca_pto`),
 /// clipped to the grid. Its [`Work`] is at most `H·(W/32 + 3)`.
 pub fn mark_square<const W: usize>(grid: &mut Grid<W>, x: i32, y: i32, half_side: u16) -> Work {
-    let h = half_side as i64;
-    let last_row = grid.geometry().height() as i64 - 1;
-    let (x0, x1) = (x as i64 - h, x as i64 + h);
+    let h = half_side as i32;
+    let last_row = grid.geometry().height() as i32 - 1;
+    let (x0, x1) = (x.saturating_sub(h), x.saturating_add(h));
     let mut work = 0;
     // Only the rows on the grid: the loop is bounded by the grid, not by `half_side`.
-    for row in (y as i64 - h).max(0)..=(y as i64 + h).min(last_row) {
-        work += 1 + grow::fill_row(grid, row, x0, x1);
+    for row in y.saturating_sub(h).max(0)..=y.saturating_add(h).min(last_row) {
+        work += 1 + grid.fill_row(row, x0, x1) as Work;
     }
     work
 }
