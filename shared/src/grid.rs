@@ -395,6 +395,7 @@ impl<const WORDS: usize> Grid<WORDS> {
 
     /// Mark occupied the cells `x0..=x1` of row `y`, clipped to the grid, a word at a time.
     /// Returns the number of words written (0 when nothing of the run is on the grid).
+    #[inline]
     pub fn fill_row(&mut self, y: i32, x0: i32, x1: i32) -> usize {
         let w = self.geometry.width as i32;
         if y < 0 || y >= self.geometry.height as i32 {
@@ -420,6 +421,7 @@ impl<const WORDS: usize> Grid<WORDS> {
     }
 
     /// Set the bits `first..=last` (row-major indices below the cell count).
+    #[inline]
     fn fill_bits(&mut self, first: usize, last: usize) -> usize {
         let (first_word, last_word) = (first / 32, last / 32);
         // Bits from `first % 32` up in the first word, up to `last % 32` in the last one.

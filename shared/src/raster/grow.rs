@@ -16,6 +16,7 @@ use crate::grid::Grid;
 
 /// Mark cells `x0..=x1` of `row` (any integers: clipped to the grid here). Returns the words
 /// written.
+#[inline]
 fn fill_row<const W: usize>(grid: &mut Grid<W>, row: i32, x0: i32, x1: i32) -> u32 {
     grid.fill_row(row, x0, x1) as u32
 }
@@ -42,10 +43,12 @@ impl FloorStep {
         }
     }
 
+    #[inline]
     fn value(&self) -> i32 {
         self.quotient
     }
 
+    #[inline]
     fn advance(&mut self) {
         self.quotient += self.step_quotient;
         self.remainder += self.step_remainder;
@@ -78,8 +81,10 @@ impl WindowEnd {
     }
 
     /// Move to index `t` (clamped), one more than before at most.
+    #[inline]
     fn move_to(&mut self, t: i32) {
-        let t = t.clamp(self.lo, self.hi);
+        // `max` then `min`, not `clamp`: no panic path (lo ≤ hi holds by construction).
+        let t = t.max(self.lo).min(self.hi);
         if t > self.t {
             self.t = t;
             self.floor.advance();
