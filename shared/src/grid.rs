@@ -434,7 +434,10 @@ impl<const WORDS: usize> Grid<WORDS> {
             [only] => *only |= head & tail,
             [start, middle @ .., end] => {
                 *start |= head;
-                middle.fill(u32::MAX);
+                // Most runs of a grown edge span one or two words: no library call for none.
+                if !middle.is_empty() {
+                    middle.fill(u32::MAX);
+                }
                 *end |= tail;
             }
             [] => {}
