@@ -394,30 +394,55 @@ impl<const WORDS: usize> Grid<WORDS> {
     }
 
     /// Mark occupied the cells `x0..=x1` of row `y`, clipped to the grid, a word at a time.
-    pub fn fill_row(&mut self, y: i32, x0: i32, x1: i32) {
+    /// Returns the number of words written (0 when nothing of the run is on the grid).
+    #[inline]
+    pub fn fill_row(&mut self, y: i32, x0: i32, x1: i32) -> usize {
         let w = self.geometry.width as i32;
         if y < 0 || y >= self.geometry.height as i32 {
-            return;
+            return 0;
         }
         let (x0, x1) = (x0.max(0), x1.min(w - 1));
         if x0 > x1 {
-            return;
+            return 0;
         }
         let row = y as usize * w as usize;
-        let (mut i, end) = (row + x0 as usize, row + x1 as usize);
-        while i <= end {
-            let bit = i % 32;
-            let n = (32 - bit).min(end - i + 1);
-            let mask = if n == 32 {
-                u32::MAX
-            } else {
-                ((1u32 << n) - 1) << bit
-            };
-            if let Some(word) = self.bits.get_mut(i / 32) {
-                *word |= mask;
-            }
-            i += n;
+        self.fill_bits(row + x0 as usize, row + x1 as usize)
+    }
+
+    /// Mark occupied every cell of rows `y0..=y1`, clipped to the grid: one run of bits, since
+    /// consecutive rows are consecutive in memory. Returns the number of words written.
+    pub fn fill_rows(&mut self, y0: i32, y1: i32) -> usize {
+        let (y0, y1) = (y0.max(0), y1.min(self.geometry.height as i32 - 1));
+        if y0 > y1 {
+            return 0;
         }
+        let w = self.geometry.width as usize;
+        self.fill_bits(y0 as usize * w, (y1 as usize + 1) * w - 1)
+    }
+
+    /// Set the bits `first..=last` (row-major indices below the cell count).
+    #[inline]
+    fn fill_bits(&mut self, first: usize, last: usize) -> usize {
+        let (first_word, last_word) = (first / 32, last / 32);
+        // Bits from `first % 32` up in the first word, up to `last % 32` in the last one.
+        let head = u32::MAX << (first % 32);
+        let tail = u32::MAX >> (31 - last % 32);
+        let Some(words) = self.bits.get_mut(first_word..=last_word) else {
+            return 0; // cannot happen: the geometry fits the capacity
+        };
+        match words {
+            [only] => *only |= head & tail,
+            [start, middle @ .., end] => {
+                *start |= head;
+                // Most runs of a grown edge span one or two words: no library call for none.
+                if !middle.is_empty() {
+                    middle.fill(u32::MAX);
+                }
+                *end |= tail;
+            }
+            [] => {}
+        }
+        words.len()
     }
 
     /// Number of occupied cells.
@@ -550,6 +575,7 @@ mod tests {
         grid.fill_row(2, -5, 100);
         assert_eq!(grid.count_occupied(), 37);
         grid.fill_row(7, 0, 10); // outside: ignored
+        assert_eq!(grid.fill_rows(5, 9), 0, "outside: ignored");
         grid.set_xy(-1, 0, true); // outside: ignored
         assert_eq!(grid.count_occupied(), 37);
         assert!(grid.is_occupied_xy(36, 2));
@@ -558,6 +584,10 @@ mod tests {
         grid.set(Cell::new(3, 3), false);
         grid.set(Cell::new(3, 2), false);
         assert_eq!(grid.count_occupied(), 36);
+        // Rows 3 and 4 (cells 111..=184): words 3 to 5.
+        assert_eq!(grid.fill_rows(3, 9), 3);
+        assert_eq!(grid.count_occupied(), 36 + 2 * 37);
+        assert!(!grid.is_occupied_xy(36, 0) && grid.is_occupied_xy(0, 3));
     }
 
     #[test]

@@ -16,7 +16,8 @@ const USAGE: &str = "usage: cargo xtask <command>
   firmware    build both firmware ELFs (hardware, and QEMU: twil-firmware-qemu) and print their sizes
   size        print flash / static RAM / CCM of the built ELFs
   qemu [PORT] run the QEMU firmware with USART1 on tcp:127.0.0.1:PORT (default: a free port)
-  mcu-bench   instructions per plan on 300x300 grids (open, 20% random, maze) under QEMU
+  mcu-bench   instructions per plan on 300x300 grids (open, 20% random, maze) and of the
+              worst marking requests (tests/firmware_requests.rs) under QEMU
   on-target   build the firmware's on-target tests (defmt-test) and run them under QEMU
   defmt-log FILE  decode a saved QEMU log (TWIL_QEMU_LOG=FILE twil … --remote qemu)";
 
@@ -362,6 +363,20 @@ fn run_mcu_bench() -> Result<()> {
         "--ignored",
         "--exact",
         "mcu_bench",
+        "--nocapture",
+    ]);
+    run(c)?;
+    // The worst requests other than `Plan` (marking obstacles), and a ping right after each.
+    let mut c = cargo();
+    c.args([
+        "test",
+        "--release",
+        "--package",
+        "twil-host",
+        "--test",
+        "firmware_requests",
+        "--",
+        "--ignored",
         "--nocapture",
     ]);
     run(c)

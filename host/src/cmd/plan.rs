@@ -152,6 +152,9 @@ pub struct World {
     pub saved: Option<Box<Grid400>>,
     /// Half-side of the growth square, cells.
     pub expansion_cells: u16,
+    /// Work of marking the polygons on `grid` and `raw` (`twil_core::raster::Work`: walk steps,
+    /// rows and words), bounded by the map and the vertex count, not by the coordinates.
+    pub marking_work: u64,
     /// The `--world` file, if any.
     pub world_path: Option<PathBuf>,
     /// The `--map` file, if any.
@@ -207,9 +210,10 @@ pub fn load(args: &Args) -> anyhow::Result<World> {
         Some(path) => world_io::read_da(path)?,
         None => Obstacles::new(),
     };
+    let mut marking_work = 0;
     for polygon in obstacles.iter() {
-        mark_polygon(&mut grid, polygon, expansion_cells);
-        mark_polygon(&mut raw, polygon, 0);
+        marking_work += mark_polygon(&mut grid, polygon, expansion_cells);
+        marking_work += mark_polygon(&mut raw, polygon, 0);
     }
     let saved = match &args.map {
         Some(path) => {
@@ -227,6 +231,7 @@ pub fn load(args: &Args) -> anyhow::Result<World> {
         raw,
         saved,
         expansion_cells,
+        marking_work,
         world_path: args.world.clone(),
         map_path: args.map.clone(),
     })

@@ -22,7 +22,7 @@ use super::message::*;
 use crate::geom::PointM;
 use crate::grid::{words_for_cells, Grid, GridError, GridGeometry, DEFAULT_RESOLUTION_M};
 use crate::plan::{PlanError, Planner};
-use crate::raster::mark_polygon;
+use crate::raster::{mark_polygon, Work};
 use crate::world::{Obstacles, PolygonSetError, MAX_POLYGONS, MAX_VERTICES};
 
 /// Vertices of one polygon being uploaded (a larger polygon is refused with
@@ -44,6 +44,10 @@ pub struct Handler<const GRID_WORDS: usize> {
     rx_dropped_bytes: u32,
     last_plan: LastPlan,
     reset_cause: crate::failsafe::ResetCause,
+    /// Instructions of the last request handled (see [`DeviceStatus::last_request_instructions`]).
+    last_request_instructions: u64,
+    /// Marking work of the last request that marked obstacles (see [`crate::raster::Work`]).
+    last_marking_work: Work,
 }
 
 /// What the status reports about the last plan.
@@ -86,6 +90,8 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                 queue_peak: 0,
             },
             reset_cause: crate::failsafe::ResetCause::Unknown,
+            last_request_instructions: 0,
+            last_marking_work: 0,
         }
     }
 
@@ -192,10 +198,13 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
     ) -> Reply {
         self.requests = self.requests.saturating_add(1);
         self.info.planner_capacity_cells = Planner::<SCRATCH_WORDS, QUEUE>::CAPACITY_CELLS as u32;
-        match self.try_handle(request, grid, planner, clock) {
+        let before = clock();
+        let reply = match self.try_handle(request, grid, planner, clock) {
             Ok(reply) => reply,
             Err(error) => Reply::Error(error),
-        }
+        };
+        self.last_request_instructions = clock().saturating_sub(before);
+        reply
     }
 
     fn try_handle<const SCRATCH_WORDS: usize, const QUEUE: usize>(
@@ -352,6 +361,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             last_plan_expanded: self.last_plan.expanded,
             last_plan_queue_peak: self.last_plan.queue_peak,
             reset_cause: self.reset_cause,
+            last_request_instructions: self.last_request_instructions,
         }
     }
 
@@ -389,16 +399,24 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         })?;
         self.params = params;
         self.path_points = 0;
-        self.mark_all(grid);
+        self.last_marking_work = self.mark_all(grid);
         Ok(())
     }
 
-    /// Mark every stored obstacle on `grid` with the current radius.
-    pub fn mark_all(&self, grid: &mut Grid<GRID_WORDS>) {
+    /// Mark every stored obstacle on `grid` with the current radius. The work is at most
+    /// [`crate::raster::polygon_work_bound`] for the stored vertices: the map's, not the
+    /// coordinates' nor the radius'.
+    pub fn mark_all(&self, grid: &mut Grid<GRID_WORDS>) -> Work {
         let half = grid.geometry().expansion_cells(self.params.robot_radius_m);
-        for polygon in self.obstacles.iter() {
-            mark_polygon(grid, polygon, half);
-        }
+        self.obstacles
+            .iter()
+            .map(|polygon| mark_polygon(grid, polygon, half))
+            .sum()
+    }
+
+    /// Marking work of the last `SetParams` or polygon-closing `ObstacleChunk`.
+    pub fn last_marking_work(&self) -> Work {
+        self.last_marking_work
     }
 
     fn obstacle_chunk(
@@ -421,7 +439,7 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                 .obstacles
                 .polygon(self.obstacles.len().saturating_sub(1))
             {
-                mark_polygon(grid, polygon, half);
+                self.last_marking_work = mark_polygon(grid, polygon, half);
             }
             self.path_points = 0;
         }

@@ -390,6 +390,11 @@ pub struct DeviceStatus {
     pub last_plan_queue_peak: u32,
     /// Why the chip last reset (firmware on a board; `Unknown` under QEMU and on the host).
     pub reset_cause: ResetCause,
+    /// Instructions spent answering the request before this `Status` (any kind: `SetParams`
+    /// re-marking every obstacle, the `ObstacleChunk` that closes a polygon, `Plan`, …), as
+    /// `last_plan_instructions` measures them (0 on the host). A `Ping` waits at most this long
+    /// behind the worst request.
+    pub last_request_instructions: u64,
 }
 
 /// What the device answers.
