@@ -574,6 +574,11 @@ struct PendingPlan {
     /// The mission no longer wants the result (a settle ended the moving pass it was for); it
     /// still waits for it before it changes the grid.
     cancelled: bool,
+    /// Moving plans: where the robot was when it asked, world metres.
+    asked_at: PointM,
+    /// Moving plans: farthest the robot was, during the pass that led to this plan, from
+    /// `asked_at`, metres (0 standing). See [`Mission::stale_m`].
+    pass_spread_m: f32,
 }
 
 /// The mission: see the module documentation.
@@ -1226,11 +1231,24 @@ impl<const W: usize> Mission<W> {
         }
         let id = self.next_plan_id;
         self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
+        let asked_at = self.position_world();
+        let pass_spread_m = if moving {
+            self.readings
+                .as_slice()
+                .iter()
+                .map(|r| hypot(r.pose.x_m - asked_at.x_m, r.pose.y_m - asked_at.y_m))
+                .filter(|d| d.is_finite())
+                .fold(0.0, f32::max)
+        } else {
+            0.0
+        };
         self.pending_plan = Some(PendingPlan {
             id,
             blocked,
             moving,
             cancelled: false,
+            asked_at,
+            pass_spread_m,
         });
         if !moving {
             // Hold where the controller is heading now until the result is back.
@@ -1355,7 +1373,7 @@ impl<const W: usize> Mission<W> {
         // Each try writes the seed's prefix into `self.prefix`; the seen-space rule is measured
         // first and written over it only when it keeps more (no second path buffer: on the MCU
         // this runs on a task's stack).
-        let range_m = self.prune_range_m();
+        let range_m = (self.prune_range_m() - Self::stale_m(&pending, origin)).max(res_m);
         let cap_m = self.config.max_trusted_path_m;
         for k in skip..=last_try {
             let rest = self.path.get(k..).unwrap_or(&[]);
@@ -1487,6 +1505,31 @@ impl<const W: usize> Mission<W> {
     fn prune_range_m(&self) -> f32 {
         let r = &self.config.robot;
         (r.sonar_range_m - r.planning_radius_m).max(self.grid.geometry().resolution_m())
+    }
+
+    /// How far the robot may be from where the readings behind a plan were taken, metres: 0
+    /// for a standing sweep; for a moving pass, the farthest reading pose from where the plan
+    /// was asked plus how far the trajectory's origin has moved since (triangle inequality).
+    /// The seed's prefix rule (within `sonar range − planning radius` of the robot, visible)
+    /// assumes the sweep was taken where the prefix starts; a moving pass's readings are up to
+    /// `speed × (pass time + plan latency)` behind (0.77 m at 0.2 m/s, 3.8 s passes), so the
+    /// rule's distance is shortened by this much. Without it the robot drove into a wall ahead
+    /// that the pass had not reached: `worlds/corridor` in continuous mode at 0.25 m/s.
+    /// Space seen free (the seen-space rule) stays trusted however old the reading.
+    fn stale_m(pending: &PendingPlan, origin: PointM) -> f32 {
+        if !pending.moving {
+            return 0.0;
+        }
+        let moved_m = hypot(
+            origin.x_m - pending.asked_at.x_m,
+            origin.y_m - pending.asked_at.y_m,
+        );
+        let stale_m = pending.pass_spread_m + moved_m;
+        if stale_m.is_finite() {
+            stale_m
+        } else {
+            f32::MAX
+        }
     }
 
     /// Hold the robot and sweep standing.
