@@ -30,6 +30,7 @@ pub mod cspace;
 pub mod drivers;
 pub mod geom;
 pub mod grid;
+pub mod limits;
 pub mod link;
 pub mod math;
 pub mod mission;

@@ -274,6 +274,20 @@ impl MissionConfig {
                 return Err(MissionError::BadValue { field, value });
             }
         }
+        // Beyond these the robot cannot be trusted to stay clear (see `crate::limits`).
+        if crate::limits::check_speed_m_s(&self.robot, self.speed_m_s).is_err() {
+            return Err(MissionError::BadValue {
+                field: "speed_m_s",
+                value: self.speed_m_s,
+            });
+        }
+        let radius_m = self.robot.planning_radius_m;
+        if crate::limits::check_planning_radius_m(&self.robot, radius_m).is_err() {
+            return Err(MissionError::BadValue {
+                field: "planning_radius_m",
+                value: radius_m,
+            });
+        }
         let finite = [
             ("start x", self.start.x_m),
             ("start y", self.start.y_m),
