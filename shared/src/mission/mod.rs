@@ -1439,15 +1439,34 @@ impl<const W: usize> Mission<W> {
             .take_while(|p| hypot(p.x_m - pose.x_m, p.y_m - pose.y_m) <= range_m)
             .count()
             .max(1);
-        if !self.last_sweep_full
-            && needs_full_sweep(
-                self.prefix.get(..near).unwrap_or(&[]),
-                PointM::new(pose.x_m, pose.y_m),
-                pose.heading_rad,
-                band_rad,
-            )
-        {
-            if self.config.mode == MissionMode::Continuous {
+        // The body is wider than the path: what lies within the planning radius of the near
+        // part must be known too (see `corridor`).
+        let unknown_at_m = if self.last_sweep_full {
+            None
+        } else {
+            Corridor {
+                grid: &self.grid,
+                seen: &self.seen,
+                pose,
+                sonar_offset_m: self.config.robot.sonar_offset_m,
+                half_band_rad: band_rad,
+                radius_m: self.config.robot.planning_radius_m,
+            }
+            .first_unknown_m(&self.prefix, range_m)
+        };
+        let path_outside_band = needs_full_sweep(
+            self.prefix.get(..near).unwrap_or(&[]),
+            PointM::new(pose.x_m, pose.y_m),
+            pose.heading_rad,
+            band_rad,
+        );
+        if !self.last_sweep_full {
+            let continuous = self.config.mode == MissionMode::Continuous;
+            // Continuous mode may follow a prefix cut short; a cut of two cells or less would
+            // stall it (the sonar, 0.20 m ahead, never sees beside the centre while moving),
+            // so it stops for a full sweep like stop mode.
+            let cut_m = unknown_at_m.filter(|m| *m > 2.0 * g.resolution_m());
+            if continuous && path_outside_band {
                 // Sweeping while moving: instead of stopping for a full sweep, follow only the
                 // part inside the band (at least one cell towards the path, which makes the
                 // supplier turn in place first); the sonar keeps sweeping around the new
@@ -1458,7 +1477,12 @@ impl<const W: usize> Mission<W> {
                     band_rad,
                 );
                 self.stats.band_cuts += 1;
-            } else {
+            } else if continuous && cut_m.is_some() {
+                // Follow only up to where the body would reach unknown space; the sonar keeps
+                // sweeping and the next pass replans.
+                self.truncate_prefix_m(unknown_at_m.unwrap_or(0.0));
+                self.stats.band_cuts += 1;
+            } else if path_outside_band || unknown_at_m.is_some() {
                 push(out, MissionEvent::FullSweepRequested);
                 self.begin_standing_sweep(true, out);
                 return;
@@ -1475,6 +1499,25 @@ impl<const W: usize> Mission<W> {
             out.pilot_command = Some(PilotCommand::Follow);
         } else {
             self.finish(MissionStatus::Aborted, out);
+        }
+    }
+
+    /// Keep the first `length_m` of the prefix (cut inside a segment where needed).
+    fn truncate_prefix_m(&mut self, length_m: f32) {
+        let mut along_m = 0.0;
+        for i in 1..self.prefix.len() {
+            let (a, b) = (self.prefix[i - 1], self.prefix[i]);
+            let len_m = hypot(b.x_m - a.x_m, b.y_m - a.y_m);
+            if along_m + len_m > length_m && len_m > 0.0 {
+                let t = ((length_m - along_m) / len_m).clamp(0.0, 1.0);
+                self.prefix.truncate(i);
+                let _ = self.prefix.push(PointM::new(
+                    a.x_m + t * (b.x_m - a.x_m),
+                    a.y_m + t * (b.y_m - a.y_m),
+                ));
+                return;
+            }
+            along_m += len_m;
         }
     }
 
@@ -1624,6 +1667,7 @@ fn nearest_free<const W: usize>(grid: &Grid<W>, x: i32, y: i32, max_ring: i32) -
     None
 }
 
+mod corridor;
 mod local;
 mod pilot;
 #[cfg(test)]
@@ -1633,5 +1677,6 @@ mod trust;
 pub use local::{LocalRunner, TickOutcome, MAX_EVENTS_PER_TICK, MAX_READINGS_PER_TICK};
 pub use pilot::{Pilot, PilotCommand, PilotReport};
 
+use corridor::Corridor;
 use trust::SeenSpace;
 pub use trust::SEEN_NEAR_CELLS;
