@@ -246,8 +246,8 @@ pub fn parse_par(text: &str) -> Result<Params, ParseError> {
 }
 
 /// [`parse_par`] for a mission of `robot`: the speed at most `robot.max_safe_speed_m_s()`,
-/// the radius within [`crate::limits::check_planning_radius_m`] (0.1 m to the sonar range
-/// minus 0.4 m); the error names the line and the bound.
+/// the radius within [`crate::limits::check_planning_radius_m`] (0.31 m to the sonar
+/// range minus 0.4 m); the error names the line and the bound.
 pub fn parse_par_for(text: &str, robot: &RobotConfig) -> Result<Params, ParseError> {
     parse_par_inner(text, Some(robot))
 }
@@ -256,7 +256,7 @@ pub fn parse_par_for(text: &str, robot: &RobotConfig) -> Result<Params, ParseErr
 const SPEED_RULE: &str =
     "above 0 and at most the robot's safe speed, 0.364 m/s for the Twil robot; see docs/simulate.md";
 /// The safe radius rule in words (see [`RobotConfig::max_safe_planning_radius_m`]).
-const RADIUS_RULE: &str = "0.1 m up to the sonar range minus 0.4 m, 1.1 m with the 1.5 m sonar; see docs/simulate.md";
+const RADIUS_RULE: &str = "the sonar's shortest range plus 0.05 m up to its range minus 0.4 m: 0.31 to 1.1 m with the seed's sonar; see docs/simulate.md";
 
 fn parse_par_inner(text: &str, robot: Option<&RobotConfig>) -> Result<Params, ParseError> {
     let mut t = Tokens::new(text);
