@@ -237,7 +237,7 @@ fn bad_files_are_named_with_their_line() {
 fn a_goal_off_the_map_is_refused_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let par = dir.path().join("far.par");
-    std::fs::write(&par, "0.3\n0.3\n90\n1.5 1.5\n40 1\n").unwrap();
+    std::fs::write(&par, "0.35\n0.3\n90\n1.5 1.5\n40 1\n").unwrap();
     let par_s = par.display().to_string();
     let o = run(&[
         "mission",

@@ -162,23 +162,40 @@ fn speeds_and_radii_beyond_the_bounds_are_refused_naming_file_line_and_bound() {
         std::fs::write(&par, format!("{radius}\n{speed}\n90\n1.5 1.5\n13.5 13\n")).unwrap();
         for command in ["simulate", "mission"] {
             let mut cmd = common::twil();
-            cmd.args([command, "--real", &common::world("office.da").display().to_string()]);
+            cmd.args([
+                command,
+                "--real",
+                &common::world("office.da").display().to_string(),
+            ]);
             if command == "mission" {
                 cmd.args(["--remote", "sim"]);
             }
             let out = cmd
-                .args(["--params", &par.display().to_string(), "--sonar-range", range])
+                .args([
+                    "--params",
+                    &par.display().to_string(),
+                    "--sonar-range",
+                    range,
+                ])
                 .arg("--json")
                 .output()
                 .unwrap();
             let stderr = String::from_utf8_lossy(&out.stderr);
-            assert_eq!(out.status.code(), Some(1), "{command} {radius} {speed}: {stderr}");
+            assert_eq!(
+                out.status.code(),
+                Some(1),
+                "{command} {radius} {speed}: {stderr}"
+            );
             let expected = format!(
                 "{}: line {line}: field `{field}`: `{value}` is out of range",
                 par.display()
             );
             assert!(stderr.contains(&expected), "{command}: {stderr}");
-            let bound = if field == "speed" { "0.364 m/s" } else { "0.31 to 1.1 m" };
+            let bound = if field == "speed" {
+                "0.364 m/s"
+            } else {
+                "0.31 to 1.1 m"
+            };
             assert!(stderr.contains(bound), "{command}: {stderr}");
             assert!(out.stdout.is_empty(), "{command}: nothing on stdout");
         }
