@@ -269,7 +269,7 @@ fn a_link_timeout_out_of_range_is_refused_naming_the_option() {
 fn a_goal_off_the_map_is_refused_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let par = dir.path().join("far.par");
-    std::fs::write(&par, "0.3\n0.3\n90\n1.5 1.5\n40 1\n").unwrap();
+    std::fs::write(&par, "0.35\n0.3\n90\n1.5 1.5\n40 1\n").unwrap();
     let par_s = par.display().to_string();
     let o = run(&[
         "mission",

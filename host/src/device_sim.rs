@@ -362,7 +362,7 @@ mod tests {
             PointM::new(2.0, 3.2),
         ];
         let map = MapParams {
-            robot_radius_m: 0.3,
+            robot_radius_m: 0.35,
             ..MapParams::default()
         };
         remote.call(Request::SetParams(map)).unwrap();

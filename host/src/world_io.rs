@@ -26,7 +26,8 @@
 use std::path::Path;
 
 use twil_core::grid::Grid;
-use twil_core::world::{parse_da, parse_par, Obstacles, Params, ParseError};
+use twil_core::robot::RobotConfig;
+use twil_core::world::{parse_da, parse_par, parse_par_for, Obstacles, Params, ParseError};
 
 pub use crate::files::FileError;
 use crate::files::{read_capped, read_text, DA, PAR};
@@ -52,6 +53,14 @@ pub fn read_da(path: &Path) -> Result<Obstacles, FileError> {
 pub fn read_par(path: &Path) -> Result<Params, FileError> {
     let text = read_text(path, PAR)?;
     parse_par(&text).map_err(|e| parse_error(path, &text, &e))
+}
+
+/// Read a `.par` file for a mission of `robot`: as [`read_par`], and the speed and the radius
+/// within what `robot` can be trusted with ([`twil_core::limits`]); errors name the file, the
+/// line, the field and the bound.
+pub fn read_par_for(path: &Path, robot: &RobotConfig) -> Result<Params, FileError> {
+    let text = read_text(path)?;
+    parse_par_for(&text, robot).map_err(|e| FileError::parse(path, &text, &e))
 }
 
 /// Mark in `grid` every cell that a saved map (see the module doc) marks occupied, for the

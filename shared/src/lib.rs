@@ -33,6 +33,7 @@ pub mod drivers;
 pub mod failsafe;
 pub mod geom;
 pub mod grid;
+pub mod limits;
 pub mod link;
 pub mod math;
 pub mod mission;

@@ -28,6 +28,7 @@ use core::fmt;
 use heapless::{String, Vec};
 
 use crate::geom::PointM;
+use crate::robot::RobotConfig;
 
 /// Largest number of obstacle polygons in one [`Obstacles`] set.
 pub const MAX_POLYGONS: usize = 128;
@@ -236,18 +237,40 @@ pub struct Params {
 
 /// Read a `.par` text.
 ///
-/// The radius must lie in `[0, 10]` m and the speed in `(0, 10]` m/s; anything after the seven
-/// values is an error.
+/// The radius must lie in `[0, 10]` m and the speed above 0 and at most the default robot's
+/// safe speed ([`crate::robot::RobotConfig::max_safe_speed_m_s`], 0.365 m/s); anything after
+/// the seven values is an error. [`parse_par_for`] also checks the radius against a robot's
+/// sonar.
 pub fn parse_par(text: &str) -> Result<Params, ParseError> {
+    parse_par_inner(text, None)
+}
+
+/// [`parse_par`] for a mission of `robot`: the speed at most `robot.max_safe_speed_m_s()`,
+/// the radius within [`crate::limits::check_planning_radius_m`] (0.31 m to the sonar
+/// range minus 0.4 m); the error names the line and the bound.
+pub fn parse_par_for(text: &str, robot: &RobotConfig) -> Result<Params, ParseError> {
+    parse_par_inner(text, Some(robot))
+}
+
+/// The safe speed rule in words (see [`RobotConfig::max_safe_speed_m_s`]).
+const SPEED_RULE: &str =
+    "above 0 and at most the robot's safe speed, 0.364 m/s for the Twil robot; see docs/simulate.md";
+/// The safe radius rule in words (see [`RobotConfig::max_safe_planning_radius_m`]).
+const RADIUS_RULE: &str = "the sonar's shortest range plus 0.05 m up to its range minus 0.4 m: 0.31 to 1.1 m with the seed's sonar; see docs/simulate.md";
+
+fn parse_par_inner(text: &str, robot: Option<&RobotConfig>) -> Result<Params, ParseError> {
     let mut t = Tokens::new(text);
     let robot_radius_m = ranged(&mut t, "robot radius", 0.0, 10.0, "0 to 10 m")?;
-    let speed_m_s = ranged(
-        &mut t,
-        "speed",
-        f32::MIN_POSITIVE,
-        10.0,
-        "above 0 and at most 10 m/s",
-    )?;
+    if let Some(robot) = robot {
+        if let Err(e) = crate::limits::check_planning_radius_m(robot, robot_radius_m) {
+            return Err(t.error("robot radius", None, unsafe_kind(e, RADIUS_RULE)));
+        }
+    }
+    let speed_m_s = t.f32("speed", None)?;
+    let speed_robot = robot.unwrap_or(&RobotConfig::DEFAULT);
+    if let Err(e) = crate::limits::check_speed_m_s(speed_robot, speed_m_s) {
+        return Err(t.error("speed", None, unsafe_kind(e, SPEED_RULE)));
+    }
     let initial_heading_deg = t.f32("initial angle", None)?;
     let start = PointM::new(t.f32("start x", None)?, t.f32("start y", None)?);
     let goal = PointM::new(t.f32("goal x", None)?, t.f32("goal y", None)?);
@@ -259,6 +282,14 @@ pub fn parse_par(text: &str) -> Result<Params, ParseError> {
         start,
         goal,
     })
+}
+
+/// The value (as `f32` prints it) with the safe range in words: the bound is a property of the
+/// robot (see [`crate::limits`]), so the words give the rule and the default robot's figure.
+fn unsafe_kind(e: crate::limits::LimitError, expected: &'static str) -> ParseErrorKind {
+    let mut value = String::new();
+    let _ = core::fmt::write(&mut value, format_args!("{}", e.value));
+    ParseErrorKind::OutOfRange { value, expected }
 }
 
 fn ranged(

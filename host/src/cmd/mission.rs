@@ -191,6 +191,9 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
     if let Err(e) = robot.validate() {
         bail!("robot config: {e}");
     }
+    // The speed and the radius against what this robot (its sonar range) can be trusted
+    // with, naming the .par's line.
+    crate::world_io::read_par_for(&args.params, &robot)?;
     if !(args.time_limit.is_finite() && args.time_limit > 0.0) {
         bail!(
             "--time-limit: must be a positive number of seconds, got {}",
@@ -283,11 +286,19 @@ fn explain_bad_mission(args: &Args, error: &ErrorReply) -> String {
         2 => format!("start ({par})"),
         3 => format!("initial heading ({par})"),
         4 => format!("goal ({par})"),
+        5 if error.limit > 0 => format!(
+            "speed ({par}; the robot's safe speed is at most {:.3} m/s)",
+            error.limit as f32 / 1000.0
+        ),
         5 => format!("speed ({par})"),
         6 => format!("sonar range (--sonar-range {})", args.sonar_range),
         7 => format!("time limit (--time-limit {})", args.time_limit),
         11 => format!("sonar noise (--sonar-noise {})", args.sonar_noise),
         12 => format!("link timeout (--link-timeout-ms {})", args.link_timeout_ms),
+        100 => format!(
+            "planning radius ({par}; at most the sonar range minus {} m)",
+            twil_core::limits::MIN_PREFIX_M
+        ),
         v if v >= 100 => format!("robot configuration field {} (see the device log)", v - 100),
         v => format!("field {v}"),
     };

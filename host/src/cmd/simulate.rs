@@ -167,6 +167,9 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
     if let Err(e) = robot.validate() {
         bail!("robot config: {e}");
     }
+    // The speed and the radius against what this robot (its sonar range) can be trusted
+    // with, naming the .par's line.
+    crate::world_io::read_par_for(&args.params, &robot)?;
     if !(args.plan_latency_ms.is_finite() && (0.0..=60_000.0).contains(&args.plan_latency_ms)) {
         bail!(
             "--plan-latency-ms: must be between 0 and 60000, got {}",

@@ -491,8 +491,9 @@ pub enum ErrorCode {
     /// latched.
     WrongState,
     /// 16: the mission setup is refused: `value` is the index of the offending field of
-    /// [`MissionSetup`] (or 100 + the robot config's, see the device log), `detail` 1 when the
-    /// start or the goal lies off the map.
+    /// [`MissionSetup`] (or 100 + the robot config's, see the device log; 100 is the planning
+    /// radius of `SetParams`), `detail` 1 when the start or the goal lies off the map. For the
+    /// speed (5), `limit` is the robot's safe speed in mm/s.
     BadMission,
 }
 

@@ -582,7 +582,14 @@ impl<const W: usize> RobotLink<'_, W> {
         if let Err(e) = config.validate() {
             return Err(match e {
                 MissionError::BadValue { field, .. } => match field {
-                    "speed_m_s" => bad(5),
+                    // The safe bound in mm/s, so the host can say it.
+                    "speed_m_s" => ErrorReply::new(
+                        ErrorCode::BadMission,
+                        5,
+                        (config.robot.max_safe_speed_m_s() * 1000.0) as u32,
+                    ),
+                    // Robot config field 0 (the radius comes from `SetParams`).
+                    "planning_radius_m" => bad(100),
                     "time_limit_s" => bad(7),
                     _ => bad(100),
                 },

@@ -274,6 +274,20 @@ impl MissionConfig {
                 return Err(MissionError::BadValue { field, value });
             }
         }
+        // Beyond these the robot cannot be trusted to stay clear (see `crate::limits`).
+        if crate::limits::check_speed_m_s(&self.robot, self.speed_m_s).is_err() {
+            return Err(MissionError::BadValue {
+                field: "speed_m_s",
+                value: self.speed_m_s,
+            });
+        }
+        let radius_m = self.robot.planning_radius_m;
+        if crate::limits::check_planning_radius_m(&self.robot, radius_m).is_err() {
+            return Err(MissionError::BadValue {
+                field: "planning_radius_m",
+                value: radius_m,
+            });
+        }
         let finite = [
             ("start x", self.start.x_m),
             ("start y", self.start.y_m),
@@ -574,6 +588,11 @@ struct PendingPlan {
     /// The mission no longer wants the result (a settle ended the moving pass it was for); it
     /// still waits for it before it changes the grid.
     cancelled: bool,
+    /// Moving plans: where the robot was when it asked, world metres.
+    asked_at: PointM,
+    /// Moving plans: farthest the robot was, during the pass that led to this plan, from
+    /// `asked_at`, metres (0 standing). See [`Mission::stale_m`].
+    pass_spread_m: f32,
 }
 
 /// The mission: see the module documentation.
@@ -1226,11 +1245,24 @@ impl<const W: usize> Mission<W> {
         }
         let id = self.next_plan_id;
         self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
+        let asked_at = self.position_world();
+        let pass_spread_m = if moving {
+            self.readings
+                .as_slice()
+                .iter()
+                .map(|r| hypot(r.pose.x_m - asked_at.x_m, r.pose.y_m - asked_at.y_m))
+                .filter(|d| d.is_finite())
+                .fold(0.0, f32::max)
+        } else {
+            0.0
+        };
         self.pending_plan = Some(PendingPlan {
             id,
             blocked,
             moving,
             cancelled: false,
+            asked_at,
+            pass_spread_m,
         });
         if !moving {
             // Hold where the controller is heading now until the result is back.
@@ -1355,7 +1387,7 @@ impl<const W: usize> Mission<W> {
         // Each try writes the seed's prefix into `self.prefix`; the seen-space rule is measured
         // first and written over it only when it keeps more (no second path buffer: on the MCU
         // this runs on a task's stack).
-        let range_m = self.prune_range_m();
+        let range_m = (self.prune_range_m() - Self::stale_m(&pending, origin)).max(res_m);
         let cap_m = self.config.max_trusted_path_m;
         for k in skip..=last_try {
             let rest = self.path.get(k..).unwrap_or(&[]);
@@ -1407,15 +1439,34 @@ impl<const W: usize> Mission<W> {
             .take_while(|p| hypot(p.x_m - pose.x_m, p.y_m - pose.y_m) <= range_m)
             .count()
             .max(1);
-        if !self.last_sweep_full
-            && needs_full_sweep(
-                self.prefix.get(..near).unwrap_or(&[]),
-                PointM::new(pose.x_m, pose.y_m),
-                pose.heading_rad,
-                band_rad,
-            )
-        {
-            if self.config.mode == MissionMode::Continuous {
+        // The body is wider than the path: what lies within the planning radius of the near
+        // part must be known too (see `corridor`).
+        let unknown_at_m = if self.last_sweep_full {
+            None
+        } else {
+            Corridor {
+                grid: &self.grid,
+                seen: &self.seen,
+                pose,
+                sonar_offset_m: self.config.robot.sonar_offset_m,
+                half_band_rad: band_rad,
+                radius_m: self.config.robot.planning_radius_m,
+            }
+            .first_unknown_m(&self.prefix, range_m)
+        };
+        let path_outside_band = needs_full_sweep(
+            self.prefix.get(..near).unwrap_or(&[]),
+            PointM::new(pose.x_m, pose.y_m),
+            pose.heading_rad,
+            band_rad,
+        );
+        if !self.last_sweep_full {
+            let continuous = self.config.mode == MissionMode::Continuous;
+            // Continuous mode may follow a prefix cut short; a cut of two cells or less would
+            // stall it (the sonar, 0.20 m ahead, never sees beside the centre while moving),
+            // so it stops for a full sweep like stop mode.
+            let cut_m = unknown_at_m.filter(|m| *m > 2.0 * g.resolution_m());
+            if continuous && path_outside_band {
                 // Sweeping while moving: instead of stopping for a full sweep, follow only the
                 // part inside the band (at least one cell towards the path, which makes the
                 // supplier turn in place first); the sonar keeps sweeping around the new
@@ -1426,7 +1477,12 @@ impl<const W: usize> Mission<W> {
                     band_rad,
                 );
                 self.stats.band_cuts += 1;
-            } else {
+            } else if continuous && cut_m.is_some() {
+                // Follow only up to where the body would reach unknown space; the sonar keeps
+                // sweeping and the next pass replans.
+                self.truncate_prefix_m(unknown_at_m.unwrap_or(0.0));
+                self.stats.band_cuts += 1;
+            } else if path_outside_band || unknown_at_m.is_some() {
                 push(out, MissionEvent::FullSweepRequested);
                 self.begin_standing_sweep(true, out);
                 return;
@@ -1443,6 +1499,25 @@ impl<const W: usize> Mission<W> {
             out.pilot_command = Some(PilotCommand::Follow);
         } else {
             self.finish(MissionStatus::Aborted, out);
+        }
+    }
+
+    /// Keep the first `length_m` of the prefix (cut inside a segment where needed).
+    fn truncate_prefix_m(&mut self, length_m: f32) {
+        let mut along_m = 0.0;
+        for i in 1..self.prefix.len() {
+            let (a, b) = (self.prefix[i - 1], self.prefix[i]);
+            let len_m = hypot(b.x_m - a.x_m, b.y_m - a.y_m);
+            if along_m + len_m > length_m && len_m > 0.0 {
+                let t = ((length_m - along_m) / len_m).clamp(0.0, 1.0);
+                self.prefix.truncate(i);
+                let _ = self.prefix.push(PointM::new(
+                    a.x_m + t * (b.x_m - a.x_m),
+                    a.y_m + t * (b.y_m - a.y_m),
+                ));
+                return;
+            }
+            along_m += len_m;
         }
     }
 
@@ -1487,6 +1562,31 @@ impl<const W: usize> Mission<W> {
     fn prune_range_m(&self) -> f32 {
         let r = &self.config.robot;
         (r.sonar_range_m - r.planning_radius_m).max(self.grid.geometry().resolution_m())
+    }
+
+    /// How far the robot may be from where the readings behind a plan were taken, metres: 0
+    /// for a standing sweep; for a moving pass, the farthest reading pose from where the plan
+    /// was asked plus how far the trajectory's origin has moved since (triangle inequality).
+    /// The seed's prefix rule (within `sonar range − planning radius` of the robot, visible)
+    /// assumes the sweep was taken where the prefix starts; a moving pass's readings are up to
+    /// `speed × (pass time + plan latency)` behind (0.77 m at 0.2 m/s, 3.8 s passes), so the
+    /// rule's distance is shortened by this much. Without it the robot drove into a wall ahead
+    /// that the pass had not reached: `worlds/corridor` in continuous mode at 0.25 m/s.
+    /// Space seen free (the seen-space rule) stays trusted however old the reading.
+    fn stale_m(pending: &PendingPlan, origin: PointM) -> f32 {
+        if !pending.moving {
+            return 0.0;
+        }
+        let moved_m = hypot(
+            origin.x_m - pending.asked_at.x_m,
+            origin.y_m - pending.asked_at.y_m,
+        );
+        let stale_m = pending.pass_spread_m + moved_m;
+        if stale_m.is_finite() {
+            stale_m
+        } else {
+            f32::MAX
+        }
     }
 
     /// Hold the robot and sweep standing.
@@ -1567,6 +1667,7 @@ fn nearest_free<const W: usize>(grid: &Grid<W>, x: i32, y: i32, max_ring: i32) -
     None
 }
 
+mod corridor;
 mod local;
 mod pilot;
 #[cfg(test)]
@@ -1576,5 +1677,6 @@ mod trust;
 pub use local::{LocalRunner, TickOutcome, MAX_EVENTS_PER_TICK, MAX_READINGS_PER_TICK};
 pub use pilot::{Pilot, PilotCommand, PilotReport};
 
+use corridor::Corridor;
 use trust::SeenSpace;
 pub use trust::SEEN_NEAR_CELLS;

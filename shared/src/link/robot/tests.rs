@@ -396,7 +396,18 @@ fn requests_in_the_wrong_state_are_refused_and_change_nothing() {
         code(b.call(Request::PauseMission)),
         Some(ErrorCode::WrongState)
     );
-    // A goal off the map, a NaN speed: refused, naming the field.
+    // No SetParams yet: a radius of 0 is below the safe radius (robot config field 0).
+    assert_eq!(
+        b.call(Request::SetMission(setup(&params, MissionMode::Stop))),
+        Reply::Error(ErrorReply::new(ErrorCode::BadMission, 100, 0))
+    );
+    let map = MapParams {
+        robot_radius_m: params.robot_radius_m,
+        ..MapParams::default()
+    };
+    assert_eq!(b.call(Request::SetParams(map)), Reply::Ack);
+    // A goal off the map, a NaN speed, a speed above the safe bound: refused, naming the
+    // field (and for the speed, the bound in mm/s).
     let mut bad = setup(&params, MissionMode::Stop);
     bad.goal = PointM::new(99.0, 1.0);
     assert_eq!(
@@ -412,7 +423,12 @@ fn requests_in_the_wrong_state_are_refused_and_change_nothing() {
     bad.speed_m_s = f32::NAN;
     assert_eq!(
         b.call(Request::SetMission(bad)),
-        Reply::Error(ErrorReply::new(ErrorCode::BadMission, 5, 0))
+        Reply::Error(ErrorReply::new(ErrorCode::BadMission, 5, 364))
+    );
+    bad.speed_m_s = 0.5;
+    assert_eq!(
+        b.call(Request::SetMission(bad)),
+        Reply::Error(ErrorReply::new(ErrorCode::BadMission, 5, 364))
     );
     assert_eq!(b.device.state(), RunState::Idle);
     b.upload_world(&real);
