@@ -59,8 +59,8 @@ pub fn read_par(path: &Path) -> Result<Params, FileError> {
 /// within what `robot` can be trusted with ([`twil_core::limits`]); errors name the file, the
 /// line, the field and the bound.
 pub fn read_par_for(path: &Path, robot: &RobotConfig) -> Result<Params, FileError> {
-    let text = read_text(path)?;
-    parse_par_for(&text, robot).map_err(|e| FileError::parse(path, &text, &e))
+    let text = read_text(path, PAR)?;
+    parse_par_for(&text, robot).map_err(|e| parse_error(path, &text, &e))
 }
 
 /// Mark in `grid` every cell that a saved map (see the module doc) marks occupied, for the
