@@ -10,21 +10,26 @@
 //! largest radius `SetParams` accepts (10 m). `Plan` has its own budget (`mcu_bench` in
 //! tests/firmware_qemu.rs). `cargo xtask mcu-bench` runs this test and prints the table.
 //!
-//! Budgets: on the seed's 300 × 300 map (the mission's) at most `SEED_MAP_REQUEST_BUDGET`
-//! instructions; on any map at most `INSTRUCTIONS_PER_WORK_UNIT` per unit of the documented
-//! work bound (`raster::polygon_work_bound`: rows and words, so a tall map costs more).
+//! The device refuses marking that would visit more than `MAX_MARKING_ROWS` rows (vertices ×
+//! map height: `ErrorCode::MarkingBudget`), so a tall map holds fewer vertices; the test fills
+//! each map up to that budget and checks that one vertex more is refused.
+//!
+//! Budgets: on any map at most `REQUEST_BUDGET` instructions (a fraction of the watchdog's 1 s),
+//! and at most `INSTRUCTIONS_PER_WORK_UNIT` per unit of the documented work bound
+//! (`raster::polygon_work_bound`: rows and words).
 
 mod common;
 
 use twil_core::geom::PointM;
 use twil_core::grid::GridGeometry;
+use twil_core::link::handler::MAX_MARKING_ROWS;
 use twil_core::link::{MapParams, Reply, Request};
 use twil_core::raster::polygon_work_bound;
 use twil_core::world::MAX_VERTICES;
 use twil_host::remote::{Remote, RemoteSpec};
 
-/// Budget of one request (other than `Plan`) on the seed's 300 × 300 map, instructions.
-const SEED_MAP_REQUEST_BUDGET: u64 = 60_000_000;
+/// Budget of one request (other than `Plan`) on any map, instructions (0.36 s at 168 MHz).
+const REQUEST_BUDGET: u64 = 60_000_000;
 /// Instructions per unit of `raster::polygon_work_bound` (a row visit or a word written) any
 /// marking request may cost, on any map.
 const INSTRUCTIONS_PER_WORK_UNIT: u64 = 100;
@@ -46,10 +51,10 @@ fn qemu() -> Remote {
 /// A polygon of `POLYGON_VERTICES` vertices zig-zagging between two far points (up to ±40 km,
 /// inside the ±1e6-cell clamp) on the line of the map's diagonal: each edge is a long line
 /// crossing every row of the map, shifted across it by its own offset (`number` picks them).
-fn zigzag(map_m: (f32, f32), number: usize) -> Vec<PointM> {
+fn zigzag(map_m: (f32, f32), number: usize, vertices: usize) -> Vec<PointM> {
     let (w, h) = map_m;
     let far = 40_000.0 / w.max(h);
-    (0..POLYGON_VERTICES)
+    (0..vertices)
         .map(|i| {
             let side = if i % 2 == 0 { -far } else { far };
             let t = ((i * 7 + number * 13) % 101) as f32 / 100.0 - 0.5;
@@ -110,40 +115,54 @@ fn worst_requests_stay_within_the_budget() {
                 n as f64 / bound as f64,
                 n as f64 / CORE_HZ * 1e3
             );
-            let seed_map = (width, height) == (300, 300);
-            if n > INSTRUCTIONS_PER_WORK_UNIT * bound || (seed_map && n > SEED_MAP_REQUEST_BUDGET) {
+            if n > INSTRUCTIONS_PER_WORK_UNIT * bound || n > REQUEST_BUDGET {
                 over.push(format!("{what} on {map}, radius {radius_m} m: {n}"));
             }
             if n > worst.1 {
                 worst = (format!("{what} on {map} cells, radius {radius_m} m"), n);
             }
         };
+        // As many vertices as the marking budget lets this map hold.
+        let budget_vertices = (MAX_MARKING_ROWS / height as u32).min(MAX_VERTICES as u32) as usize;
+        let polygon_vertices = budget_vertices.min(POLYGON_VERTICES);
         // The closing chunk of one polygon, marked with the largest radius.
         remote.call(Request::ClearMap).expect("clear");
         remote
             .call(Request::SetParams(params(width, height, 10.0)))
             .expect("params");
-        let polygon = zigzag(map_m, 0);
+        let polygon = zigzag(map_m, 0, polygon_vertices);
         remote.upload_polygon(&polygon).expect("upload");
         let n = last_request_instructions(&mut remote);
         remote.ping(1).expect("ping after the closing chunk");
-        record("ObstacleChunk (closing)", 10.0, POLYGON_VERTICES, n);
-        // Fill the store (1 024 vertices) with a small radius, then re-mark it all.
+        record("ObstacleChunk (closing)", 10.0, polygon_vertices, n);
+        // Fill the store up to the budget with a small radius, then re-mark it all.
         remote.call(Request::ClearMap).expect("clear");
         remote
             .call(Request::SetParams(params(width, height, 0.0)))
             .expect("params");
-        for number in 0..MAX_VERTICES / POLYGON_VERTICES {
+        let mut stored = 0;
+        for number in 0.. {
+            let vertices = (budget_vertices - stored).min(POLYGON_VERTICES);
+            if vertices == 0 {
+                break;
+            }
             remote
-                .upload_polygon(&zigzag(map_m, number))
+                .upload_polygon(&zigzag(map_m, number, vertices))
                 .expect("upload");
+            stored += vertices;
+        }
+        if budget_vertices < MAX_VERTICES {
+            // One vertex more would go over the budget.
+            let refused = remote.upload_polygon(&zigzag(map_m, 99, 1));
+            let message = format!("{:#}", refused.expect_err("over the marking budget"));
+            assert!(message.contains("map rows"), "{message}");
         }
         for radius_m in [0.4, 10.0] {
             let n = measure(
                 &mut remote,
                 Request::SetParams(params(width, height, radius_m)),
             );
-            record("SetParams (re-mark)", radius_m, MAX_VERTICES, n);
+            record("SetParams (re-mark)", radius_m, budget_vertices, n);
         }
     }
     println!();
@@ -156,6 +175,6 @@ fn worst_requests_stay_within_the_budget() {
     assert!(
         over.is_empty(),
         "over {INSTRUCTIONS_PER_WORK_UNIT} instructions per unit of work bound, or over \
-         {SEED_MAP_REQUEST_BUDGET} on the seed's map: {over:?}"
+         {REQUEST_BUDGET} instructions: {over:?}"
     );
 }

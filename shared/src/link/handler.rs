@@ -32,6 +32,38 @@ pub const MAX_PENDING_VERTICES: usize = 256;
 /// Largest robot radius accepted by `SetParams`, metres (as the `.par` reader).
 pub const MAX_ROBOT_RADIUS_M: f32 = 10.0;
 
+/// Most map rows one request may have the marker visit: stored obstacle vertices × map height
+/// (each edge visits at most every row of the map, see [`crate::raster::edge_work_bound`]).
+///
+/// Marking costs about 140 instructions per row visited on the MCU (`cargo xtask mcu-bench`,
+/// tests/firmware_requests.rs), so this bound keeps the worst marking request near 43 M
+/// instructions (0.26 s at 168 MHz): far inside the 1 s the watchdog gives the mission task, and
+/// exactly what the seed's 300 × 300 map with [`MAX_VERTICES`] vertices needs. A tall map holds
+/// fewer vertices (21 × 4 096 cells: 75), instead of a request that keeps the device busy for
+/// seconds (it measured 613 M instructions, 3.6 s, before this bound).
+pub const MAX_MARKING_ROWS: u32 = MAX_VERTICES as u32 * 300;
+
+/// Rows the marker may visit for `vertices` obstacle vertices on a map `height_cells` tall.
+pub fn marking_rows(vertices: usize, height_cells: u32) -> u32 {
+    u32::try_from(vertices)
+        .unwrap_or(u32::MAX)
+        .saturating_mul(height_cells)
+}
+
+/// [`ErrorCode::MarkingBudget`] unless `vertices` on a map `height_cells` tall are within
+/// [`MAX_MARKING_ROWS`].
+fn check_marking_budget(vertices: usize, height_cells: u32) -> Result<(), ErrorReply> {
+    let rows = marking_rows(vertices, height_cells);
+    if rows > MAX_MARKING_ROWS {
+        return Err(ErrorReply::new(
+            ErrorCode::MarkingBudget,
+            rows,
+            MAX_MARKING_ROWS,
+        ));
+    }
+    Ok(())
+}
+
 /// The request handler and all the state it acts on.
 pub struct Handler<const GRID_WORDS: usize> {
     info: DeviceInfo,
@@ -387,6 +419,9 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
                 params.height_cells as u32,
             ),
         })?;
+        // Re-marking every stored obstacle must stay a bounded request (checked before the
+        // grid changes: a refused request changes nothing).
+        check_marking_budget(self.obstacles.vertex_count(), u32::from(geometry.height()))?;
         grid.reset(geometry).map_err(|e| match e {
             GridError::CapacityExceeded { cells, capacity } => {
                 ErrorReply::new(ErrorCode::GridCapacity, cells, capacity)
@@ -426,6 +461,17 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         last: bool,
         grid: &mut Grid<GRID_WORDS>,
     ) -> Result<Reply, ErrorReply> {
+        let already = if first_vertex == 0 {
+            0
+        } else {
+            self.pending.len()
+        };
+        if first_vertex as usize == already {
+            check_marking_budget(
+                self.obstacles.vertex_count() + already + vertices.len(),
+                u32::from(grid.geometry().height()),
+            )?;
+        }
         if upload_chunk(
             &mut self.obstacles,
             &mut self.pending,
@@ -710,6 +756,82 @@ mod tests {
             vertices: Vec::from_slice(vertices).unwrap(),
             last,
         }
+    }
+
+    #[test]
+    fn marking_beyond_the_row_budget_is_refused_and_changes_nothing() {
+        let mut d = device();
+        let tall = |radius_m: f32| MapParams {
+            width_cells: 21,
+            height_cells: 4096,
+            resolution_m: 0.05,
+            robot_radius_m: radius_m,
+        };
+        assert_eq!(call(&mut d, 1, Request::SetParams(tall(0.1))), Reply::Ack);
+        // 75 vertices × 4 096 rows = 307 200 = the budget: taken, in chunks.
+        let fits = MAX_MARKING_ROWS as usize / 4096;
+        let vertex = |i: usize| PointM::new((i % 2) as f32, i as f32 * 0.002);
+        let polygon: StdVec<PointM> = (0..fits + 1).map(vertex).collect();
+        for (seq, first) in [(2, 0), (12, 30)] {
+            assert_eq!(
+                call(
+                    &mut d,
+                    seq,
+                    chunk(first, &polygon[first as usize..first as usize + 30], false)
+                ),
+                Reply::Obstacles {
+                    polygons: 0,
+                    vertices: 0,
+                    pending_vertices: first + 30
+                }
+            );
+        }
+        let before = (d.grid().words().to_vec(), d.status());
+        // One more vertex would go over: refused at once, with the rows and the budget.
+        assert_eq!(
+            call(&mut d, 3, chunk(60, &polygon[60..], true)),
+            Reply::Error(ErrorReply::new(
+                ErrorCode::MarkingBudget,
+                (fits as u32 + 1) * 4096,
+                MAX_MARKING_ROWS
+            ))
+        );
+        let mut after = d.status();
+        after.requests = before.1.requests;
+        assert_eq!((d.grid().words().to_vec(), after), before);
+        assert!(matches!(
+            call(&mut d, 4, chunk(60, &polygon[60..fits], true)),
+            Reply::Obstacles { polygons: 1, .. }
+        ));
+        // 76 vertices stored on a low map, then the tall map: refused before the grid changes.
+        let low = MapParams {
+            width_cells: 300,
+            height_cells: 280,
+            ..tall(0.1)
+        };
+        assert_eq!(call(&mut d, 5, Request::ClearMap), Reply::Ack);
+        assert_eq!(call(&mut d, 6, Request::SetParams(low)), Reply::Ack);
+        for (seq, first) in [(7u16, 0u16), (8, 30)] {
+            let range = first as usize..first as usize + 30;
+            call(&mut d, seq, chunk(first, &polygon[range], false));
+        }
+        assert!(matches!(
+            call(&mut d, 9, chunk(60, &polygon[60..], true)),
+            Reply::Obstacles {
+                polygons: 1,
+                vertices: 76,
+                ..
+            }
+        ));
+        let words = d.grid().words().to_vec();
+        assert_eq!(
+            error_code(&call(&mut d, 10, Request::SetParams(tall(0.1)))),
+            Some(ErrorCode::MarkingBudget)
+        );
+        assert_eq!(d.grid().words(), &words[..]);
+        assert_eq!(d.status().params, low);
+        // The seed's map holds every vertex the device stores.
+        assert!(marking_rows(MAX_VERTICES, 300) <= MAX_MARKING_ROWS);
     }
 
     #[test]

@@ -495,6 +495,10 @@ pub enum ErrorCode {
     /// radius of `SetParams`), `detail` 1 when the start or the goal lies off the map. For the
     /// speed (5), `limit` is the robot's safe speed in mm/s.
     BadMission,
+    /// 17: marking the obstacles would visit `value` map rows (stored and new vertices × map
+    /// height), more than the `limit` one request may
+    /// ([`MAX_MARKING_ROWS`](super::handler::MAX_MARKING_ROWS)): fewer vertices or a lower map.
+    MarkingBudget,
 }
 
 /// An error answer: a code and up to three numbers whose meaning the code documents.
@@ -591,6 +595,11 @@ impl core::fmt::Display for ErrorReply {
                     write!(f, "mission setup field {v} is not a valid value")
                 }
             }
+            ErrorCode::MarkingBudget => write!(
+                f,
+                "marking the obstacles would visit {v} map rows (vertices x map height), \
+                 more than the {l} one request may: fewer vertices or a lower map"
+            ),
         }
     }
 }
