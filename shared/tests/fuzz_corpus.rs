@@ -48,7 +48,11 @@ fn every_corpus_file_passes_its_target() {
         assert!(!inputs.is_empty(), "no corpus for target {target}");
         for (path, bytes) in &inputs {
             let result = std::panic::catch_unwind(|| run(bytes));
-            assert!(result.is_ok(), "target {target} fails on {}", path.display());
+            assert!(
+                result.is_ok(),
+                "target {target} fails on {}",
+                path.display()
+            );
         }
         total += inputs.len();
     }
@@ -78,10 +82,10 @@ enum Mutation {
 fn mutation() -> impl Strategy<Value = Mutation> {
     let at = any::<usize>();
     prop_oneof![
-        (at.clone(), 0u8..8).prop_map(|(at, bit)| Mutation::Flip { at, bit }),
-        (at.clone(), any::<u8>()).prop_map(|(at, byte)| Mutation::Insert { at, byte }),
-        (at.clone(), 1usize..16).prop_map(|(at, len)| Mutation::Delete { at, len }),
-        (at.clone(), any::<usize>()).prop_map(|(at, pick)| Mutation::Special { at, pick }),
+        (at, 0u8..8).prop_map(|(at, bit)| Mutation::Flip { at, bit }),
+        (at, any::<u8>()).prop_map(|(at, byte)| Mutation::Insert { at, byte }),
+        (at, 1usize..16).prop_map(|(at, len)| Mutation::Delete { at, len }),
+        (at, any::<usize>()).prop_map(|(at, pick)| Mutation::Special { at, pick }),
         (at, any::<usize>(), any::<usize>(), 1usize..64).prop_map(|(at, other, from, len)| {
             Mutation::Splice {
                 at,
@@ -135,10 +139,7 @@ fn mutated_corpus_files_pass_their_targets() {
         // A fixed seed: the same cases on every run (the fuzzer is where randomness pays).
         let mut runner =
             TestRunner::new_with_rng(config, TestRng::deterministic_rng(RngAlgorithm::ChaCha));
-        let strategy = (
-            any::<usize>(),
-            proptest::collection::vec(mutation(), 1..8),
-        );
+        let strategy = (any::<usize>(), proptest::collection::vec(mutation(), 1..8));
         let result = runner.run(&strategy, |(pick, mutations)| {
             let mut input = inputs[pick % inputs.len()].1.clone();
             for m in &mutations {
@@ -163,7 +164,7 @@ mod seeds {
     use twil_core::link::frame::{encode, FrameDecoder, MAX_FRAME_BYTES};
     use twil_core::link::*;
     use twil_core::mission::{MissionMode, MissionPhase, MissionStats, MissionStatus};
-    use twil_core::plan::{PlanStatus, PlannerKind, Planner};
+    use twil_core::plan::{PlanStatus, Planner, PlannerKind};
 
     fn frame_of<T: serde::Serialize>(m: &T) -> Vec<u8> {
         let mut out = [0u8; MAX_FRAME_BYTES];
@@ -369,13 +370,23 @@ mod seeds {
             out.push(("frame_request", format!("seed-{i:02}"), frame_of(f)));
             out.push(("messages", format!("seed-request-{i:02}"), postcard_of(f)));
             // Each request after the session's SetParams.
-            out.push((
-                "device",
-                format!("seed-{i:02}"),
-                script(&[frames[2].clone(), f.clone()]),
-            ));
+            for target in ["device", "robot_device"] {
+                out.push((
+                    target,
+                    format!("seed-{i:02}"),
+                    script(&[frames[2].clone(), f.clone()]),
+                ));
+            }
         }
         out.push(("device", "seed-session".into(), script(&frames)));
+        out.push(("robot_device", "seed-session".into(), script(&frames)));
+        // A mission that runs for 40 steps (SetParams, SetMission, StartMission, pings).
+        let mut mission = vec![frames[2].clone(), frames[9].clone(), frames[12].clone()];
+        mission.extend((0..40).map(|i| RequestFrame {
+            seq: 100 + i,
+            request: Request::Ping { nonce: i as u32 },
+        }));
+        out.push(("robot_device", "seed-mission".into(), script(&mission)));
         for (i, f) in device_frames().iter().enumerate() {
             out.push(("frame_device", format!("seed-{i:02}"), frame_of(f)));
             out.push(("messages", format!("seed-device-{i:02}"), postcard_of(f)));
@@ -390,7 +401,11 @@ mod seeds {
                 Some("TRA") => "tra",
                 _ => continue,
             };
-            out.push((target, format!("seed-{name}"), std::fs::read(&path).unwrap()));
+            out.push((
+                target,
+                format!("seed-{name}"),
+                std::fs::read(&path).unwrap(),
+            ));
             if target == "rob" {
                 // A .MAP of this robot (coarse, so the seed stays small); first byte: wraps.
                 let robot = parse_rob(&std::fs::read_to_string(&path).unwrap()).unwrap();

@@ -5,7 +5,7 @@
 //! - framed decoders: the same frames whatever the chunking of the stream, at most one result
 //!   per `0x00`, and every decoded message re-encodes to a frame that decodes to the same bytes;
 //! - message decoders: every decoded message fits a frame and re-encodes byte-stably;
-//! - the device: at most one reply per frame, every reply a valid frame, and a well-formed
+//! - the devices (planning, mission): at most one reply per frame, every reply a valid frame, and a well-formed
 //!   request frame answered by exactly one reply carrying its sequence number;
 //! - text parsers: an error names a line of the text; a parsed file written back parses equal;
 //!   a failing `.da` parse leaves the obstacles as they were.
@@ -23,17 +23,23 @@ use twil_core::cspace::{map::ConfigMap, rob::parse_rob, tra::Trajectory};
 use twil_core::grid::words_for_cells;
 use twil_core::link::frame::{self, FrameDecoder, FrameFault, MAX_FRAME_BYTES};
 use twil_core::link::{
-    Device, DeviceFrame, MapParams, Reply, Request, RequestFrame, Telemetry,
+    Device, DeviceFrame, MapParams, Reply, Request, RequestFrame, RobotDevice, RunState, Telemetry,
+    WorldUpload,
 };
+use twil_core::mission::{Mission, Pilot};
 use twil_core::plan::Planner;
 use twil_core::world::{parse_da, parse_par, Obstacles, Params};
 
+/// A target's body.
+pub type Target = fn(&[u8]);
+
 /// Every target, by the name of its cargo-fuzz binary and corpus directory.
-pub const TARGETS: &[(&str, fn(&[u8]))] = &[
+pub const TARGETS: &[(&str, Target)] = &[
     ("frame_request", frame_request),
     ("frame_device", frame_device),
     ("messages", messages),
     ("device", device),
+    ("robot_device", robot_device),
     ("da", da),
     ("par", par),
     ("rob", rob),
@@ -67,7 +73,9 @@ fn decode_stream<T: DeserializeOwned>(stream: &[u8], chunk: usize) -> Vec<Result
 /// Bytes of `message` as postcard writes it (`None` if over `MAX_FRAME_BYTES`).
 fn postcard_bytes<T: Serialize>(message: &T) -> Option<Vec<u8>> {
     let mut buf = [0u8; MAX_FRAME_BYTES];
-    postcard::to_slice(message, &mut buf).ok().map(|b| b.to_vec())
+    postcard::to_slice(message, &mut buf)
+        .ok()
+        .map(|b| b.to_vec())
 }
 
 /// A frame of `message`, terminator included.
@@ -161,28 +169,31 @@ const RAW_TAG: u8 = 0xc0;
 fn known_slow(request: &Request) -> bool {
     const FAR_M: f32 = 100.0;
     const RADIUS_CELLS: f32 = 16.0;
+    // NaN counts as too much.
+    let over = |v: f32, limit: f32| v.is_nan() || v.abs() > limit;
     match request {
         Request::SetParams(MapParams {
             resolution_m,
             robot_radius_m,
             ..
-        }) => !(robot_radius_m / resolution_m <= RADIUS_CELLS),
-        Request::ObstacleChunk { vertices, .. } | Request::WorldChunk { vertices, .. } => {
-            vertices
-                .iter()
-                .any(|p| !(p.x_m.abs() <= FAR_M && p.y_m.abs() <= FAR_M))
-        }
+        }) => over(robot_radius_m / resolution_m, RADIUS_CELLS),
+        Request::ObstacleChunk { vertices, .. } | Request::WorldChunk { vertices, .. } => vertices
+            .iter()
+            .any(|p| over(p.x_m, FAR_M) || over(p.y_m, FAR_M)),
         _ => false,
     }
 }
 
-/// The whole `Device::receive` path fed arbitrary bytes. The input is a script: a tag byte, then
-/// either a postcard `RequestFrame` (tag < 0xc0: framed properly and sent after a `0x00`, so it
-/// must get exactly one reply with its sequence number) or `1 + (tag & 0x3f)` raw bytes (at most
-/// one reply per `0x00` among them).
-pub fn device(data: &[u8]) {
-    let mut device: Device<DEVICE_GRID_WORDS> = Device::new(Default::default());
-    let mut planner = Planner::<512, 256>::new();
+/// Run a device script: a tag byte, then either a postcard `RequestFrame` (tag < 0xc0: framed
+/// properly and sent after a `0x00`, so it must get exactly one reply with its sequence number)
+/// or `1 + (tag & 0x3f)` raw bytes (at most one reply per `0x00` among them). `receive` feeds
+/// the bytes to the device and returns the frames it sent, in order; `after_step` runs after
+/// each step (the mission shell's work).
+fn run_script(
+    data: &[u8],
+    mut receive: impl FnMut(&[u8]) -> Vec<Vec<u8>>,
+    mut after_step: impl FnMut(),
+) {
     let mut rest = data;
     for _ in 0..DEVICE_STEPS {
         let Some((&tag, tail)) = rest.split_first() else {
@@ -205,10 +216,7 @@ pub fn device(data: &[u8]) {
             sent.extend(frame_of(&request));
             (sent, Some(request.seq))
         };
-        let mut replies: Vec<Vec<u8>> = Vec::new();
-        device.receive(&sent, &mut planner, &mut || 0, &mut |out: &[u8]| {
-            replies.push(out.to_vec())
-        });
+        let replies = receive(&sent);
         let terminators = sent.iter().filter(|b| **b == 0).count();
         assert!(
             replies.len() <= terminators,
@@ -231,10 +239,92 @@ pub fn device(data: &[u8]) {
                 "{} replies",
                 replies.len()
             );
-            assert_eq!(last_seq, Some(Some(seq)), "the reply carries the request's seq");
+            assert_eq!(
+                last_seq,
+                Some(Some(seq)),
+                "the reply carries the request's seq"
+            );
         }
+        after_step();
     }
+}
+
+/// The planning device's whole `Device::receive` path fed a script (see [`run_script`]).
+pub fn device(data: &[u8]) {
+    let mut device: Device<DEVICE_GRID_WORDS> = Device::new(Default::default());
+    let mut planner = Planner::<512, 256>::new();
+    run_script(
+        data,
+        |sent| {
+            let mut replies = Vec::new();
+            device.receive(sent, &mut planner, &mut || 0, &mut |out: &[u8]| {
+                replies.push(out.to_vec())
+            });
+            replies
+        },
+        || {},
+    );
     let _ = device.status();
+}
+
+/// Control period of the fuzzed mission shell, seconds (as `twil --remote sim`).
+const PERIOD_S: f32 = 0.05;
+/// Telemetry frames drained per step, at most.
+const TELEMETRY_PER_STEP: usize = 64;
+
+/// The mission device (`RobotDevice`, the firmware's): `RobotLink::receive` with a simulated
+/// world fed a script (see [`run_script`]); after each step the shell's work as `twil --remote
+/// sim` does it, without the plant: one pilot tick while a mission runs (the wheels do not
+/// turn), plans run at once, sonar requests answered "no echo", telemetry drained. Every
+/// telemetry frame must encode.
+pub fn robot_device(data: &[u8]) {
+    let mut device: RobotDevice<DEVICE_GRID_WORDS> = RobotDevice::new(Default::default());
+    let mut mission = Box::new(Mission::<DEVICE_GRID_WORDS>::IDLE);
+    let mut planner = Planner::<512, 256>::new();
+    let mut world = WorldUpload::default();
+    let mut pilot: Option<Pilot> = None;
+    let state = core::cell::RefCell::new((&mut device, &mut *mission, &mut planner, &mut world));
+    run_script(
+        data,
+        |sent| {
+            let (device, mission, planner, world) = &mut *state.borrow_mut();
+            let mut replies = Vec::new();
+            device
+                .link(mission)
+                .receive(sent, *planner, &mut || 0, *world, &mut |out: &[u8]| {
+                    replies.push(out.to_vec())
+                });
+            replies
+        },
+        || {
+            let (device, mission, planner, _) = &mut *state.borrow_mut();
+            if let Some(config) = device.link(mission).take_started() {
+                pilot = Some(Pilot::new(&config));
+            }
+            if let (Some(p), RunState::Running | RunState::Paused) = (&mut pilot, device.state()) {
+                let report = p.tick(0, 0, PERIOD_S);
+                device.link(mission).tick(&report);
+            }
+            for _ in 0..TELEMETRY_PER_STEP {
+                if let (Some(command), Some(p)) = (device.take_pilot_command(), &mut pilot) {
+                    let _ = p.command(command, mission.prefix());
+                }
+                if device.plan_pending() {
+                    device.link(mission).run_planner(*planner, &mut || 0);
+                } else if let Some(request) = device.take_sonar_request() {
+                    device.link(mission).reading(request.neck_angle_rad, None);
+                } else {
+                    break;
+                }
+            }
+            for _ in 0..TELEMETRY_PER_STEP {
+                let Some(t) = device.link(mission).next_telemetry() else {
+                    break;
+                };
+                let _ = frame_of(&DeviceFrame::Telemetry(t));
+            }
+        },
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -337,7 +427,9 @@ pub fn rob(data: &[u8]) {
 /// `.MAP` reader: an error names a line; a parsed map written back parses equal. The first
 /// byte's low bits say which joints wrap (the file does not say).
 pub fn map(data: &[u8]) {
-    let wraps = data.first().map_or([false; 2], |b| [b & 1 != 0, b & 2 != 0]);
+    let wraps = data
+        .first()
+        .map_or([false; 2], |b| [b & 1 != 0, b & 2 != 0]);
     let text = text_of(data.get(1..).unwrap_or(&[]));
     match ConfigMap::parse_map(&text, wraps) {
         Err(e) => check_line(e.line, &text, &e.to_string()),
