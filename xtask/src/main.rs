@@ -6,6 +6,7 @@ use std::process::Command;
 use anyhow::{bail, Context, Result};
 
 mod defmt_log;
+mod fuzz;
 
 /// The QEMU command line, shared with `twil --remote qemu`.
 #[path = "../../host/src/qemu_cmd.rs"]
@@ -19,7 +20,8 @@ const USAGE: &str = "usage: cargo xtask <command>
   mcu-bench   instructions per plan on 300x300 grids (open, 20% random, maze) and of the
               worst marking requests (tests/firmware_requests.rs) under QEMU
   on-target   build the firmware's on-target tests (defmt-test) and run them under QEMU
-  defmt-log FILE  decode a saved QEMU log (TWIL_QEMU_LOG=FILE twil … --remote qemu)";
+  defmt-log FILE  decode a saved QEMU log (TWIL_QEMU_LOG=FILE twil … --remote qemu)
+  fuzz [TARGET|all] [SECONDS]  run the cargo-fuzz targets of shared/fuzz (nightly + cargo-fuzz; default: all, 60 s each)";
 
 /// Target of the firmware.
 const THUMB: &str = "thumbv7em-none-eabihf";
@@ -44,6 +46,11 @@ fn main() -> Result<()> {
         Some("qemu") => qemu(args.get(1).map(String::as_str)),
         Some("mcu-bench") => mcu_bench(),
         Some("on-target") => on_target(),
+        Some("fuzz") => fuzz::fuzz(
+            &workspace_root(),
+            args.get(1).map(String::as_str),
+            args.get(2).map(String::as_str),
+        ),
         Some("defmt-log") => match args.get(1) {
             Some(file) => defmt_log_file(Path::new(file)),
             None => {

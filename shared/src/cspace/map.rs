@@ -299,13 +299,17 @@ pub struct ConfigMap {
 /// The input file name of a `.MAP` or `.TRA` header.
 pub type Name = String<NAME_CAPACITY>;
 
-/// `name` cut to [`NAME_CAPACITY`] bytes at a character boundary.
+/// `name` cut to [`NAME_CAPACITY`] bytes at a character boundary, without the whitespace the
+/// cut may leave at its end (the readers trim the name, so it would not read back the same).
 pub fn name_of(name: &str) -> Name {
     let mut s = Name::new();
     for c in name.chars() {
         if s.push(c).is_err() {
             break;
         }
+    }
+    while s.ends_with(char::is_whitespace) {
+        s.pop();
     }
     s
 }
