@@ -224,6 +224,10 @@ mod seeds {
                 trust_seen_space: false,
                 noise_seed: 1,
                 sonar_noise_std_m: 0.01,
+                link_loss: twil_core::failsafe::LinkLossPolicy {
+                    timeout_ms: 2000,
+                    reaction: twil_core::failsafe::LinkLossReaction::StopAndHold,
+                },
             }),
             Request::WorldChunk {
                 first_vertex: 0,
@@ -303,12 +307,15 @@ mod seeds {
             max_plan_instructions: 3_000_000,
             stack_high_water_bytes: 9_000,
             stop_ticks: 1,
+            stop_latency_us: 48_000,
+            stop_cause: twil_core::failsafe::StopCause::Host,
             emergency_stop: false,
         };
         out.extend(
             [
                 Telemetry::Boot {
                     protocol_version: PROTOCOL_VERSION,
+                    reset_cause: twil_core::failsafe::ResetCause::IndependentWatchdog,
                 },
                 Telemetry::Pose(PoseReport {
                     t_ms: 1200,

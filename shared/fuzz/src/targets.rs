@@ -23,7 +23,7 @@ use twil_core::cspace::{map::ConfigMap, rob::parse_rob, tra::Trajectory};
 use twil_core::grid::words_for_cells;
 use twil_core::link::frame::{self, FrameDecoder, FrameFault, MAX_FRAME_BYTES};
 use twil_core::link::{
-    Device, DeviceFrame, MapParams, Reply, Request, RequestFrame, RobotDevice, RunState, Telemetry,
+    Device, DeviceFrame, Reply, Request, RequestFrame, RobotDevice, RunState, Telemetry,
     WorldUpload,
 };
 use twil_core::mission::{Mission, Pilot};
@@ -163,35 +163,6 @@ const DEVICE_STEPS: usize = 64;
 /// Tags at or above this feed raw bytes; below, a postcard `RequestFrame` follows.
 const RAW_TAG: u8 = 0xc0;
 
-/// Requests whose cost is not yet bounded (issue 12, deliverable 1, another change): obstacles
-/// far off the map, fine resolutions and radii of many cells make one request take seconds to
-/// minutes (obstacle edges are rasterised up to ±1e6 cells, each cell grown by the radius),
-/// which a fuzzer reports as a timeout and stops at. With these limits one obstacle chunk marks
-/// at most about 32 edges x 2 000 cells x 17² cells. Remove this filter once rasterisation is
-/// clipped to the map and grown by runs.
-fn known_slow(request: &Request) -> bool {
-    const FAR_M: f32 = 20.0;
-    const MIN_RESOLUTION_M: f32 = 0.02;
-    const RADIUS_CELLS: f32 = 8.0;
-    // NaN counts as too much.
-    let over = |v: f32, limit: f32| v.is_nan() || v.abs() > limit;
-    match request {
-        Request::SetParams(MapParams {
-            resolution_m,
-            robot_radius_m,
-            ..
-        }) => {
-            resolution_m.is_nan()
-                || *resolution_m < MIN_RESOLUTION_M
-                || over(robot_radius_m / resolution_m, RADIUS_CELLS)
-        }
-        Request::ObstacleChunk { vertices, .. } | Request::WorldChunk { vertices, .. } => vertices
-            .iter()
-            .any(|p| over(p.x_m, FAR_M) || over(p.y_m, FAR_M)),
-        _ => false,
-    }
-}
-
 /// Run a device script: a tag byte, then either a postcard `RequestFrame` (tag < 0xc0: framed
 /// properly and sent after a `0x00`, so it must get exactly one reply with its sequence number)
 /// or `1 + (tag & 0x3f)` raw bytes (at most one reply per `0x00` among them). `receive` feeds
@@ -217,9 +188,6 @@ fn run_script(
                 break;
             };
             rest = after;
-            if known_slow(&request.request) {
-                continue;
-            }
             let mut sent = vec![0u8];
             sent.extend(frame_of(&request));
             (sent, Some(request.seq))
