@@ -283,7 +283,7 @@ mod tests {
         let mut remote = Remote::over(SimLink::spawn(1).unwrap());
         remote.hello().unwrap();
         let map = MapParams {
-            robot_radius_m: 0.3,
+            robot_radius_m: 0.35,
             ..MapParams::default()
         };
         remote.call(Request::SetParams(map)).unwrap();
