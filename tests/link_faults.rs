@@ -155,6 +155,11 @@ fn nine_of_ten_plans_and_a_mission_complete_through_a_bad_line_to_the_firmware()
         .arg(common::world("corridor.par"))
         .args(["--planner", "astar", "--json", "--remote"])
         .arg(format!("tcp:{}", proxy.addr))
+        // QEMU (`sleep=off`) skips the idle time, so the device's clock runs several times
+        // faster than the host's: one resend after 500 ms of host time can be seconds of
+        // mission time, and the default 2 s link timeout would stop the mission ("link lost",
+        // seen in CI). On a board both clocks agree.
+        .args(["--link-timeout-ms", "10000"])
         .arg("--out")
         .arg(dir.path())
         .output()
