@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use twil_core::grid::{Grid400, GridGeometry};
 use twil_core::raster::{mark_polygon, polygon_work_bound};
 use twil_core::world::{parse_da, Obstacles};
-use twil_host::cmd::plan::{load, Args, PlannerArg, SizeM};
+use twil_host::cmd::plan::load;
 
 /// The 4-vertex polygon at x = ±1e9 m: two long horizontal edges through the map.
 const FAR_POLYGON: &str = "1\n4\n-1e9 5  1e9 5\n1e9 6  -1e9 6\n";
@@ -30,24 +30,6 @@ fn zigzag_da() -> String {
     text
 }
 
-fn args(da: PathBuf, par: PathBuf) -> Args {
-    Args {
-        world: Some(da),
-        params: par,
-        map: None,
-        size: SizeM {
-            width_m: 15.0,
-            height_m: 15.0,
-        },
-        resolution: 0.05,
-        planner: PlannerArg::Astar,
-        json: true,
-        png: None,
-        scale: None,
-        remote: None,
-    }
-}
-
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
@@ -56,7 +38,11 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 
 /// The grown and the thin marking together (what `load` does) may cost at most one bound each.
 fn assert_within_bound(da: &Path, par: &Path, radius_m: f32) {
-    let world = load(&args(da.to_path_buf(), par.to_path_buf())).unwrap();
+    let world = load(&common::plan_args(
+        Some(da.to_path_buf()),
+        par.to_path_buf(),
+    ))
+    .unwrap();
     let geometry = *world.grid.geometry();
     let vertices = world.obstacles.vertex_count();
     let half = geometry.expansion_cells(radius_m);

@@ -16,7 +16,7 @@ use twil_core::grid::{Grid400, GridGeometry};
 use twil_core::plan::{DIAGONAL_COST, STRAIGHT_COST};
 use twil_core::raster::BresenhamLine;
 use twil_core::world::{parse_da, parse_par, Obstacles};
-use twil_host::cmd::plan::{load, Args, PlannerArg, SizeM};
+use twil_host::cmd::plan::load;
 
 const WORLDS: [&str; 3] = ["corridor", "office", "pillars"];
 const PLANNERS: [&str; 3] = ["bfs", "astar", "anyangle"];
@@ -63,24 +63,6 @@ fn plan_json(da: &Path, par: &Path, planner: &str, extra: &[&str]) -> Value {
     let stdout = String::from_utf8(out.stdout).unwrap();
     assert_eq!(stdout.trim().lines().count(), 1, "one JSON line: {stdout}");
     serde_json::from_str(stdout.trim()).unwrap()
-}
-
-fn default_args(da: Option<PathBuf>, par: PathBuf) -> Args {
-    Args {
-        world: da,
-        params: par,
-        map: None,
-        size: SizeM {
-            width_m: 15.0,
-            height_m: 15.0,
-        },
-        resolution: 0.05,
-        planner: PlannerArg::Astar,
-        json: true,
-        png: None,
-        scale: None,
-        remote: None,
-    }
 }
 
 fn path_of(json: &Value) -> Vec<PointM> {
@@ -197,7 +179,7 @@ fn every_world_and_planner_gives_a_valid_collision_free_path() {
     for name in WORLDS {
         let da = common::world(&format!("{name}.da"));
         let par = common::world(&format!("{name}.par"));
-        let world = load(&default_args(Some(da.clone()), par.clone())).unwrap();
+        let world = load(&common::plan_args(Some(da.clone()), par.clone())).unwrap();
         let geometry = *world.grid.geometry();
         let res = geometry.resolution_m();
         let (start, goal) = (world.params.start, world.params.goal);
@@ -470,7 +452,7 @@ fn saved_map_replaces_or_complements_the_world() {
     let dir = tempfile::tempdir().unwrap();
     let da = common::world("office.da");
     let par = common::world("office.par");
-    let world = load(&default_args(Some(da.clone()), par.clone())).unwrap();
+    let world = load(&common::plan_args(Some(da.clone()), par.clone())).unwrap();
     let map = dir.path().join("office.map");
     twil_host::world_io::write_saved_map(&map, &world.grid).unwrap();
     assert_eq!(std::fs::metadata(&map).unwrap().len(), 300 * 300);

@@ -277,17 +277,9 @@ mod tests {
     use twil_core::mission::{MissionMode, MissionStatus};
     use twil_core::plan::PlannerKind;
 
-    /// A mission on the tiny world at real-time pace (`sim:1`, 12 s to the goal) that reacts
-    /// to `timeout_ms` of silence by stopping; started.
-    fn paced_mission_with_link_timeout(timeout_ms: u32) -> Remote {
-        let mut remote = Remote::over(SimLink::spawn(1).unwrap());
-        remote.hello().unwrap();
-        let map = MapParams {
-            robot_radius_m: 0.35,
-            ..MapParams::default()
-        };
-        remote.call(Request::SetParams(map)).unwrap();
-        let setup = MissionSetup {
+    /// The mission across the tiny world's wall, from (3, 1.5) to (3, 5) m.
+    fn tiny_mission(link_loss: twil_core::failsafe::LinkLossPolicy) -> MissionSetup {
+        MissionSetup {
             mode: MissionMode::Continuous,
             planner: PlannerKind::AStar,
             start: PointM::new(3.0, 1.5),
@@ -300,11 +292,24 @@ mod tests {
             trust_seen_space: true,
             noise_seed: 1,
             sonar_noise_std_m: 0.0,
-            link_loss: twil_core::failsafe::LinkLossPolicy {
-                timeout_ms,
-                reaction: twil_core::failsafe::LinkLossReaction::StopAndHold,
-            },
+            link_loss,
+        }
+    }
+
+    /// A mission on the tiny world at real-time pace (`sim:1`, 12 s to the goal) that reacts
+    /// to `timeout_ms` of silence by stopping; started.
+    fn paced_mission_with_link_timeout(timeout_ms: u32) -> Remote {
+        let mut remote = Remote::over(SimLink::spawn(1).unwrap());
+        remote.hello().unwrap();
+        let map = MapParams {
+            robot_radius_m: 0.35,
+            ..MapParams::default()
         };
+        remote.call(Request::SetParams(map)).unwrap();
+        let setup = tiny_mission(twil_core::failsafe::LinkLossPolicy {
+            timeout_ms,
+            reaction: twil_core::failsafe::LinkLossReaction::StopAndHold,
+        });
         assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
         assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);
         remote
@@ -377,21 +382,7 @@ mod tests {
             matches!(reply, Reply::Obstacles { polygons: 1, .. }),
             "{reply:?}"
         );
-        let setup = MissionSetup {
-            mode: MissionMode::Continuous,
-            planner: PlannerKind::AStar,
-            start: PointM::new(3.0, 1.5),
-            initial_heading_rad: std::f32::consts::FRAC_PI_2,
-            goal: PointM::new(3.0, 5.0),
-            speed_m_s: 0.3,
-            sonar_range_m: 1.5,
-            time_limit_s: 300.0,
-            constant_depth_filter: false,
-            trust_seen_space: true,
-            noise_seed: 1,
-            sonar_noise_std_m: 0.0,
-            link_loss: twil_core::failsafe::LinkLossPolicy::NEVER,
-        };
+        let setup = tiny_mission(twil_core::failsafe::LinkLossPolicy::NEVER);
         assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
         assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);
         let deadline = Instant::now() + Duration::from_secs(60);

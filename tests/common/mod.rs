@@ -15,3 +15,23 @@ pub fn world(name: &str) -> PathBuf {
 pub fn twil() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_twil"))
 }
+
+/// `twil plan`'s options for `world` (`None`: no obstacles) and `params` as the command line
+/// gives them by default (15 × 15 m, 0.05 m cells, A*), with `--json`.
+pub fn plan_args(world: Option<PathBuf>, params: PathBuf) -> twil_host::cmd::plan::Args {
+    twil_host::cmd::plan::Args {
+        world,
+        params,
+        map: None,
+        size: twil_host::cmd::plan::SizeM {
+            width_m: 15.0,
+            height_m: 15.0,
+        },
+        resolution: 0.05,
+        planner: twil_host::cmd::plan::PlannerArg::Astar,
+        json: true,
+        png: None,
+        scale: None,
+        remote: None,
+    }
+}

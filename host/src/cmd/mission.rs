@@ -498,12 +498,9 @@ impl Follower {
                 points,
             } => {
                 if let Some(p) = self.plan.as_mut().filter(|p| p.number == plan) {
-                    if first as usize == p.prefix.len() {
-                        p.prefix.extend_from_slice(&points);
-                    } else {
+                    if !append_chunk(&mut p.prefix, &mut p.prefix_total, first, total, &points) {
                         self.telemetry_gaps += 1;
                     }
-                    p.prefix_total = Some(total);
                 }
                 self.picture_plan(false);
             }
@@ -514,12 +511,9 @@ impl Follower {
                 points,
             } => {
                 if let Some(p) = self.plan.as_mut().filter(|p| p.number == plan) {
-                    if first as usize == p.path.len() {
-                        p.path.extend_from_slice(&points);
-                    } else {
+                    if !append_chunk(&mut p.path, &mut p.path_total, first, total, &points) {
                         self.telemetry_gaps += 1;
                     }
-                    p.path_total = Some(total);
                 }
                 self.picture_plan(false);
             }
@@ -552,6 +546,23 @@ impl Follower {
 }
 
 /// A short name of a phase.
+/// Append a `Prefix` / `Path` chunk that starts at point `first` to `points` and note the
+/// total; `false` (nothing appended) when an earlier chunk was lost.
+fn append_chunk(
+    points: &mut Vec<PointM>,
+    total_points: &mut Option<u16>,
+    first: u16,
+    total: u16,
+    chunk: &[PointM],
+) -> bool {
+    *total_points = Some(total);
+    if first as usize != points.len() {
+        return false;
+    }
+    points.extend_from_slice(chunk);
+    true
+}
+
 pub fn phase_name(phase: MissionPhase) -> &'static str {
     match phase {
         MissionPhase::Sweep { full: true } => "full sweep",
@@ -874,6 +885,15 @@ fn note(bar: &ProgressBar, line: &str) {
     }
 }
 
+/// The error when the device stays quiet for `--silence`.
+fn went_silent(args: &Args, follower: &Follower) -> String {
+    format!(
+        "the device went silent: no telemetry for {} s (mission time {:.1} s)",
+        args.silence,
+        follower.t_s()
+    )
+}
+
 /// Follow the telemetry until `Finished`; `true` if Ctrl-C aborted the mission.
 fn follow(
     args: &Args,
@@ -936,11 +956,7 @@ fn follow(
                     note(bar, "twil: MissionStatus unanswered, still listening");
                     continue;
                 }
-                Poll::NoReply => bail!(
-                    "the device went silent: no telemetry for {} s (mission time {:.1} s)",
-                    args.silence,
-                    follower.t_s()
-                ),
+                Poll::NoReply => bail!(went_silent(args, follower)),
             }
         }
         let mut deadline = (last_heard + silence).min(last_beat.max(last_heard) + POLL_AFTER);
@@ -955,13 +971,7 @@ fn follow(
             // The wait ended for a heartbeat or a poll, not for the silence: go round.
             Err(_) if Instant::now() >= deadline && last_heard.elapsed() < silence => continue,
             Err(e) if Instant::now() >= deadline => {
-                return Err(e).with_context(|| {
-                    format!(
-                        "the device went silent: no telemetry for {} s (mission time {:.1} s)",
-                        args.silence,
-                        follower.t_s()
-                    )
-                });
+                return Err(e).with_context(|| went_silent(args, follower));
             }
             Err(e) => return Err(e).context("reading the mission's telemetry"),
         };
