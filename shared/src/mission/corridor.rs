@@ -7,16 +7,17 @@
 //! interior wall that way: the robot faced south, the path turned east 0.15 m below the wall's
 //! unseen end, 125° off the heading as seen from the sonar.
 //!
-//! Here each path sample (every cell along the prefix, within sonar range of the robot) has two
-//! side points, one planning radius to each side of the path. A side point is *known* when its
-//! cell is occupied on the map (an obstacle within reach is already grown into it), was seen by
-//! some earlier ray, or lies inside the last sweep's band as seen from the sonar. The prefix is
-//! good up to the first sample with an unknown side point.
+//! Here each path sample (every cell along the prefix, within sonar range of the robot) has
+//! points beside it, every cell out to one planning radius on each side of the path. A point is
+//! *known* when it was seen by some earlier ray or lies inside the last sweep's band as seen from
+//! the sonar; the two outermost ones also when their cell is occupied on the map (an obstacle
+//! within reach is already grown into it). The prefix is good up to where the body, a disc of the
+//! planning radius, would first reach an unknown point.
 
 use crate::control::Pose;
 use crate::geom::PointM;
 use crate::grid::Grid;
-use crate::math::{abs, atan2, hypot, wrap_angle_rad};
+use crate::math::{abs, atan2, hypot, sqrt, wrap_angle_rad};
 
 /// Most samples looked at (a 6 m sonar range at 0.05 m per sample is 120).
 const MAX_SAMPLES: u32 = 512;
@@ -35,52 +36,130 @@ pub(super) struct Corridor<'a, const W: usize> {
     pub half_band_rad: f32,
     /// Planning radius, metres.
     pub radius_m: f32,
+    /// The body's radius, metres: what lies within it of where the robot stands is free.
+    pub body_radius_m: f32,
+    /// Only occupied cells no ray saw are unknown (after a full sweep, which saw all it
+    /// could: the gaps between its rays are not worth another).
+    pub occupied_only: bool,
 }
 
 impl<const W: usize> Corridor<'_, W> {
-    /// Length along `prefix` up to the first sample whose side points are not all known, or
-    /// `None` when every sample within `range_m` of the robot is known.
+    /// Length along `prefix` the centre may go before the body reaches an unknown point, or
+    /// `None` when everything beside the prefix within `range_m` of the robot is known.
     pub fn first_unknown_m(&self, prefix: &[PointM], range_m: f32) -> Option<f32> {
         let step_m = self.grid.geometry().resolution_m();
         if !(step_m > 0.0 && self.radius_m.is_finite() && range_m.is_finite()) {
             return None;
         }
         let centre = self.pose.position();
+        let r = self.radius_m;
         let mut along_m = 0.0;
         let mut samples = 0;
-        for w in prefix.windows(2) {
+        let segments = prefix.len().saturating_sub(1);
+        for (i, w) in prefix.windows(2).enumerate() {
             let (a, b) = (w[0], w[1]);
             let len_m = hypot(b.x_m - a.x_m, b.y_m - a.y_m);
             if !(len_m.is_finite() && len_m > 1.0e-6) {
                 continue;
             }
-            // Unit normal to the segment.
-            let (nx, ny) = (-(b.y_m - a.y_m) / len_m, (b.x_m - a.x_m) / len_m);
+            // Unit direction and normal of the segment.
+            let (ux, uy) = ((b.x_m - a.x_m) / len_m, (b.y_m - a.y_m) / len_m);
+            let (nx, ny) = (-uy, ux);
+            // Past the last point the body still reaches one radius ahead: sample on into the
+            // disc it covers there.
+            let last = i + 1 == segments;
+            let end_m = if last { len_m + r } else { len_m };
             let mut s_m = 0.0;
-            while s_m <= len_m {
+            while s_m <= end_m {
                 samples += 1;
                 if samples > MAX_SAMPLES {
                     return None;
                 }
-                let t = s_m / len_m;
-                let p = PointM::new(a.x_m + t * (b.x_m - a.x_m), a.y_m + t * (b.y_m - a.y_m));
-                if hypot(p.x_m - centre.x_m, p.y_m - centre.y_m) > range_m {
+                let p = PointM::new(a.x_m + s_m * ux, a.y_m + s_m * uy);
+                if s_m <= len_m && hypot(p.x_m - centre.x_m, p.y_m - centre.y_m) > range_m {
                     return None;
                 }
-                for side in [1.0, -1.0] {
-                    let q = PointM::new(
-                        p.x_m + side * self.radius_m * nx,
-                        p.y_m + side * self.radius_m * ny,
-                    );
-                    if !self.known(q) {
-                        return Some(along_m + s_m);
-                    }
+                let beyond_m = (s_m - len_m).max(0.0);
+                let half_width_m = sqrt((r * r - beyond_m * beyond_m).max(0.0));
+                if let Some(ahead_m) = self.first_unknown_beside(p, nx, ny, step_m, half_width_m) {
+                    // The body reaches `ahead_m` ahead of its centre at that lateral offset:
+                    // stop its centre that much short of the sample.
+                    return Some((along_m + s_m - ahead_m).max(0.0));
                 }
                 s_m += step_m;
             }
             along_m += len_m;
         }
         None
+    }
+
+    /// The points beside `p` along the unit normal `(nx, ny)`, every `step_m` out to
+    /// `half_width_m` (at most the planning radius) on each side, and `p` itself past the
+    /// prefix's end: `None` when all are known, else how far ahead of its centre the body
+    /// reaches at the lateral offset of the first unknown one, `sqrt(r² − d²)`.
+    fn first_unknown_beside(
+        &self,
+        p: PointM,
+        nx: f32,
+        ny: f32,
+        step_m: f32,
+        half_width_m: f32,
+    ) -> Option<f32> {
+        let r = self.radius_m;
+        let full = half_width_m >= r - 1.0e-4;
+        // On the prefix the centre line is the path's (checked by the pruning); past its end
+        // it is the body's.
+        let mut d = if full { step_m.min(r) } else { 0.0 };
+        loop {
+            for side in [1.0, -1.0] {
+                let q = PointM::new(p.x_m + side * d * nx, p.y_m + side * d * ny);
+                // At the radius an occupied cell is known (the obstacle within reach is
+                // already grown into it). Nearer the path it is not: an occupied cell there
+                // may be the unseen end of a wall whose seen part grew it (a 0.15 m wall's
+                // end met this way put the body 0.30 m from it: a collision at 0.36 m/s).
+                let known = if self.occupied_only {
+                    self.free_or_seen(q)
+                } else if full && d >= r {
+                    self.known(q)
+                } else {
+                    self.free_or_seen(q)
+                };
+                if !known {
+                    return Some(sqrt((r * r - d * d).max(0.0)));
+                }
+            }
+            if d >= half_width_m {
+                return None;
+            }
+            d = (d + step_m).min(half_width_m);
+        }
+    }
+
+    /// Free on the map, seen by some ray, off the map, inside the last sweep's band as seen
+    /// from the sonar, or under the body now.
+    fn free_or_seen(&self, q: PointM) -> bool {
+        let g = self.grid.geometry();
+        let Some((x, y)) = g.cell_xy_of(q) else {
+            return true;
+        };
+        if !g.contains_xy(x, y) {
+            return true;
+        }
+        !self.grid.is_occupied_xy(x, y)
+            || self.seen.is_occupied_xy(x, y)
+            || self.in_band(q)
+            || self.under_body(q)
+    }
+
+    fn in_band(&self, q: PointM) -> bool {
+        let sonar = self.pose.point_ahead(self.sonar_offset_m);
+        let bearing = atan2(q.y_m - sonar.y_m, q.x_m - sonar.x_m);
+        abs(wrap_angle_rad(bearing - self.pose.heading_rad)) <= self.half_band_rad
+    }
+
+    fn under_body(&self, q: PointM) -> bool {
+        let c = self.pose.position();
+        hypot(q.x_m - c.x_m, q.y_m - c.y_m) <= self.body_radius_m + 1.0e-3
     }
 
     fn known(&self, q: PointM) -> bool {
@@ -92,11 +171,6 @@ impl<const W: usize> Corridor<'_, W> {
         if !g.contains_xy(x, y) {
             return true;
         }
-        if self.grid.is_occupied_xy(x, y) || self.seen.is_occupied_xy(x, y) {
-            return true;
-        }
-        let sonar = self.pose.point_ahead(self.sonar_offset_m);
-        let bearing = atan2(q.y_m - sonar.y_m, q.x_m - sonar.x_m);
-        abs(wrap_angle_rad(bearing - self.pose.heading_rad)) <= self.half_band_rad
+        self.grid.is_occupied_xy(x, y) || self.seen.is_occupied_xy(x, y) || self.in_band(q)
     }
 }

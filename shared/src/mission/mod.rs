@@ -1441,43 +1441,64 @@ impl<const W: usize> Mission<W> {
             .max(1);
         // The body is wider than the path: what lies within the planning radius of the near
         // part must be known too (see `corridor`).
-        let unknown_at_m = if self.last_sweep_full {
+        // A pass taken while moving read each bearing from another pose and heading: its band
+        // around the heading now proves nothing, only the rays' cells do.
+        let trusted_band_rad = if moving { 0.0 } else { band_rad };
+        let mut unknown_at_m = if self.last_sweep_full {
             None
         } else {
-            Corridor {
-                grid: &self.grid,
-                seen: &self.seen,
-                pose,
-                sonar_offset_m: self.config.robot.sonar_offset_m,
-                half_band_rad: band_rad,
-                radius_m: self.config.robot.planning_radius_m,
-            }
-            .first_unknown_m(&self.prefix, range_m)
+            self.first_unknown_beside_prefix_m(pose, trusted_band_rad)
         };
-        let path_outside_band = needs_full_sweep(
+        let mut path_outside_band = needs_full_sweep(
             self.prefix.get(..near).unwrap_or(&[]),
             PointM::new(pose.x_m, pose.y_m),
             pose.heading_rad,
             band_rad,
         );
-        if !self.last_sweep_full {
+        if self.last_sweep_full {
+            // A full sweep saw all it could from here. What it could not see beside a known
+            // obstacle (its end in the sonar's blind zone, or behind it) may reach further:
+            // follow only up to where the body would meet it, when that is a move at all.
+            let beside_known = Corridor {
+                grid: &self.grid,
+                seen: &self.seen,
+                pose,
+                sonar_offset_m: self.config.robot.sonar_offset_m,
+                half_band_rad: 0.0,
+                radius_m: self.config.robot.planning_radius_m,
+                body_radius_m: self.config.robot.physical_radius_m(),
+                occupied_only: true,
+            }
+            .first_unknown_m(&self.prefix, range_m);
+            if let Some(m) = beside_known.filter(|m| *m > 2.0 * g.resolution_m()) {
+                self.truncate_prefix_m(m);
+                self.stats.band_cuts += 1;
+            }
+        } else {
             let continuous = self.config.mode == MissionMode::Continuous;
-            // Continuous mode may follow a prefix cut short; a cut of two cells or less would
-            // stall it (the sonar, 0.20 m ahead, never sees beside the centre while moving),
-            // so it stops for a full sweep like stop mode.
-            let cut_m = unknown_at_m.filter(|m| *m > 2.0 * g.resolution_m());
             if continuous && path_outside_band {
                 // Sweeping while moving: instead of stopping for a full sweep, follow only the
                 // part inside the band (at least one cell towards the path, which makes the
                 // supplier turn in place first); the sonar keeps sweeping around the new
-                // heading and the next pass replans.
+                // heading and the next pass replans. The body corridor is then the cut
+                // prefix's (a cut that turns beside an unseen wall end must stop short of it).
                 self.cut_prefix_to_band(
                     PointM::new(pose.x_m, pose.y_m),
                     pose.heading_rad,
                     band_rad,
                 );
                 self.stats.band_cuts += 1;
-            } else if continuous && cut_m.is_some() {
+                path_outside_band = false;
+                let length_m = polyline_length_m(&self.prefix);
+                unknown_at_m = self
+                    .first_unknown_beside_prefix_m(pose, trusted_band_rad)
+                    .filter(|m| *m < length_m);
+            }
+            // Continuous mode may follow a prefix cut short; a cut of two cells or less would
+            // stall it (the sonar, 0.20 m ahead, never sees beside the centre while moving),
+            // so it stops for a full sweep like stop mode.
+            let cut_m = unknown_at_m.filter(|m| *m > 2.0 * g.resolution_m());
+            if continuous && cut_m.is_some() {
                 // Follow only up to where the body would reach unknown space; the sonar keeps
                 // sweeping and the next pass replans.
                 self.truncate_prefix_m(unknown_at_m.unwrap_or(0.0));
@@ -1503,6 +1524,22 @@ impl<const W: usize> Mission<W> {
     }
 
     /// Keep the first `length_m` of the prefix (cut inside a segment where needed).
+    /// How far along the prefix the body may go before it reaches space not known to be free
+    /// (see [`Corridor`]), within sonar range of `pose`.
+    fn first_unknown_beside_prefix_m(&self, pose: Pose, band_rad: f32) -> Option<f32> {
+        Corridor {
+            grid: &self.grid,
+            seen: &self.seen,
+            pose,
+            sonar_offset_m: self.config.robot.sonar_offset_m,
+            half_band_rad: band_rad,
+            radius_m: self.config.robot.planning_radius_m,
+            body_radius_m: self.config.robot.physical_radius_m(),
+            occupied_only: false,
+        }
+        .first_unknown_m(&self.prefix, self.config.robot.sonar_range_m)
+    }
+
     fn truncate_prefix_m(&mut self, length_m: f32) {
         let mut along_m = 0.0;
         for i in 1..self.prefix.len() {
@@ -1596,6 +1633,14 @@ impl<const W: usize> Mission<W> {
         // Hold where the controller is heading now.
         self.phase = MissionPhase::Sweep { full };
     }
+}
+
+/// Length of a polyline, metres.
+fn polyline_length_m(points: &[PointM]) -> f32 {
+    points
+        .windows(2)
+        .map(|w| hypot(w[1].x_m - w[0].x_m, w[1].y_m - w[0].y_m))
+        .sum()
 }
 
 fn push(out: &mut MissionOutput, event: MissionEvent) {
