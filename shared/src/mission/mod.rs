@@ -506,7 +506,8 @@ pub struct MissionOutput {
 /// Counters of a mission.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MissionStats {
-    /// Sweeps taken while standing (the seed's stops).
+    /// Places the robot stood to sweep (the seed's stops): a full sweep where the robot has
+    /// just swept standing counts with that stop; `full_sweeps` counts full sweeps.
     pub stops: u32,
     /// Sweeps taken while moving (continuous mode).
     pub moving_sweeps: u32,
@@ -621,6 +622,8 @@ pub struct Mission<const W: usize> {
     supply_segment: u16,
     last_plan_origin: Option<PointM>,
     stalled_plans: u16,
+    /// Where the last standing sweep was taken (world frame).
+    last_stop_position: Option<PointM>,
     pending_plan: Option<PendingPlan>,
     /// A sweep that ended while a plan was out: marked when the result is back.
     deferred_sweep_end: Option<SweepState>,
@@ -677,6 +680,7 @@ impl<const W: usize> Mission<W> {
             supply_segment: 0,
             last_plan_origin: None,
             stalled_plans: 0,
+            last_stop_position: None,
             pending_plan: None,
             deferred_sweep_end: None,
             next_plan_id: 1,
@@ -746,6 +750,7 @@ impl<const W: usize> Mission<W> {
         self.supply_segment = 0;
         self.last_plan_origin = None;
         self.stalled_plans = 0;
+        self.last_stop_position = None;
         self.pending_plan = None;
         self.deferred_sweep_end = None;
         self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
@@ -1018,7 +1023,16 @@ impl<const W: usize> Mission<W> {
         if moving {
             self.stats.moving_sweeps += 1;
         } else {
-            self.stats.stops += 1;
+            // A stop is a place the robot stood to sweep: a full sweep right where the last
+            // standing sweep was (the band or the body corridor asked for it) is the same stop.
+            let here = self.position_world();
+            let same_place = self.last_stop_position.is_some_and(|p| {
+                hypot(here.x_m - p.x_m, here.y_m - p.y_m) < self.config.stall_distance_m
+            });
+            if !same_place {
+                self.stats.stops += 1;
+            }
+            self.last_stop_position = Some(here);
             if full {
                 self.stats.full_sweeps += 1;
             }
