@@ -63,6 +63,7 @@ fn seed_preset_sets_every_listed_choice() {
     assert!((settle - 18.85).abs() < 0.01, "{s}");
     assert_eq!(s["reference_feed_forward"], false, "{s}");
     assert_eq!(s["sweep_readings"], "seed", "{s}");
+    assert_eq!(s["turn_in_place"], false, "{s}");
     // The seed's sweeps were really taken: 104 readings a normal sweep, 200 a full one (stop
     // mode: every sweep is a stop).
     let stops = s["stops"].as_u64().expect("stops");
@@ -88,6 +89,7 @@ fn ours_preset_is_exactly_the_default() {
     assert_eq!(s["settle"], "model", "{s}");
     assert_eq!(s["reference_feed_forward"], true, "{s}");
     assert_eq!(s["sweep_readings"], "symmetric", "{s}");
+    assert_eq!(s["turn_in_place"], true, "{s}");
     let stops = s["stops"].as_u64().expect("stops");
     let full = s["full_sweeps"].as_u64().expect("full_sweeps");
     assert_eq!(
@@ -120,6 +122,7 @@ fn explicit_options_override_the_preset() {
         "--settle",
         "model",
         "--feed-forward",
+        "--turn-in-place",
         "--sweep-readings",
         "symmetric",
     ]);
@@ -132,6 +135,7 @@ fn explicit_options_override_the_preset() {
         "--settle",
         "model",
         "--feed-forward=true",
+        "--turn-in-place=true",
         "--sweep-readings",
         "symmetric",
     ]);
@@ -173,6 +177,32 @@ fn mission_records_the_preset_and_sends_its_setup_fields() {
     assert_eq!(s["planner"], "bfs", "{s}");
     assert_eq!(s["constant_depth_filter"], true, "{s}");
     assert_eq!(s["trust_seen_space"], false, "{s}");
+}
+
+#[test]
+fn mission_preset_seed_sends_what_the_old_flags_sent() {
+    let (da, par) = (world("office.da"), world("office.par"));
+    let (da, par) = (da.display().to_string(), par.display().to_string());
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "mission",
+            "--remote",
+            "sim",
+            "--real",
+            &da,
+            "--params",
+            &par,
+            "--time-limit",
+            "60",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        run_ok(&args)
+    };
+    let preset = run(&["--preset", "seed"]);
+    assert_eq!(preset, run(&["--planner", "bfs", "--rcd", "--seed-prune"]));
+    assert_ne!(preset, run(&[]), "the preset changed nothing on the device");
+    assert_eq!(run(&["--preset", "ours"]), run(&[]));
 }
 
 #[test]

@@ -523,6 +523,34 @@ mod tests {
     }
 
     #[test]
+    fn the_seed_layout_reads_2n_positions_from_the_negative_end() {
+        let c = RobotConfig {
+            sweep_layout: SweepLayout::Seed,
+            ..RobotConfig::default()
+        };
+        let normal = SweepPlan::new(&c, SweepKind::Normal);
+        assert_eq!(normal.readings(), 104);
+        let first = normal.neck_angle_rad(0).unwrap();
+        let last = normal.neck_angle_rad(103).unwrap();
+        assert!((first + 93.6 * DEG).abs() < 1e-5, "{first}");
+        assert!((last - 91.8 * DEG).abs() < 1e-5, "{last}");
+        assert_eq!(normal.neck_angle_rad(104), None);
+        // The neck still goes n steps out, 2n across and n back.
+        assert_eq!(normal.timing(&c).neck_steps, 208);
+        assert_eq!(normal.timing(&c).readings, 104);
+        let full = SweepPlan::new(&c, SweepKind::Full);
+        assert_eq!(full.readings(), 200);
+        let last = full.neck_angle_rad(199).unwrap();
+        assert!((last - 178.2 * DEG).abs() < 1e-4, "{last}");
+        // A zero-step plan still reads once.
+        let broken = RobotConfig {
+            neck_step_deg: f32::NAN,
+            ..c
+        };
+        assert_eq!(SweepPlan::new(&broken, SweepKind::Normal).readings(), 1);
+    }
+
+    #[test]
     fn plans_are_symmetric_and_fit() {
         let c = RobotConfig::default();
         let normal = SweepPlan::new(&c, SweepKind::Normal);
