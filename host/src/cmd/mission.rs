@@ -255,7 +255,6 @@ fn mission_mode(mode: Mode) -> MissionMode {
     }
 }
 
-
 /// What the device says about a refused `SetMission`, naming the field and where it came from.
 fn explain_bad_mission(args: &Args, error: &ErrorReply) -> String {
     if error.code != ErrorCode::BadMission {
