@@ -100,6 +100,8 @@ pub struct RobotConfig {
     pub echo_wait_s: f32,
     /// Time for one neck step, seconds (seed `TEMPO_MOV_PASSO_MOTOR_SONAR` 0.001).
     pub neck_step_time_s: f32,
+    /// Which neck positions a sweep reads (symmetric `2n + 1`; the seed's `2n`).
+    pub sweep_layout: crate::sonar::SweepLayout,
     /// Full angle of the simulated sonar beam, degrees (0: one ray).
     pub sonar_cone_deg: f32,
     /// Rays cast across the simulated beam (1 ..= [`MAX_CONE_RAYS`]).
@@ -154,6 +156,7 @@ impl RobotConfig {
         full_half_sweep_deg: 180.0,
         echo_wait_s: 0.035,
         neck_step_time_s: 0.001,
+        sweep_layout: crate::sonar::SweepLayout::Symmetric,
         sonar_cone_deg: 0.0,
         sonar_cone_rays: 1,
         sonar_noise_std_m: 0.0,

@@ -15,8 +15,9 @@
 //! [`SweepPlan`] lists the neck angles: `n = ⌊half / step⌋` steps each side of straight ahead,
 //! `2n + 1` readings (105 for ±95°, 201 for ±180°), symmetric around 0° so straight ahead is
 //! always read. (The seed started at −half and took `2⌊half/step⌋` readings, missing the last
-//! one; the symmetric plan is simpler to reason about.) [`SWEEP_CAPACITY`] = 360/1.8 + 1 = 201
-//! readings is what a [`SweepBuffer`] holds.
+//! one; the symmetric plan is simpler to reason about. [`SweepLayout::Seed`] reads as the seed
+//! did, for `--preset seed`.) [`SWEEP_CAPACITY`] = 360/1.8 + 1 = 201 readings is what a
+//! [`SweepBuffer`] holds.
 //!
 //! # Regions of constant depth (seed `sonar.cpp`, after Renon & Lages)
 //!
@@ -81,6 +82,20 @@ pub enum SweepKind {
     Full,
 }
 
+/// Which neck positions a sweep reads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SweepLayout {
+    /// `2n + 1` readings from `−n` to `+n` steps: straight ahead and both ends read (105 for
+    /// ±95°, 201 for ±180°).
+    #[default]
+    Symmetric,
+    /// The seed's `sonar_rpc`: the neck goes `n` steps to one side and reads `2n` times,
+    /// stepping after each reading, so the last position (`+n`) is never read: 104 readings
+    /// from −93.6° to +91.8° for ±95°, 200 from −180° to +178.2° for ±180°.
+    Seed,
+}
+
 /// Time of flight (out and back) of an echo from `range_m`, seconds, at 343.2 m/s.
 ///
 /// ```
@@ -128,6 +143,8 @@ pub struct SweepPlan {
     pub steps_each_side: u16,
     /// Neck angle per step, radians.
     pub step_rad: f32,
+    /// Which positions are read ([`RobotConfig::sweep_layout`]).
+    pub layout: SweepLayout,
 }
 
 impl SweepPlan {
@@ -160,12 +177,18 @@ impl SweepPlan {
             } else {
                 0.0
             },
+            layout: config.sweep_layout,
         }
     }
 
-    /// Number of readings, `2n + 1` (≤ [`SWEEP_CAPACITY`]).
+    /// Number of readings: `2n + 1`, or `2n` (at least 1) with [`SweepLayout::Seed`]
+    /// (≤ [`SWEEP_CAPACITY`]).
     pub fn readings(&self) -> usize {
-        2 * self.steps_each_side as usize + 1
+        let n = self.steps_each_side as usize;
+        match self.layout {
+            SweepLayout::Symmetric => 2 * n + 1,
+            SweepLayout::Seed => (2 * n).max(1),
+        }
     }
 
     /// Neck angle of reading `index` (0 = leftmost negative end), radians, or `None` past the
@@ -497,6 +520,34 @@ mod tests {
             &mut hits,
         );
         (n, hits)
+    }
+
+    #[test]
+    fn the_seed_layout_reads_2n_positions_from_the_negative_end() {
+        let c = RobotConfig {
+            sweep_layout: SweepLayout::Seed,
+            ..RobotConfig::default()
+        };
+        let normal = SweepPlan::new(&c, SweepKind::Normal);
+        assert_eq!(normal.readings(), 104);
+        let first = normal.neck_angle_rad(0).unwrap();
+        let last = normal.neck_angle_rad(103).unwrap();
+        assert!((first + 93.6 * DEG).abs() < 1e-5, "{first}");
+        assert!((last - 91.8 * DEG).abs() < 1e-5, "{last}");
+        assert_eq!(normal.neck_angle_rad(104), None);
+        // The neck still goes n steps out, 2n across and n back.
+        assert_eq!(normal.timing(&c).neck_steps, 208);
+        assert_eq!(normal.timing(&c).readings, 104);
+        let full = SweepPlan::new(&c, SweepKind::Full);
+        assert_eq!(full.readings(), 200);
+        let last = full.neck_angle_rad(199).unwrap();
+        assert!((last - 178.2 * DEG).abs() < 1e-4, "{last}");
+        // A zero-step plan still reads once.
+        let broken = RobotConfig {
+            neck_step_deg: f32::NAN,
+            ..c
+        };
+        assert_eq!(SweepPlan::new(&broken, SweepKind::Normal).readings(), 1);
     }
 
     #[test]

@@ -32,12 +32,12 @@ use twil_core::link::{
     PoseReport, Reply, Request, Telemetry, PROTOCOL_VERSION,
 };
 use twil_core::mission::{MissionMode, MissionPhase, MissionStatus};
-use twil_core::plan::PlannerKind;
 use twil_core::plant::Plant;
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
-use super::simulate::{parse_size, read_da, read_par, Mode, PlannerArg};
+use super::preset::LoopArgs;
+use super::simulate::{parse_size, read_da, read_par, Mode};
 use crate::remote::{Remote, RemoteSpec};
 use crate::sim::{output, SimResult, SimSetup, SimStatus, Snapshot, TrajectoryRow};
 
@@ -63,9 +63,10 @@ pub struct Args {
     /// Stop-and-sweep or continuous sweeping.
     #[arg(long, value_enum, default_value_t = Mode::Stop)]
     pub mode: Mode,
-    /// Planner.
-    #[arg(long, value_enum, default_value_t = PlannerArg::Anyangle)]
-    pub planner: PlannerArg,
+    /// Loop choices: `--preset`, `--planner`, `--rcd`, `--seed-prune` (what `SetMission`
+    /// carries; the settle time, reference and sweep readings are the device's own).
+    #[command(flatten)]
+    pub loop_args: LoopArgs,
     /// Write trajectory.csv, plan PNGs, mission.gif and summary.json here.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -84,12 +85,6 @@ pub struct Args {
     /// Mission time limit, seconds of mission time.
     #[arg(long, default_value_t = 900.0)]
     pub time_limit: f32,
-    /// Filter each sweep with the regions-of-constant-depth filter before marking.
-    #[arg(long)]
-    pub rcd: bool,
-    /// Keep only the seed's prefix (within sonar range, visible from the robot).
-    #[arg(long)]
-    pub seed_prune: bool,
     /// Give up when the device sends nothing for this many seconds.
     #[arg(long, default_value_t = 10.0, value_name = "S")]
     pub silence: f32,
@@ -238,15 +233,15 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
 pub fn mission_setup(args: &Args, params: &Params) -> MissionSetup {
     MissionSetup {
         mode: mission_mode(args.mode),
-        planner: planner_kind(args.planner),
+        planner: args.loop_args.resolve(None).planner_kind(),
         start: params.start,
         initial_heading_rad: params.initial_heading_deg.to_radians(),
         goal: params.goal,
         speed_m_s: params.speed_m_s,
         sonar_range_m: args.sonar_range,
         time_limit_s: args.time_limit,
-        constant_depth_filter: args.rcd,
-        trust_seen_space: !args.seed_prune,
+        constant_depth_filter: args.loop_args.resolve(None).rcd,
+        trust_seen_space: !args.loop_args.resolve(None).seed_prune,
         noise_seed: args.seed,
         sonar_noise_std_m: args.sonar_noise,
         link_loss: args.link_loss(),
@@ -257,14 +252,6 @@ fn mission_mode(mode: Mode) -> MissionMode {
     match mode {
         Mode::Stop => MissionMode::Stop,
         Mode::Continuous => MissionMode::Continuous,
-    }
-}
-
-fn planner_kind(planner: PlannerArg) -> PlannerKind {
-    match planner {
-        PlannerArg::Bfs => PlannerKind::Bfs,
-        PlannerArg::Astar => PlannerKind::AStar,
-        PlannerArg::Anyangle => PlannerKind::AnyAngle,
     }
 }
 
@@ -648,7 +635,10 @@ fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value {
         "remote": remote_name(&args.remote),
         "build": format!("{:?}", outcome.info.build).to_lowercase(),
         "mode": match args.mode { Mode::Stop => "stop", Mode::Continuous => "continuous" },
-        "planner": format!("{:?}", args.planner).to_lowercase(),
+        "preset": args.loop_args.preset.name(),
+        "planner": args.loop_args.resolve(None).planner_name(),
+        "constant_depth_filter": args.loop_args.resolve(None).rcd,
+        "trust_seen_space": !args.loop_args.resolve(None).seed_prune,
         "real": args.real.as_ref().map(|p| p.display().to_string()),
         "known": args.known.as_ref().map(|p| p.display().to_string()),
         "params": args.params.display().to_string(),
@@ -706,6 +696,13 @@ fn check_real(args: &Args, build: Build) -> Result<()> {
 /// Run `twil mission`.
 pub fn run(args: Args) -> Result<()> {
     let inputs = read_inputs(&args)?;
+    if args.loop_args.preset == super::preset::Preset::Seed && !args.json {
+        eprintln!(
+            "twil: --preset seed: the device gets the seed's planner, filter and pruning; \
+             SetMission carries no settle time, reference feed-forward, turn-in-place or sweep layout, so \
+             those are the device's own (`twil simulate --preset seed` has all of them)"
+        );
+    }
     // A simulated device is known before connecting: refuse early.
     match args.remote {
         RemoteSpec::Sim(_) => check_real(&args, Build::Host)?,
@@ -1006,14 +1003,18 @@ fn write_outputs(
         params: inputs.params,
         geometry: inputs.geometry,
         mode: mission_mode(args.mode),
-        planner: planner_kind(args.planner),
+        planner: args.loop_args.resolve(None).planner_kind(),
         robot: inputs.robot,
         time_limit_s: args.time_limit,
-        constant_depth_filter: args.rcd,
-        trust_seen_space: !args.seed_prune,
+        constant_depth_filter: args.loop_args.resolve(None).rcd,
+        trust_seen_space: !args.loop_args.resolve(None).seed_prune,
         moving_half_sweep_deg: 95.0,
         snapshot_period_s: FRAME_PERIOD_S,
         plan_latency_s: 0.0,
+        // The device's own (SetMission does not carry them).
+        settle: twil_core::mission::SettleRule::ReferenceModel,
+        reference_feed_forward: true,
+        turn_in_place: true,
     };
     let report = &outcome.report;
     let result = SimResult {

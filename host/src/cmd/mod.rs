@@ -5,4 +5,5 @@ pub mod mission;
 pub mod mission_link;
 pub mod ping;
 pub mod plan;
+pub mod preset;
 pub mod simulate;

@@ -16,11 +16,12 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 use twil_core::grid::GridGeometry;
 use twil_core::mission::{MissionMode, MissionStats};
-use twil_core::plan::PlannerKind;
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
 use crate::world_io;
+
+use super::preset::{FollowArgs, LoopArgs, LoopChoices};
 
 use crate::sim::{self, output, SimResult, SimSetup};
 
@@ -65,9 +66,12 @@ pub struct Args {
     /// Stop-and-sweep or continuous sweeping.
     #[arg(long, value_enum, default_value_t = Mode::Stop)]
     pub mode: Mode,
-    /// Planner.
-    #[arg(long, value_enum, default_value_t = PlannerArg::Anyangle)]
-    pub planner: PlannerArg,
+    /// Loop choices: `--preset`, `--planner`, `--rcd`, `--seed-prune`.
+    #[command(flatten)]
+    pub loop_args: LoopArgs,
+    /// Following choices: `--settle`, `--feed-forward`, `--turn-in-place`, `--sweep-readings`.
+    #[command(flatten)]
+    pub follow: FollowArgs,
     /// Write trajectory.csv, plan PNGs, mission.gif and summary.json here.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -86,14 +90,6 @@ pub struct Args {
     /// Mission time limit, seconds of simulated time.
     #[arg(long, default_value_t = 900.0)]
     pub time_limit: f32,
-    /// Filter each sweep with the seed's regions-of-constant-depth filter before marking (made
-    /// for a wide-beam sonar: with the ideal ray-cast sonar it drops oblique walls).
-    #[arg(long)]
-    pub rcd: bool,
-    /// Keep only the seed's prefix (within sonar range, visible from the robot); by default
-    /// the prefix may go on through space seen free by earlier sweeps.
-    #[arg(long)]
-    pub seed_prune: bool,
     /// Continuous mode: half-width of the sweeps taken while moving, degrees (narrower sweeps
     /// come round more often but see less to the sides; experimental).
     #[arg(long, default_value_t = 95.0)]
@@ -157,10 +153,12 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
             geometry.height()
         );
     }
+    let choices = args.choices();
     let robot = RobotConfig {
         sonar_range_m: args.sonar_range,
         sonar_noise_std_m: args.sonar_noise,
         noise_seed: args.seed,
+        sweep_layout: choices.sweep_layout,
         ..RobotConfig::default()
     }
     .with_planning_radius_m(params.robot_radius_m);
@@ -202,19 +200,25 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
             Mode::Stop => MissionMode::Stop,
             Mode::Continuous => MissionMode::Continuous,
         },
-        planner: match args.planner {
-            PlannerArg::Bfs => PlannerKind::Bfs,
-            PlannerArg::Astar => PlannerKind::AStar,
-            PlannerArg::Anyangle => PlannerKind::AnyAngle,
-        },
+        planner: choices.planner_kind(),
         robot,
         time_limit_s: args.time_limit,
         snapshot_period_s: if args.out.is_some() { 0.5 } else { 0.0 },
-        constant_depth_filter: args.rcd,
-        trust_seen_space: !args.seed_prune,
+        constant_depth_filter: choices.rcd,
+        trust_seen_space: !choices.seed_prune,
         moving_half_sweep_deg: args.moving_sweep,
         plan_latency_s: args.plan_latency_ms / 1000.0,
+        settle: choices.settle,
+        reference_feed_forward: choices.reference_feed_forward,
+        turn_in_place: choices.turn_in_place,
     })
+}
+
+impl Args {
+    /// The loop choices of this run: `--preset`'s, with the explicit options applied.
+    pub fn choices(&self) -> LoopChoices {
+        self.loop_args.resolve(Some(&self.follow))
+    }
 }
 
 /// The `--json` object: exactly the keys of the issue.
@@ -237,7 +241,13 @@ pub fn summary_json(args: &Args, setup: &SimSetup, result: &SimResult) -> serde_
     let stats: &MissionStats = &result.stats;
     let extra = json!({
         "mode": match setup.mode { MissionMode::Stop => "stop", MissionMode::Continuous => "continuous" },
-        "planner": format!("{:?}", args.planner).to_lowercase(),
+        "preset": args.loop_args.preset.name(),
+        "planner": args.choices().planner_name(),
+        "settle": args.choices().settle_name(),
+        "settle_time_s": round3(mission_config_settle_s(setup)),
+        "reference_feed_forward": setup.reference_feed_forward,
+        "sweep_readings": args.choices().sweep_readings_name(),
+        "turn_in_place": setup.turn_in_place,
         "real": args.real.display().to_string(),
         "known": args.known.as_ref().map(|p| p.display().to_string()),
         "params": args.params.display().to_string(),
@@ -266,6 +276,11 @@ pub fn summary_json(args: &Args, setup: &SimSetup, result: &SimResult) -> serde_
         }
     }
     v
+}
+
+fn mission_config_settle_s(setup: &SimSetup) -> f32 {
+    let config = sim::mission_config(setup);
+    config.settle.settle_time_s(&config.robot)
 }
 
 fn round3(x: f32) -> f64 {

@@ -68,6 +68,13 @@ pub struct SimSetup {
     pub snapshot_period_s: f32,
     /// How long after its request a plan is handed back, seconds (see the module docs).
     pub plan_latency_s: f32,
+    /// How long a stop waits after each prefix.
+    pub settle: twil_core::mission::SettleRule,
+    /// Feed `τ × velocity` forward into the controller's reference.
+    pub reference_feed_forward: bool,
+    /// Turn in place at the start of a prefix and at sharp vertices; `false` never does (the
+    /// seed: the supplier hands out the time-stamped path points only).
+    pub turn_in_place: bool,
 }
 
 /// How a simulation ended.
@@ -197,6 +204,12 @@ pub fn mission_config(setup: &SimSetup) -> MissionConfig {
     config.constant_depth_filter = setup.constant_depth_filter;
     config.trust_seen_space = setup.trust_seen_space;
     config.moving_half_sweep_deg = setup.moving_half_sweep_deg;
+    config.settle = setup.settle;
+    config.reference_feed_forward = setup.reference_feed_forward;
+    if !setup.turn_in_place {
+        // Direction changes are wrapped to ±π: none is larger.
+        config.turn_in_place_above_rad = core::f32::consts::PI;
+    }
     config
 }
 

@@ -218,6 +218,11 @@ pub struct MissionConfig {
     /// Continuous mode: half-width of the sweeps taken while moving, degrees (narrower sweeps
     /// come round to each direction more often).
     pub moving_half_sweep_deg: f32,
+    /// How long a stop waits after the end of a prefix (see [`SettleRule`]).
+    pub settle: SettleRule,
+    /// Add `τ × velocity` to the controller's reference so the first-order reference model
+    /// does not lag the path (ours); `false` feeds the path point alone, as the seed did.
+    pub reference_feed_forward: bool,
 }
 
 impl MissionConfig {
@@ -241,6 +246,8 @@ impl MissionConfig {
         trust_seen_space: true,
         max_trusted_path_m: 30.0,
         moving_half_sweep_deg: 95.0,
+        settle: SettleRule::ReferenceModel,
+        reference_feed_forward: true,
     };
 
     /// A configuration from a `.par` file's parameters and a robot config (whose planning
@@ -310,8 +317,7 @@ impl MissionConfig {
             speed_m_s: self.speed_m_s,
             turn_rate_rad_s: self.turn_rate_rad_s,
             turn_in_place_above_rad: self.turn_in_place_above_rad,
-            settle_time_s: crate::control::settle_time_s(&self.robot)
-                + 2.0 * self.robot.controller_period_s,
+            settle_time_s: self.settle.settle_time_s(&self.robot),
         }
     }
 }
@@ -1729,12 +1735,14 @@ fn nearest_free<const W: usize>(grid: &Grid<W>, x: i32, y: i32, max_ring: i32) -
 mod corridor;
 mod local;
 mod pilot;
+mod settle;
 #[cfg(test)]
 mod tests;
 mod trust;
 
 pub use local::{LocalRunner, TickOutcome, MAX_EVENTS_PER_TICK, MAX_READINGS_PER_TICK};
 pub use pilot::{Pilot, PilotCommand, PilotReport};
+pub use settle::SettleRule;
 
 use corridor::Corridor;
 use trust::SeenSpace;

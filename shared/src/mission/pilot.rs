@@ -73,6 +73,8 @@ pub struct Pilot {
     /// The supplier is handing out points (following or settling).
     supplying: bool,
     stopped: bool,
+    /// [`MissionConfig::reference_feed_forward`].
+    feed_forward: bool,
 }
 
 impl Pilot {
@@ -101,6 +103,7 @@ impl Pilot {
         voltages_v: (0.0, 0.0),
         supplying: false,
         stopped: false,
+        feed_forward: true,
     };
 
     /// A pilot at the mission's start pose, holding.
@@ -116,6 +119,7 @@ impl Pilot {
             voltages_v: (0.0, 0.0),
             supplying: false,
             stopped: false,
+            feed_forward: config.reference_feed_forward,
         }
     }
 
@@ -132,6 +136,7 @@ impl Pilot {
         self.voltages_v = (0.0, 0.0);
         self.supplying = false;
         self.stopped = false;
+        self.feed_forward = config.reference_feed_forward;
     }
 
     /// One control period: the encoder counts since the previous tick and the real time
@@ -155,7 +160,12 @@ impl Pilot {
             // Feed-forward through the first-order reference model: with p = y + τ·ẏ the
             // model output follows y without the lag τ·v (0.2 m at 0.2 m/s), so the centre
             // stays on the path and turns in place stay in place.
-            let tau = self.robot.reference_time_constant_s;
+            // The seed fed the path point alone (`reference_feed_forward` off).
+            let tau = if self.feed_forward {
+                self.robot.reference_time_constant_s
+            } else {
+                0.0
+            };
             self.reference = PointM::new(
                 supply.point.x_m + d * c + tau * vx,
                 supply.point.y_m + d * s + tau * vy,
