@@ -121,6 +121,28 @@ fn an_enclosed_goal_ends_unreachable_whether_the_box_is_known_or_not() {
 }
 
 #[test]
+fn an_unreachable_mission_draws_no_plan_in_its_last_pictures() {
+    // The box is found only on the way, so earlier plans were followed; once the map proves
+    // the goal unreachable there is no plan, and the final frame (the GIF's last frame) and
+    // the failed plan's picture must not draw the previous plan's path or prefix.
+    let (da, par) = (world("enclosed.da"), world("enclosed.par"));
+    for mode in ["stop", "continuous"] {
+        let r = simulate(&["--real", &da, "--params", &par, "--mode", mode]);
+        assert_eq!(r.status, SimStatus::Unreachable, "{mode}: {:?}", r.stats);
+        assert!(
+            r.plans.iter().any(|p| p.prefix.len() > 1),
+            "{mode}: some earlier plan had a prefix to follow"
+        );
+        let last_frame = r.frames.last().expect("a final frame");
+        assert!(last_frame.prefix.is_empty(), "{mode}: {:?}", last_frame.prefix);
+        assert!(last_frame.path.is_empty(), "{mode}: {:?}", last_frame.path);
+        let last_plan = r.plans.last().expect("the failed plan's snapshot");
+        assert!(last_plan.prefix.is_empty(), "{mode}: {:?}", last_plan.prefix);
+        assert!(last_plan.path.is_empty(), "{mode}: {:?}", last_plan.path);
+    }
+}
+
+#[test]
 fn the_time_limit_gives_timeout() {
     let r = simulate(&[
         "--real",
