@@ -80,7 +80,10 @@ fn the_lab_world_is_reached_without_collision_in_both_modes_on_its_18_by_10_map(
         ((p.start.x_m, p.start.y_m), (p.goal.x_m, p.goal.y_m))
     };
     let start_to_goal_m = ((goal.0 - start.0).powi(2) + (goal.1 - start.1).powi(2)).sqrt();
-    assert!((12.5..=13.5).contains(&start_to_goal_m), "{start_to_goal_m}");
+    assert!(
+        (12.5..=13.5).contains(&start_to_goal_m),
+        "{start_to_goal_m}"
+    );
     for mode in ["stop", "continuous"] {
         let r = simulate(&[
             "--real", &da, "--params", &par, "--size", "18x10", "--mode", mode,
@@ -91,7 +94,11 @@ fn the_lab_world_is_reached_without_collision_in_both_modes_on_its_18_by_10_map(
         let d = distance_to_goal(&r, goal);
         assert!(d < 0.25, "{what}: ended {d} m from the goal");
         let known = r.known_map_plan_length_m.expect("a known-map plan");
-        assert!(r.distance_m > 0.9 * known, "{what}: {} vs {known}", r.distance_m);
+        assert!(
+            r.distance_m > 0.9 * known,
+            "{what}: {} vs {known}",
+            r.distance_m
+        );
     }
 }
 
@@ -158,10 +165,18 @@ fn an_unreachable_mission_draws_no_plan_in_its_last_pictures() {
             "{mode}: some earlier plan had a prefix to follow"
         );
         let last_frame = r.frames.last().expect("a final frame");
-        assert!(last_frame.prefix.is_empty(), "{mode}: {:?}", last_frame.prefix);
+        assert!(
+            last_frame.prefix.is_empty(),
+            "{mode}: {:?}",
+            last_frame.prefix
+        );
         assert!(last_frame.path.is_empty(), "{mode}: {:?}", last_frame.path);
         let last_plan = r.plans.last().expect("the failed plan's snapshot");
-        assert!(last_plan.prefix.is_empty(), "{mode}: {:?}", last_plan.prefix);
+        assert!(
+            last_plan.prefix.is_empty(),
+            "{mode}: {:?}",
+            last_plan.prefix
+        );
         assert!(last_plan.path.is_empty(), "{mode}: {:?}", last_plan.path);
     }
 }

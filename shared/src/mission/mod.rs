@@ -1427,8 +1427,8 @@ impl<const W: usize> Mission<W> {
         // The band is what the sweep actually read: its outermost readings (±93.6° for the
         // ±95° sweep at 1.8° steps), not the nominal half-width, which the stepper never
         // reaches (the 1.4° beyond the last reading were never looked at).
-        let band_rad = SweepPlan::new(&self.sweep_robot(moving), SweepKind::Normal)
-            .covered_half_angle_rad();
+        let band_rad =
+            SweepPlan::new(&self.sweep_robot(moving), SweepKind::Normal).covered_half_angle_rad();
         // Only the part within sonar range is the last sweep's business: farther points were
         // trusted through space seen earlier.
         let range_m = self.config.robot.sonar_range_m;
