@@ -72,6 +72,37 @@ fn bundled_worlds_reach_the_goal_without_collision_in_both_modes() {
 }
 
 #[test]
+fn the_lab_world_is_reached_without_collision_in_both_modes_on_its_18_by_10_map() {
+    // The seed's chapter V lab: 18 × 10 m, start to goal about 13 m.
+    let (da, par) = (world("lab.da"), world("lab.par"));
+    let (start, goal) = {
+        let p = twil_host::cmd::simulate::read_par(Path::new(&par)).unwrap();
+        ((p.start.x_m, p.start.y_m), (p.goal.x_m, p.goal.y_m))
+    };
+    let start_to_goal_m = ((goal.0 - start.0).powi(2) + (goal.1 - start.1).powi(2)).sqrt();
+    assert!(
+        (12.5..=13.5).contains(&start_to_goal_m),
+        "{start_to_goal_m}"
+    );
+    for mode in ["stop", "continuous"] {
+        let r = simulate(&[
+            "--real", &da, "--params", &par, "--size", "18x10", "--mode", mode,
+        ]);
+        let what = format!("lab {mode}: {:?} {:?}", r.status, r.stats);
+        assert_eq!(r.status, SimStatus::Reached, "{what}");
+        assert!(r.min_clearance_m > 0.0, "{what}: {}", r.min_clearance_m);
+        let d = distance_to_goal(&r, goal);
+        assert!(d < 0.25, "{what}: ended {d} m from the goal");
+        let known = r.known_map_plan_length_m.expect("a known-map plan");
+        assert!(
+            r.distance_m > 0.9 * known,
+            "{what}: {} vs {known}",
+            r.distance_m
+        );
+    }
+}
+
+#[test]
 fn continuous_mode_stops_less_and_finishes_sooner_than_stop_mode() {
     let (da, par) = (world("office.da"), world("office.par"));
     let stop = simulate(&["--real", &da, "--params", &par, "--mode", "stop"]);
@@ -117,6 +148,36 @@ fn an_enclosed_goal_ends_unreachable_whether_the_box_is_known_or_not() {
         // The known map proves it after the first sweep, without moving.
         assert_eq!(known.stats.stops, 1);
         assert!(known.distance_m < 0.01);
+    }
+}
+
+#[test]
+fn an_unreachable_mission_draws_no_plan_in_its_last_pictures() {
+    // The box is found only on the way, so earlier plans were followed; once the map proves
+    // the goal unreachable there is no plan, and the final frame (the GIF's last frame) and
+    // the failed plan's picture must not draw the previous plan's path or prefix.
+    let (da, par) = (world("enclosed.da"), world("enclosed.par"));
+    for mode in ["stop", "continuous"] {
+        let r = simulate(&["--real", &da, "--params", &par, "--mode", mode]);
+        assert_eq!(r.status, SimStatus::Unreachable, "{mode}: {:?}", r.stats);
+        assert!(
+            r.plans.iter().any(|p| p.prefix.len() > 1),
+            "{mode}: some earlier plan had a prefix to follow"
+        );
+        let last_frame = r.frames.last().expect("a final frame");
+        assert!(
+            last_frame.prefix.is_empty(),
+            "{mode}: {:?}",
+            last_frame.prefix
+        );
+        assert!(last_frame.path.is_empty(), "{mode}: {:?}", last_frame.path);
+        let last_plan = r.plans.last().expect("the failed plan's snapshot");
+        assert!(
+            last_plan.prefix.is_empty(),
+            "{mode}: {:?}",
+            last_plan.prefix
+        );
+        assert!(last_plan.path.is_empty(), "{mode}: {:?}", last_plan.path);
     }
 }
 

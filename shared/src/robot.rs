@@ -91,7 +91,9 @@ pub struct RobotConfig {
     pub sonar_range_m: f32,
     /// Neck stepper angle per step, degrees (seed 1.8).
     pub neck_step_deg: f32,
-    /// Half-width of a normal sweep, degrees (seed 95).
+    /// Half-width of a normal sweep, degrees (seed 95). The readings go out to the last whole
+    /// neck step inside it (±93.6° at 1.8°), and the band checks trust only that far
+    /// ([`crate::sonar::SweepPlan::covered_half_angle_rad`]).
     pub normal_half_sweep_deg: f32,
     /// Half-width of a full sweep, degrees (seed 180).
     pub full_half_sweep_deg: f32,

@@ -506,6 +506,14 @@ impl Follower {
             }
             Telemetry::Finished(report) => {
                 self.picture_plan(true);
+                if report.status == MissionStatus::Unreachable {
+                    // No plan any more (a stalled mission sends no last `Planned`): the final
+                    // frame must not draw the previous plan as if it were followed.
+                    if let Some(p) = &mut self.plan {
+                        p.path.clear();
+                        p.prefix.clear();
+                    }
+                }
                 if self.pictures {
                     let snap = self.snapshot(report.stats.time_s, 0);
                     self.frames.push(snap);

@@ -125,9 +125,9 @@ pub struct Snapshot {
     pub pose: Pose,
     /// The robot's map.
     pub grid: Box<Grid400>,
-    /// The full plan.
+    /// The full plan (empty once the mission ended unreachable).
     pub path: Vec<PointM>,
-    /// The kept prefix.
+    /// The kept prefix (empty once the mission ended unreachable).
     pub prefix: Vec<PointM>,
     /// Hits of the latest sweep.
     pub hits: Vec<PointM>,
@@ -170,12 +170,22 @@ fn snapshot(
     trail_len: usize,
     plan_number: u32,
 ) -> Snapshot {
+    // A mission that ended unreachable has no plan: the mission still holds the previous
+    // plan's path and prefix, which a picture must not show as if they were followed.
+    let has_plan = mission.status() != MissionStatus::Unreachable;
+    let plan_points = |points: &[PointM]| {
+        if has_plan {
+            points.to_vec()
+        } else {
+            Vec::new()
+        }
+    };
     Snapshot {
         t_s,
         pose,
         grid: Box::new(mission.grid().clone()),
-        path: mission.path().to_vec(),
-        prefix: mission.prefix().to_vec(),
+        path: plan_points(mission.path()),
+        prefix: plan_points(mission.prefix()),
         hits: mission.last_hits().to_vec(),
         trail_len,
         plan_number,

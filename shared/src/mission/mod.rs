@@ -1444,12 +1444,11 @@ impl<const W: usize> Mission<W> {
         // Band check (seed traj_fora_faixa_leit): a kept point more than the normal half sweep
         // off the heading needs a full sweep first, unless the last sweep was one.
         let pose = self.pose_world();
-        let band_deg = if moving {
-            self.config.moving_half_sweep_deg
-        } else {
-            self.config.robot.normal_half_sweep_deg
-        };
-        let band_rad = band_deg * (core::f32::consts::PI / 180.0);
+        // The band is what the sweep actually read: its outermost readings (±93.6° for the
+        // ±95° sweep at 1.8° steps), not the nominal half-width, which the stepper never
+        // reaches (the 1.4° beyond the last reading were never looked at).
+        let band_rad =
+            SweepPlan::new(&self.sweep_robot(moving), SweepKind::Normal).covered_half_angle_rad();
         // Only the part within sonar range is the last sweep's business: farther points were
         // trusted through space seen earlier.
         let range_m = self.config.robot.sonar_range_m;

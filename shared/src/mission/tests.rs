@@ -679,3 +679,59 @@ fn a_restarted_mission_runs_like_a_new_one_and_a_bad_restart_changes_nothing() {
         assert_eq!(reused.grid(), fresh.grid());
     }
 }
+
+/// The phase right after the first plan of a mission standing at `start`, facing
+/// `heading_deg`, in an empty 8 × 8 m map whose sweep hears nothing, and whether that plan
+/// asked for a full sweep.
+fn phase_after_the_first_plan(
+    start: PointM,
+    heading_deg: f32,
+    goal: PointM,
+) -> (MissionPhase, bool) {
+    let mut c = config(start, goal, MissionMode::Stop);
+    c.initial_heading_rad = heading_deg.to_radians();
+    let mut mission = Box::new(Mission300::new(c, geometry()).unwrap());
+    let mut pilot = Pilot::new(&c);
+    let (request, _) = tick_until_plan_request(&mut mission, &mut pilot, None);
+    let mut planner = Box::new(MissionPlanner300::new());
+    let (grid, path) = mission.plan_workspace();
+    let result = planner.plan(request.kind, grid, request.start, request.goal, path);
+    let out = step(
+        &mut mission,
+        &mut pilot,
+        MissionInput::PlanDone {
+            id: request.id,
+            result,
+        },
+    );
+    // The straight path north was kept whole.
+    let prefix = mission.prefix();
+    assert_eq!(prefix.len(), 2, "{prefix:?}");
+    assert!((prefix[1].x_m - goal.x_m).abs() < 1e-4, "{prefix:?}");
+    assert!((prefix[1].y_m - goal.y_m).abs() < 1e-4, "{prefix:?}");
+    let full = out
+        .events
+        .iter()
+        .any(|e| matches!(e, MissionEvent::FullSweepRequested));
+    (mission.phase(), full)
+}
+
+#[test]
+fn the_band_check_trusts_only_the_bearings_the_sweep_read() {
+    // The ±95° sweep's outermost readings are at ±93.6° (52 steps of 1.8°). The robot stands
+    // in the map's north-west corner (what lies west and north of the path is off the map, so
+    // the body corridor is known) and the straight path goes north, just behind its side.
+    let plan = SweepPlan::new(&RobotConfig::default(), SweepKind::Normal);
+    assert!((plan.covered_half_angle_rad().to_degrees() - 93.6).abs() < 1e-3);
+    let (start, goal) = (PointM::new(0.325, 7.125), PointM::new(0.325, 7.875));
+    // 93.4° off the heading: read by the sweep, followed at once.
+    assert_eq!(
+        phase_after_the_first_plan(start, -3.4, goal),
+        (MissionPhase::Follow, false)
+    );
+    // 93.8° off: inside the nominal ±95° but never read, so a full sweep comes first.
+    assert_eq!(
+        phase_after_the_first_plan(start, -3.8, goal),
+        (MissionPhase::Sweep { full: true }, true)
+    );
+}

@@ -19,7 +19,9 @@ use crate::geom::PointM;
 use crate::grid::Grid;
 use crate::math::hypot;
 
-/// The seed's normal sonar sweep: ±95° around the heading (`AMPLITUDE_LEITURA_NORMAL_SONAR`).
+/// The seed's nominal normal sweep: ±95° around the heading (`AMPLITUDE_LEITURA_NORMAL_SONAR`).
+/// Its stepper's readings reach only ±93.6° (52 steps of 1.8°); the mission's band checks use
+/// that read extent ([`crate::sonar::SweepPlan::covered_half_angle_rad`]), not this constant.
 pub const NORMAL_HALF_BAND_RAD: f32 = 95.0 * core::f32::consts::PI / 180.0;
 
 /// Why a pruned prefix ends where it does.
