@@ -113,8 +113,8 @@ pub struct RobotConfig {
     /// Beam model: half-angle of the cone, degrees (Moravec & Elfes' 30° cone for the Polaroid
     /// ranger: 15; see `docs/robot-model.md`).
     pub sonar_beam_half_angle_deg: f32,
-    /// Beam model: a smooth wall echoes only when the angle between the ray and the wall's
-    /// normal is below this, degrees (specular reflection).
+    /// Beam model: a wall echoes only when the angle between the ray and the wall's normal is
+    /// below this, degrees (specular reflection; 70 by default, why in `docs/robot-model.md`).
     pub sonar_incidence_limit_deg: f32,
     /// Beam model: a ray hitting within this distance of a polygon vertex echoes at any angle
     /// (corner reflector, edge diffraction), metres.
@@ -172,7 +172,7 @@ impl RobotConfig {
         sonar_noise_std_m: 0.0,
         sonar_beam: false,
         sonar_beam_half_angle_deg: 15.0,
-        sonar_incidence_limit_deg: 15.0,
+        sonar_incidence_limit_deg: 70.0,
         sonar_corner_radius_m: 0.05,
         noise_seed: 1,
         rcd_depth_tolerance_m: 0.01,
