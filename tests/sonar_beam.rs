@@ -36,7 +36,15 @@ fn beam_and_rcd_missions_on_the_bundled_worlds_do_not_collide() {
                 }
                 let r = simulate(
                     name,
-                    &["--mode", mode, "--sonar-range", range, "--sonar", "beam", "--rcd"],
+                    &[
+                        "--mode",
+                        mode,
+                        "--sonar-range",
+                        range,
+                        "--sonar",
+                        "beam",
+                        "--rcd",
+                    ],
                 );
                 let what = format!("{name} {mode} {range} m: {:?} {:?}", r.status, r.stats);
                 let expected = if name == "enclosed" {
@@ -76,7 +84,9 @@ fn bad_beam_options_are_refused_naming_the_field() {
         ("--beam-half-angle", "60", "sonar_beam_half_angle_deg"),
         ("--incidence-limit", "95", "sonar_incidence_limit_deg"),
     ] {
-        let argv = ["twil", "--real", &da, "--params", &par, "--sonar", "beam", flag, value];
+        let argv = [
+            "twil", "--real", &da, "--params", &par, "--sonar", "beam", flag, value,
+        ];
         let err = setup_from_args(&Cli::parse_from(argv).args).unwrap_err();
         let text = format!("{err:#}");
         assert!(text.contains(field) && text.contains(value), "{text}");

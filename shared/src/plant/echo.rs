@@ -86,7 +86,9 @@ impl Beam {
             0.0
         };
         let cos_limit = if self.incidence_limit_rad.is_finite() {
-            cos(self.incidence_limit_rad.clamp(0.0, core::f32::consts::FRAC_PI_2))
+            cos(self
+                .incidence_limit_rad
+                .clamp(0.0, core::f32::consts::FRAC_PI_2))
         } else {
             1.0
         };
@@ -197,9 +199,8 @@ fn echo_along<const V: usize, const P: usize>(
             let wy = a.y_m - origin.y_m;
             let t = (wx * ey - wy * ex) / denom;
             let u = (wx * dy - wy * dx) / denom;
-            if !(t.is_finite() && t >= 0.0 && t <= max_range_m)
-                || !(-1.0e-6..=1.0 + 1.0e-6).contains(&u)
-            {
+            let on_edge = (-1.0e-6..=1.0 + 1.0e-6).contains(&u);
+            if !(t.is_finite() && t >= 0.0 && t <= max_range_m && on_edge) {
                 continue;
             }
             let len = sqrt(ex * ex + ey * ey);
@@ -320,7 +321,10 @@ mod tests {
     fn the_cone_returns_the_nearest_echo() {
         // A far wall ahead and a near post 10° to the left, inside the 15° cone.
         let mut o = segment((3.0, -5.0), (3.0, 5.0));
-        let post = (1.5 * 10f32.to_radians().cos(), 1.5 * 10f32.to_radians().sin());
+        let post = (
+            1.5 * 10f32.to_radians().cos(),
+            1.5 * 10f32.to_radians().sin(),
+        );
         o.push(&[
             PointM::new(post.0, post.1 - 0.05),
             PointM::new(post.0, post.1 + 0.05),
