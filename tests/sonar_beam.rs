@@ -92,3 +92,41 @@ fn bad_beam_options_are_refused_naming_the_field() {
         assert!(text.contains(field) && text.contains(value), "{text}");
     }
 }
+
+#[test]
+fn twil_mission_remote_sim_takes_the_beam_options() {
+    let da = common::world("office.da").display().to_string();
+    let par = common::world("office.par").display().to_string();
+    let base = [
+        "mission", "--remote", "sim", "--real", &da, "--params", &par, "--json",
+    ];
+    let json = |extra: &[&str]| {
+        let out = common::twil()
+            .args(base.iter().chain(extra))
+            .output()
+            .expect("run twil");
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(out.status.success(), "{extra:?}: {stdout}");
+        serde_json::from_str::<serde_json::Value>(stdout.trim()).expect("JSON")
+    };
+    // The ray with the filter collides on the device as in the simulator (the device goes on,
+    // so the clearance tells); the beam reaches the goal with room to spare.
+    let ray = json(&["--rcd"]);
+    let beam = json(&["--rcd", "--sonar", "beam"]);
+    assert!(ray["min_clearance_m"].as_f64().unwrap() < 0.0, "{ray}");
+    assert_eq!(beam["status"], "reached", "{beam}");
+    assert!(beam["min_clearance_m"].as_f64().unwrap() > 0.0, "{beam}");
+    // A bad value is refused, naming the field.
+    let out = common::twil()
+        .args(
+            base.iter()
+                .chain(&["--sonar", "beam", "--incidence-limit", "95"]),
+        )
+        .output()
+        .expect("run twil");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("sonar_incidence_limit_deg"),
+        "{err}"
+    );
+}
