@@ -110,8 +110,8 @@ pub struct RobotConfig {
     /// [`sonar_cone_deg`](Self::sonar_cone_deg)), `true` the ultrasonic beam of
     /// [`crate::plant::echo`] (cone, first echo, incidence limit, corners).
     pub sonar_beam: bool,
-    /// Beam model: half-angle of the cone, degrees (Moravec & Elfes' 30° cone for the Polaroid
-    /// ranger: 15; see `docs/robot-model.md`).
+    /// Beam model: half-angle of the cone, degrees (half of Moravec & Elfes' 30° sonar cone; no
+    /// data-sheet value was found: see `docs/robot-model.md`).
     pub sonar_beam_half_angle_deg: f32,
     /// Beam model: a wall echoes only when the angle between the ray and the wall's normal is
     /// below this, degrees (specular reflection; 70 by default, why in `docs/robot-model.md`).
