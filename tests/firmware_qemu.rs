@@ -527,6 +527,9 @@ fn start_device_mission_with(
         noise_seed: 1,
         sonar_noise_std_m: 0.0,
         link_loss,
+        sonar_beam: false,
+        beam_half_angle_deg: 15.0,
+        incidence_limit_deg: 70.0,
     };
     assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
     assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);

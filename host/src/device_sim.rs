@@ -293,6 +293,9 @@ mod tests {
             noise_seed: 1,
             sonar_noise_std_m: 0.0,
             link_loss,
+            sonar_beam: false,
+            beam_half_angle_deg: 15.0,
+            incidence_limit_deg: 70.0,
         }
     }
 

@@ -13,8 +13,10 @@
 //!   quantization never drifts. Counts wrap like a hardware counter: take deltas with
 //!   `i32::wrapping_sub`.
 //! - **Sonar**: the nearest crossing of a ray from the sonar (0.20 m ahead of the centre) with
-//!   any polygon edge; optionally the minimum over a cone of rays, and seeded noise (SplitMix64
-//!   and a 4-uniform approximation of a Gaussian: no `rand`, same numbers everywhere).
+//!   any polygon edge; optionally the minimum over a cone of rays, or
+//!   ([`RobotConfig::sonar_beam`]) the ultrasonic beam of [`echo`] (first echo within a cone,
+//!   incidence limit, corners); and seeded noise (SplitMix64 and a 4-uniform approximation of
+//!   a Gaussian: no `rand`, same numbers everywhere).
 //! - **Collision**: the body is a disc of [`RobotConfig::physical_radius_m`] around the pose.
 //!
 //! Polygons are closed outlines (last vertex joins the first); two-vertex polygons are single
@@ -42,6 +44,8 @@ use crate::math::{abs, cos, exp, floor, hypot, sin, wrap_angle_rad};
 use crate::robot::{RobotConfig, MAX_CONE_RAYS};
 use crate::sonar::{Reading, SweepBuffer, SweepPlan};
 use crate::world::PolygonSet;
+
+pub mod echo;
 
 /// Most substeps one [`Plant::step`] call integrates; a longer `dt_s` uses longer substeps.
 pub const MAX_SUBSTEPS_PER_STEP: u32 = 100_000;
@@ -267,8 +271,10 @@ impl Plant {
         ray_cast(obstacles, origin, cos(angle), sin(angle), max_range_m)
     }
 
-    /// One simulated sonar reading, as the hardware would give it: the minimum over the beam
-    /// cone ([`RobotConfig::sonar_cone_deg`], [`RobotConfig::sonar_cone_rays`] rays), plus
+    /// One simulated sonar reading, as the hardware would give it: with
+    /// [`RobotConfig::sonar_beam`] the first echo of the beam ([`echo::Beam`]), otherwise the
+    /// minimum over the legacy cone ([`RobotConfig::sonar_cone_deg`],
+    /// [`RobotConfig::sonar_cone_rays`] rays, by default one exact ray); plus
     /// noise of [`RobotConfig::sonar_noise_std_m`]; `None` ("no echo") when nothing lies
     /// within `max_range_m` or the echo is nearer than [`RobotConfig::sonar_min_range_m`] (the
     /// receiver is still blanked). Draws from the noise generator only when noise is on, so a
@@ -287,7 +293,19 @@ impl Plant {
             0.0
         };
         let mut best: Option<f32> = None;
-        if rays == 1 || cone_rad == 0.0 {
+        if c.sonar_beam {
+            let beam = echo::Beam::from_deg(
+                c.sonar_beam_half_angle_deg,
+                c.sonar_incidence_limit_deg,
+                c.sonar_corner_radius_m,
+            );
+            best = beam.first_echo_m(
+                obstacles,
+                self.sonar_position(),
+                self.pose.heading_rad + neck_angle_rad,
+                max_range_m,
+            );
+        } else if rays == 1 || cone_rad == 0.0 {
             best = self.ray_cast_m(obstacles, neck_angle_rad, max_range_m);
         } else {
             for i in 0..rays {
@@ -658,6 +676,42 @@ mod tests {
     }
 
     #[test]
+    fn beam_readings_and_their_noise_are_reproducible_per_seed() {
+        let c = RobotConfig {
+            sonar_beam: true,
+            sonar_noise_std_m: 0.02,
+            noise_seed: 7,
+            ..RobotConfig::default()
+        };
+        let walls = square(3.0, 0.0, 0.5);
+        let read = |config: &RobotConfig| {
+            let mut plant = Plant::new(config, Pose::new(1.0, 0.3, 0.0));
+            let mut out = [0.0f32; 40];
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = plant
+                    .sonar_range_m(&walls, (i as f32 - 20.0) * 0.05, 6.0)
+                    .unwrap_or(-1.0);
+            }
+            out
+        };
+        let a = read(&c);
+        assert_eq!(a, read(&c));
+        assert_ne!(a, read(&RobotConfig { noise_seed: 8, ..c }));
+        // Without noise the beam looking straight at the square's face reads its distance
+        // (face at x = 2.5, sonar at x = 1.2), and differs from the single ray off-axis where
+        // the ray glances off the face but the beam still holds the face's normal.
+        let exact = RobotConfig {
+            sonar_noise_std_m: 0.0,
+            ..c
+        };
+        let mut plant = Plant::new(&exact, Pose::new(1.0, 0.3, 0.0));
+        let d = plant.sonar_range_m(&walls, 0.0, 6.0).unwrap();
+        assert!((d - 1.3).abs() < 1e-3, "{d}");
+        let d = plant.sonar_range_m(&walls, 0.2, 6.0).unwrap();
+        assert!((d - 1.3).abs() < 1e-3, "{d}");
+    }
+
+    #[test]
     fn clearance_and_inside() {
         let c = RobotConfig::default();
         let obstacles = square(3.0, 0.0, 0.5);
@@ -760,6 +814,30 @@ mod tests {
             }
             proptest::prop_assert!(plant.pose().is_finite());
             proptest::prop_assert!(ctl.pose().is_finite());
+        }
+
+        #[test]
+        fn beam_never_panics(
+            x in proptest::num::f32::ANY,
+            heading in proptest::num::f32::ANY,
+            half in proptest::num::f32::ANY,
+            limit in proptest::num::f32::ANY,
+            corner in proptest::num::f32::ANY,
+            range in proptest::num::f32::ANY,
+        ) {
+            let c = RobotConfig {
+                sonar_beam: true,
+                sonar_beam_half_angle_deg: half,
+                sonar_incidence_limit_deg: limit,
+                sonar_corner_radius_m: corner,
+                sonar_noise_std_m: 0.01,
+                ..RobotConfig::default()
+            };
+            let obstacles = square(3.0, 0.0, 0.5);
+            let mut plant = Plant::new(&c, Pose::new(x, 0.1, heading));
+            if let Some(d) = plant.sonar_range_m(&obstacles, half, range) {
+                proptest::prop_assert!(d.is_finite() && d >= c.sonar_min_range_m && d <= range);
+            }
         }
 
         #[test]

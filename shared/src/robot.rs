@@ -110,6 +110,19 @@ pub struct RobotConfig {
     pub sonar_cone_rays: u8,
     /// Standard deviation of the simulated range noise, metres (0: exact).
     pub sonar_noise_std_m: f32,
+    /// Simulated sonar model: `false` the exact ray (or the legacy minimum over
+    /// [`sonar_cone_deg`](Self::sonar_cone_deg)), `true` the ultrasonic beam of
+    /// [`crate::plant::echo`] (cone, first echo, incidence limit, corners).
+    pub sonar_beam: bool,
+    /// Beam model: half-angle of the cone, degrees (half of Moravec & Elfes' 30° sonar cone; no
+    /// data-sheet value was found: see `docs/robot-model.md`).
+    pub sonar_beam_half_angle_deg: f32,
+    /// Beam model: a wall echoes only when the angle between the ray and the wall's normal is
+    /// below this, degrees (specular reflection; 70 by default, why in `docs/robot-model.md`).
+    pub sonar_incidence_limit_deg: f32,
+    /// Beam model: a ray hitting within this distance of a polygon vertex echoes at any angle
+    /// (corner reflector, edge diffraction), metres.
+    pub sonar_corner_radius_m: f32,
     /// Seed of the simulated noise generator.
     pub noise_seed: u64,
     /// Regions of constant depth: largest depth difference between neighbouring readings of
@@ -162,6 +175,10 @@ impl RobotConfig {
         sonar_cone_deg: 0.0,
         sonar_cone_rays: 1,
         sonar_noise_std_m: 0.0,
+        sonar_beam: false,
+        sonar_beam_half_angle_deg: 15.0,
+        sonar_incidence_limit_deg: 70.0,
+        sonar_corner_radius_m: 0.05,
         noise_seed: 1,
         rcd_depth_tolerance_m: 0.01,
         rcd_min_pairs: 4,
@@ -233,7 +250,8 @@ impl RobotConfig {
     ///
     /// Rules: lengths, times and gains finite and positive (gains ≥ 0 where 0 makes sense);
     /// `sonar_min_range_m < sonar_range_m ≤ 6 m`; half sweeps in `(0, 180]`; tolerance in
-    /// `(0, 1)`; `1 ≤ sonar_cone_rays ≤ 31`; cone in `[0, 90]`°; substep ≤ period.
+    /// `(0, 1)`; `1 ≤ sonar_cone_rays ≤ 31`; cone in `[0, 90]`°; beam half-angle in `[0, 45]`°,
+    /// incidence limit in `[0, 90]`°, corner radius in `[0, 1]` m; substep ≤ period.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let c = self;
         check(
@@ -411,6 +429,24 @@ impl RobotConfig {
             "sonar_noise_std_m",
             c.sonar_noise_std_m,
             c.sonar_noise_std_m >= 0.0 && c.sonar_noise_std_m <= 1.0,
+            "0 to 1 m",
+        )?;
+        check(
+            "sonar_beam_half_angle_deg",
+            c.sonar_beam_half_angle_deg,
+            c.sonar_beam_half_angle_deg >= 0.0 && c.sonar_beam_half_angle_deg <= 45.0,
+            "0 to 45 degrees",
+        )?;
+        check(
+            "sonar_incidence_limit_deg",
+            c.sonar_incidence_limit_deg,
+            c.sonar_incidence_limit_deg >= 0.0 && c.sonar_incidence_limit_deg <= 90.0,
+            "0 to 90 degrees",
+        )?;
+        check(
+            "sonar_corner_radius_m",
+            c.sonar_corner_radius_m,
+            c.sonar_corner_radius_m >= 0.0 && c.sonar_corner_radius_m <= 1.0,
             "0 to 1 m",
         )?;
         check(

@@ -228,6 +228,9 @@ mod seeds {
                     timeout_ms: 2000,
                     reaction: twil_core::failsafe::LinkLossReaction::StopAndHold,
                 },
+                sonar_beam: true,
+                beam_half_angle_deg: 15.0,
+                incidence_limit_deg: 70.0,
             }),
             Request::WorldChunk {
                 first_vertex: 0,

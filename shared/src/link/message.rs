@@ -217,6 +217,13 @@ pub struct MissionSetup {
     pub sonar_noise_std_m: f32,
     /// What the mission does when the host falls silent (timeout 0: nothing).
     pub link_loss: LinkLossPolicy,
+    /// Simulated sonar: the ultrasonic beam instead of one ray ([`crate::robot::RobotConfig::sonar_beam`];
+    /// simulated builds).
+    pub sonar_beam: bool,
+    /// The beam's half-angle, degrees (simulated builds).
+    pub beam_half_angle_deg: f32,
+    /// The beam's incidence limit, degrees (simulated builds).
+    pub incidence_limit_deg: f32,
 }
 
 /// How the device's mission stands ([`Reply::Mission`], [`Telemetry::Finished`]).

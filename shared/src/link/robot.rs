@@ -549,6 +549,9 @@ impl<const W: usize> RobotLink<'_, W> {
             sonar_range_m: setup.sonar_range_m,
             sonar_noise_std_m: setup.sonar_noise_std_m,
             noise_seed: setup.noise_seed,
+            sonar_beam: setup.sonar_beam,
+            sonar_beam_half_angle_deg: setup.beam_half_angle_deg,
+            sonar_incidence_limit_deg: setup.incidence_limit_deg,
             ..RobotConfig::DEFAULT
         };
         let par = Params {
@@ -566,7 +569,7 @@ impl<const W: usize> RobotLink<'_, W> {
         config.constant_depth_filter = setup.constant_depth_filter;
         config.trust_seen_space = setup.trust_seen_space;
         // Field indices of MissionSetup: 2 start, 3 heading, 4 goal, 5 speed, 6 sonar range,
-        // 7 time limit, 11 noise, 12 link-loss policy.
+        // 7 time limit, 11 noise, 12 link-loss policy, 14 beam half-angle, 15 incidence limit.
         if !setup.link_loss.is_valid() {
             return Err(bad(12));
         }
@@ -596,6 +599,8 @@ impl<const W: usize> RobotLink<'_, W> {
                 MissionError::Robot(r) => match r.field {
                     "sonar_range_m" => bad(6),
                     "sonar_noise_std_m" => bad(11),
+                    "sonar_beam_half_angle_deg" => bad(14),
+                    "sonar_incidence_limit_deg" => bad(15),
                     _ => bad(100),
                 },
                 _ => bad(100),

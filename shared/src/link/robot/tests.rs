@@ -207,6 +207,9 @@ pub(super) fn setup(params: &crate::world::Params, mode: MissionMode) -> Mission
         noise_seed: 1,
         sonar_noise_std_m: 0.0,
         link_loss: crate::failsafe::LinkLossPolicy::NEVER,
+        sonar_beam: false,
+        beam_half_angle_deg: 15.0,
+        incidence_limit_deg: 70.0,
     }
 }
 
@@ -589,6 +592,9 @@ fn the_largest_mission_messages_fit_a_frame() {
             timeout_ms: u32::MAX,
             reaction: crate::failsafe::LinkLossReaction::StopAndHold,
         },
+        sonar_beam: true,
+        beam_half_angle_deg: f32::MAX,
+        incidence_limit_deg: f32::MAX,
     };
     let mut out = [0u8; MAX_FRAME_BYTES];
     assert!(encode(
