@@ -37,7 +37,7 @@ use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
 use super::preset::LoopArgs;
-use super::simulate::{parse_size, read_da, read_par, Mode, SonarArg};
+use super::simulate::{parse_size, read_da, read_par, Mode, SonarArg, SonarArgs};
 use crate::remote::{Remote, RemoteSpec};
 use crate::sim::{output, SimResult, SimSetup, SimStatus, Snapshot, TrajectoryRow};
 
@@ -82,15 +82,9 @@ pub struct Args {
     /// Standard deviation of the simulated sonar noise, metres (simulated devices).
     #[arg(long, default_value_t = 0.0)]
     pub sonar_noise: f32,
-    /// Simulated sonar (simulated devices): `ray` one exact ray; `beam` an ultrasonic beam.
-    #[arg(long, value_enum, default_value_t = SonarArg::Ray)]
-    pub sonar: SonarArg,
-    /// With `--sonar beam`: half-angle of the beam's cone, degrees (0 to 45).
-    #[arg(long, default_value_t = RobotConfig::DEFAULT.sonar_beam_half_angle_deg, value_name = "DEG")]
-    pub beam_half_angle: f32,
-    /// With `--sonar beam`: a wall echoes only within this angle of its normal, degrees.
-    #[arg(long, default_value_t = RobotConfig::DEFAULT.sonar_incidence_limit_deg, value_name = "DEG")]
-    pub incidence_limit: f32,
+    /// The simulated sonar (simulated devices).
+    #[command(flatten)]
+    pub sonar_model: SonarArgs,
     /// Mission time limit, seconds of mission time.
     #[arg(long, default_value_t = 900.0)]
     pub time_limit: f32,
@@ -185,16 +179,15 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
             geometry.height()
         );
     }
-    let robot = RobotConfig {
-        sonar_range_m: args.sonar_range,
-        sonar_noise_std_m: args.sonar_noise,
-        noise_seed: args.seed,
-        sonar_beam: args.sonar == SonarArg::Beam,
-        sonar_beam_half_angle_deg: args.beam_half_angle,
-        sonar_incidence_limit_deg: args.incidence_limit,
-        ..RobotConfig::default()
-    }
-    .with_planning_radius_m(params.robot_radius_m);
+    let robot = args
+        .sonar_model
+        .apply(RobotConfig {
+            sonar_range_m: args.sonar_range,
+            sonar_noise_std_m: args.sonar_noise,
+            noise_seed: args.seed,
+            ..RobotConfig::default()
+        })
+        .with_planning_radius_m(params.robot_radius_m);
     if let Err(e) = robot.validate() {
         bail!("robot config: {e}");
     }
@@ -257,9 +250,9 @@ pub fn mission_setup(args: &Args, params: &Params) -> MissionSetup {
         noise_seed: args.seed,
         sonar_noise_std_m: args.sonar_noise,
         link_loss: args.link_loss(),
-        sonar_beam: args.sonar == SonarArg::Beam,
-        beam_half_angle_deg: args.beam_half_angle,
-        incidence_limit_deg: args.incidence_limit,
+        sonar_beam: args.sonar_model.sonar == SonarArg::Beam,
+        beam_half_angle_deg: args.sonar_model.beam_half_angle,
+        incidence_limit_deg: args.sonar_model.incidence_limit,
     }
 }
 
@@ -298,11 +291,11 @@ fn explain_bad_mission(args: &Args, error: &ErrorReply) -> String {
         11 => format!("sonar noise (--sonar-noise {})", args.sonar_noise),
         14 => format!(
             "beam half-angle (--beam-half-angle {})",
-            args.beam_half_angle
+            args.sonar_model.beam_half_angle
         ),
         15 => format!(
             "incidence limit (--incidence-limit {})",
-            args.incidence_limit
+            args.sonar_model.incidence_limit
         ),
         12 => format!("link timeout (--link-timeout-ms {})", args.link_timeout_ms),
         100 => format!(

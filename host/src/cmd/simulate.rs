@@ -34,6 +34,35 @@ pub enum SonarArg {
     Beam,
 }
 
+/// The simulated sonar's options, shared by `twil simulate` and `twil mission` (whose
+/// simulated devices use them).
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct SonarArgs {
+    /// Simulated sonar: `ray` one exact ray; `beam` an ultrasonic beam (cone, first echo,
+    /// smooth walls echo only near face-on, corners at any angle; docs/robot-model.md).
+    #[arg(long, value_enum, default_value_t = SonarArg::Ray)]
+    pub sonar: SonarArg,
+    /// With `--sonar beam`: half-angle of the beam's cone, degrees (0 to 45).
+    #[arg(long, default_value_t = RobotConfig::DEFAULT.sonar_beam_half_angle_deg, value_name = "DEG")]
+    pub beam_half_angle: f32,
+    /// With `--sonar beam`: a smooth wall echoes only when the ray is within this angle of
+    /// its normal, degrees (0 to 90).
+    #[arg(long, default_value_t = RobotConfig::DEFAULT.sonar_incidence_limit_deg, value_name = "DEG")]
+    pub incidence_limit: f32,
+}
+
+impl SonarArgs {
+    /// `robot` with this sonar model.
+    pub fn apply(&self, robot: RobotConfig) -> RobotConfig {
+        RobotConfig {
+            sonar_beam: self.sonar == SonarArg::Beam,
+            sonar_beam_half_angle_deg: self.beam_half_angle,
+            sonar_incidence_limit_deg: self.incidence_limit,
+            ..robot
+        }
+    }
+}
+
 /// Sonar use.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
@@ -96,17 +125,8 @@ pub struct Args {
     /// Standard deviation of the simulated sonar noise, metres.
     #[arg(long, default_value_t = 0.0)]
     pub sonar_noise: f32,
-    /// Simulated sonar: `ray` one exact ray; `beam` an ultrasonic beam (cone, first echo,
-    /// smooth walls echo only near face-on, corners at any angle; docs/robot-model.md).
-    #[arg(long, value_enum, default_value_t = SonarArg::Ray)]
-    pub sonar: SonarArg,
-    /// With `--sonar beam`: half-angle of the beam's cone, degrees (0 to 45).
-    #[arg(long, default_value_t = RobotConfig::DEFAULT.sonar_beam_half_angle_deg, value_name = "DEG")]
-    pub beam_half_angle: f32,
-    /// With `--sonar beam`: a smooth wall echoes only when the ray is within this angle of
-    /// its normal, degrees (0 to 90).
-    #[arg(long, default_value_t = RobotConfig::DEFAULT.sonar_incidence_limit_deg, value_name = "DEG")]
-    pub incidence_limit: f32,
+    #[command(flatten)]
+    pub sonar_model: SonarArgs,
     /// Mission time limit, seconds of simulated time.
     #[arg(long, default_value_t = 900.0)]
     pub time_limit: f32,
@@ -174,17 +194,16 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         );
     }
     let choices = args.choices();
-    let robot = RobotConfig {
-        sonar_range_m: args.sonar_range,
-        sonar_noise_std_m: args.sonar_noise,
-        noise_seed: args.seed,
-        sweep_layout: choices.sweep_layout,
-        sonar_beam: args.sonar == SonarArg::Beam,
-        sonar_beam_half_angle_deg: args.beam_half_angle,
-        sonar_incidence_limit_deg: args.incidence_limit,
-        ..RobotConfig::default()
-    }
-    .with_planning_radius_m(params.robot_radius_m);
+    let robot = args
+        .sonar_model
+        .apply(RobotConfig {
+            sonar_range_m: args.sonar_range,
+            sonar_noise_std_m: args.sonar_noise,
+            noise_seed: args.seed,
+            sweep_layout: choices.sweep_layout,
+            ..RobotConfig::default()
+        })
+        .with_planning_radius_m(params.robot_radius_m);
     if let Err(e) = robot.validate() {
         bail!("robot config: {e}");
     }
