@@ -85,9 +85,10 @@ pub struct Args {
     /// The simulated sonar (simulated devices).
     #[command(flatten)]
     pub sonar_model: SonarArgs,
-    /// Mission time limit, seconds of mission time.
-    #[arg(long, default_value_t = 900.0)]
-    pub time_limit: f32,
+    /// Mission time limit, seconds of mission time [default: the preset's: 900; seed: 1800, its
+    /// 18.85 s settles].
+    #[arg(long)]
+    pub time_limit: Option<f32>,
     /// Give up when the device sends nothing for this many seconds.
     #[arg(long, default_value_t = 10.0, value_name = "S")]
     pub silence: f32,
@@ -194,11 +195,9 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
     // The speed and the radius against what this robot (its sonar range) can be trusted
     // with, naming the .par's line.
     crate::world_io::read_par_for(&args.params, &robot)?;
-    if !(args.time_limit.is_finite() && args.time_limit > 0.0) {
-        bail!(
-            "--time-limit: must be a positive number of seconds, got {}",
-            args.time_limit
-        );
+    let time_limit_s = args.time_limit_s();
+    if !(time_limit_s.is_finite() && time_limit_s > 0.0) {
+        bail!("--time-limit: must be a positive number of seconds, got {time_limit_s}");
     }
     if !(args.silence.is_finite() && args.silence > 0.0 && args.silence <= 3600.0) {
         bail!(
@@ -235,6 +234,14 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
 }
 
 /// The `SetMission` of `args` and `params`.
+impl Args {
+    /// `--time-limit`, or the preset's.
+    pub fn time_limit_s(&self) -> f32 {
+        self.time_limit
+            .unwrap_or(self.loop_args.preset.time_limit_s())
+    }
+}
+
 pub fn mission_setup(args: &Args, params: &Params) -> MissionSetup {
     MissionSetup {
         mode: mission_mode(args.mode),
@@ -244,7 +251,7 @@ pub fn mission_setup(args: &Args, params: &Params) -> MissionSetup {
         goal: params.goal,
         speed_m_s: params.speed_m_s,
         sonar_range_m: args.sonar_range,
-        time_limit_s: args.time_limit,
+        time_limit_s: args.time_limit_s(),
         constant_depth_filter: args.loop_args.resolve(None).rcd,
         trust_seen_space: !args.loop_args.resolve(None).seed_prune,
         noise_seed: args.seed,
@@ -287,7 +294,7 @@ fn explain_bad_mission(args: &Args, error: &ErrorReply) -> String {
         ),
         5 => format!("speed ({par})"),
         6 => format!("sonar range (--sonar-range {})", args.sonar_range),
-        7 => format!("time limit (--time-limit {})", args.time_limit),
+        7 => format!("time limit (--time-limit {})", args.time_limit_s()),
         11 => format!("sonar noise (--sonar-noise {})", args.sonar_noise),
         14 => format!(
             "beam half-angle (--beam-half-angle {})",
@@ -672,6 +679,7 @@ fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value {
         "plans": s.plans,
         "blocked_replans": s.blocked_replans,
         "band_cuts": s.band_cuts,
+        "blind_cuts": s.blind_cuts,
         "readings": s.readings,
         "hits": s.hits,
         "odometry_distance_m": round3(s.odometry_distance_m),
@@ -1029,7 +1037,7 @@ fn write_outputs(
         mode: mission_mode(args.mode),
         planner: args.loop_args.resolve(None).planner_kind(),
         robot: inputs.robot,
-        time_limit_s: args.time_limit,
+        time_limit_s: args.time_limit_s(),
         constant_depth_filter: args.loop_args.resolve(None).rcd,
         trust_seen_space: !args.loop_args.resolve(None).seed_prune,
         moving_half_sweep_deg: 95.0,

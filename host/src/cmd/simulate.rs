@@ -28,9 +28,9 @@ use crate::sim::{self, output, SimResult, SimSetup};
 /// The simulated sonar model.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SonarArg {
-    /// One exact ray along the neck's direction (the default).
+    /// One exact ray along the neck's direction (the earlier model).
     Ray,
-    /// An ultrasonic beam: cone, first echo, incidence limit, corners.
+    /// An ultrasonic beam: cone, first echo, incidence limit, corners (the default).
     Beam,
 }
 
@@ -40,12 +40,12 @@ pub enum SonarArg {
 pub struct SonarArgs {
     /// Simulated sonar: `ray` one exact ray; `beam` an ultrasonic beam (cone, first echo,
     /// smooth walls echo only near face-on, corners at any angle; docs/robot-model.md).
-    #[arg(long, value_enum, default_value_t = SonarArg::Ray)]
+    #[arg(long, value_enum, default_value_t = SonarArg::Beam)]
     pub sonar: SonarArg,
-    /// With `--sonar beam`: half-angle of the beam's cone, degrees (0 to 45).
+    /// Half-angle of the beam's cone, degrees (0 to 45; the HC-SR04 data sheet's 15°).
     #[arg(long, default_value_t = RobotConfig::DEFAULT.sonar_beam_half_angle_deg, value_name = "DEG")]
     pub beam_half_angle: f32,
-    /// With `--sonar beam`: a smooth wall echoes only when the ray is within this angle of
+    /// Beam: a smooth wall echoes only when the ray is within this angle of
     /// its normal, degrees (0 to 90).
     #[arg(long, default_value_t = RobotConfig::DEFAULT.sonar_incidence_limit_deg, value_name = "DEG")]
     pub incidence_limit: f32,
@@ -127,9 +127,10 @@ pub struct Args {
     pub sonar_noise: f32,
     #[command(flatten)]
     pub sonar_model: SonarArgs,
-    /// Mission time limit, seconds of simulated time.
-    #[arg(long, default_value_t = 900.0)]
-    pub time_limit: f32,
+    /// Mission time limit, seconds of simulated time [default: the preset's: 900; seed: 1800, its
+    /// 18.85 s settles].
+    #[arg(long)]
+    pub time_limit: Option<f32>,
     /// Continuous mode: half-width of the sweeps taken while moving, degrees (narrower sweeps
     /// come round more often but see less to the sides; experimental).
     #[arg(long, default_value_t = 95.0)]
@@ -216,11 +217,11 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
             args.plan_latency_ms
         );
     }
-    if !(args.time_limit.is_finite() && args.time_limit > 0.0) {
-        bail!(
-            "--time-limit: must be a positive number of seconds, got {}",
-            args.time_limit
-        );
+    let time_limit_s = args
+        .time_limit
+        .unwrap_or(args.loop_args.preset.time_limit_s());
+    if !(time_limit_s.is_finite() && time_limit_s > 0.0) {
+        bail!("--time-limit: must be a positive number of seconds, got {time_limit_s}");
     }
     for (which, p) in [("start", params.start), ("goal", params.goal)] {
         if geometry.cell_of(p).is_err() {
@@ -244,7 +245,7 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         },
         planner: choices.planner_kind(),
         robot,
-        time_limit_s: args.time_limit,
+        time_limit_s,
         snapshot_period_s: if args.out.is_some() { 0.5 } else { 0.0 },
         constant_depth_filter: choices.rcd,
         trust_seen_space: !choices.seed_prune,
@@ -299,6 +300,7 @@ pub fn summary_json(args: &Args, setup: &SimSetup, result: &SimResult) -> serde_
         "plans": stats.plans,
         "blocked_replans": stats.blocked_replans,
         "band_cuts": stats.band_cuts,
+        "blind_cuts": stats.blind_cuts,
         "trust_seen_space": setup.trust_seen_space,
         "constant_depth_filter": setup.constant_depth_filter,
         "readings": stats.readings,

@@ -18,8 +18,9 @@ use crate::plan::{PlanStatus, PlannerKind};
 /// Version of this protocol. A host and a device only talk when their versions are equal
 /// ([`Request::Hello`]). 2: missions (requests 10–19, telemetry 3–8, the pose report). 3:
 /// failsafes (`MissionSetup::link_loss`, `MissionReport::stop_cause` / `stop_latency_us`,
-/// the reset cause in `DeviceStatus` and `Telemetry::Boot`).
-pub const PROTOCOL_VERSION: u16 = 3;
+/// the reset cause in `DeviceStatus` and `Telemetry::Boot`). 4: the plant's sonar model in
+/// `SetMission` (fields 13–15) and `MissionStats::blind_cuts`.
+pub const PROTOCOL_VERSION: u16 = 4;
 
 /// Points carried by one telemetry chunk of hits, prefix or path.
 pub const TELEMETRY_CHUNK_POINTS: usize = 32;

@@ -242,7 +242,7 @@ impl MissionConfig {
         goal_tolerance_m: 0.10,
         max_stalled_plans: 6,
         stall_distance_m: 0.10,
-        constant_depth_filter: false,
+        constant_depth_filter: true,
         trust_seen_space: true,
         max_trusted_path_m: 30.0,
         moving_half_sweep_deg: 95.0,
@@ -527,6 +527,8 @@ pub struct MissionStats {
     pub blocked_replans: u32,
     /// Continuous mode: prefixes cut to the swept band instead of stopping for a full sweep.
     pub band_cuts: u32,
+    /// Prefixes shortened so that the sonar's blind zone at their end is known (`blind`).
+    pub blind_cuts: u32,
     /// Sonar readings taken.
     pub readings: u32,
     /// Hits marked in the grid.
@@ -558,6 +560,7 @@ impl MissionStats {
         replans: 0,
         blocked_replans: 0,
         band_cuts: 0,
+        blind_cuts: 0,
         readings: 0,
         hits: 0,
         odometry_distance_m: 0.0,
@@ -1138,9 +1141,12 @@ impl<const W: usize> Mission<W> {
     fn mark_seen(&mut self, pose: Pose, neck_angle_rad: f32, range_m: Option<f32>) {
         let robot = &self.config.robot;
         let g = *self.grid.geometry();
+        // Silence proves free space a cell short of the range, as an echo a cell short of
+        // itself: a surface on the range limit may have been heard on some readings and not
+        // on others.
         let length_m = match range_m {
             Some(r) => r - g.resolution_m(),
-            None => robot.sonar_range_m,
+            None => robot.sonar_range_m - g.resolution_m(),
         };
         let sonar = pose.point_ahead(robot.sonar_offset_m);
         let angle = pose.heading_rad + neck_angle_rad;
@@ -1529,6 +1535,29 @@ impl<const W: usize> Mission<W> {
             }
         }
 
+        // Where the prefix ends the sonar reads again, deaf within its minimum range: end it
+        // where that zone is known (see `blind`).
+        let swept_half_band_rad = if self.last_sweep_full {
+            core::f32::consts::PI
+        } else {
+            trusted_band_rad
+        };
+        let blind = BlindZone {
+            grid: &self.grid,
+            seen: &self.seen,
+            pose,
+            sonar_offset_m: self.config.robot.sonar_offset_m,
+            blind_radius_m: self.config.robot.sonar_min_range_m + res_m,
+            radius_m: self.config.robot.planning_radius_m,
+            body_radius_m: self.config.robot.physical_radius_m(),
+            swept_half_band_rad,
+            swept_range_m: self.config.robot.sonar_range_m - res_m,
+        };
+        if let Some(m) = blind.keep_m(&self.prefix) {
+            self.truncate_prefix_m(m);
+            self.stats.blind_cuts += 1;
+        }
+
         // Follow (the pilot turns in place first when the prefix starts elsewhere). What the
         // supplier would refuse ends the mission here instead of leaving the robot holding.
         let followable = self.pose_odom.heading_rad.is_finite()
@@ -1731,6 +1760,7 @@ fn nearest_free<const W: usize>(grid: &Grid<W>, x: i32, y: i32, max_ring: i32) -
     None
 }
 
+mod blind;
 mod corridor;
 mod local;
 mod pilot;
@@ -1743,6 +1773,7 @@ pub use local::{LocalRunner, TickOutcome, MAX_EVENTS_PER_TICK, MAX_READINGS_PER_
 pub use pilot::{Pilot, PilotCommand, PilotReport};
 pub use settle::SettleRule;
 
+use blind::BlindZone;
 use corridor::Corridor;
 use trust::SeenSpace;
 pub use trust::SEEN_NEAR_CELLS;

@@ -534,6 +534,7 @@ fn the_largest_mission_messages_fit_a_frame() {
             replans: u32::MAX,
             blocked_replans: u32::MAX,
             band_cuts: u32::MAX,
+            blind_cuts: u32::MAX,
             readings: u32::MAX,
             hits: u32::MAX,
             odometry_distance_m: f32::MAX,
