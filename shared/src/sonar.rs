@@ -360,6 +360,9 @@ pub struct RcdParams {
     pub min_pairs: u8,
     /// Arc length that makes a region trusted with fewer pairs, metres (seed 0.126).
     pub min_arc_m: f32,
+    /// Sonar ahead of the robot's centre, metres: where each reading was taken from, for the
+    /// depths of a sweep taken while moving (see [`filter_constant_depth`]).
+    pub sonar_offset_m: f32,
 }
 
 impl RcdParams {
@@ -369,6 +372,7 @@ impl RcdParams {
             depth_tolerance_m: config.rcd_depth_tolerance_m,
             min_pairs: config.rcd_min_pairs,
             min_arc_m: config.rcd_min_arc_m,
+            sonar_offset_m: config.sonar_offset_m,
         }
     }
 }
@@ -399,6 +403,25 @@ pub fn filter_constant_depth(
         }
         return hits.len();
     }
+    // Depths are compared as seen from where a region's first reading was taken: a sweep taken
+    // while moving towards a wall at 0.3 m/s would otherwise see its depth fall by more than
+    // the 1 cm tolerance between readings, and the filter would drop every wall ahead (the
+    // seed swept standing; there every correction is 0).
+    let offset_m = if params.sonar_offset_m.is_finite() {
+        params.sonar_offset_m
+    } else {
+        0.0
+    };
+    let shift = |r: &Reading, from: PointM| -> f32 {
+        let at = r.pose.point_ahead(offset_m);
+        let angle = r.pose.heading_rad + r.neck_angle_rad;
+        let d = (at.x_m - from.x_m) * cos(angle) + (at.y_m - from.y_m) * sin(angle);
+        if d.is_finite() {
+            d
+        } else {
+            0.0
+        }
+    };
     let tolerance = if params.depth_tolerance_m.is_finite() {
         params.depth_tolerance_m
     } else {
@@ -411,6 +434,9 @@ pub fn filter_constant_depth(
             start += 1;
             continue;
         };
+        let from = readings
+            .get(start)
+            .map_or(PointM::new(0.0, 0.0), |r| r.pose.point_ahead(offset_m));
         // Grow the region while neighbours agree.
         let mut end = start; // inclusive
         let mut arc_m = 0.0f32;
@@ -418,7 +444,7 @@ pub fn filter_constant_depth(
         let mut previous = first;
         let mut previous_angle = readings.get(start).map_or(0.0, |r| r.neck_angle_rad);
         while let Some(reading) = readings.get(end + 1) {
-            let Some(next) = valid(reading) else {
+            let Some(next) = valid(reading).map(|d| d + shift(reading, from)) else {
                 break;
             };
             if abs(next - previous) > tolerance {
@@ -442,7 +468,7 @@ pub fn filter_constant_depth(
             for r in readings.iter().take(end + 1).skip(start) {
                 let _ = hits.push(Hit {
                     neck_angle_rad: r.neck_angle_rad,
-                    range_m: mean,
+                    range_m: mean - shift(r, from),
                     pose: r.pose,
                 });
             }
@@ -662,6 +688,42 @@ mod tests {
         assert!(hits.iter().all(|h| h.range_m == 1.0));
         let (regions, hits) = filter(&[None; 20]);
         assert_eq!((regions, hits.len()), (0, 0));
+    }
+
+    #[test]
+    fn a_wall_ahead_of_a_moving_sweep_is_one_region() {
+        // The robot drives at a wall 2 m ahead, 1.5 cm per reading (0.4 m/s, 36 ms a
+        // reading): each reading is 1.5 cm nearer than the last, beyond the 1 cm tolerance,
+        // but the same depth seen from where the region began.
+        let config = RobotConfig::default();
+        let mut sweep = SweepBuffer::new();
+        for i in 0..9 {
+            let x_m = 0.015 * i as f32;
+            let sonar_x_m = x_m + config.sonar_offset_m;
+            let _ = sweep.push(Reading {
+                neck_angle_rad: (i as f32 - 4.0) * 1.0f32.to_radians(),
+                range_m: Some(2.0 - sonar_x_m),
+                pose: Pose::new(x_m, 0.0, 0.0),
+            });
+        }
+        let mut hits = HitBuffer::new();
+        let params = RcdParams::from_config(&config);
+        assert_eq!(filter_constant_depth(&sweep, &params, &mut hits), 1);
+        assert_eq!(hits.len(), 9);
+        // Each hit is reported from its own pose: all land on the wall.
+        for h in hits.iter() {
+            let p = h.world_point(config.sonar_offset_m);
+            assert!((p.x_m - 2.0).abs() < 0.01, "{p:?}");
+        }
+        // Without the poses (all taken from the first), the same ranges make no region.
+        let mut standing = SweepBuffer::new();
+        for r in sweep.as_slice() {
+            let _ = standing.push(Reading {
+                pose: Pose::new(0.0, 0.0, 0.0),
+                ..*r
+            });
+        }
+        assert_eq!(filter_constant_depth(&standing, &params, &mut hits), 0);
     }
 
     #[test]

@@ -250,7 +250,9 @@ mod tests {
         let ours = LoopArgs::default().resolve(Some(&FollowArgs::default()));
         let idle = twil_core::mission::MissionConfig::IDLE;
         assert!(ours.rcd && !ours.seed_prune);
-        assert_eq!(idle.constant_depth_filter, ours.rcd);
+        // The core's idle configuration keeps the filter off, as its plant keeps the single
+        // ray (the filter is for a beam); the host's default turns both on.
+        assert!(!idle.constant_depth_filter && !idle.robot.sonar_beam);
         assert_eq!(idle.trust_seen_space, !ours.seed_prune);
         assert_eq!(idle.settle, ours.settle);
         assert_eq!(idle.reference_feed_forward, ours.reference_feed_forward);

@@ -4,10 +4,9 @@
 //! `sonar_min_range_m` (0.26 m, the transducer still ringing from its own ping). An obstacle in
 //! that zone reads as silence, which the mission takes for free space. The body corridor
 //! (`corridor`) keeps the body's disc out of unknown space; the sonar, 0.20 m ahead of the
-//! centre, has its blind disc reaching 0.06 m and a cell further. So the prefix is shortened
+//! centre, has its blind disc reaching 0.06 m further. So the prefix is shortened
 //! until every point of that disc outside the body's is known: crossed by a ray, marked as an
-//! obstacle, under the body now, or read by the last standing sweep (inside its band and a cell
-//! short of its range).
+//! obstacle, under the body now, or vouched for by the last standing sweep (`swept`).
 //!
 //! Without it a wall that sat on the range limit of the first sweep (its echoes on the
 //! threshold, rejected by the regions-of-constant-depth filter) was met head-on: the robot
@@ -15,10 +14,11 @@
 //! (`worlds/corridor`, 3 m, beam sonar with the filter; `worlds/enclosed`, 1.5 m, continuous).
 //! The cut costs a few centimetres on prefixes that end sideways at the edge of what was read.
 
+use super::swept::Swept;
 use crate::control::Pose;
 use crate::geom::PointM;
 use crate::grid::Grid;
-use crate::math::{abs, atan2, hypot, wrap_angle_rad};
+use crate::math::hypot;
 
 /// Most end positions tried (one per cell back along the prefix).
 const MAX_TRIES: u32 = 256;
@@ -33,17 +33,15 @@ pub(super) struct BlindZone<'a, const W: usize> {
     pub pose: Pose,
     /// Sonar ahead of the centre, metres.
     pub sonar_offset_m: f32,
-    /// Radius of the blind disc around the sonar: its minimum range and a cell, metres.
+    /// Radius of the blind disc around the sonar: its minimum range, metres.
     pub blind_radius_m: f32,
     /// Planning radius (the body's disc checked by the corridor), metres.
     pub radius_m: f32,
     /// The body's radius, metres.
     pub body_radius_m: f32,
-    /// Half-width of the band the last standing sweep read from `pose` (π for a full sweep, 0
-    /// after a moving pass, whose readings came from other poses).
-    pub swept_half_band_rad: f32,
-    /// How far that sweep's silence proves free space from the sonar, metres.
-    pub swept_range_m: f32,
+    /// The last standing sweep (`Swept::NOTHING` after a moving pass, whose readings came from
+    /// other poses).
+    pub swept: Swept<'a>,
 }
 
 impl<const W: usize> BlindZone<'_, W> {
@@ -115,12 +113,8 @@ impl<const W: usize> BlindZone<'_, W> {
         if hypot(q.x_m - centre.x_m, q.y_m - centre.y_m) <= self.body_radius_m + 1.0e-3 {
             return true;
         }
-        // Read by the last standing sweep: inside its band, and nearer than its silence
-        // proves (the gaps between its rays count as read).
-        let sonar = self.pose.point_ahead(self.sonar_offset_m);
-        let bearing = atan2(q.y_m - sonar.y_m, q.x_m - sonar.x_m);
-        abs(wrap_angle_rad(bearing - self.pose.heading_rad)) <= self.swept_half_band_rad
-            && hypot(q.x_m - sonar.x_m, q.y_m - sonar.y_m) <= self.swept_range_m
+        // Read by the last standing sweep, between its rays.
+        self.swept.vouches(q)
     }
 }
 
@@ -156,6 +150,7 @@ fn point_along(points: &[PointM], length_m: f32) -> Option<(PointM, (f32, f32))>
 mod tests {
     use super::*;
     use crate::grid::GridGeometry;
+    use crate::sonar::Reading;
 
     const W: usize = crate::grid::words_for_cells(100 * 100);
 
@@ -164,35 +159,70 @@ mod tests {
         (Grid::new(g).unwrap(), Grid::new(g).unwrap())
     }
 
-    fn zone<'a>(grid: &'a Grid<W>, seen: &'a Grid<W>, half_band_rad: f32) -> BlindZone<'a, W> {
+    /// A silent ±93.6° sweep from (1, 1) facing +y with a 1.5 m sonar.
+    fn silent_sweep() -> heapless::Vec<Reading, 201> {
+        let step = 1.8f32.to_radians();
+        let mut v = heapless::Vec::new();
+        for i in -52..=52 {
+            let _ = v.push(Reading {
+                neck_angle_rad: i as f32 * step,
+                range_m: None,
+                pose: pose(),
+            });
+        }
+        v
+    }
+
+    fn pose() -> Pose {
+        Pose::new(1.0, 1.0, core::f32::consts::FRAC_PI_2)
+    }
+
+    fn zone<'a>(
+        grid: &'a Grid<W>,
+        seen: &'a Grid<W>,
+        readings: &'a [Reading],
+        half_band_rad: f32,
+    ) -> BlindZone<'a, W> {
         BlindZone {
             grid,
             seen,
-            pose: Pose::new(1.0, 1.0, core::f32::consts::FRAC_PI_2),
+            pose: pose(),
             sonar_offset_m: 0.2,
             blind_radius_m: 0.31,
             radius_m: 0.4,
             body_radius_m: 0.2,
-            swept_half_band_rad: half_band_rad,
-            swept_range_m: 1.45,
+            swept: Swept {
+                readings,
+                pose: pose(),
+                sonar_offset_m: 0.2,
+                half_band_rad,
+                min_range_m: 0.26,
+                range_m: 1.5,
+                cell_m: 0.05,
+                echo_limited: true,
+            },
         }
     }
 
     #[test]
     fn an_end_whose_blind_zone_was_read_is_kept() {
         let (grid, seen) = grids();
+        let sweep = silent_sweep();
         let prefix = [PointM::new(1.0, 1.0), PointM::new(1.0, 2.0)];
         // Ahead, within the sweep's band and range: sonar at 2.2, disc to 2.51 < 1.2 + 1.45.
-        assert_eq!(zone(&grid, &seen, 1.63).keep_m(&prefix), None);
+        assert_eq!(zone(&grid, &seen, &sweep, 1.63).keep_m(&prefix), None);
     }
 
     #[test]
     fn an_end_at_the_edge_of_what_was_read_is_pulled_back() {
         let (grid, seen) = grids();
+        let sweep = silent_sweep();
         // 1.1 m ahead: the blind disc reaches 1.1 + 0.2 + 0.31 = 1.61 m from the centre,
         // 1.41 m from the sweep's sonar: read. 1.4 m ahead it reaches 1.71 m from the sonar.
         let prefix = [PointM::new(1.0, 1.0), PointM::new(1.0, 2.4)];
-        let kept = zone(&grid, &seen, 1.63).keep_m(&prefix).expect("cut");
+        let kept = zone(&grid, &seen, &sweep, 1.63)
+            .keep_m(&prefix)
+            .expect("cut");
         assert!((1.0..1.2).contains(&kept), "{kept}");
         // Cells crossed by a ray count whatever the band: mark the column ahead as seen.
         let (grid, mut seen) = grids();
@@ -201,17 +231,18 @@ mod tests {
                 seen.set_xy(x, y, true);
             }
         }
-        assert_eq!(zone(&grid, &seen, 0.0).keep_m(&prefix), None);
+        assert_eq!(zone(&grid, &seen, &sweep, 0.0).keep_m(&prefix), None);
     }
 
     #[test]
     fn after_a_moving_pass_only_rays_count() {
         let (grid, seen) = grids();
+        let sweep = silent_sweep();
         let prefix = [PointM::new(1.0, 1.0), PointM::new(1.0, 1.5)];
         // Nothing seen and no band: even a short prefix ends blind; no end within it would
         // do better than the start, which the rule reports as "keep all" (None): the robot's
         // own blind zone is not the prefix's fault.
-        let kept = zone(&grid, &seen, 0.0).keep_m(&prefix);
+        let kept = zone(&grid, &seen, &sweep, 0.0).keep_m(&prefix);
         assert_eq!(kept, None);
     }
 }

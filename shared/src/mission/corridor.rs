@@ -9,15 +9,16 @@
 //!
 //! Here each path sample (every cell along the prefix, within sonar range of the robot) has
 //! points beside it, every cell out to one planning radius on each side of the path. A point is
-//! *known* when it was seen by some earlier ray or lies inside the last sweep's band as seen from
-//! the sonar; the two outermost ones also when their cell is occupied on the map (an obstacle
+//! *known* when it was seen by some earlier ray or the last standing sweep vouches for it
+//! between its rays (`swept`); the two outermost ones also when their cell is occupied on the map (an obstacle
 //! within reach is already grown into it). The prefix is good up to where the body, a disc of the
 //! planning radius, would first reach an unknown point.
 
+use super::swept::Swept;
 use crate::control::Pose;
 use crate::geom::PointM;
 use crate::grid::Grid;
-use crate::math::{abs, atan2, hypot, sqrt, wrap_angle_rad};
+use crate::math::{hypot, sqrt};
 
 /// Most samples looked at (a 6 m sonar range at 0.05 m per sample is 120).
 const MAX_SAMPLES: u32 = 512;
@@ -30,10 +31,9 @@ pub(super) struct Corridor<'a, const W: usize> {
     pub seen: &'a Grid<W>,
     /// Where the robot stands and faces (the sweep's pose).
     pub pose: Pose,
-    /// Sonar ahead of the centre, metres.
-    pub sonar_offset_m: f32,
-    /// Half-width of the band the sweep covered, radians.
-    pub half_band_rad: f32,
+    /// The last standing sweep, with the band it may vouch for (`Swept::NOTHING` after a
+    /// full sweep's `occupied_only` check or a moving pass).
+    pub swept: Swept<'a>,
     /// Planning radius, metres.
     pub radius_m: f32,
     /// The body's radius, metres: what lies within it of where the robot stands is free.
@@ -152,9 +152,7 @@ impl<const W: usize> Corridor<'_, W> {
     }
 
     fn in_band(&self, q: PointM) -> bool {
-        let sonar = self.pose.point_ahead(self.sonar_offset_m);
-        let bearing = atan2(q.y_m - sonar.y_m, q.x_m - sonar.x_m);
-        abs(wrap_angle_rad(bearing - self.pose.heading_rad)) <= self.half_band_rad
+        self.swept.vouches(q)
     }
 
     fn under_body(&self, q: PointM) -> bool {

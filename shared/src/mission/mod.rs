@@ -242,7 +242,7 @@ impl MissionConfig {
         goal_tolerance_m: 0.10,
         max_stalled_plans: 6,
         stall_distance_m: 0.10,
-        constant_depth_filter: true,
+        constant_depth_filter: false,
         trust_seen_space: true,
         max_trusted_path_m: 30.0,
         moving_half_sweep_deg: 95.0,
@@ -1472,7 +1472,7 @@ impl<const W: usize> Mission<W> {
         let mut unknown_at_m = if self.last_sweep_full {
             None
         } else {
-            self.first_unknown_beside_prefix_m(pose, trusted_band_rad)
+            self.first_unknown_beside_prefix_m(pose, trusted_band_rad, false)
         };
         let mut path_outside_band = needs_full_sweep(
             self.prefix.get(..near).unwrap_or(&[]),
@@ -1488,8 +1488,7 @@ impl<const W: usize> Mission<W> {
                 grid: &self.grid,
                 seen: &self.seen,
                 pose,
-                sonar_offset_m: self.config.robot.sonar_offset_m,
-                half_band_rad: 0.0,
+                swept: Swept::NOTHING,
                 radius_m: self.config.robot.planning_radius_m,
                 body_radius_m: self.config.robot.physical_radius_m(),
                 occupied_only: true,
@@ -1516,7 +1515,7 @@ impl<const W: usize> Mission<W> {
                 path_outside_band = false;
                 let length_m = polyline_length_m(&self.prefix);
                 unknown_at_m = self
-                    .first_unknown_beside_prefix_m(pose, trusted_band_rad)
+                    .first_unknown_beside_prefix_m(pose, trusted_band_rad, false)
                     .filter(|m| *m < length_m);
             }
             // Continuous mode may follow a prefix cut short; a cut of two cells or less would
@@ -1535,9 +1534,22 @@ impl<const W: usize> Mission<W> {
             }
         }
 
+        // What the sweep read but could not see through (behind an echo, or in the sonar's
+        // blind zone) is no business of a full sweep: follow only up to where the body would
+        // reach it, when that is a move at all, and look again from there (see `swept`).
+        if !self.last_sweep_full {
+            let hidden_at_m = self
+                .first_unknown_beside_prefix_m(pose, trusted_band_rad, true)
+                .filter(|m| *m > 2.0 * res_m);
+            if let Some(m) = hidden_at_m {
+                self.truncate_prefix_m(m);
+                self.stats.band_cuts += 1;
+            }
+        }
+
         // Where the prefix ends the sonar reads again, deaf within its minimum range: end it
         // where that zone is known (see `blind`).
-        let swept_half_band_rad = if self.last_sweep_full {
+        let swept_half_band_rad = if self.last_sweep_full && !moving {
             core::f32::consts::PI
         } else {
             trusted_band_rad
@@ -1547,13 +1559,18 @@ impl<const W: usize> Mission<W> {
             seen: &self.seen,
             pose,
             sonar_offset_m: self.config.robot.sonar_offset_m,
-            blind_radius_m: self.config.robot.sonar_min_range_m + res_m,
+            blind_radius_m: self.config.robot.sonar_min_range_m,
             radius_m: self.config.robot.planning_radius_m,
             body_radius_m: self.config.robot.physical_radius_m(),
-            swept_half_band_rad,
-            swept_range_m: self.config.robot.sonar_range_m - res_m,
+            swept: self.swept(pose, swept_half_band_rad, true),
         };
-        if let Some(m) = blind.keep_m(&self.prefix) {
+        // A moving pass's prefix is replaced by the next pass's long before its end.
+        let blind_cut = if moving {
+            None
+        } else {
+            blind.keep_m(&self.prefix)
+        };
+        if let Some(m) = blind_cut {
             self.truncate_prefix_m(m);
             self.stats.blind_cuts += 1;
         }
@@ -1574,13 +1591,17 @@ impl<const W: usize> Mission<W> {
     /// Keep the first `length_m` of the prefix (cut inside a segment where needed).
     /// How far along the prefix the body may go before it reaches space not known to be free
     /// (see [`Corridor`]), within sonar range of `pose`.
-    fn first_unknown_beside_prefix_m(&self, pose: Pose, band_rad: f32) -> Option<f32> {
+    fn first_unknown_beside_prefix_m(
+        &self,
+        pose: Pose,
+        band_rad: f32,
+        echo_limited: bool,
+    ) -> Option<f32> {
         Corridor {
             grid: &self.grid,
             seen: &self.seen,
             pose,
-            sonar_offset_m: self.config.robot.sonar_offset_m,
-            half_band_rad: band_rad,
+            swept: self.swept(pose, band_rad, echo_limited),
             radius_m: self.config.robot.planning_radius_m,
             body_radius_m: self.config.robot.physical_radius_m(),
             occupied_only: false,
@@ -1644,6 +1665,22 @@ impl<const W: usize> Mission<W> {
     /// of the centre does not help: with the full range (the seed's rule; the seed's cell
     /// count came to 1.06 m) the robot drove its body into a wall 3.0 m to its side with a
     /// 3 m sonar. At least one cell.
+    /// The last sweep as seen from `pose`, vouching within `half_band_rad` of the heading
+    /// (see `swept`).
+    fn swept(&self, pose: Pose, half_band_rad: f32, echo_limited: bool) -> Swept<'_> {
+        let robot = &self.config.robot;
+        Swept {
+            readings: self.readings.as_slice(),
+            pose,
+            sonar_offset_m: robot.sonar_offset_m,
+            half_band_rad,
+            min_range_m: robot.sonar_min_range_m,
+            range_m: robot.sonar_range_m,
+            cell_m: self.grid.geometry().resolution_m(),
+            echo_limited,
+        }
+    }
+
     fn prune_range_m(&self) -> f32 {
         let r = &self.config.robot;
         (r.sonar_range_m - r.planning_radius_m).max(self.grid.geometry().resolution_m())
@@ -1765,6 +1802,7 @@ mod corridor;
 mod local;
 mod pilot;
 mod settle;
+mod swept;
 #[cfg(test)]
 mod tests;
 mod trust;
@@ -1775,5 +1813,6 @@ pub use settle::SettleRule;
 
 use blind::BlindZone;
 use corridor::Corridor;
+use swept::Swept;
 use trust::SeenSpace;
 pub use trust::SEEN_NEAR_CELLS;
