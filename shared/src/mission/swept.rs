@@ -62,7 +62,7 @@ impl Swept<'_> {
     /// Does the sweep prove `q` free (see the module docs)?
     pub fn vouches(&self, q: PointM) -> bool {
         let n = self.readings.len();
-        if n < 2 || !(self.half_band_rad > 0.0) {
+        if n < 2 || self.half_band_rad.is_nan() || self.half_band_rad <= 0.0 {
             return false;
         }
         let sonar = self.pose.point_ahead(self.sonar_offset_m);
@@ -75,7 +75,7 @@ impl Swept<'_> {
             return true;
         }
         let d_m = hypot(q.x_m - sonar.x_m, q.y_m - sonar.y_m);
-        if !(d_m >= self.min_range_m) {
+        if d_m.is_nan() || d_m < self.min_range_m {
             return false;
         }
         // The readings on each side of `rel`: the sweep's angles are evenly spaced, so the
@@ -96,7 +96,8 @@ impl Swept<'_> {
         for i in [below, above] {
             let r = &self.readings[i];
             // Each neighbour must lie within a step of `q`'s bearing.
-            if !(abs(r.neck_angle_rad - rel) <= step * 1.001) {
+            let off_rad = abs(r.neck_angle_rad - rel);
+            if off_rad.is_nan() || off_rad > step * 1.001 {
                 return false;
             }
             let free_m = r.range_m.unwrap_or(self.range_m) - self.cell_m;
