@@ -5,6 +5,7 @@ pub mod cmd;
 pub mod cspace;
 pub mod device_sim;
 pub mod files;
+pub mod picture;
 pub mod qemu_cmd;
 pub mod remote;
 pub mod render;

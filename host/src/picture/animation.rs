@@ -1,0 +1,135 @@
+//! GIF animations of figures: one 256-colour palette for the whole animation: the marks' own
+//! colours exactly (so that small marks such as sonar hits keep their colour), and the rest
+//! learnt by `color_quant`'s NeuQuant from sample frames (anti-aliased edges, text); every
+//! pixel then takes the nearest entry. Anti-aliased pictures have thousands of colours, so
+//! exact per-frame palettes do not work.
+
+use std::collections::HashMap;
+use std::fs;
+use std::io::BufWriter;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use color_quant::NeuQuant;
+use image::{Rgb, RgbImage};
+
+/// Writes frames of one size to a GIF file.
+pub struct GifWriter {
+    encoder: gif::Encoder<BufWriter<fs::File>>,
+    palette: Vec<[u8; 3]>,
+    cache: HashMap<[u8; 3], u8>,
+    size: (u16, u16),
+    path: String,
+}
+
+impl GifWriter {
+    /// Create `path` for frames the size of `samples[0]`, with a palette learnt from `samples`
+    /// (e.g. the first and the last frame) and `key_colors` (the marks' colours).
+    pub fn create(path: &Path, samples: &[&RgbImage], key_colors: &[Rgb<u8>]) -> Result<Self> {
+        let name = path.display().to_string();
+        let first = samples
+            .first()
+            .with_context(|| format!("{name}: no frame to write"))?;
+        let (w, h) = first.dimensions();
+        let size = (
+            u16::try_from(w).with_context(|| format!("{name}: frame wider than 65535 px"))?,
+            u16::try_from(h).with_context(|| format!("{name}: frame taller than 65535 px"))?,
+        );
+        let mut palette: Vec<[u8; 3]> = Vec::new();
+        for c in key_colors.iter().take(128) {
+            if !palette.contains(&c.0) {
+                palette.push(c.0);
+            }
+        }
+        let mut rgba = Vec::new();
+        for s in samples {
+            for p in s.pixels() {
+                rgba.extend_from_slice(&[p.0[0], p.0[1], p.0[2], 255]);
+            }
+        }
+        let learnt = NeuQuant::new(10, 256 - palette.len(), &rgba).color_map_rgb();
+        palette.extend(learnt.chunks_exact(3).map(|c| [c[0], c[1], c[2]]));
+        let flat: Vec<u8> = palette.concat();
+        let file = fs::File::create(path).with_context(|| format!("{name}: cannot create"))?;
+        let mut encoder = gif::Encoder::new(BufWriter::new(file), size.0, size.1, &flat)
+            .with_context(|| format!("{name}: cannot write GIF"))?;
+        encoder
+            .set_repeat(gif::Repeat::Infinite)
+            .with_context(|| format!("{name}: cannot write GIF"))?;
+        Ok(Self {
+            encoder,
+            palette,
+            cache: HashMap::new(),
+            size,
+            path: name,
+        })
+    }
+
+    /// Palette index of a colour (nearest entry, remembered).
+    fn index(&mut self, c: [u8; 3]) -> u8 {
+        if let Some(i) = self.cache.get(&c) {
+            return *i;
+        }
+        let mut best = (u32::MAX, 0u8);
+        for (i, p) in self.palette.iter().enumerate() {
+            let d: u32 = (0..3)
+                .map(|k| (p[k] as i32 - c[k] as i32).unsigned_abs().pow(2))
+                .sum();
+            if d < best.0 {
+                best = (d, i as u8);
+            }
+        }
+        let i = best.1;
+        self.cache.insert(c, i);
+        i
+    }
+
+    /// Append a frame shown for `delay_cs` hundredths of a second. Frames of another size than
+    /// the first are refused.
+    pub fn add(&mut self, image: &RgbImage, delay_cs: u16) -> Result<()> {
+        let (w, h) = image.dimensions();
+        if (w, h) != (self.size.0 as u32, self.size.1 as u32) {
+            anyhow::bail!(
+                "{}: frame of {w}x{h} px in an animation of {}x{} px",
+                self.path,
+                self.size.0,
+                self.size.1
+            );
+        }
+        let indices: Vec<u8> = image.pixels().map(|p| self.index(p.0)).collect();
+        let mut frame = gif::Frame::from_indexed_pixels(self.size.0, self.size.1, indices, None);
+        frame.delay = delay_cs;
+        self.encoder
+            .write_frame(&frame)
+            .with_context(|| format!("{}: cannot write GIF frame", self.path))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn key_colours_survive_and_frames_are_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.gif");
+        // A gradient with one tiny red mark.
+        let mut img = RgbImage::from_fn(64, 48, |x, y| Rgb([(x * 4) as u8, (y * 5) as u8, 128]));
+        img.put_pixel(3, 3, Rgb([230, 20, 20]));
+        let mut w = GifWriter::create(&path, &[&img], &[Rgb([230, 20, 20])]).unwrap();
+        w.add(&img, 10).unwrap();
+        w.add(&img, 10).unwrap();
+        assert!(w.add(&RgbImage::new(10, 10), 10).is_err());
+        drop(w);
+        let mut decoder = gif::DecodeOptions::new();
+        decoder.set_color_output(gif::ColorOutput::RGBA);
+        let mut d = decoder.read_info(fs::File::open(&path).unwrap()).unwrap();
+        let mut frames = 0;
+        while let Some(f) = d.read_next_frame().unwrap() {
+            frames += 1;
+            let i = (3 * 64 + 3) * 4;
+            assert_eq!(&f.buffer[i..i + 3], &[230, 20, 20]);
+        }
+        assert_eq!(frames, 2);
+    }
+}

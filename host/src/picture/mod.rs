@@ -1,0 +1,1183 @@
+//! Every `twil` picture (plan, simulate and mission PNGs and GIFs, cspace PNG and GIF) is a
+//! [`Figure`] drawn by this module: anti-aliased shapes from `tiny-skia`, text in the bundled
+//! DejaVu Sans through `ab_glyph` ([`text`]), GIFs through [`animation`]. Why these crates:
+//! `docs/pictures.md`.
+//!
+//! A figure is laid out once from a [`FigureSpec`]:
+//!
+//! ```text
+//! caption lines (wrapped to the width)
+//! ┌ panel title ─────────────┐ ┌ panel 2 … ┐
+//! y (m)                       
+//!  4 ┤ plot area (data units, │
+//!  2 ┤ y up, clipped)         │
+//!  0 ┼──┬──┬──┬──┬──┬──┬──┬──┘
+//!    0  2  4  6  8 …
+//! ▬▬▬ 1 m         x (m)
+//! legend: swatch + label for every mark, in as many columns as fit
+//! ```
+//!
+//! Each panel maps data units to pixels with its own scale (`px_per_x`, `px_per_y`), draws
+//! axis ticks at 1-2-5 steps with labels, and a scale bar of a 1-2-5 length under the plot.
+//! [`Figure::plot`] gives a [`Plot`] that draws in data units, clipped to the plot area.
+//! Nothing here panics: non-finite coordinates draw nothing and sizes are bounded.
+
+pub mod animation;
+pub mod text;
+
+use image::{Rgb, RgbImage};
+use tiny_skia::{
+    FillRule, LineCap, LineJoin, Mask, Paint, PathBuilder, Pixmap, PremultipliedColorU8, Rect,
+    Stroke, Transform,
+};
+use twil_core::grid::{Grid, GridGeometry};
+
+/// Largest accepted picture side, pixels.
+pub const MAX_SIDE_PX: u32 = 8192;
+/// Caption text size, pixels.
+pub const CAPTION_PX: f32 = 15.0;
+/// Tick, axis and legend text size, pixels.
+pub const LABEL_PX: f32 = 13.0;
+/// Thickness of the scale bar, pixels.
+pub const SCALE_BAR_THICKNESS_PX: i32 = 5;
+/// Side of a legend swatch, pixels.
+pub const SWATCH_PX: i32 = 16;
+/// Narrowest figure, pixels: small maps get room for a readable legend and caption.
+pub const MIN_WIDTH_PX: u32 = 520;
+
+const PAD: i32 = 8;
+const TICK_PX: i32 = 5;
+const PANEL_GAP: i32 = 24;
+
+/// Colours that every picture shares, so that plan, simulate and cspace pictures read alike.
+pub mod palette {
+    use image::Rgb;
+    /// Background, and space never seen by the sonar.
+    pub const BACKGROUND: Rgb<u8> = Rgb([255, 255, 255]);
+    /// Text.
+    pub const TEXT: Rgb<u8> = Rgb([20, 20, 20]);
+    /// Axes and ticks.
+    pub const AXIS: Rgb<u8> = Rgb([70, 70, 80]);
+    /// Faint lines at the axis ticks.
+    pub const GRID_LINES: Rgb<u8> = Rgb([232, 234, 240]);
+    /// The scale bar (a colour no other mark uses, so tests can find it).
+    pub const SCALE_BAR: Rgb<u8> = Rgb([30, 30, 110]);
+    /// The legend box's border.
+    pub const LEGEND_BORDER: Rgb<u8> = Rgb([190, 190, 200]);
+    /// Cells occupied in the robot's map (obstacles grown by the planning radius).
+    pub const MAP: Rgb<u8> = Rgb([250, 200, 150]);
+    /// Obstacles themselves (plan pictures), or a saved map.
+    pub const OBSTACLE: Rgb<u8> = Rgb([110, 110, 122]);
+    /// Obstacle outlines.
+    pub const OUTLINE: Rgb<u8> = Rgb([35, 35, 45]);
+    /// Real obstacles the robot does not know (drawn faint).
+    pub const REAL: Rgb<u8> = Rgb([150, 150, 160]);
+    /// Obstacles known before the start.
+    pub const KNOWN: Rgb<u8> = Rgb([35, 35, 45]);
+    /// Space the sonar has swept and seen free.
+    pub const SEEN: Rgb<u8> = Rgb([214, 236, 250]);
+    /// The full plan.
+    pub const PLAN: Rgb<u8> = Rgb([110, 150, 255]);
+    /// The kept prefix (and `twil plan`'s path).
+    pub const PREFIX: Rgb<u8> = Rgb([0, 70, 210]);
+    /// The driven trail.
+    pub const TRAIL: Rgb<u8> = Rgb([0, 150, 60]);
+    /// Sonar hits.
+    pub const HITS: Rgb<u8> = Rgb([230, 20, 20]);
+    /// The robot.
+    pub const ROBOT: Rgb<u8> = Rgb([255, 140, 0]);
+    /// Start marker.
+    pub const START: Rgb<u8> = Rgb([0, 165, 0]);
+    /// Goal marker.
+    pub const GOAL: Rgb<u8> = Rgb([200, 0, 200]);
+    /// The band the last sweep covered (drawn translucent).
+    pub const BAND: Rgb<u8> = Rgb([255, 215, 0]);
+    /// The sonar range circle.
+    pub const RANGE: Rgb<u8> = Rgb([150, 80, 200]);
+    /// A second path to compare with (cspace: the thesis' path).
+    pub const COMPARE: Rgb<u8> = Rgb([245, 150, 20]);
+    /// cspace: configurations where arm 1 collides.
+    pub const ARM1_CELL: Rgb<u8> = Rgb([160, 180, 215]);
+    /// cspace: configurations where arm 2 collides.
+    pub const ARM2_CELL: Rgb<u8> = Rgb([100, 100, 118]);
+    /// cspace: arm 1.
+    pub const ARM1: Rgb<u8> = Rgb([60, 120, 200]);
+    /// cspace: arm 2 (or the moving object).
+    pub const ARM2: Rgb<u8> = Rgb([30, 160, 150]);
+    /// cspace: earlier arm positions.
+    pub const GHOST: Rgb<u8> = Rgb([205, 205, 215]);
+}
+
+/// Opacity of the band wedge over the map.
+pub const BAND_ALPHA: f32 = 0.28;
+/// Opacity of the unknown real obstacles.
+pub const REAL_ALPHA: f32 = 0.45;
+
+/// The colour `color` at opacity `alpha` over white: what a translucent mark looks like on
+/// the background, and so its legend swatch.
+pub fn over_white(color: Rgb<u8>, alpha: f32) -> Rgb<u8> {
+    let a = alpha.clamp(0.0, 1.0);
+    Rgb(color.0.map(|c| (255.0 * (1.0 - a) + c as f32 * a).round() as u8))
+}
+
+/// Why a figure could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum PictureError {
+    /// The layout would exceed [`MAX_SIDE_PX`] on a side, or a scale is not positive.
+    #[error("picture of {width_px}x{height_px} px is not possible (at most {MAX_SIDE_PX} px a side, positive scales)")]
+    Size {
+        /// Width asked for.
+        width_px: f64,
+        /// Height asked for.
+        height_px: f64,
+    },
+    /// Writing a file failed.
+    #[error("{path}: cannot write the picture: {error}")]
+    Save {
+        /// The file.
+        path: String,
+        /// Why.
+        error: String,
+    },
+}
+
+/// Marker shapes, a fixed size in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Marker {
+    /// A filled disc with a white rim.
+    Disc,
+    /// A filled diamond with a white rim.
+    Diamond,
+    /// A filled square with a white rim.
+    Square,
+}
+
+/// A legend swatch: how the mark looks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mark {
+    /// A filled square (areas: cells, obstacles, shaded space).
+    Fill(Rgb<u8>),
+    /// A filled square with an outline (obstacles drawn filled and outlined).
+    FillOutline(Rgb<u8>, Rgb<u8>),
+    /// A square outline (outlined polygons).
+    Outline(Rgb<u8>),
+    /// A horizontal line `width` pixels thick (paths).
+    Line(Rgb<u8>, f32),
+    /// A marker.
+    Marker(Marker, Rgb<u8>),
+    /// Three dots (sonar hits).
+    Dots(Rgb<u8>),
+    /// A ring (a circle outline, e.g. the sonar range).
+    Ring(Rgb<u8>),
+    /// The robot: a translucent disc with outline and heading.
+    Robot(Rgb<u8>),
+}
+
+impl Mark {
+    /// The colour whose exact pixels the swatch shows.
+    pub fn color(&self) -> Rgb<u8> {
+        match *self {
+            Mark::Fill(c)
+            | Mark::Outline(c)
+            | Mark::Line(c, _)
+            | Mark::Marker(_, c)
+            | Mark::Dots(c)
+            | Mark::Ring(c)
+            | Mark::Robot(c) => c,
+            Mark::FillOutline(c, _) => c,
+        }
+    }
+}
+
+/// One legend line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LegendEntry {
+    /// What the mark is.
+    pub label: String,
+    /// How it looks.
+    pub mark: Mark,
+}
+
+impl LegendEntry {
+    /// An entry.
+    pub fn new(label: impl Into<String>, mark: Mark) -> Self {
+        Self {
+            label: label.into(),
+            mark,
+        }
+    }
+}
+
+/// One axis of a panel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Axis {
+    /// Data value at the left (x) or bottom (y) edge of the plot.
+    pub min: f32,
+    /// Data value at the right (x) or top (y) edge.
+    pub max: f32,
+    /// Pixels per data unit.
+    pub px_per_unit: f32,
+    /// The axis title with its unit, e.g. `x (m)`.
+    pub title: String,
+}
+
+/// One plot of a figure.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PanelSpec {
+    /// Horizontal axis.
+    pub x: Axis,
+    /// Vertical axis (data y up).
+    pub y: Axis,
+    /// Unit of the scale bar (along x), e.g. `m`.
+    pub unit: String,
+    /// A title above the plot, if any.
+    pub title: Option<String>,
+}
+
+impl PanelSpec {
+    /// A map of `geometry` (origin at its lower-left corner) at `px_per_cell`, in metres.
+    pub fn map(geometry: GridGeometry, px_per_cell: u32, title: Option<String>) -> Self {
+        let px_per_m = px_per_cell as f32 / geometry.resolution_m();
+        Self {
+            x: Axis {
+                min: 0.0,
+                max: geometry.width_m(),
+                px_per_unit: px_per_m,
+                title: "x (m)".into(),
+            },
+            y: Axis {
+                min: 0.0,
+                max: geometry.height_m(),
+                px_per_unit: px_per_m,
+                title: "y (m)".into(),
+            },
+            unit: "m".into(),
+            title,
+        }
+    }
+}
+
+/// What a figure shows around its plots.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FigureSpec {
+    /// Caption lines above the plots (wrapped to the figure's width).
+    pub caption: Vec<String>,
+    /// Plots, side by side.
+    pub panels: Vec<PanelSpec>,
+    /// Legend entries, below the plots.
+    pub legend: Vec<LegendEntry>,
+}
+
+/// A rectangle of pixels, `[x0, x1) × [y0, y1)` from the picture's top-left corner.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PxRect {
+    /// Left.
+    pub x0: i32,
+    /// Top.
+    pub y0: i32,
+    /// Right (exclusive).
+    pub x1: i32,
+    /// Bottom (exclusive).
+    pub y1: i32,
+}
+
+impl PxRect {
+    /// Does it hold the pixel?
+    pub fn contains(&self, x: i32, y: i32) -> bool {
+        x >= self.x0 && x < self.x1 && y >= self.y0 && y < self.y1
+    }
+}
+
+/// Where a scale bar was drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScaleBar {
+    /// The bar's pixels (filled with [`palette::SCALE_BAR`]).
+    pub rect: PxRect,
+    /// Its length in data units.
+    pub length: f32,
+}
+
+#[derive(Clone, Debug)]
+struct PanelLayout {
+    spec: PanelSpec,
+    plot: PxRect,
+    scale_bar: ScaleBar,
+}
+
+/// A laid-out picture: see the module documentation.
+pub struct Figure {
+    pixmap: Pixmap,
+    panels: Vec<PanelLayout>,
+    legend_box: PxRect,
+    legend_swatches: Vec<PxRect>,
+    masks: Vec<Mask>,
+}
+
+/// A length of 1, 2 or 5 × 10^k near `target`.
+fn nice(target: f32) -> f32 {
+    if !(target.is_finite() && target > 0.0) {
+        return 1.0;
+    }
+    let p = 10f32.powf(target.log10().floor());
+    let m = target / p;
+    let f = if m < 1.5 {
+        1.0
+    } else if m < 3.5 {
+        2.0
+    } else if m < 7.5 {
+        5.0
+    } else {
+        10.0
+    };
+    f * p
+}
+
+/// A tick label: as many decimals as the step needs.
+fn tick_label(v: f32, step: f32) -> String {
+    let decimals = if step >= 1.0 {
+        0
+    } else {
+        (-step.log10().floor()) as usize
+    };
+    let s = format!("{v:.decimals$}");
+    if s.starts_with('-') && s.trim_start_matches(['-', '0', '.']).is_empty() {
+        s[1..].to_string()
+    } else {
+        s
+    }
+}
+
+/// Ticks of an axis: values and their offsets from the axis's `min` edge, pixels.
+fn ticks(axis: &Axis, min_spacing_px: f32) -> (f32, Vec<(f32, f32)>) {
+    let step = nice(min_spacing_px / axis.px_per_unit);
+    let step = if step * axis.px_per_unit < min_spacing_px * 0.75 {
+        step * 2.0
+    } else {
+        step
+    };
+    let mut out = Vec::new();
+    let first = (axis.min / step).ceil();
+    for k in 0..200 {
+        let v = (first + k as f32) * step;
+        if v > axis.max + step * 1e-3 {
+            break;
+        }
+        out.push((v, (v - axis.min) * axis.px_per_unit));
+    }
+    (step, out)
+}
+
+/// The scale bar's length in data units: one unit when that is 36 to 240 px long, else the
+/// shortest 1-2-5 length of at least 36 px.
+pub fn scale_bar_length(px_per_unit: f32) -> f32 {
+    if (36.0..=240.0).contains(&px_per_unit) {
+        return 1.0;
+    }
+    let mut l = nice(36.0 / px_per_unit);
+    for _ in 0..3 {
+        if l * px_per_unit >= 36.0 {
+            break;
+        }
+        l = nice(l * 2.2);
+    }
+    l
+}
+
+fn wrap(text: &str, size_px: f32, width_px: f32) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in text.split(' ') {
+        let candidate = if line.is_empty() {
+            word.to_string()
+        } else {
+            format!("{line} {word}")
+        };
+        if !line.is_empty() && text::width_px(&candidate, size_px) > width_px {
+            lines.push(std::mem::take(&mut line));
+            line = word.to_string();
+        } else {
+            line = candidate;
+        }
+    }
+    lines.push(line);
+    lines
+}
+
+fn color(c: Rgb<u8>, alpha: f32) -> tiny_skia::Color {
+    tiny_skia::Color::from_rgba8(c.0[0], c.0[1], c.0[2], (alpha.clamp(0.0, 1.0) * 255.0) as u8)
+}
+
+fn paint(c: Rgb<u8>, alpha: f32) -> Paint<'static> {
+    let mut p = Paint::default();
+    p.set_color(color(c, alpha));
+    p.anti_alias = true;
+    p
+}
+
+fn solid(c: Rgb<u8>) -> PremultipliedColorU8 {
+    PremultipliedColorU8::from_rgba(c.0[0], c.0[1], c.0[2], 255)
+        .unwrap_or(PremultipliedColorU8::TRANSPARENT)
+}
+
+/// Coordinates beyond this many pixels are not drawn (keeps the rasteriser's work bounded).
+const FAR_PX: f32 = 1.0e5;
+
+impl Figure {
+    /// Lay out and draw everything but the data: caption, axes, ticks, scale bars, legend.
+    pub fn new(spec: &FigureSpec) -> Result<Self, PictureError> {
+        let label_h = text::line_height_px(LABEL_PX) as i32;
+        let caption_h = text::line_height_px(CAPTION_PX) as i32;
+        // Panel blocks: widths and heights.
+        struct Block {
+            gutter: i32,
+            plot_w: i32,
+            plot_h: i32,
+            right: i32,
+        }
+        let mut blocks = Vec::new();
+        for p in &spec.panels {
+            let ok = |a: &Axis| {
+                a.px_per_unit.is_finite()
+                    && a.px_per_unit > 0.0
+                    && a.min.is_finite()
+                    && a.max.is_finite()
+                    && a.max > a.min
+            };
+            let (w, h) = (
+                (p.x.max - p.x.min) as f64 * p.x.px_per_unit as f64,
+                (p.y.max - p.y.min) as f64 * p.y.px_per_unit as f64,
+            );
+            if !ok(&p.x) || !ok(&p.y) || w > MAX_SIDE_PX as f64 || h > MAX_SIDE_PX as f64 {
+                return Err(PictureError::Size {
+                    width_px: w,
+                    height_px: h,
+                });
+            }
+            let (ystep, yt) = ticks(&p.y, 60.0);
+            let gutter = yt
+                .iter()
+                .map(|(v, _)| text::width_px(&tick_label(*v, ystep), LABEL_PX) as i32)
+                .max()
+                .unwrap_or(0)
+                .max(text::width_px(&p.y.title, LABEL_PX) as i32 / 2)
+                + TICK_PX
+                + 4;
+            let (xstep, xt) = ticks(&p.x, 60.0);
+            let right = xt
+                .last()
+                .map(|(v, _)| text::width_px(&tick_label(*v, xstep), LABEL_PX) as i32 / 2 + 2)
+                .unwrap_or(0)
+                .max(6);
+            blocks.push(Block {
+                gutter,
+                plot_w: w.round() as i32,
+                plot_h: h.round() as i32,
+                right,
+            });
+        }
+        let panels_w: i32 = blocks
+            .iter()
+            .map(|b| b.gutter + b.plot_w + b.right)
+            .sum::<i32>()
+            + PANEL_GAP * (blocks.len() as i32 - 1).max(0);
+        let width = (panels_w + 2 * PAD).max(MIN_WIDTH_PX as i32);
+        let inner_w = (width - 2 * PAD) as f32;
+        // Caption.
+        let caption: Vec<String> = spec
+            .caption
+            .iter()
+            .flat_map(|l| wrap(l, CAPTION_PX, inner_w))
+            .collect();
+        let caption_top = PAD;
+        let panels_top = caption_top + caption.len() as i32 * caption_h + 4;
+        let header_h = label_h + 2;
+        let plot_h_max = blocks.iter().map(|b| b.plot_h).max().unwrap_or(0);
+        let below_plot = TICK_PX + label_h + label_h + 6;
+        let legend_top = panels_top + header_h + plot_h_max + below_plot + 4;
+        // Legend grid.
+        let entry_w = spec
+            .legend
+            .iter()
+            .map(|e| SWATCH_PX + 6 + text::width_px(&e.label, LABEL_PX).ceil() as i32 + 14)
+            .max()
+            .unwrap_or(1);
+        let cols = ((inner_w as i32 - 8) / entry_w)
+            .clamp(1, spec.legend.len().max(1) as i32);
+        let rows = (spec.legend.len() as i32 + cols - 1) / cols;
+        let row_h = label_h.max(SWATCH_PX + 4);
+        let legend_h = if spec.legend.is_empty() {
+            0
+        } else {
+            rows * row_h + 10
+        };
+        let height = legend_top + legend_h + PAD;
+        if width as u32 > MAX_SIDE_PX || height as u32 > MAX_SIDE_PX {
+            return Err(PictureError::Size {
+                width_px: width as f64,
+                height_px: height as f64,
+            });
+        }
+        let mut pixmap = Pixmap::new(width as u32, height as u32).ok_or(PictureError::Size {
+            width_px: width as f64,
+            height_px: height as f64,
+        })?;
+        pixmap.fill(tiny_skia::Color::WHITE);
+        let mut fig = Figure {
+            pixmap,
+            panels: Vec::new(),
+            legend_box: PxRect {
+                x0: PAD,
+                y0: legend_top,
+                x1: width - PAD,
+                y1: legend_top + legend_h,
+            },
+            legend_swatches: Vec::new(),
+            masks: Vec::new(),
+        };
+        for (i, line) in caption.iter().enumerate() {
+            fig.text(
+                PAD as f32,
+                (caption_top + i as i32 * caption_h) as f32,
+                line,
+                CAPTION_PX,
+                palette::TEXT,
+            );
+        }
+        // Panels.
+        let mut x = PAD + (width - 2 * PAD - panels_w) / 2;
+        for (p, b) in spec.panels.iter().zip(&blocks) {
+            let plot = PxRect {
+                x0: x + b.gutter,
+                y0: panels_top + header_h,
+                x1: x + b.gutter + b.plot_w,
+                y1: panels_top + header_h + b.plot_h,
+            };
+            let scale_bar = fig.draw_axes(p, plot, header_h, label_h);
+            let mut mask = Mask::new(width as u32, height as u32).ok_or(PictureError::Size {
+                width_px: width as f64,
+                height_px: height as f64,
+            })?;
+            if let Some(r) = Rect::from_ltrb(
+                plot.x0 as f32,
+                plot.y0 as f32,
+                plot.x1 as f32,
+                plot.y1 as f32,
+            ) {
+                mask.fill_path(
+                    &PathBuilder::from_rect(r),
+                    FillRule::Winding,
+                    false,
+                    Transform::identity(),
+                );
+            }
+            fig.masks.push(mask);
+            fig.panels.push(PanelLayout {
+                spec: p.clone(),
+                plot,
+                scale_bar,
+            });
+            x += b.gutter + b.plot_w + b.right + PANEL_GAP;
+        }
+        // Legend.
+        if !spec.legend.is_empty() {
+            let lb = fig.legend_box;
+            fig.stroke_px_rect(lb, palette::LEGEND_BORDER);
+            let total_w = cols * entry_w;
+            let x0 = lb.x0 + ((lb.x1 - lb.x0) - total_w).max(0) / 2;
+            for (i, e) in spec.legend.iter().enumerate() {
+                let (c, r) = (i as i32 % cols, i as i32 / cols);
+                let sx = x0 + c * entry_w + 4;
+                let sy = lb.y0 + 5 + r * row_h + (row_h - SWATCH_PX) / 2;
+                let sw = PxRect {
+                    x0: sx,
+                    y0: sy,
+                    x1: sx + SWATCH_PX,
+                    y1: sy + SWATCH_PX,
+                };
+                fig.swatch(sw, e.mark);
+                fig.legend_swatches.push(sw);
+                let ty = lb.y0 + 5 + r * row_h + (row_h - label_h) / 2;
+                fig.text(
+                    (sx + SWATCH_PX + 6) as f32,
+                    ty as f32,
+                    &e.label,
+                    LABEL_PX,
+                    palette::TEXT,
+                );
+            }
+        }
+        Ok(fig)
+    }
+
+    /// Axes, ticks, tick labels, titles and the scale bar of one panel; returns the bar.
+    fn draw_axes(&mut self, p: &PanelSpec, plot: PxRect, header_h: i32, label_h: i32) -> ScaleBar {
+        let (xstep, xt) = ticks(&p.x, 60.0);
+        let (ystep, yt) = ticks(&p.y, 60.0);
+        // Faint lines at the ticks, under the data.
+        for (_, off) in &xt {
+            let x = plot.x0 + off.round() as i32;
+            self.fill_px(x, plot.y0, x + 1, plot.y1, palette::GRID_LINES);
+        }
+        for (_, off) in &yt {
+            let y = plot.y1 - 1 - off.round() as i32;
+            self.fill_px(plot.x0, y, plot.x1, y + 1, palette::GRID_LINES);
+        }
+        // Axis lines and ticks, outside the plot.
+        self.fill_px(plot.x0 - 1, plot.y0, plot.x0, plot.y1 + 1, palette::AXIS);
+        self.fill_px(plot.x0 - 1, plot.y1, plot.x1, plot.y1 + 1, palette::AXIS);
+        for (v, off) in &xt {
+            let x = (plot.x0 + off.round() as i32).min(plot.x1 - 1);
+            self.fill_px(x, plot.y1, x + 1, plot.y1 + TICK_PX, palette::AXIS);
+            let s = tick_label(*v, xstep);
+            let w = text::width_px(&s, LABEL_PX);
+            self.text(
+                x as f32 - w / 2.0,
+                (plot.y1 + TICK_PX) as f32,
+                &s,
+                LABEL_PX,
+                palette::TEXT,
+            );
+        }
+        for (v, off) in &yt {
+            let y = (plot.y1 - 1 - off.round() as i32).max(plot.y0);
+            self.fill_px(plot.x0 - 1 - TICK_PX, y, plot.x0 - 1, y + 1, palette::AXIS);
+            let s = tick_label(*v, ystep);
+            let w = text::width_px(&s, LABEL_PX);
+            self.text(
+                plot.x0 as f32 - 3.0 - TICK_PX as f32 - w,
+                y as f32 - label_h as f32 / 2.0,
+                &s,
+                LABEL_PX,
+                palette::TEXT,
+            );
+        }
+        // Header: y title at the left, panel title right-aligned.
+        let header_y = (plot.y0 - header_h) as f32;
+        let yw = text::width_px(&p.y.title, LABEL_PX);
+        self.text(
+            (plot.x0 as f32 - yw / 2.0).max(0.0),
+            header_y,
+            &p.y.title,
+            LABEL_PX,
+            palette::TEXT,
+        );
+        if let Some(title) = &p.title {
+            let w = text::width_px(title, LABEL_PX);
+            self.text(
+                plot.x1 as f32 - w,
+                header_y,
+                title,
+                LABEL_PX,
+                palette::TEXT,
+            );
+        }
+        // Row under the tick labels: scale bar at the left, x title centred.
+        let row_y = plot.y1 + TICK_PX + label_h + 2;
+        let length = scale_bar_length(p.x.px_per_unit);
+        let bar_px = (length * p.x.px_per_unit).round() as i32;
+        let bar = PxRect {
+            x0: plot.x0,
+            y0: row_y + (label_h - SCALE_BAR_THICKNESS_PX) / 2,
+            x1: plot.x0 + bar_px,
+            y1: row_y + (label_h - SCALE_BAR_THICKNESS_PX) / 2 + SCALE_BAR_THICKNESS_PX,
+        };
+        self.fill_px(bar.x0, bar.y0, bar.x1, bar.y1, palette::SCALE_BAR);
+        let unit_sep = if p.unit.starts_with('°') { "" } else { " " };
+        let label = format!("{}{unit_sep}{}", tick_label(length, length), p.unit);
+        self.text(
+            (bar.x1 + 5) as f32,
+            row_y as f32,
+            &label,
+            LABEL_PX,
+            palette::TEXT,
+        );
+        let tw = text::width_px(&p.x.title, LABEL_PX);
+        let centre = (plot.x0 + plot.x1) as f32 / 2.0 - tw / 2.0;
+        let after_bar = (bar.x1 + 5) as f32 + text::width_px(&label, LABEL_PX) + 12.0;
+        self.text(
+            centre.max(after_bar),
+            row_y as f32,
+            &p.x.title,
+            LABEL_PX,
+            palette::TEXT,
+        );
+        ScaleBar { rect: bar, length }
+    }
+
+    fn swatch(&mut self, r: PxRect, mark: Mark) {
+        let (cx, cy) = (
+            (r.x0 + r.x1) as f32 / 2.0,
+            (r.y0 + r.y1) as f32 / 2.0,
+        );
+        let half = (r.x1 - r.x0) as f32 / 2.0;
+        match mark {
+            Mark::Fill(c) => self.fill_px(r.x0, r.y0, r.x1, r.y1, c),
+            Mark::FillOutline(c, o) => {
+                self.fill_px(r.x0, r.y0, r.x1, r.y1, c);
+                self.stroke_px_rect(r, o);
+            }
+            Mark::Outline(c) => {
+                self.stroke_px_rect(r, c);
+                let inner = PxRect {
+                    x0: r.x0 + 1,
+                    y0: r.y0 + 1,
+                    x1: r.x1 - 1,
+                    y1: r.y1 - 1,
+                };
+                self.stroke_px_rect(inner, c);
+            }
+            Mark::Line(c, w) => {
+                let t = (w.round() as i32).clamp(1, r.y1 - r.y0);
+                let y0 = r.y0 + (r.y1 - r.y0 - t) / 2;
+                self.fill_px(r.x0 - 2, y0, r.x1 + 2, y0 + t, c);
+            }
+            Mark::Marker(m, c) => self.marker_px(cx, cy, m, half * 1.6, c, None),
+            Mark::Dots(c) => {
+                for (dx, dy) in [(-4.0, 3.0), (0.0, -3.0), (4.0, 2.0)] {
+                    self.disc_px(cx + dx, cy + dy, 2.2, c, 1.0, None);
+                }
+                // One exact pixel block in the middle, so the colour is certain to show.
+                self.fill_px(cx as i32, cy as i32 - 3, cx as i32 + 1, cy as i32 - 2, c);
+            }
+            Mark::Ring(c) => {
+                self.circle_px(cx, cy, half - 1.5, c, 2.0, None);
+                self.fill_px(r.x0, cy as i32, r.x0 + 2, cy as i32 + 1, c);
+            }
+            Mark::Robot(c) => {
+                self.disc_px(cx, cy, half - 1.0, c, 0.35, None);
+                self.circle_px(cx, cy, half - 1.0, c, 2.0, None);
+                self.line_px(&[(cx, cy), (cx + half - 1.0, cy)], c, 2.0, 1.0, None);
+                self.fill_px(cx as i32, cy as i32, cx as i32 + 4, cy as i32 + 1, c);
+            }
+        }
+    }
+
+    // ----- geometry in pixels -----
+
+    fn fill_px(&mut self, x0: i32, y0: i32, x1: i32, y1: i32, c: Rgb<u8>) {
+        self.blend_px(x0, y0, x1, y1, c, 1.0, None);
+    }
+
+    /// Fill a pixel rectangle with `c` at `alpha`, limited to `clip` when given.
+    #[allow(clippy::too_many_arguments)]
+    fn blend_px(
+        &mut self,
+        x0: i32,
+        y0: i32,
+        x1: i32,
+        y1: i32,
+        c: Rgb<u8>,
+        alpha: f32,
+        clip: Option<PxRect>,
+    ) {
+        let (w, h) = (self.pixmap.width() as i32, self.pixmap.height() as i32);
+        let bounds = clip.unwrap_or(PxRect {
+            x0: 0,
+            y0: 0,
+            x1: w,
+            y1: h,
+        });
+        let (x0, x1) = (x0.max(bounds.x0).max(0), x1.min(bounds.x1).min(w));
+        let (y0, y1) = (y0.max(bounds.y0).max(0), y1.min(bounds.y1).min(h));
+        if x0 >= x1 || y0 >= y1 {
+            return;
+        }
+        let a = alpha.clamp(0.0, 1.0);
+        let full = solid(c);
+        let pixels = self.pixmap.pixels_mut();
+        for y in y0..y1 {
+            let row = &mut pixels[(y * w + x0) as usize..(y * w + x1) as usize];
+            if a >= 1.0 {
+                row.fill(full);
+            } else {
+                for p in row {
+                    let mix = |d: u8, s: u8| (d as f32 * (1.0 - a) + s as f32 * a).round() as u8;
+                    let m = Rgb([
+                        mix(p.red(), c.0[0]),
+                        mix(p.green(), c.0[1]),
+                        mix(p.blue(), c.0[2]),
+                    ]);
+                    *p = solid(m);
+                }
+            }
+        }
+    }
+
+    fn stroke_px_rect(&mut self, r: PxRect, c: Rgb<u8>) {
+        self.fill_px(r.x0, r.y0, r.x1, r.y0 + 1, c);
+        self.fill_px(r.x0, r.y1 - 1, r.x1, r.y1, c);
+        self.fill_px(r.x0, r.y0, r.x0 + 1, r.y1, c);
+        self.fill_px(r.x1 - 1, r.y0, r.x1, r.y1, c);
+    }
+
+    fn text(&mut self, x: f32, y: f32, s: &str, size: f32, c: Rgb<u8>) {
+        text::draw(&mut self.pixmap, x, y, s, size, c);
+    }
+
+    fn fill_path_px(&mut self, pb: PathBuilder, c: Rgb<u8>, alpha: f32, panel: Option<usize>) {
+        if let Some(path) = pb.finish() {
+            let paint = paint(c, alpha);
+            let mask = panel.and_then(|i| self.masks.get(i));
+            self.pixmap.fill_path(
+                &path,
+                &paint,
+                FillRule::EvenOdd,
+                Transform::identity(),
+                mask,
+            );
+        }
+    }
+
+    fn stroke_path_px(
+        &mut self,
+        pb: PathBuilder,
+        c: Rgb<u8>,
+        width: f32,
+        alpha: f32,
+        panel: Option<usize>,
+    ) {
+        if !(width.is_finite() && width > 0.0) {
+            return;
+        }
+        if let Some(path) = pb.finish() {
+            let paint = paint(c, alpha);
+            let stroke = Stroke {
+                width: width.min(200.0),
+                line_cap: LineCap::Round,
+                line_join: LineJoin::Round,
+                ..Stroke::default()
+            };
+            let mask = panel.and_then(|i| self.masks.get(i));
+            self.pixmap
+                .stroke_path(&path, &paint, &stroke, Transform::identity(), mask);
+        }
+    }
+
+    fn disc_px(&mut self, cx: f32, cy: f32, r: f32, c: Rgb<u8>, alpha: f32, panel: Option<usize>) {
+        if !(finite_px(cx, cy) && r.is_finite() && r > 0.0 && r < FAR_PX) {
+            return;
+        }
+        let mut pb = PathBuilder::new();
+        pb.push_circle(cx, cy, r);
+        self.fill_path_px(pb, c, alpha, panel);
+    }
+
+    fn circle_px(&mut self, cx: f32, cy: f32, r: f32, c: Rgb<u8>, w: f32, panel: Option<usize>) {
+        if !(finite_px(cx, cy) && r.is_finite() && r > 0.0 && r < FAR_PX) {
+            return;
+        }
+        let mut pb = PathBuilder::new();
+        pb.push_circle(cx, cy, r);
+        self.stroke_path_px(pb, c, w, 1.0, panel);
+    }
+
+    fn line_px(&mut self, pts: &[(f32, f32)], c: Rgb<u8>, w: f32, alpha: f32, panel: Option<usize>) {
+        let mut pb = PathBuilder::new();
+        let mut started = false;
+        for &(x, y) in pts {
+            if !finite_px(x, y) {
+                started = false;
+                continue;
+            }
+            if started {
+                pb.line_to(x, y);
+            } else {
+                pb.move_to(x, y);
+                started = true;
+            }
+        }
+        self.stroke_path_px(pb, c, w, alpha, panel);
+    }
+
+    fn marker_px(
+        &mut self,
+        cx: f32,
+        cy: f32,
+        m: Marker,
+        size: f32,
+        c: Rgb<u8>,
+        panel: Option<usize>,
+    ) {
+        if !finite_px(cx, cy) {
+            return;
+        }
+        let h = size.clamp(2.0, 200.0) / 2.0;
+        let shape = |h: f32| {
+            let mut pb = PathBuilder::new();
+            match m {
+                Marker::Disc => pb.push_circle(cx, cy, h),
+                Marker::Diamond => {
+                    let h = h * 1.2;
+                    pb.move_to(cx, cy - h);
+                    pb.line_to(cx + h, cy);
+                    pb.line_to(cx, cy + h);
+                    pb.line_to(cx - h, cy);
+                    pb.close();
+                }
+                Marker::Square => {
+                    if let Some(r) = Rect::from_ltrb(cx - h, cy - h, cx + h, cy + h) {
+                        pb.push_rect(r);
+                    }
+                }
+            }
+            pb
+        };
+        self.fill_path_px(shape(h + 2.0), palette::BACKGROUND, 1.0, panel);
+        self.fill_path_px(shape(h), c, 1.0, panel);
+    }
+
+    // ----- access -----
+
+    /// Drawing in data units on panel `index` (clipped to its plot area); `None` if there is
+    /// no such panel.
+    pub fn plot(&mut self, index: usize) -> Option<Plot<'_>> {
+        (index < self.panels.len()).then_some(Plot { fig: self, index })
+    }
+
+    /// The plot area of panel `index`, pixels.
+    pub fn plot_rect(&self, index: usize) -> Option<PxRect> {
+        self.panels.get(index).map(|p| p.plot)
+    }
+
+    /// The scale bar of panel `index`.
+    pub fn scale_bar(&self, index: usize) -> Option<ScaleBar> {
+        self.panels.get(index).map(|p| p.scale_bar)
+    }
+
+    /// The legend's box, pixels.
+    pub fn legend_box(&self) -> PxRect {
+        self.legend_box
+    }
+
+    /// Each legend entry's swatch, in order, pixels.
+    pub fn legend_swatches(&self) -> &[PxRect] {
+        &self.legend_swatches
+    }
+
+    /// Picture size, pixels.
+    pub fn size_px(&self) -> (u32, u32) {
+        (self.pixmap.width(), self.pixmap.height())
+    }
+
+    /// The picture as an RGB image.
+    pub fn to_image(&self) -> RgbImage {
+        let w = self.pixmap.width();
+        let pixels = self.pixmap.pixels();
+        RgbImage::from_fn(w, self.pixmap.height(), |x, y| {
+            let p = pixels[(y * w + x) as usize];
+            Rgb([p.red(), p.green(), p.blue()])
+        })
+    }
+
+    /// Write the picture as PNG (missing parent folders are created).
+    pub fn save_png(&self, path: &std::path::Path) -> Result<(), PictureError> {
+        let err = |e: String| PictureError::Save {
+            path: path.display().to_string(),
+            error: e,
+        };
+        if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent).map_err(|e| err(e.to_string()))?;
+        }
+        self.to_image()
+            .save_with_format(path, image::ImageFormat::Png)
+            .map_err(|e| err(e.to_string()))
+    }
+}
+
+fn finite_px(x: f32, y: f32) -> bool {
+    x.is_finite() && y.is_finite() && x.abs() < FAR_PX && y.abs() < FAR_PX
+}
+
+/// Drawing on one panel, in its data units (x right, y up), clipped to the plot area.
+pub struct Plot<'a> {
+    fig: &'a mut Figure,
+    index: usize,
+}
+
+impl Plot<'_> {
+    fn layout(&self) -> &PanelLayout {
+        &self.fig.panels[self.index]
+    }
+
+    /// Pixel position (fractional, from the picture's top-left corner) of a data point.
+    pub fn to_px(&self, x: f32, y: f32) -> (f32, f32) {
+        let l = self.layout();
+        (
+            l.plot.x0 as f32 + (x - l.spec.x.min) * l.spec.x.px_per_unit,
+            l.plot.y1 as f32 - (y - l.spec.y.min) * l.spec.y.px_per_unit,
+        )
+    }
+
+    /// Pixels per data unit along x.
+    pub fn px_per_unit(&self) -> f32 {
+        self.layout().spec.x.px_per_unit
+    }
+
+    fn pts(&self, points: &[(f32, f32)]) -> Vec<(f32, f32)> {
+        points.iter().map(|&(x, y)| self.to_px(x, y)).collect()
+    }
+
+    /// Fill the data rectangle `[x0, x1] × [y0, y1]`, snapped to whole pixels (cells).
+    pub fn fill_box(&mut self, x0: f32, y0: f32, x1: f32, y1: f32, c: Rgb<u8>, alpha: f32) {
+        let (a, b) = (self.to_px(x0, y1), self.to_px(x1, y0));
+        if !(finite_px(a.0, a.1) && finite_px(b.0, b.1)) {
+            return;
+        }
+        let clip = self.layout().plot;
+        self.fig.blend_px(
+            a.0.round() as i32,
+            a.1.round() as i32,
+            b.0.round() as i32,
+            b.1.round() as i32,
+            c,
+            alpha,
+            Some(clip),
+        );
+    }
+
+    /// Fill every occupied cell of `grid` (its geometry in metres from this panel's origin),
+    /// runs of a row at a time.
+    pub fn fill_grid<const W: usize>(&mut self, grid: &Grid<W>, c: Rgb<u8>, alpha: f32) {
+        let g = *grid.geometry();
+        let r = g.resolution_m();
+        for y in 0..g.height() {
+            let mut x = 0;
+            while x < g.width() {
+                if !grid.is_occupied_xy(x as i32, y as i32) {
+                    x += 1;
+                    continue;
+                }
+                let start = x;
+                while x < g.width() && grid.is_occupied_xy(x as i32, y as i32) {
+                    x += 1;
+                }
+                self.fill_box(
+                    start as f32 * r,
+                    y as f32 * r,
+                    x as f32 * r,
+                    (y + 1) as f32 * r,
+                    c,
+                    alpha,
+                );
+            }
+        }
+    }
+
+    /// Fill a polygon (even-odd rule).
+    pub fn fill_polygon(&mut self, points: &[(f32, f32)], c: Rgb<u8>, alpha: f32) {
+        let px = self.pts(points);
+        if px.len() < 3 || px.iter().any(|&(x, y)| !finite_px(x, y)) {
+            return;
+        }
+        let mut pb = PathBuilder::new();
+        pb.move_to(px[0].0, px[0].1);
+        for p in &px[1..] {
+            pb.line_to(p.0, p.1);
+        }
+        pb.close();
+        self.fig.fill_path_px(pb, c, alpha, Some(self.index));
+    }
+
+    /// A closed outline `width_px` wide.
+    pub fn stroke_polygon(&mut self, points: &[(f32, f32)], c: Rgb<u8>, width_px: f32) {
+        let mut px = self.pts(points);
+        if let Some(first) = px.first().copied() {
+            px.push(first);
+        }
+        self.fig.line_px(&px, c, width_px, 1.0, Some(self.index));
+    }
+
+    /// An open polyline `width_px` wide; one point draws a dot.
+    pub fn polyline(&mut self, points: &[(f32, f32)], c: Rgb<u8>, width_px: f32) {
+        match points {
+            [] => {}
+            [p] => {
+                let (x, y) = self.to_px(p.0, p.1);
+                self.fig
+                    .disc_px(x, y, (width_px / 2.0).max(1.0), c, 1.0, Some(self.index));
+            }
+            _ => {
+                let px = self.pts(points);
+                self.fig.line_px(&px, c, width_px, 1.0, Some(self.index));
+            }
+        }
+    }
+
+    /// Dots of `radius_px` at each point.
+    pub fn dots(&mut self, points: &[(f32, f32)], radius_px: f32, c: Rgb<u8>) {
+        for &(x, y) in points {
+            let (px, py) = self.to_px(x, y);
+            self.fig.disc_px(px, py, radius_px, c, 1.0, Some(self.index));
+        }
+    }
+
+    /// A disc of `radius` data units (along x) at `alpha`.
+    pub fn disc(&mut self, x: f32, y: f32, radius: f32, c: Rgb<u8>, alpha: f32) {
+        let (px, py) = self.to_px(x, y);
+        let r = radius * self.px_per_unit();
+        self.fig.disc_px(px, py, r, c, alpha, Some(self.index));
+    }
+
+    /// A disc `radius_px` pixels across at a data point (joints, arm ends).
+    pub fn disc_fixed(&mut self, x: f32, y: f32, radius_px: f32, c: Rgb<u8>) {
+        let (px, py) = self.to_px(x, y);
+        self.fig.disc_px(px, py, radius_px, c, 1.0, Some(self.index));
+    }
+
+    /// A circle outline of `radius` data units.
+    pub fn circle(&mut self, x: f32, y: f32, radius: f32, c: Rgb<u8>, width_px: f32) {
+        let (px, py) = self.to_px(x, y);
+        let r = radius * self.px_per_unit();
+        self.fig.circle_px(px, py, r, c, width_px, Some(self.index));
+    }
+
+    /// A wedge of `radius` data units from `centre`, `half_angle_rad` either side of
+    /// `heading_rad` (counter-clockwise from +x; a half angle of π or more is the whole disc),
+    /// filled at `alpha`.
+    pub fn wedge(
+        &mut self,
+        centre: (f32, f32),
+        radius: f32,
+        heading_rad: f32,
+        half_angle_rad: f32,
+        c: Rgb<u8>,
+        alpha: f32,
+    ) {
+        if !(heading_rad.is_finite() && half_angle_rad.is_finite() && radius.is_finite()) {
+            return;
+        }
+        if half_angle_rad >= std::f32::consts::PI - 1e-3 {
+            self.disc(centre.0, centre.1, radius, c, alpha);
+            return;
+        }
+        let steps = 48;
+        let mut pts = vec![centre];
+        for k in 0..=steps {
+            let a = heading_rad - half_angle_rad + 2.0 * half_angle_rad * k as f32 / steps as f32;
+            pts.push((centre.0 + radius * a.cos(), centre.1 + radius * a.sin()));
+        }
+        self.fill_polygon(&pts, c, alpha);
+    }
+
+    /// The robot: a translucent disc of `radius`, its outline and a heading line.
+    pub fn robot(&mut self, x: f32, y: f32, radius: f32, heading_rad: f32, c: Rgb<u8>) {
+        self.disc(x, y, radius, c, 0.35);
+        self.circle(x, y, radius, c, 2.0);
+        if heading_rad.is_finite() {
+            let tip = (
+                x + radius * heading_rad.cos(),
+                y + radius * heading_rad.sin(),
+            );
+            self.polyline(&[(x, y), tip], c, 2.5);
+        }
+    }
+
+    /// A marker `size_px` across at a data point, with a white rim.
+    pub fn marker(&mut self, x: f32, y: f32, m: Marker, size_px: f32, c: Rgb<u8>) {
+        let (px, py) = self.to_px(x, y);
+        self.fig.marker_px(px, py, m, size_px, c, Some(self.index));
+    }
+}
+
+#[cfg(test)]
+mod tests;
