@@ -2,7 +2,9 @@
 //! colours exactly (so that small marks such as sonar hits keep their colour), and the rest
 //! learnt by `color_quant`'s NeuQuant from sample frames (anti-aliased edges, text); every
 //! pixel then takes the nearest entry. Anti-aliased pictures have thousands of colours, so
-//! exact per-frame palettes do not work.
+//! exact per-frame palettes do not work. After the first frame, pixels that did not change are
+//! written as the transparent entry [`TRANSPARENT`] over the kept previous frame: long runs of
+//! one index, which LZW packs small.
 
 use std::collections::HashMap;
 use std::fs;
@@ -13,11 +15,15 @@ use anyhow::{Context, Result};
 use color_quant::NeuQuant;
 use image::{Rgb, RgbImage};
 
+/// The palette entry that means "as in the previous frame".
+pub const TRANSPARENT: u8 = 255;
+
 /// Writes frames of one size to a GIF file.
 pub struct GifWriter {
     encoder: gif::Encoder<BufWriter<fs::File>>,
     palette: Vec<[u8; 3]>,
     cache: HashMap<[u8; 3], u8>,
+    previous: Option<Vec<u8>>,
     size: (u16, u16),
     path: String,
 }
@@ -47,9 +53,11 @@ impl GifWriter {
                 rgba.extend_from_slice(&[p.0[0], p.0[1], p.0[2], 255]);
             }
         }
-        let learnt = NeuQuant::new(10, 256 - palette.len(), &rgba).color_map_rgb();
+        // 255 entries for colours; the last one is TRANSPARENT.
+        let learnt = NeuQuant::new(10, 255 - palette.len(), &rgba).color_map_rgb();
         palette.extend(learnt.chunks_exact(3).map(|c| [c[0], c[1], c[2]]));
-        let flat: Vec<u8> = palette.concat();
+        let mut flat: Vec<u8> = palette.concat();
+        flat.resize(256 * 3, 0);
         let file = fs::File::create(path).with_context(|| format!("{name}: cannot create"))?;
         let mut encoder = gif::Encoder::new(BufWriter::new(file), size.0, size.1, &flat)
             .with_context(|| format!("{name}: cannot write GIF"))?;
@@ -60,6 +68,7 @@ impl GifWriter {
             encoder,
             palette,
             cache: HashMap::new(),
+            previous: None,
             size,
             path: name,
         })
@@ -97,11 +106,38 @@ impl GifWriter {
             );
         }
         let indices: Vec<u8> = image.pixels().map(|p| self.index(p.0)).collect();
-        let mut frame = gif::Frame::from_indexed_pixels(self.size.0, self.size.1, indices, None);
+        let mut frame = match &self.previous {
+            Some(prev) => {
+                let changed: Vec<u8> = indices
+                    .iter()
+                    .zip(prev)
+                    .map(|(&i, &p)| if i == p { TRANSPARENT } else { i })
+                    .collect();
+                gif::Frame::from_indexed_pixels(
+                    self.size.0,
+                    self.size.1,
+                    changed,
+                    Some(TRANSPARENT),
+                )
+            }
+            None => gif::Frame::from_indexed_pixels(self.size.0, self.size.1, indices.clone(), None),
+        };
+        frame.dispose = gif::DisposalMethod::Keep;
         frame.delay = delay_cs;
+        self.previous = Some(indices);
         self.encoder
             .write_frame(&frame)
             .with_context(|| format!("{}: cannot write GIF frame", self.path))
+    }
+
+    /// Write the GIF's trailer and flush the file.
+    pub fn finish(self) -> Result<()> {
+        let path = self.path;
+        let mut out = self
+            .encoder
+            .into_inner()
+            .with_context(|| format!("{path}: cannot finish the GIF"))?;
+        std::io::Write::flush(&mut out).with_context(|| format!("{path}: cannot write"))
     }
 }
 
@@ -110,26 +146,34 @@ mod tests {
     use super::*;
 
     #[test]
-    fn key_colours_survive_and_frames_are_written() {
+    fn key_colours_survive_and_unchanged_pixels_are_transparent() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("a.gif");
-        // A gradient with one tiny red mark.
-        let mut img = RgbImage::from_fn(64, 48, |x, y| Rgb([(x * 4) as u8, (y * 5) as u8, 128]));
-        img.put_pixel(3, 3, Rgb([230, 20, 20]));
-        let mut w = GifWriter::create(&path, &[&img], &[Rgb([230, 20, 20])]).unwrap();
-        w.add(&img, 10).unwrap();
-        w.add(&img, 10).unwrap();
+        let red = Rgb([230, 20, 20]);
+        // A gradient with one tiny red mark; the second frame adds another.
+        let mut one = RgbImage::from_fn(64, 48, |x, y| Rgb([(x * 4) as u8, (y * 5) as u8, 128]));
+        one.put_pixel(3, 3, red);
+        let mut two = one.clone();
+        two.put_pixel(40, 30, red);
+        let mut w = GifWriter::create(&path, &[&one, &two], &[red]).unwrap();
+        w.add(&one, 10).unwrap();
+        w.add(&two, 10).unwrap();
         assert!(w.add(&RgbImage::new(10, 10), 10).is_err());
-        drop(w);
+        w.finish().unwrap();
         let mut decoder = gif::DecodeOptions::new();
         decoder.set_color_output(gif::ColorOutput::RGBA);
         let mut d = decoder.read_info(fs::File::open(&path).unwrap()).unwrap();
-        let mut frames = 0;
-        while let Some(f) = d.read_next_frame().unwrap() {
-            frames += 1;
-            let i = (3 * 64 + 3) * 4;
-            assert_eq!(&f.buffer[i..i + 3], &[230, 20, 20]);
-        }
-        assert_eq!(frames, 2);
+        let px = |f: &gif::Frame, x: usize, y: usize| {
+            let i = (y * 64 + x) * 4;
+            f.buffer[i..i + 4].to_vec()
+        };
+        let f1 = d.read_next_frame().unwrap().unwrap().clone();
+        assert_eq!(px(&f1, 3, 3), vec![230, 20, 20, 255]);
+        assert!(f1.buffer.chunks(4).all(|p| p[3] == 255), "first frame is whole");
+        let f2 = d.read_next_frame().unwrap().unwrap().clone();
+        assert_eq!(px(&f2, 40, 30), vec![230, 20, 20, 255]);
+        assert_eq!(px(&f2, 3, 3)[3], 0, "unchanged: transparent");
+        assert_eq!(f2.buffer.chunks(4).filter(|p| p[3] == 255).count(), 1);
+        assert!(d.read_next_frame().unwrap().is_none());
     }
 }

@@ -257,11 +257,25 @@ impl PanelSpec {
     }
 }
 
+/// Pixels per cell that make the longer side of `geometry` about `target_px` (1 to 16).
+pub fn fit_px_per_cell(geometry: GridGeometry, target_px: u32) -> u32 {
+    let side = geometry.width().max(geometry.height()).max(1) as u32;
+    (target_px / side).clamp(1, 16)
+}
+
+/// World points as data points of a map panel.
+pub fn points(points: &[twil_core::geom::PointM]) -> Vec<(f32, f32)> {
+    points.iter().map(|p| (p.x_m, p.y_m)).collect()
+}
+
 /// What a figure shows around its plots.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FigureSpec {
     /// Caption lines above the plots (wrapped to the figure's width).
     pub caption: Vec<String>,
+    /// Exactly this many caption lines after wrapping (blank lines added, extra lines cut),
+    /// so that the frames of an animation keep one size; `None`: as many as the text needs.
+    pub caption_lines: Option<usize>,
     /// Plots, side by side.
     pub panels: Vec<PanelSpec>,
     /// Legend entries, below the plots.
@@ -483,11 +497,14 @@ impl Figure {
         let width = (panels_w + 2 * PAD).max(MIN_WIDTH_PX as i32);
         let inner_w = (width - 2 * PAD) as f32;
         // Caption.
-        let caption: Vec<String> = spec
+        let mut caption: Vec<String> = spec
             .caption
             .iter()
             .flat_map(|l| wrap(l, CAPTION_PX, inner_w))
             .collect();
+        if let Some(n) = spec.caption_lines {
+            caption.resize(n.min(64), String::new());
+        }
         let caption_top = PAD;
         let panels_top = caption_top + caption.len() as i32 * caption_h + 4;
         let header_h = label_h + 2;

@@ -4,6 +4,7 @@ fn spec(px_per_cell: u32) -> FigureSpec {
     let g = GridGeometry::new(100, 60, 0.05).unwrap(); // 5 m x 3 m
     FigureSpec {
         caption: vec!["a caption".into()],
+        caption_lines: None,
         panels: vec![PanelSpec::map(g, px_per_cell, Some("title".into()))],
         legend: vec![
             LegendEntry::new("area", Mark::Fill(palette::MAP)),
