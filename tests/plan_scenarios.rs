@@ -282,7 +282,11 @@ fn human_summary_and_picture() {
     assert!(stdout.contains("300x300 cells"), "{stdout}");
     let image = image::open(&png).unwrap().to_rgb8();
     // 300 cells at 2 px (about 800 px for the map by default), plus axes, caption, legend.
-    assert!(image.width() >= 600 && image.width() < 800, "{}", image.width());
+    assert!(
+        image.width() >= 600 && image.width() < 800,
+        "{}",
+        image.width()
+    );
     assert!(image.height() > 600);
     let count = |c: image::Rgb<u8>| image.pixels().filter(|p| **p == c).count();
     use twil_host::picture::palette;
@@ -294,7 +298,10 @@ fn human_summary_and_picture() {
         palette::GOAL,
         palette::ROBOT,
     ] {
-        assert!(count(colour) > 0, "colour {colour:?} missing from the picture");
+        assert!(
+            count(colour) > 0,
+            "colour {colour:?} missing from the picture"
+        );
     }
     // The scale bar: 1 m at 40 px per metre, 5 px thick, in a colour nothing else uses.
     assert_eq!(count(palette::SCALE_BAR), 40 * 5);

@@ -8,6 +8,5 @@ pub mod files;
 pub mod picture;
 pub mod qemu_cmd;
 pub mod remote;
-pub mod render;
 pub mod sim;
 pub mod world_io;

@@ -24,9 +24,7 @@ use twil_core::plan::{PathM, PlanReport, PlanStatus, Planner, PlannerKind};
 use twil_core::raster::mark_polygon;
 use twil_core::world::{Obstacles, Params};
 
-use crate::picture::{
-    self, palette, Figure, FigureSpec, LegendEntry, Mark, Marker, PanelSpec,
-};
+use crate::picture::{self, palette, Figure, FigureSpec, LegendEntry, Mark, Marker, PanelSpec};
 use crate::world_io;
 
 /// Cells of the largest host grid (400 x 400).
@@ -405,10 +403,7 @@ pub fn plan_figure(
         .flatten()
         .collect::<Vec<_>>()
         .join(" + ");
-    let mut result = format!(
-        "{}",
-        status_name(outcome.report.status).replace('_', " ")
-    );
+    let mut result = status_name(outcome.report.status).replace('_', " ");
     if outcome.report.status == PlanStatus::Found {
         result.push_str(&format!(", {:.2} m", outcome.report.length_m));
     }
@@ -433,7 +428,10 @@ pub fn plan_figure(
         "obstacle"
     };
     let legend = vec![
-        LegendEntry::new(obstacle, Mark::FillOutline(palette::OBSTACLE, palette::OUTLINE)),
+        LegendEntry::new(
+            obstacle,
+            Mark::FillOutline(palette::OBSTACLE, palette::OUTLINE),
+        ),
         LegendEntry::new("grown by robot radius", Mark::Fill(palette::MAP)),
         LegendEntry::new("path", Mark::Line(palette::PREFIX, 3.0)),
         LegendEntry::new("robot at start", Mark::Robot(palette::ROBOT)),

@@ -120,7 +120,9 @@ impl GifWriter {
                     Some(TRANSPARENT),
                 )
             }
-            None => gif::Frame::from_indexed_pixels(self.size.0, self.size.1, indices.clone(), None),
+            None => {
+                gif::Frame::from_indexed_pixels(self.size.0, self.size.1, indices.clone(), None)
+            }
         };
         frame.dispose = gif::DisposalMethod::Keep;
         frame.delay = delay_cs;
@@ -169,7 +171,10 @@ mod tests {
         };
         let f1 = d.read_next_frame().unwrap().unwrap().clone();
         assert_eq!(px(&f1, 3, 3), vec![230, 20, 20, 255]);
-        assert!(f1.buffer.chunks(4).all(|p| p[3] == 255), "first frame is whole");
+        assert!(
+            f1.buffer.chunks(4).all(|p| p[3] == 255),
+            "first frame is whole"
+        );
         let f2 = d.read_next_frame().unwrap().unwrap().clone();
         assert_eq!(px(&f2, 40, 30), vec![230, 20, 20, 255]);
         assert_eq!(px(&f2, 3, 3)[3], 0, "unchanged: transparent");

@@ -117,7 +117,9 @@ pub const REAL_ALPHA: f32 = 0.45;
 /// the background, and so its legend swatch.
 pub fn over_white(color: Rgb<u8>, alpha: f32) -> Rgb<u8> {
     let a = alpha.clamp(0.0, 1.0);
-    Rgb(color.0.map(|c| (255.0 * (1.0 - a) + c as f32 * a).round() as u8))
+    Rgb(color
+        .0
+        .map(|c| (255.0 * (1.0 - a) + c as f32 * a).round() as u8))
 }
 
 /// Why a figure could not be made.
@@ -418,7 +420,12 @@ fn wrap(text: &str, size_px: f32, width_px: f32) -> Vec<String> {
 }
 
 fn color(c: Rgb<u8>, alpha: f32) -> tiny_skia::Color {
-    tiny_skia::Color::from_rgba8(c.0[0], c.0[1], c.0[2], (alpha.clamp(0.0, 1.0) * 255.0) as u8)
+    tiny_skia::Color::from_rgba8(
+        c.0[0],
+        c.0[1],
+        c.0[2],
+        (alpha.clamp(0.0, 1.0) * 255.0) as u8,
+    )
 }
 
 fn paint(c: Rgb<u8>, alpha: f32) -> Paint<'static> {
@@ -518,8 +525,7 @@ impl Figure {
             .map(|e| SWATCH_PX + 6 + text::width_px(&e.label, LABEL_PX).ceil() as i32 + 14)
             .max()
             .unwrap_or(1);
-        let cols = ((inner_w as i32 - 8) / entry_w)
-            .clamp(1, spec.legend.len().max(1) as i32);
+        let cols = ((inner_w as i32 - 8) / entry_w).clamp(1, spec.legend.len().max(1) as i32);
         let rows = (spec.legend.len() as i32 + cols - 1) / cols;
         let row_h = label_h.max(SWATCH_PX + 4);
         let legend_h = if spec.legend.is_empty() {
@@ -680,13 +686,7 @@ impl Figure {
         );
         if let Some(title) = &p.title {
             let w = text::width_px(title, LABEL_PX);
-            self.text(
-                plot.x1 as f32 - w,
-                header_y,
-                title,
-                LABEL_PX,
-                palette::TEXT,
-            );
+            self.text(plot.x1 as f32 - w, header_y, title, LABEL_PX, palette::TEXT);
         }
         // Row under the tick labels: scale bar at the left, x title centred.
         let row_y = plot.y1 + TICK_PX + label_h + 2;
@@ -722,10 +722,7 @@ impl Figure {
     }
 
     fn swatch(&mut self, r: PxRect, mark: Mark) {
-        let (cx, cy) = (
-            (r.x0 + r.x1) as f32 / 2.0,
-            (r.y0 + r.y1) as f32 / 2.0,
-        );
+        let (cx, cy) = ((r.x0 + r.x1) as f32 / 2.0, (r.y0 + r.y1) as f32 / 2.0);
         let half = (r.x1 - r.x0) as f32 / 2.0;
         match mark {
             Mark::Fill(c) => self.fill_px(r.x0, r.y0, r.x1, r.y1, c),
@@ -888,7 +885,14 @@ impl Figure {
         self.stroke_path_px(pb, c, w, 1.0, panel);
     }
 
-    fn line_px(&mut self, pts: &[(f32, f32)], c: Rgb<u8>, w: f32, alpha: f32, panel: Option<usize>) {
+    fn line_px(
+        &mut self,
+        pts: &[(f32, f32)],
+        c: Rgb<u8>,
+        w: f32,
+        alpha: f32,
+        panel: Option<usize>,
+    ) {
         let mut pb = PathBuilder::new();
         let mut started = false;
         for &(x, y) in pts {
@@ -1124,7 +1128,8 @@ impl Plot<'_> {
     pub fn dots(&mut self, points: &[(f32, f32)], radius_px: f32, c: Rgb<u8>) {
         for &(x, y) in points {
             let (px, py) = self.to_px(x, y);
-            self.fig.disc_px(px, py, radius_px, c, 1.0, Some(self.index));
+            self.fig
+                .disc_px(px, py, radius_px, c, 1.0, Some(self.index));
         }
     }
 
@@ -1138,7 +1143,8 @@ impl Plot<'_> {
     /// A disc `radius_px` pixels across at a data point (joints, arm ends).
     pub fn disc_fixed(&mut self, x: f32, y: f32, radius_px: f32, c: Rgb<u8>) {
         let (px, py) = self.to_px(x, y);
-        self.fig.disc_px(px, py, radius_px, c, 1.0, Some(self.index));
+        self.fig
+            .disc_px(px, py, radius_px, c, 1.0, Some(self.index));
     }
 
     /// A circle outline of `radius` data units.

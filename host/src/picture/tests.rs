@@ -38,7 +38,11 @@ fn scale_bar_is_one_metre_long_at_the_picture_scale() {
         let run: Vec<u32> = (0..img.width())
             .filter(|&x| img.get_pixel(x, y) == &palette::SCALE_BAR)
             .collect();
-        assert_eq!(run.len() as f32, (metres * px_per_m).round(), "{px_per_cell}");
+        assert_eq!(
+            run.len() as f32,
+            (metres * px_per_m).round(),
+            "{px_per_cell}"
+        );
         assert_eq!(run.first().copied(), Some(bar.rect.x0 as u32));
         // Contiguous, and under the plot, left-aligned with it.
         assert_eq!(run.last().unwrap() - run[0] + 1, run.len() as u32);
@@ -47,7 +51,10 @@ fn scale_bar_is_one_metre_long_at_the_picture_scale() {
         assert!(bar.rect.y0 > plot.y1);
         // Nothing else in the picture has the bar's colour.
         let total = img.pixels().filter(|p| **p == palette::SCALE_BAR).count();
-        assert_eq!(total as i32, (bar.rect.x1 - bar.rect.x0) * SCALE_BAR_THICKNESS_PX);
+        assert_eq!(
+            total as i32,
+            (bar.rect.x1 - bar.rect.x0) * SCALE_BAR_THICKNESS_PX
+        );
     }
 }
 

@@ -118,7 +118,9 @@ mod tests {
             .filter(|&(x, y)| p.pixel(x, y).unwrap().red() < 128)
             .collect();
         assert!(dark.len() > 30);
-        assert!(dark.iter().all(|&(x, y)| (10..40).contains(&x) && (5..35).contains(&y)));
+        assert!(dark
+            .iter()
+            .all(|&(x, y)| (10..40).contains(&x) && (5..35).contains(&y)));
         // Off the picture or absurd: nothing, no panic.
         draw(&mut p, -1.0e30, f32::NAN, "x", 1.0e9, Rgb([0, 0, 0]));
         draw(&mut p, 95.0, 35.0, "WWWW", 30.0, Rgb([0, 0, 0]));

@@ -7,8 +7,10 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 
+pub use super::pictures::{
+    pick_frames, render_snapshot, write_gif, write_plan_pngs, MAX_GIF_FRAMES,
+};
 use super::SimResult;
-pub use super::pictures::{pick_frames, render_snapshot, write_gif, write_plan_pngs, MAX_GIF_FRAMES};
 
 /// Write `trajectory.csv`: header `t,x,y,theta`, one row per controller period, true pose.
 pub fn write_trajectory_csv(path: &Path, result: &SimResult) -> Result<()> {

@@ -31,8 +31,10 @@ const GIF_CAPTION_LINES: usize = 4;
 /// A world's name for the captions: the real world's file name, and the known one's.
 pub fn world_name(real: Option<&Path>, known: Option<&Path>) -> String {
     let name = |p: &Path| {
-        p.file_name()
-            .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned())
+        p.file_name().map_or_else(
+            || p.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        )
     };
     let mut s = real.map_or_else(|| "the device's world".to_string(), name);
     if let Some(k) = known {
@@ -66,7 +68,10 @@ pub fn legend(setup: &SimSetup, result: &SimResult) -> Vec<LegendEntry> {
         LegendEntry::new("kept prefix", Mark::Line(palette::PREFIX, 3.0)),
     ];
     if setup.known.is_some() {
-        l.push(LegendEntry::new("known obstacles", Mark::Outline(palette::KNOWN)));
+        l.push(LegendEntry::new(
+            "known obstacles",
+            Mark::Outline(palette::KNOWN),
+        ));
     }
     l.push(LegendEntry::new(
         "real obstacles",
@@ -123,7 +128,10 @@ pub fn caption(setup: &SimSetup, result: &SimResult, snap: &Snapshot, frame: Fra
             snap.stops, snap.plan_number, result.stats.plans
         ),
         Frame::Animation { .. } => {
-            format!("stops so far: {} · plans so far: {}", snap.stops, snap.plans)
+            format!(
+                "stops so far: {} · plans so far: {}",
+                snap.stops, snap.plans
+            )
         }
     };
     let why = match snap.reason {
@@ -195,7 +203,7 @@ pub fn snapshot_figure(
             BAND_ALPHA,
         );
     }
-    plot.circle(x, y, range_m, palette::RANGE, 1.5);
+    plot.circle(x, y, range_m, palette::RANGE, 2.0);
     let trail: Vec<(f32, f32)> = result.trajectory[..snap.trail_len.min(result.trajectory.len())]
         .iter()
         .map(|r| (r.pose.x_m, r.pose.y_m))
@@ -307,4 +315,169 @@ pub fn write_gif(
         }
     }
     gif.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cmd::simulate::{setup_from_args, Args};
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn world(name: &str) -> String {
+        format!("{}/../worlds/{name}", env!("CARGO_MANIFEST_DIR"))
+    }
+
+    /// The corridor world in continuous mode with snapshots: a short run.
+    fn run() -> (SimSetup, SimResult) {
+        let cli = Cli::try_parse_from([
+            "simulate",
+            "--real",
+            &world("corridor.da"),
+            "--params",
+            &world("corridor.par"),
+            "--mode",
+            "continuous",
+            "--out",
+            "unused",
+        ])
+        .unwrap();
+        let setup = setup_from_args(&cli.args).unwrap();
+        let result = super::super::run(&setup, &mut super::super::NoProgress).unwrap();
+        (setup, result)
+    }
+
+    fn count_in(img: &RgbImage, r: picture::PxRect, c: Rgb<u8>) -> usize {
+        (r.y0.max(0)..r.y1.min(img.height() as i32))
+            .flat_map(|y| (r.x0.max(0)..r.x1.min(img.width() as i32)).map(move |x| (x, y)))
+            .filter(|&(x, y)| img.get_pixel(x as u32, y as u32) == &c)
+            .count()
+    }
+
+    #[test]
+    fn a_plan_picture_has_scale_bar_legend_band_range_and_seen_space() {
+        let (setup, result) = run();
+        assert!(result.plans.len() >= 2);
+        let snap = &result.plans[1];
+        let fig = snapshot_figure(&setup, &result, snap, 2, Frame::Plan).unwrap();
+        let img = fig.to_image();
+        // Scale bar: 1 m at 2 px per 0.05 m cell = 40 px, nothing else in its colour.
+        let bar = fig.scale_bar(0).unwrap();
+        assert_eq!(bar.length, 1.0);
+        assert_eq!(bar.rect.x1 - bar.rect.x0, 40);
+        assert_eq!(
+            count_in(&img, bar.rect, palette::SCALE_BAR),
+            40 * picture::SCALE_BAR_THICKNESS_PX as usize
+        );
+        // Legend: every mark named, each swatch's colour inside the legend box.
+        let entries = legend(&setup, &result);
+        let labels: Vec<&str> = entries.iter().map(|e| e.label.as_str()).collect();
+        for needle in [
+            "start",
+            "goal",
+            "robot",
+            "trail",
+            "plan",
+            "kept prefix",
+            "real obstacles",
+            "sonar hits",
+            "seen space",
+            "swept band",
+            "sonar range",
+        ] {
+            assert!(labels.iter().any(|l| l.starts_with(needle)), "{needle}");
+        }
+        let lb = fig.legend_box();
+        for (e, sw) in entries.iter().zip(fig.legend_swatches()) {
+            assert!(lb.contains(sw.x0, sw.y0), "{}", e.label);
+            let grown = picture::PxRect {
+                x0: sw.x0 - 3,
+                y0: sw.y0 - 3,
+                x1: sw.x1 + 3,
+                y1: sw.y1 + 3,
+            };
+            assert!(count_in(&img, grown, e.mark.color()) >= 3, "{}", e.label);
+        }
+        // Seen space is shaded in the map (drawn without the band, which tints most of it).
+        let plot = fig.plot_rect(0).unwrap();
+        let mut bandless = snap.clone();
+        bandless.band = None;
+        let plain = snapshot_figure(&setup, &result, &bandless, 2, Frame::Plan)
+            .unwrap()
+            .to_image();
+        let seen_cells = snap.seen.as_ref().unwrap().count_occupied();
+        assert!(seen_cells > 100);
+        assert!(count_in(&plain, plot, palette::SEEN) > seen_cells);
+        // The sonar range circle passes range_m from the robot: look along the four axes.
+        let mut fig = fig;
+        let p = fig.plot(0).unwrap();
+        let (rx, ry) = p.to_px(snap.pose.x_m, snap.pose.y_m);
+        let r_px = setup.robot.sonar_range_m * p.px_per_unit();
+        let near = |x: f32, y: f32, c: Rgb<u8>| {
+            (-2..=2).any(|dy| {
+                (-2..=2).any(|dx| {
+                    let (px, py) = (x as i32 + dx, y as i32 + dy);
+                    plot.contains(px, py) && img.get_pixel(px as u32, py as u32) == &c
+                })
+            })
+        };
+        let on_circle = [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
+            .iter()
+            .filter(|(dx, dy)| near(rx + dx * r_px, ry + dy * r_px, palette::RANGE))
+            .count();
+        assert!(on_circle >= 2, "range circle not found at {r_px} px");
+        // The band: yellow-tinted pixels within the range, ahead of the robot.
+        let band = snap.band.unwrap();
+        assert!(band.half_angle_deg > 0.0);
+        let ahead = (
+            rx + 0.6 * r_px * snap.pose.heading_rad.cos(),
+            ry - 0.6 * r_px * snap.pose.heading_rad.sin(),
+        );
+        let px = img.get_pixel(ahead.0 as u32, ahead.1 as u32).0;
+        assert!(
+            px[2] + 40 < px[0],
+            "no band tint ahead of the robot: {px:?}"
+        );
+        // The caption names world, mode, planner and the reason.
+        let text = caption(&setup, &result, snap, Frame::Plan).join(" ");
+        for needle in [
+            "corridor.da",
+            "continuous",
+            "anyangle",
+            "plan 2 of",
+            "Why plan 2",
+        ] {
+            assert!(text.contains(needle), "{needle} not in {text}");
+        }
+    }
+
+    #[test]
+    fn gif_frames_keep_one_size() {
+        let (setup, mut result) = run();
+        // A few frames from the start and the end (debug builds draw slowly).
+        let n = result.frames.len();
+        assert!(n > 8);
+        result.frames.drain(3..n - 3);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.gif");
+        write_gif(&path, &setup, &result, 1).unwrap();
+        let mut d = gif::DecodeOptions::new()
+            .read_info(std::fs::File::open(&path).unwrap())
+            .unwrap();
+        let (w, h) = (d.width(), d.height());
+        let mut frames = 0;
+        while let Some(f) = d.read_next_frame().unwrap() {
+            assert_eq!((f.width, f.height), (w, h));
+            frames += 1;
+        }
+        assert_eq!(
+            frames,
+            pick_frames(result.frames.len(), MAX_GIF_FRAMES).len()
+        );
+    }
 }
