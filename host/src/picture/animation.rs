@@ -23,7 +23,8 @@ pub struct GifWriter {
     encoder: gif::Encoder<BufWriter<fs::File>>,
     palette: Vec<[u8; 3]>,
     cache: HashMap<[u8; 3], u8>,
-    previous: Option<Vec<u8>>,
+    /// The previous frame: its pixels and their palette indices.
+    previous: Option<(RgbImage, Vec<u8>)>,
     size: (u16, u16),
     path: String,
 }
@@ -105,14 +106,22 @@ impl GifWriter {
                 self.size.1
             );
         }
-        let indices: Vec<u8> = image.pixels().map(|p| self.index(p.0)).collect();
-        let mut frame = match &self.previous {
-            Some(prev) => {
-                let changed: Vec<u8> = indices
-                    .iter()
-                    .zip(prev)
-                    .map(|(&i, &p)| if i == p { TRANSPARENT } else { i })
-                    .collect();
+        let mut frame = match self.previous.take() {
+            Some((prev_image, prev_indices)) => {
+                // Unchanged pixels keep their index (no palette search) and are sent as
+                // TRANSPARENT.
+                let mut indices = prev_indices;
+                let mut changed = vec![TRANSPARENT; indices.len()];
+                for (k, (p, q)) in image.pixels().zip(prev_image.pixels()).enumerate() {
+                    if p != q {
+                        let i = self.index(p.0);
+                        if i != indices[k] {
+                            indices[k] = i;
+                            changed[k] = i;
+                        }
+                    }
+                }
+                self.previous = Some((image.clone(), indices));
                 gif::Frame::from_indexed_pixels(
                     self.size.0,
                     self.size.1,
@@ -121,12 +130,13 @@ impl GifWriter {
                 )
             }
             None => {
-                gif::Frame::from_indexed_pixels(self.size.0, self.size.1, indices.clone(), None)
+                let indices: Vec<u8> = image.pixels().map(|p| self.index(p.0)).collect();
+                self.previous = Some((image.clone(), indices.clone()));
+                gif::Frame::from_indexed_pixels(self.size.0, self.size.1, indices, None)
             }
         };
         frame.dispose = gif::DisposalMethod::Keep;
         frame.delay = delay_cs;
-        self.previous = Some(indices);
         self.encoder
             .write_frame(&frame)
             .with_context(|| format!("{}: cannot write GIF frame", self.path))

@@ -514,7 +514,8 @@ impl Figure {
         }
         let caption_top = PAD;
         let panels_top = caption_top + caption.len() as i32 * caption_h + 4;
-        let header_h = label_h + 2;
+        // Room for the y title above the top tick label, which reaches half a line above the plot.
+        let header_h = label_h + label_h / 2 + 2;
         let plot_h_max = blocks.iter().map(|b| b.plot_h).max().unwrap_or(0);
         let below_plot = TICK_PX + label_h + label_h + 6;
         let legend_top = panels_top + header_h + plot_h_max + below_plot + 4;

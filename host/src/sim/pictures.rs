@@ -86,16 +86,15 @@ pub fn legend(setup: &SimSetup, result: &SimResult) -> Vec<LegendEntry> {
         l.push(LegendEntry::new("seen space", Mark::Fill(palette::SEEN)));
     }
     if all().any(|s| s.band.is_some()) {
-        let moving = if setup.mode == MissionMode::Continuous {
-            format!(", ±{:.0}° moving", setup.moving_half_sweep_deg)
+        let standing = setup.robot.normal_half_sweep_deg;
+        let moving = setup.moving_half_sweep_deg;
+        let label = if setup.mode == MissionMode::Continuous && moving != standing {
+            format!("swept band (±{standing:.0}° stopped, ±{moving:.0}° moving, full ±180°)")
         } else {
-            String::new()
+            format!("swept band (±{standing:.0}°, full ±180°)")
         };
         l.push(LegendEntry::new(
-            format!(
-                "swept band (±{:.0}°{moving}, ±180° full)",
-                setup.robot.normal_half_sweep_deg
-            ),
+            label,
             Mark::Fill(over_white(palette::BAND, BAND_ALPHA)),
         ));
     }
@@ -116,23 +115,20 @@ fn mode_name(mode: MissionMode) -> &'static str {
 /// The caption of a snapshot.
 pub fn caption(setup: &SimSetup, result: &SimResult, snap: &Snapshot, frame: Frame) -> Vec<String> {
     let head = format!(
-        "{} · {} mode · planner {} · t = {:.1} s",
+        "{} · {} mode · planner {}",
         setup.world_name,
         mode_name(setup.mode),
         setup.planner.as_str(),
-        snap.t_s
     );
     let counts = match frame {
         Frame::Plan => format!(
-            "stops so far: {} · plan {} of {}",
-            snap.stops, snap.plan_number, result.stats.plans
+            "t = {:.1} s · stops so far: {} · plan {} of {}",
+            snap.t_s, snap.stops, snap.plan_number, result.stats.plans
         ),
-        Frame::Animation { .. } => {
-            format!(
-                "stops so far: {} · plans so far: {}",
-                snap.stops, snap.plans
-            )
-        }
+        Frame::Animation { .. } => format!(
+            "t = {:.1} s · stops so far: {} · plans so far: {}",
+            snap.t_s, snap.stops, snap.plans
+        ),
     };
     let why = match snap.reason {
         Some(r) => r.text().to_string(),
@@ -150,7 +146,7 @@ pub fn caption(setup: &SimSetup, result: &SimResult, snap: &Snapshot, frame: Fra
     if frame == (Frame::Animation { last: true }) {
         second.push_str(&format!(" Mission ended: {}.", status_text(result.status)));
     }
-    vec![format!("{head} · {counts}"), second]
+    vec![head, counts, second]
 }
 
 fn status_text(s: SimStatus) -> &'static str {
