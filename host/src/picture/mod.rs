@@ -23,14 +23,19 @@
 //! Nothing here panics: non-finite coordinates draw nothing and sizes are bounded.
 
 pub mod animation;
+mod plot;
+mod style;
 pub mod text;
+
+pub use plot::Plot;
+pub use style::{over_white, palette, LegendEntry, Mark, Marker, BAND_ALPHA, REAL_ALPHA};
 
 use image::{Rgb, RgbImage};
 use tiny_skia::{
     FillRule, LineCap, LineJoin, Mask, Paint, PathBuilder, Pixmap, PremultipliedColorU8, Rect,
     Stroke, Transform,
 };
-use twil_core::grid::{Grid, GridGeometry};
+use twil_core::grid::GridGeometry;
 
 /// Largest accepted picture side, pixels.
 pub const MAX_SIDE_PX: u32 = 8192;
@@ -48,79 +53,6 @@ pub const MIN_WIDTH_PX: u32 = 520;
 const PAD: i32 = 8;
 const TICK_PX: i32 = 5;
 const PANEL_GAP: i32 = 24;
-
-/// Colours that every picture shares, so that plan, simulate and cspace pictures read alike.
-pub mod palette {
-    use image::Rgb;
-    /// Background, and space never seen by the sonar.
-    pub const BACKGROUND: Rgb<u8> = Rgb([255, 255, 255]);
-    /// Text.
-    pub const TEXT: Rgb<u8> = Rgb([20, 20, 20]);
-    /// Axes and ticks.
-    pub const AXIS: Rgb<u8> = Rgb([70, 70, 80]);
-    /// Faint lines at the axis ticks.
-    pub const GRID_LINES: Rgb<u8> = Rgb([232, 234, 240]);
-    /// The scale bar (a colour no other mark uses, so tests can find it).
-    pub const SCALE_BAR: Rgb<u8> = Rgb([30, 30, 110]);
-    /// The legend box's border.
-    pub const LEGEND_BORDER: Rgb<u8> = Rgb([190, 190, 200]);
-    /// Cells occupied in the robot's map (obstacles grown by the planning radius).
-    pub const MAP: Rgb<u8> = Rgb([250, 200, 150]);
-    /// Obstacles themselves (plan pictures), or a saved map.
-    pub const OBSTACLE: Rgb<u8> = Rgb([110, 110, 122]);
-    /// Obstacle outlines.
-    pub const OUTLINE: Rgb<u8> = Rgb([35, 35, 45]);
-    /// Real obstacles the robot does not know (drawn faint).
-    pub const REAL: Rgb<u8> = Rgb([150, 150, 160]);
-    /// Obstacles known before the start.
-    pub const KNOWN: Rgb<u8> = Rgb([35, 35, 45]);
-    /// Space the sonar has swept and seen free.
-    pub const SEEN: Rgb<u8> = Rgb([214, 236, 250]);
-    /// The full plan.
-    pub const PLAN: Rgb<u8> = Rgb([110, 150, 255]);
-    /// The kept prefix (and `twil plan`'s path).
-    pub const PREFIX: Rgb<u8> = Rgb([0, 70, 210]);
-    /// The driven trail.
-    pub const TRAIL: Rgb<u8> = Rgb([0, 150, 60]);
-    /// Sonar hits.
-    pub const HITS: Rgb<u8> = Rgb([230, 20, 20]);
-    /// The robot.
-    pub const ROBOT: Rgb<u8> = Rgb([255, 140, 0]);
-    /// Start marker.
-    pub const START: Rgb<u8> = Rgb([0, 165, 0]);
-    /// Goal marker.
-    pub const GOAL: Rgb<u8> = Rgb([200, 0, 200]);
-    /// The band the last sweep covered (drawn translucent).
-    pub const BAND: Rgb<u8> = Rgb([255, 215, 0]);
-    /// The sonar range circle.
-    pub const RANGE: Rgb<u8> = Rgb([150, 80, 200]);
-    /// A second path to compare with (cspace: the thesis' path).
-    pub const COMPARE: Rgb<u8> = Rgb([245, 150, 20]);
-    /// cspace: configurations where arm 1 collides.
-    pub const ARM1_CELL: Rgb<u8> = Rgb([160, 180, 215]);
-    /// cspace: configurations where arm 2 collides.
-    pub const ARM2_CELL: Rgb<u8> = Rgb([100, 100, 118]);
-    /// cspace: arm 1.
-    pub const ARM1: Rgb<u8> = Rgb([60, 120, 200]);
-    /// cspace: arm 2 (or the moving object).
-    pub const ARM2: Rgb<u8> = Rgb([30, 160, 150]);
-    /// cspace: earlier arm positions.
-    pub const GHOST: Rgb<u8> = Rgb([205, 205, 215]);
-}
-
-/// Opacity of the band wedge over the map.
-pub const BAND_ALPHA: f32 = 0.28;
-/// Opacity of the unknown real obstacles.
-pub const REAL_ALPHA: f32 = 0.45;
-
-/// The colour `color` at opacity `alpha` over white: what a translucent mark looks like on
-/// the background, and so its legend swatch.
-pub fn over_white(color: Rgb<u8>, alpha: f32) -> Rgb<u8> {
-    let a = alpha.clamp(0.0, 1.0);
-    Rgb(color
-        .0
-        .map(|c| (255.0 * (1.0 - a) + c as f32 * a).round() as u8))
-}
 
 /// Why a figure could not be made.
 #[derive(Debug, thiserror::Error)]
@@ -141,73 +73,6 @@ pub enum PictureError {
         /// Why.
         error: String,
     },
-}
-
-/// Marker shapes, a fixed size in pixels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Marker {
-    /// A filled disc with a white rim.
-    Disc,
-    /// A filled diamond with a white rim.
-    Diamond,
-    /// A filled square with a white rim.
-    Square,
-}
-
-/// A legend swatch: how the mark looks.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Mark {
-    /// A filled square (areas: cells, obstacles, shaded space).
-    Fill(Rgb<u8>),
-    /// A filled square with an outline (obstacles drawn filled and outlined).
-    FillOutline(Rgb<u8>, Rgb<u8>),
-    /// A square outline (outlined polygons).
-    Outline(Rgb<u8>),
-    /// A horizontal line `width` pixels thick (paths).
-    Line(Rgb<u8>, f32),
-    /// A marker.
-    Marker(Marker, Rgb<u8>),
-    /// Three dots (sonar hits).
-    Dots(Rgb<u8>),
-    /// A ring (a circle outline, e.g. the sonar range).
-    Ring(Rgb<u8>),
-    /// The robot: a translucent disc with outline and heading.
-    Robot(Rgb<u8>),
-}
-
-impl Mark {
-    /// The colour whose exact pixels the swatch shows.
-    pub fn color(&self) -> Rgb<u8> {
-        match *self {
-            Mark::Fill(c)
-            | Mark::Outline(c)
-            | Mark::Line(c, _)
-            | Mark::Marker(_, c)
-            | Mark::Dots(c)
-            | Mark::Ring(c)
-            | Mark::Robot(c) => c,
-            Mark::FillOutline(c, _) => c,
-        }
-    }
-}
-
-/// One legend line.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LegendEntry {
-    /// What the mark is.
-    pub label: String,
-    /// How it looks.
-    pub mark: Mark,
-}
-
-impl LegendEntry {
-    /// An entry.
-    pub fn new(label: impl Into<String>, mark: Mark) -> Self {
-        Self {
-            label: label.into(),
-            mark,
-        }
-    }
 }
 
 /// One axis of a panel.
@@ -1008,199 +873,6 @@ impl Figure {
 
 fn finite_px(x: f32, y: f32) -> bool {
     x.is_finite() && y.is_finite() && x.abs() < FAR_PX && y.abs() < FAR_PX
-}
-
-/// Drawing on one panel, in its data units (x right, y up), clipped to the plot area.
-pub struct Plot<'a> {
-    fig: &'a mut Figure,
-    index: usize,
-}
-
-impl Plot<'_> {
-    fn layout(&self) -> &PanelLayout {
-        &self.fig.panels[self.index]
-    }
-
-    /// Pixel position (fractional, from the picture's top-left corner) of a data point.
-    pub fn to_px(&self, x: f32, y: f32) -> (f32, f32) {
-        let l = self.layout();
-        (
-            l.plot.x0 as f32 + (x - l.spec.x.min) * l.spec.x.px_per_unit,
-            l.plot.y1 as f32 - (y - l.spec.y.min) * l.spec.y.px_per_unit,
-        )
-    }
-
-    /// Pixels per data unit along x.
-    pub fn px_per_unit(&self) -> f32 {
-        self.layout().spec.x.px_per_unit
-    }
-
-    fn pts(&self, points: &[(f32, f32)]) -> Vec<(f32, f32)> {
-        points.iter().map(|&(x, y)| self.to_px(x, y)).collect()
-    }
-
-    /// Fill the data rectangle `[x0, x1] × [y0, y1]`, snapped to whole pixels (cells).
-    pub fn fill_box(&mut self, x0: f32, y0: f32, x1: f32, y1: f32, c: Rgb<u8>, alpha: f32) {
-        let (a, b) = (self.to_px(x0, y1), self.to_px(x1, y0));
-        if !(finite_px(a.0, a.1) && finite_px(b.0, b.1)) {
-            return;
-        }
-        let clip = self.layout().plot;
-        self.fig.blend_px(
-            a.0.round() as i32,
-            a.1.round() as i32,
-            b.0.round() as i32,
-            b.1.round() as i32,
-            c,
-            alpha,
-            Some(clip),
-        );
-    }
-
-    /// Fill every occupied cell of `grid` (its geometry in metres from this panel's origin),
-    /// runs of a row at a time.
-    pub fn fill_grid<const W: usize>(&mut self, grid: &Grid<W>, c: Rgb<u8>, alpha: f32) {
-        let g = *grid.geometry();
-        let r = g.resolution_m();
-        for y in 0..g.height() {
-            let mut x = 0;
-            while x < g.width() {
-                if !grid.is_occupied_xy(x as i32, y as i32) {
-                    x += 1;
-                    continue;
-                }
-                let start = x;
-                while x < g.width() && grid.is_occupied_xy(x as i32, y as i32) {
-                    x += 1;
-                }
-                self.fill_box(
-                    start as f32 * r,
-                    y as f32 * r,
-                    x as f32 * r,
-                    (y + 1) as f32 * r,
-                    c,
-                    alpha,
-                );
-            }
-        }
-    }
-
-    /// Fill a polygon (even-odd rule).
-    pub fn fill_polygon(&mut self, points: &[(f32, f32)], c: Rgb<u8>, alpha: f32) {
-        let px = self.pts(points);
-        if px.len() < 3 || px.iter().any(|&(x, y)| !finite_px(x, y)) {
-            return;
-        }
-        let mut pb = PathBuilder::new();
-        pb.move_to(px[0].0, px[0].1);
-        for p in &px[1..] {
-            pb.line_to(p.0, p.1);
-        }
-        pb.close();
-        self.fig.fill_path_px(pb, c, alpha, Some(self.index));
-    }
-
-    /// A closed outline `width_px` wide.
-    pub fn stroke_polygon(&mut self, points: &[(f32, f32)], c: Rgb<u8>, width_px: f32) {
-        let mut px = self.pts(points);
-        if let Some(first) = px.first().copied() {
-            px.push(first);
-        }
-        self.fig.line_px(&px, c, width_px, 1.0, Some(self.index));
-    }
-
-    /// An open polyline `width_px` wide; one point draws a dot.
-    pub fn polyline(&mut self, points: &[(f32, f32)], c: Rgb<u8>, width_px: f32) {
-        match points {
-            [] => {}
-            [p] => {
-                let (x, y) = self.to_px(p.0, p.1);
-                self.fig
-                    .disc_px(x, y, (width_px / 2.0).max(1.0), c, 1.0, Some(self.index));
-            }
-            _ => {
-                let px = self.pts(points);
-                self.fig.line_px(&px, c, width_px, 1.0, Some(self.index));
-            }
-        }
-    }
-
-    /// Dots of `radius_px` at each point.
-    pub fn dots(&mut self, points: &[(f32, f32)], radius_px: f32, c: Rgb<u8>) {
-        for &(x, y) in points {
-            let (px, py) = self.to_px(x, y);
-            self.fig
-                .disc_px(px, py, radius_px, c, 1.0, Some(self.index));
-        }
-    }
-
-    /// A disc of `radius` data units (along x) at `alpha`.
-    pub fn disc(&mut self, x: f32, y: f32, radius: f32, c: Rgb<u8>, alpha: f32) {
-        let (px, py) = self.to_px(x, y);
-        let r = radius * self.px_per_unit();
-        self.fig.disc_px(px, py, r, c, alpha, Some(self.index));
-    }
-
-    /// A disc `radius_px` pixels across at a data point (joints, arm ends).
-    pub fn disc_fixed(&mut self, x: f32, y: f32, radius_px: f32, c: Rgb<u8>) {
-        let (px, py) = self.to_px(x, y);
-        self.fig
-            .disc_px(px, py, radius_px, c, 1.0, Some(self.index));
-    }
-
-    /// A circle outline of `radius` data units.
-    pub fn circle(&mut self, x: f32, y: f32, radius: f32, c: Rgb<u8>, width_px: f32) {
-        let (px, py) = self.to_px(x, y);
-        let r = radius * self.px_per_unit();
-        self.fig.circle_px(px, py, r, c, width_px, Some(self.index));
-    }
-
-    /// A wedge of `radius` data units from `centre`, `half_angle_rad` either side of
-    /// `heading_rad` (counter-clockwise from +x; a half angle of π or more is the whole disc),
-    /// filled at `alpha`.
-    pub fn wedge(
-        &mut self,
-        centre: (f32, f32),
-        radius: f32,
-        heading_rad: f32,
-        half_angle_rad: f32,
-        c: Rgb<u8>,
-        alpha: f32,
-    ) {
-        if !(heading_rad.is_finite() && half_angle_rad.is_finite() && radius.is_finite()) {
-            return;
-        }
-        if half_angle_rad >= std::f32::consts::PI - 1e-3 {
-            self.disc(centre.0, centre.1, radius, c, alpha);
-            return;
-        }
-        let steps = 48;
-        let mut pts = vec![centre];
-        for k in 0..=steps {
-            let a = heading_rad - half_angle_rad + 2.0 * half_angle_rad * k as f32 / steps as f32;
-            pts.push((centre.0 + radius * a.cos(), centre.1 + radius * a.sin()));
-        }
-        self.fill_polygon(&pts, c, alpha);
-    }
-
-    /// The robot: a translucent disc of `radius`, its outline and a heading line.
-    pub fn robot(&mut self, x: f32, y: f32, radius: f32, heading_rad: f32, c: Rgb<u8>) {
-        self.disc(x, y, radius, c, 0.35);
-        self.circle(x, y, radius, c, 2.0);
-        if heading_rad.is_finite() {
-            let tip = (
-                x + radius * heading_rad.cos(),
-                y + radius * heading_rad.sin(),
-            );
-            self.polyline(&[(x, y), tip], c, 2.5);
-        }
-    }
-
-    /// A marker `size_px` across at a data point, with a white rim.
-    pub fn marker(&mut self, x: f32, y: f32, m: Marker, size_px: f32, c: Rgb<u8>) {
-        let (px, py) = self.to_px(x, y);
-        self.fig.marker_px(px, py, m, size_px, c, Some(self.index));
-    }
 }
 
 #[cfg(test)]
