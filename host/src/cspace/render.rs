@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use anyhow::Context;
-use image::{Rgb, RgbImage};
+use image::Rgb;
 use twil_core::cspace::{
     geometry::{Frame, WorkPoint},
     map::{arm_frames, ConfigMap, Occupancy},
@@ -457,7 +457,7 @@ pub fn write_png(scene: &Scene<'_>, path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn gif_frame(scene: &Scene<'_>, configs: &[[f32; 2]], k: usize) -> anyhow::Result<RgbImage> {
+fn gif_frame(scene: &Scene<'_>, configs: &[[f32; 2]], k: usize) -> anyhow::Result<Figure> {
     let mut fig = figure(scene, true)?;
     draw_map(&mut fig, scene)?;
     let q = configs[k];
@@ -470,7 +470,7 @@ fn gif_frame(scene: &Scene<'_>, configs: &[[f32; 2]], k: usize) -> anyhow::Resul
     draw_obstacles(&mut plot, scene);
     draw_trail(&mut plot, scene, &configs[..=k]);
     draw_arm(&mut plot, scene, q, false);
-    Ok(fig.to_image())
+    Ok(fig)
 }
 
 /// Write the animation: the arm moving along the path, with its configuration in the map.
@@ -499,15 +499,15 @@ pub fn write_gif(scene: &Scene<'_>, frames: usize, path: &Path) -> anyhow::Resul
         palette::ARM1,
         palette::ARM2,
     ];
-    let mut gif = GifWriter::create(path, &[&first, &last], &keys)?;
+    let mut gif = GifWriter::create(path, &[&first.to_image(), &last.to_image()], &keys)?;
     for k in 0..configs.len() {
         let delay = if k == 0 || k == last_k { 120 } else { 6 };
         if k == 0 {
-            gif.add(&first, delay)?;
+            gif.add_figure(&first, delay)?;
         } else if k == last_k {
-            gif.add(&last, delay)?;
+            gif.add_figure(&last, delay)?;
         } else {
-            gif.add(&gif_frame(scene, &configs, k)?, delay)?;
+            gif.add_figure(&gif_frame(scene, &configs, k)?, delay)?;
         }
     }
     gif.finish()

@@ -23,8 +23,8 @@ pub struct GifWriter {
     encoder: gif::Encoder<BufWriter<fs::File>>,
     palette: Vec<[u8; 3]>,
     cache: HashMap<[u8; 3], u8>,
-    /// The previous frame: its pixels and their palette indices.
-    previous: Option<(RgbImage, Vec<u8>)>,
+    /// The previous frame: its bytes (as given) and its pixels' palette indices.
+    previous: Option<(Vec<u8>, Vec<u8>)>,
     size: (u16, u16),
     path: String,
 }
@@ -98,7 +98,20 @@ impl GifWriter {
     /// the first are refused.
     pub fn add(&mut self, image: &RgbImage, delay_cs: u16) -> Result<()> {
         let (w, h) = image.dimensions();
-        if (w, h) != (self.size.0 as u32, self.size.1 as u32) {
+        self.add_raw(image.as_raw(), 3, (w, h), delay_cs)
+    }
+
+    /// Append a figure as a frame (its pixels as they are, without a copy to RGB).
+    pub fn add_figure(&mut self, figure: &super::Figure, delay_cs: u16) -> Result<()> {
+        self.add_raw(figure.rgba(), 4, figure.size_px(), delay_cs)
+    }
+
+    /// Append a frame of `size` pixels, `bpp` bytes a pixel (RGB first).
+    fn add_raw(&mut self, raw: &[u8], bpp: usize, size: (u32, u32), delay_cs: u16) -> Result<()> {
+        let (w, h) = size;
+        if (w, h) != (self.size.0 as u32, self.size.1 as u32)
+            || raw.len() != w as usize * h as usize * bpp
+        {
             anyhow::bail!(
                 "{}: frame of {w}x{h} px in an animation of {}x{} px",
                 self.path,
@@ -106,22 +119,34 @@ impl GifWriter {
                 self.size.1
             );
         }
+        let row_bytes = w as usize * bpp;
         let mut frame = match self.previous.take() {
-            Some((prev_image, prev_indices)) => {
+            Some((prev_raw, prev_indices)) if prev_raw.len() == raw.len() => {
                 // Unchanged pixels keep their index (no palette search) and are sent as
                 // TRANSPARENT.
                 let mut indices = prev_indices;
                 let mut changed = vec![TRANSPARENT; indices.len()];
-                for (k, (p, q)) in image.pixels().zip(prev_image.pixels()).enumerate() {
-                    if p != q {
-                        let i = self.index(p.0);
-                        if i != indices[k] {
-                            indices[k] = i;
-                            changed[k] = i;
+                let rows = raw
+                    .chunks_exact(row_bytes)
+                    .zip(prev_raw.chunks_exact(row_bytes));
+                for (y, (row, prev_row)) in rows.enumerate() {
+                    // Whole rows compare as memory first: most rows do not change.
+                    if row == prev_row {
+                        continue;
+                    }
+                    let pixels = row.chunks_exact(bpp).zip(prev_row.chunks_exact(bpp));
+                    for (x, (p, q)) in pixels.enumerate() {
+                        if p != q {
+                            let k = y * w as usize + x;
+                            let i = self.index([p[0], p[1], p[2]]);
+                            if i != indices[k] {
+                                indices[k] = i;
+                                changed[k] = i;
+                            }
                         }
                     }
                 }
-                self.previous = Some((image.clone(), indices));
+                self.previous = Some((raw.to_vec(), indices));
                 gif::Frame::from_indexed_pixels(
                     self.size.0,
                     self.size.1,
@@ -129,9 +154,12 @@ impl GifWriter {
                     Some(TRANSPARENT),
                 )
             }
-            None => {
-                let indices: Vec<u8> = image.pixels().map(|p| self.index(p.0)).collect();
-                self.previous = Some((image.clone(), indices.clone()));
+            _ => {
+                let indices: Vec<u8> = raw
+                    .chunks_exact(bpp)
+                    .map(|p| self.index([p[0], p[1], p[2]]))
+                    .collect();
+                self.previous = Some((raw.to_vec(), indices.clone()));
                 gif::Frame::from_indexed_pixels(self.size.0, self.size.1, indices, None)
             }
         };

@@ -846,14 +846,21 @@ impl Figure {
         (self.pixmap.width(), self.pixmap.height())
     }
 
+    /// The picture's pixels, RGBA (opaque) row by row.
+    pub fn rgba(&self) -> &[u8] {
+        self.pixmap.data()
+    }
+
     /// The picture as an RGB image.
     pub fn to_image(&self) -> RgbImage {
-        let w = self.pixmap.width();
-        let pixels = self.pixmap.pixels();
-        RgbImage::from_fn(w, self.pixmap.height(), |x, y| {
-            let p = pixels[(y * w + x) as usize];
-            Rgb([p.red(), p.green(), p.blue()])
-        })
+        // The picture is opaque, so premultiplied RGBA is plain RGBA: drop the alpha bytes.
+        let data = self.pixmap.data();
+        let mut rgb = Vec::with_capacity(data.len() / 4 * 3);
+        for p in data.chunks_exact(4) {
+            rgb.extend_from_slice(&p[..3]);
+        }
+        RgbImage::from_raw(self.pixmap.width(), self.pixmap.height(), rgb)
+            .unwrap_or_else(|| RgbImage::new(self.pixmap.width(), self.pixmap.height()))
     }
 
     /// Write the picture as PNG (missing parent folders are created).

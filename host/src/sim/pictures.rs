@@ -281,33 +281,32 @@ pub fn write_gif(
     px_per_cell: u32,
 ) -> Result<()> {
     let picked = pick_frames(result.frames.len(), MAX_GIF_FRAMES);
-    let render = |n: usize| -> Result<RgbImage> {
+    let render = |n: usize| -> Result<Figure> {
         let i = picked[n];
         let last = n + 1 == picked.len();
-        Ok(snapshot_figure(
+        snapshot_figure(
             setup,
             result,
             &result.frames[i],
             px_per_cell,
             Frame::Animation { last },
-        )?
-        .to_image())
+        )
     };
     let (Some(_), Some(last_n)) = (picked.first(), picked.len().checked_sub(1)) else {
         anyhow::bail!("{}: no frame to write", path.display());
     };
     let first = render(0)?;
     let last = render(last_n)?;
-    let mut gif = GifWriter::create(path, &[&first, &last], &key_colors())?;
+    let mut gif = GifWriter::create(path, &[&first.to_image(), &last.to_image()], &key_colors())?;
     for n in 0..picked.len() {
         // 10 ms units; hold the last frame.
         let delay = if n == last_n { 300 } else { 8 };
         if n == 0 {
-            gif.add(&first, delay)?;
+            gif.add_figure(&first, delay)?;
         } else if n == last_n {
-            gif.add(&last, delay)?;
+            gif.add_figure(&last, delay)?;
         } else {
-            gif.add(&render(n)?, delay)?;
+            gif.add_figure(&render(n)?, delay)?;
         }
     }
     gif.finish()
