@@ -84,7 +84,12 @@ fn every_legend_swatch_shows_its_colour_inside_the_legend_box() {
     assert!(lb.x1 <= img.width() as i32 && lb.y1 <= img.height() as i32);
     for (entry, sw) in s.legend.iter().zip(fig.legend_swatches()) {
         let end = sw.x1 as f32 + 6.0 + text::width_px(&entry.label, LABEL_PX);
-        assert!(end < lb.x1 as f32, "{} ends at {end}, box at {}", entry.label, lb.x1);
+        assert!(
+            end < lb.x1 as f32,
+            "{} ends at {end}, box at {}",
+            entry.label,
+            lb.x1
+        );
     }
     for sw in fig.legend_swatches() {
         let label = PxRect {
