@@ -443,7 +443,8 @@ pub fn plan_figure(
         caption_lines: None,
         panels: vec![PanelSpec::map(g, scale, None)],
         legend,
-    })?;
+    })
+    .with_context(|| format!("--scale {scale}: the picture"))?;
     let mut plot = fig.plot(0).context("picture: no plot")?;
     plot.fill_grid(&world.grid, palette::MAP, 1.0);
     if let Some(saved) = &world.saved {
@@ -520,6 +521,33 @@ mod tests {
             let name = arg.to_possible_value().unwrap().get_name().to_string();
             assert_eq!(planner_name((*arg).into()), name);
         }
+    }
+
+    #[test]
+    fn the_picture_has_a_scale_bar_and_a_too_large_scale_is_an_error_naming_the_option() {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            args: Args,
+        }
+        let world = |n: &str| format!("{}/../worlds/{n}", env!("CARGO_MANIFEST_DIR"));
+        let cli = Cli::try_parse_from([
+            "plan",
+            "--world",
+            &world("office.da"),
+            "--params",
+            &world("office.par"),
+        ])
+        .unwrap();
+        let w = load(&cli.args).unwrap();
+        let outcome = plan(&w, PlannerKind::AnyAngle).unwrap();
+        let fig = plan_figure(&w, &outcome, None).unwrap();
+        let bar = fig.scale_bar(0).unwrap();
+        assert_eq!((bar.length, bar.rect.x1 - bar.rect.x0), (1.0, 40));
+        let e = plan_figure(&w, &outcome, Some(40)).err().unwrap();
+        assert!(format!("{e:#}").contains("--scale 40"), "{e:#}");
+        assert!(plan_figure(&w, &outcome, Some(0)).is_err());
     }
 
     #[test]

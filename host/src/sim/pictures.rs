@@ -452,6 +452,32 @@ mod tests {
     }
 
     #[test]
+    fn captions_name_the_world_and_say_when_the_reason_is_unknown() {
+        assert_eq!(
+            world_name(
+                Some(Path::new("worlds/office.da")),
+                Some(Path::new("w/office-walls.da"))
+            ),
+            "office.da (known before the start: office-walls.da)"
+        );
+        assert_eq!(world_name(None, None), "the device's world");
+        let (setup, result) = run();
+        // A device's snapshot: no reason, no seen space, no band.
+        let mut snap = result.frames[result.frames.len() / 2].clone();
+        snap.reason = None;
+        snap.seen = None;
+        snap.band = None;
+        let text = caption(&setup, &result, &snap, Frame::Animation { last: false }).join(" ");
+        assert!(text.contains("not reported by the device"), "{text}");
+        let last = result.frames.last().unwrap();
+        let text = caption(&setup, &result, last, Frame::Animation { last: true }).join(" ");
+        assert!(text.contains("Mission ended: reached."), "{text}");
+        // Drawn without them, it still has its scale bar.
+        let fig = snapshot_figure(&setup, &result, &snap, 2, Frame::Plan).unwrap();
+        assert_eq!(fig.scale_bar(0).unwrap().length, 1.0);
+    }
+
+    #[test]
     fn gif_frames_keep_one_size() {
         let (setup, mut result) = run();
         // A few frames from the start and the end (debug builds draw slowly).
