@@ -281,22 +281,30 @@ fn human_summary_and_picture() {
     assert!(stdout.contains("found"), "{stdout}");
     assert!(stdout.contains("300x300 cells"), "{stdout}");
     let image = image::open(&png).unwrap().to_rgb8();
-    // 300 cells at 3 px, plus two caption lines.
-    assert_eq!(image.width(), 900);
-    assert!(image.height() > 900);
-    let has = |c: image::Rgb<u8>| image.pixels().any(|p| *p == c);
-    use twil_host::render::palette;
+    // 300 cells at 2 px (about 800 px for the map by default), plus axes, caption, legend.
+    assert!(
+        image.width() >= 600 && image.width() < 800,
+        "{}",
+        image.width()
+    );
+    assert!(image.height() > 600);
+    let count = |c: image::Rgb<u8>| image.pixels().filter(|p| **p == c).count();
+    use twil_host::picture::palette;
     for colour in [
         palette::OBSTACLE,
-        palette::EXPANSION,
-        palette::PATH,
+        palette::MAP,
+        palette::PREFIX,
         palette::START,
         palette::GOAL,
+        palette::ROBOT,
     ] {
-        assert!(has(colour), "colour {colour:?} missing from the picture");
+        assert!(
+            count(colour) > 0,
+            "colour {colour:?} missing from the picture"
+        );
     }
-    // Goal (13.5, 13.0) m: column 13.5 / 0.05 * 3 = 810, row 900 - 780 = 120.
-    assert_eq!(*image.get_pixel(810, 120), palette::GOAL);
+    // The scale bar: 1 m at 40 px per metre, 5 px thick, in a colour nothing else uses.
+    assert_eq!(count(palette::SCALE_BAR), 40 * 5);
 }
 
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {

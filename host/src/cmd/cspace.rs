@@ -22,7 +22,7 @@ use twil_core::cspace::{
     tra::Trajectory,
 };
 
-use crate::cspace::render::{self, Ink, Scene};
+use crate::cspace::render::{self, Scene};
 use crate::files::{self, FileError};
 
 /// Which cells become search nodes.
@@ -260,23 +260,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             eprintln!("twil: no path, so no {} written", out.display());
         }
     }
-    let mut legend = Vec::new();
-    if report.status == SearchStatus::Found {
-        legend.push((format!("path {:.1}", report.length), Ink::Path));
+    let result = if report.status == SearchStatus::Found {
+        format!("found, length {:.2}", report.length)
     } else {
-        legend.push((report.status.as_str().replace('_', " "), Ink::Path));
-    }
-    if let Some((_, c)) = &compare {
-        legend.push((format!("reference {:.1}", c.length), Ink::Compare));
-    }
+        report.status.as_str().replace('_', " ")
+    };
     let scene = Scene {
-        legend,
         robot: &robot,
         map: &map,
         path: &path_q,
         start,
         goal,
         compare: compare.as_ref().map(|c| c.0.as_slice()),
+        name: rob_name.clone(),
+        result,
+        compare_label: compare
+            .as_ref()
+            .map(|(_, c)| format!("compared path ({:.1})", c.length)),
     };
     if let Some(out) = &args.png {
         render::write_png(&scene, out)?;

@@ -422,6 +422,12 @@ impl Follower {
             hits: self.hits.clone(),
             trail_len: self.trajectory.len(),
             plan_number,
+            // The device reports neither its seen space nor why it planned.
+            seen: None,
+            stops: self.stops,
+            plans: self.plans,
+            reason: None,
+            band: None,
         }
     }
 
@@ -1047,6 +1053,7 @@ fn write_outputs(
         settle: twil_core::mission::SettleRule::ReferenceModel,
         reference_feed_forward: true,
         turn_in_place: true,
+        world_name: crate::sim::pictures::world_name(args.real.as_deref(), args.known.as_deref()),
     };
     let report = &outcome.report;
     let result = SimResult {

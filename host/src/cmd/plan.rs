@@ -24,7 +24,7 @@ use twil_core::plan::{PathM, PlanReport, PlanStatus, Planner, PlannerKind};
 use twil_core::raster::mark_polygon;
 use twil_core::world::{Obstacles, Params};
 
-use crate::render::{palette, Canvas, Marker};
+use crate::picture::{self, palette, Figure, FigureSpec, LegendEntry, Mark, Marker, PanelSpec};
 use crate::world_io;
 
 /// Cells of the largest host grid (400 x 400).
@@ -64,7 +64,7 @@ pub struct Args {
     /// Draw the map, the grown obstacles, the path, start and goal to this PNG file.
     #[arg(long, value_name = "OUT.png")]
     pub png: Option<PathBuf>,
-    /// Pixels per cell in the PNG (default: about 900 px for the longer side).
+    /// Pixels per cell in the PNG (default: about 800 px for the map's longer side).
     #[arg(long, value_name = "PX")]
     pub scale: Option<u32>,
     /// Plan on the firmware instead: `qemu` (starts QEMU with the firmware), `tcp:HOST:PORT`
@@ -370,75 +370,108 @@ pub fn summary(world: &World, outcome: &Outcome) -> String {
     s
 }
 
-/// Draw `world` and `outcome` to a PNG: faint metre lines, grown obstacles (light orange),
-/// saved-map cells (grey), the obstacle polygons (grey, filled, outlined dark), the path
-/// (blue, with its vertices), the robot's size at the start (a disc with its heading), start
-/// (green disc) and goal (red diamond), and a two-line caption (legend, result). Missing
-/// parent folders of `out` are created.
+/// Draw `world` and `outcome` to a PNG (see [`plan_figure`]). Missing parent folders of `out`
+/// are created.
 pub fn render_png(
     world: &World,
     outcome: &Outcome,
     out: &Path,
     px_per_cell: Option<u32>,
 ) -> anyhow::Result<()> {
+    plan_figure(world, outcome, px_per_cell)?.save_png(out)?;
+    Ok(())
+}
+
+/// The picture of a plan: grown obstacles (light orange), saved-map cells and the obstacle
+/// polygons (grey, outlined dark), the path (blue, with its vertices), the robot's size at
+/// the start (a disc with its heading), start (green disc) and goal (magenta diamond), with
+/// axes in metres, a scale bar, a legend and a caption (world, planner, result, why).
+pub fn plan_figure(
+    world: &World,
+    outcome: &Outcome,
+    px_per_cell: Option<u32>,
+) -> anyhow::Result<Figure> {
     let g = *world.grid.geometry();
-    let scale = px_per_cell.unwrap_or_else(|| Canvas::fit_scale(g, 900));
-    let mut c = Canvas::with_caption(g, scale, 2)?;
-    c.draw_metre_lines(1.0, palette::METRE_LINES);
-    c.draw_grid(&world.grid, palette::EXPANSION);
-    if let Some(saved) = &world.saved {
-        c.draw_grid(saved, palette::OBSTACLE);
+    let scale = px_per_cell.unwrap_or_else(|| picture::fit_px_per_cell(g, 800));
+    let name = |p: &Option<PathBuf>| {
+        p.as_ref()
+            .and_then(|p| p.file_name())
+            .map(|n| n.to_string_lossy().into_owned())
+    };
+    let world_name = [name(&world.world_path), name(&world.map_path)]
+        .into_iter()
+        .flatten()
+        .collect::<Vec<_>>()
+        .join(" + ");
+    let mut result = status_name(outcome.report.status).replace('_', " ");
+    if outcome.report.status == PlanStatus::Found {
+        result.push_str(&format!(", {:.2} m", outcome.report.length_m));
     }
-    c.draw_grid(&world.raw, palette::OBSTACLE);
-    c.fill_polygons(&world.obstacles, palette::OBSTACLE);
-    c.draw_polygons(&world.obstacles, palette::POLYGON, 1.0);
+    let caption = vec![
+        format!(
+            "{world_name} · twil plan (no mission: 0 stops, 1 plan) · planner {} · {result}",
+            planner_name(outcome.kind)
+        ),
+        format!(
+            "Why this plan: the one plan from start to goal on the fully known map (obstacles grown by the robot radius {:.2} m); {} {} expanded; {}x{} cells of {} m.",
+            world.params.robot_radius_m,
+            outcome.report.expanded,
+            expanded_unit(outcome.kind),
+            g.width(),
+            g.height(),
+            g.resolution_m()
+        ),
+    ];
+    let obstacle = if world.saved.is_some() {
+        "obstacle / saved map"
+    } else {
+        "obstacle"
+    };
+    let legend = vec![
+        LegendEntry::new(
+            obstacle,
+            Mark::FillOutline(palette::OBSTACLE, palette::OUTLINE),
+        ),
+        LegendEntry::new("grown by robot radius", Mark::Fill(palette::MAP)),
+        LegendEntry::new("path", Mark::Line(palette::PREFIX, 3.0)),
+        LegendEntry::new("robot at start", Mark::Robot(palette::ROBOT)),
+        LegendEntry::new("start", Mark::Marker(Marker::Disc, palette::START)),
+        LegendEntry::new("goal", Mark::Marker(Marker::Diamond, palette::GOAL)),
+    ];
+    let mut fig = Figure::new(&FigureSpec {
+        caption,
+        caption_lines: None,
+        panels: vec![PanelSpec::map(g, scale, None)],
+        legend,
+    })
+    .with_context(|| format!("--scale {scale}: the picture"))?;
+    let mut plot = fig.plot(0).context("picture: no plot")?;
+    plot.fill_grid(&world.grid, palette::MAP, 1.0);
+    if let Some(saved) = &world.saved {
+        plot.fill_grid(saved, palette::OBSTACLE, 1.0);
+    }
+    plot.fill_grid(&world.raw, palette::OBSTACLE, 1.0);
+    for polygon in world.obstacles.iter() {
+        let pts = picture::points(polygon);
+        plot.fill_polygon(&pts, palette::OBSTACLE, 1.0);
+        plot.stroke_polygon(&pts, palette::OUTLINE, 1.0);
+    }
     let p = &world.params;
-    c.draw_robot(
-        p.start,
+    plot.robot(
+        p.start.x_m,
+        p.start.y_m,
         p.robot_radius_m,
         p.initial_heading_deg.to_radians(),
         palette::ROBOT,
     );
-    c.draw_polyline(&outcome.path, palette::PATH, 3.0);
-    if outcome.path.len() <= 16 {
-        c.draw_points(&outcome.path, 3.0, palette::PATH);
+    let path = picture::points(&outcome.path);
+    plot.polyline(&path, palette::PREFIX, 3.0);
+    if path.len() <= 16 {
+        plot.dots(&path, 3.5, palette::PREFIX);
     }
-    c.draw_marker(p.start, Marker::Disc, 14, palette::START);
-    c.draw_marker(p.goal, Marker::Diamond, 18, palette::GOAL);
-    let mut legend = vec![
-        ("obstacle", palette::OBSTACLE),
-        ("grown by radius", palette::EXPANSION),
-        ("path", palette::PATH),
-        ("start", palette::START),
-        ("goal", palette::GOAL),
-    ];
-    if world.saved.is_some() {
-        legend[0].0 = "obstacle/saved map";
-    }
-    c.caption_legend(0, &legend);
-    let mut result = format!(
-        "{}: {}",
-        planner_name(outcome.kind),
-        status_name(outcome.report.status).replace('_', " ")
-    );
-    if outcome.report.status == PlanStatus::Found {
-        result.push_str(&format!(", {:.2} m", outcome.report.length_m));
-    }
-    result.push_str(&format!(
-        ", {} {} expanded, {}x{} cells of {} m",
-        outcome.report.expanded,
-        expanded_unit(outcome.kind),
-        g.width(),
-        g.height(),
-        g.resolution_m()
-    ));
-    c.caption_text(1, &result, palette::TEXT);
-    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent)
-            .with_context(|| format!("{}: cannot create the folder", parent.display()))?;
-    }
-    c.save_png(out)?;
-    Ok(())
+    plot.marker(p.start.x_m, p.start.y_m, Marker::Disc, 14.0, palette::START);
+    plot.marker(p.goal.x_m, p.goal.y_m, Marker::Diamond, 16.0, palette::GOAL);
+    Ok(fig)
 }
 
 /// Run `twil plan`.
@@ -488,6 +521,33 @@ mod tests {
             let name = arg.to_possible_value().unwrap().get_name().to_string();
             assert_eq!(planner_name((*arg).into()), name);
         }
+    }
+
+    #[test]
+    fn the_picture_has_a_scale_bar_and_a_too_large_scale_is_an_error_naming_the_option() {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            args: Args,
+        }
+        let world = |n: &str| format!("{}/../worlds/{n}", env!("CARGO_MANIFEST_DIR"));
+        let cli = Cli::try_parse_from([
+            "plan",
+            "--world",
+            &world("office.da"),
+            "--params",
+            &world("office.par"),
+        ])
+        .unwrap();
+        let w = load(&cli.args).unwrap();
+        let outcome = plan(&w, PlannerKind::AnyAngle).unwrap();
+        let fig = plan_figure(&w, &outcome, None).unwrap();
+        let bar = fig.scale_bar(0).unwrap();
+        assert_eq!((bar.length, bar.rect.x1 - bar.rect.x0), (1.0, 40));
+        let e = plan_figure(&w, &outcome, Some(40)).err().unwrap();
+        assert!(format!("{e:#}").contains("--scale 40"), "{e:#}");
+        assert!(plan_figure(&w, &outcome, Some(0)).is_err());
     }
 
     #[test]

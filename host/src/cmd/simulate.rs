@@ -254,6 +254,7 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         settle: choices.settle,
         reference_feed_forward: choices.reference_feed_forward,
         turn_in_place: choices.turn_in_place,
+        world_name: crate::sim::pictures::world_name(Some(&args.real), args.known.as_deref()),
     })
 }
 

@@ -25,6 +25,8 @@
 //! Everything is deterministic: the plant's noise generator is seeded, and the mission is pure.
 
 pub mod output;
+pub mod pictures;
+pub mod reason;
 
 use anyhow::{bail, Result};
 use twil_core::control::Pose;
@@ -38,6 +40,8 @@ use twil_core::plan::PlannerKind;
 use twil_core::plant::Plant;
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
+
+use reason::{PlanReason, ReasonTracker, SweepBand};
 
 /// Everything a simulation run needs.
 #[derive(Clone, Debug)]
@@ -75,6 +79,8 @@ pub struct SimSetup {
     /// Turn in place at the start of a prefix and at sharp vertices; `false` never does (the
     /// seed: the supplier hands out the time-stamped path points only).
     pub turn_in_place: bool,
+    /// The world's name for the pictures' captions (e.g. the real world's file name).
+    pub world_name: String,
 }
 
 /// How a simulation ended.
@@ -135,6 +141,16 @@ pub struct Snapshot {
     pub trail_len: usize,
     /// Plan number (1 = first plan) when this snapshot was taken at a plan, else 0.
     pub plan_number: u32,
+    /// Cells the sonar has seen free, when known (not from a device).
+    pub seen: Option<Box<Grid400>>,
+    /// Stops so far.
+    pub stops: u32,
+    /// Plans so far.
+    pub plans: u32,
+    /// Why the latest plan was made, when known.
+    pub reason: Option<PlanReason>,
+    /// The band the latest sweep covered, when known.
+    pub band: Option<SweepBand>,
 }
 
 /// What a simulation produced.
@@ -165,6 +181,7 @@ pub struct SimResult {
 
 fn snapshot(
     mission: &Mission400,
+    reasons: &ReasonTracker,
     t_s: f32,
     pose: Pose,
     trail_len: usize,
@@ -189,6 +206,11 @@ fn snapshot(
         hits: mission.last_hits().to_vec(),
         trail_len,
         plan_number,
+        seen: Some(Box::new(mission.seen().clone())),
+        stops: mission.stats().stops,
+        plans: mission.stats().plans,
+        reason: reasons.reason(),
+        band: reasons.band(),
     }
 }
 
@@ -280,6 +302,11 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
     let max_ticks = ((setup.time_limit_s / period_s) as u64).saturating_add(100);
     let mut ticks = 0u64;
     let debug = std::env::var_os("TWIL_SIM_DEBUG").is_some();
+    let mut reasons = ReasonTracker::new(
+        setup.mode,
+        robot.normal_half_sweep_deg,
+        setup.moving_half_sweep_deg,
+    );
     while !collision {
         ticks += 1;
         if ticks > max_ticks {
@@ -294,6 +321,7 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
         let outcome = runner.tick(deltas.0, deltas.1, period_s, &mut |angle| {
             plant.sonar_range_m(&setup.real, angle, robot.sonar_range_m)
         });
+        reasons.observe(&outcome.events);
         if debug && !outcome.events.is_empty() {
             let m = runner.mission();
             eprintln!("{t_s:8.2} {:?} pose {:?}", outcome.events, m.pose_world());
@@ -303,6 +331,7 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
             let m = runner.mission();
             plans.push(snapshot(
                 m,
+                &reasons,
                 t_s,
                 plant.pose(),
                 trajectory.len(),
@@ -331,7 +360,14 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
         }
         if setup.snapshot_period_s > 0.0 && t_s >= next_snapshot_s {
             next_snapshot_s += setup.snapshot_period_s;
-            frames.push(snapshot(runner.mission(), t_s, after, trajectory.len(), 0));
+            frames.push(snapshot(
+                runner.mission(),
+                &reasons,
+                t_s,
+                after,
+                trajectory.len(),
+                0,
+            ));
         }
         if t_s >= next_progress_s {
             next_progress_s += 1.0;
@@ -340,6 +376,7 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
     }
     frames.push(snapshot(
         runner.mission(),
+        &reasons,
         t_s,
         plant.pose(),
         trajectory.len(),

@@ -1,0 +1,200 @@
+//! Why each plan happened, read from the mission's events (for the pictures' captions), and
+//! the band the latest sweep covered.
+//!
+//! The mission asks for a plan after every sweep; what led to that sweep is in the events
+//! before it: the first sweep at the start, the end of a prefix (the robot stopped there and
+//! swept), a full sweep asked for because the kept prefix left the ±band, or (continuous mode)
+//! the end of a moving pass, whose new obstacles may block the path.
+
+use twil_core::mission::{MissionEvent, MissionMode};
+use twil_core::plan::PlanStatus;
+
+/// Why a plan was made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlanReason {
+    /// The first plan, after the first sweep at the start.
+    First,
+    /// The robot reached the end of its prefix short of the goal, stopped and swept.
+    PrefixEnd,
+    /// The kept prefix left the swept band: a full ±180° sweep, then this plan.
+    BandFullSweep,
+    /// A moving sweep found new obstacles on the rest of the path.
+    Blocked,
+    /// A moving sweep pass ended (continuous mode replans after every pass).
+    MovingPass,
+    /// A sweep ended (no more specific cause seen).
+    Sweep,
+}
+
+impl PlanReason {
+    /// A short sentence for a caption.
+    pub fn text(self) -> &'static str {
+        match self {
+            PlanReason::First => "first plan, after the first sweep at the start",
+            PlanReason::PrefixEnd => "prefix end reached: the robot stopped, swept and replanned",
+            PlanReason::BandFullSweep => {
+                "the kept prefix left the swept band: full ±180° sweep, then replan"
+            }
+            PlanReason::Blocked => "the moving sweep found an obstacle on the path: replan",
+            PlanReason::MovingPass => "a moving sweep pass ended: routine replan",
+            PlanReason::Sweep => "a sweep ended: replan",
+        }
+    }
+}
+
+/// The band the latest sweep covered, either side of the robot's heading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SweepBand {
+    /// Half-angle, degrees (180 for a full sweep).
+    pub half_angle_deg: f32,
+    /// Taken while moving.
+    pub moving: bool,
+}
+
+/// Follows the events of a mission; see the module documentation.
+#[derive(Clone, Debug)]
+pub struct ReasonTracker {
+    standing_half_deg: f32,
+    moving_half_deg: f32,
+    plans: u32,
+    prefix_ended: bool,
+    full_requested: bool,
+    last_sweep: Option<SweepBand>,
+    last_reason: Option<PlanReason>,
+    last_status: Option<PlanStatus>,
+    mode: MissionMode,
+}
+
+impl ReasonTracker {
+    /// A tracker for sweeps of `standing_half_deg` (stopped) and `moving_half_deg` (moving).
+    pub fn new(mode: MissionMode, standing_half_deg: f32, moving_half_deg: f32) -> Self {
+        Self {
+            standing_half_deg,
+            moving_half_deg,
+            plans: 0,
+            prefix_ended: false,
+            full_requested: false,
+            last_sweep: None,
+            last_reason: None,
+            last_status: None,
+            mode,
+        }
+    }
+
+    /// Take the events of one tick, in order.
+    pub fn observe(&mut self, events: &[MissionEvent]) {
+        for e in events {
+            match *e {
+                MissionEvent::SweepStarted { full, moving } => {
+                    let half_angle_deg = if full {
+                        180.0
+                    } else if moving {
+                        self.moving_half_deg
+                    } else {
+                        self.standing_half_deg
+                    };
+                    self.last_sweep = Some(SweepBand {
+                        half_angle_deg,
+                        moving,
+                    });
+                }
+                MissionEvent::EndOfTrajectory => self.prefix_ended = true,
+                MissionEvent::FullSweepRequested => self.full_requested = true,
+                MissionEvent::Planned {
+                    status, blocked, ..
+                } => {
+                    self.plans += 1;
+                    let reason = if self.plans == 1 {
+                        PlanReason::First
+                    } else if blocked {
+                        PlanReason::Blocked
+                    } else if self.full_requested {
+                        PlanReason::BandFullSweep
+                    } else if self.prefix_ended {
+                        PlanReason::PrefixEnd
+                    } else if self.last_sweep.is_some_and(|s| s.moving)
+                        && self.mode == MissionMode::Continuous
+                    {
+                        PlanReason::MovingPass
+                    } else {
+                        PlanReason::Sweep
+                    };
+                    self.last_reason = Some(reason);
+                    self.last_status = Some(status);
+                    self.prefix_ended = false;
+                    self.full_requested = false;
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Why the latest plan was made (`None` before the first).
+    pub fn reason(&self) -> Option<PlanReason> {
+        self.last_reason
+    }
+
+    /// The planner's verdict on the latest plan.
+    pub fn status(&self) -> Option<PlanStatus> {
+        self.last_status
+    }
+
+    /// The band of the latest sweep (`None` before the first).
+    pub fn band(&self) -> Option<SweepBand> {
+        self.last_sweep
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn planned(blocked: bool) -> MissionEvent {
+        MissionEvent::Planned {
+            status: PlanStatus::Found,
+            blocked,
+            prefix_points: 3,
+        }
+    }
+
+    #[test]
+    fn stop_mode_reasons_follow_the_events_before_each_plan() {
+        let mut t = ReasonTracker::new(MissionMode::Stop, 95.0, 60.0);
+        assert_eq!(t.reason(), None);
+        t.observe(&[MissionEvent::SweepStarted {
+            full: false,
+            moving: false,
+        }]);
+        assert_eq!(t.band().unwrap().half_angle_deg, 95.0);
+        t.observe(&[planned(false)]);
+        assert_eq!(t.reason(), Some(PlanReason::First));
+        t.observe(&[MissionEvent::FullSweepRequested]);
+        t.observe(&[MissionEvent::SweepStarted {
+            full: true,
+            moving: false,
+        }]);
+        assert_eq!(t.band().unwrap().half_angle_deg, 180.0);
+        t.observe(&[planned(false)]);
+        assert_eq!(t.reason(), Some(PlanReason::BandFullSweep));
+        t.observe(&[MissionEvent::EndOfTrajectory, MissionEvent::Settled]);
+        t.observe(&[planned(false)]);
+        assert_eq!(t.reason(), Some(PlanReason::PrefixEnd));
+        t.observe(&[planned(false)]);
+        assert_eq!(t.reason(), Some(PlanReason::Sweep));
+    }
+
+    #[test]
+    fn continuous_mode_tells_blocked_from_routine_passes() {
+        let mut t = ReasonTracker::new(MissionMode::Continuous, 95.0, 60.0);
+        t.observe(&[planned(false)]);
+        t.observe(&[MissionEvent::SweepStarted {
+            full: false,
+            moving: true,
+        }]);
+        assert_eq!(t.band().unwrap().half_angle_deg, 60.0);
+        t.observe(&[planned(true)]);
+        assert_eq!(t.reason(), Some(PlanReason::Blocked));
+        t.observe(&[planned(false)]);
+        assert_eq!(t.reason(), Some(PlanReason::MovingPass));
+    }
+}
