@@ -6,6 +6,7 @@ pub mod cspace;
 pub mod device_sim;
 pub mod files;
 pub mod qemu_cmd;
+pub mod record;
 pub mod remote;
 pub mod render;
 pub mod sim;
