@@ -123,7 +123,8 @@ fn simulate_record_matches_the_run_summary_and_csv() {
     let maps = count(&topics, "/map");
     assert!(maps >= 2 && maps <= sweeps + 1, "{maps} maps, {sweeps} sweeps");
 
-    // Mission time: the poses run from 0 to the end of the run, 50 ms apart, and the last
+    // Mission time: the poses run from 0 to the end of the run, 50 ms apart (to the
+    // 30 µs an f32 time keeps at 500 s), and the last
     // /status says how the run ended.
     let pose_times = &topics["/pose"].log_times_ns;
     assert_eq!(pose_times[0], 0);
@@ -132,7 +133,7 @@ fn simulate_record_matches_the_run_summary_and_csv() {
     assert!((last_s - sim_time_s).abs() < 0.01, "{last_s} vs {sim_time_s}");
     assert!(pose_times
         .windows(2)
-        .all(|w| (w[1] - w[0]).abs_diff(50_000_000) < 10_000));
+        .all(|w| (w[1] - w[0]).abs_diff(50_000_000) < 100_000));
     let last_status: Value = serde_json::from_slice(&topics["/status"].last_data).unwrap();
     assert_eq!(last_status["status"], "reached");
     // The controller's signals are plottable numbers, as in the CSV.
@@ -167,7 +168,8 @@ fn trajectory_csv_carries_references_voltages_and_phase() {
     // The first row is the start: no controller step yet.
     assert_eq!(rows[0][4], "");
     let phases: BTreeSet<&str> = rows.iter().map(|r| r[10]).collect();
-    for phase in ["sweep", "follow", "done"] {
+    // The last row is the period before the mission ended: no row is in phase `done`.
+    for phase in ["sweep", "plan", "follow", "settle"] {
         assert!(phases.contains(phase), "{phase} missing from {phases:?}");
     }
     let following: Vec<&Vec<&str>> = rows.iter().filter(|r| r[10] == "follow").collect();
@@ -285,10 +287,11 @@ fn live_server_streams_poses_and_ctrl_c_ends_cleanly() {
     let mut request = format!("ws://127.0.0.1:{port}")
         .into_client_request()
         .unwrap();
-    request.headers_mut().insert(
-        "Sec-WebSocket-Protocol",
-        "foxglove.websocket.v1".parse().unwrap(),
-    );
+    // The SDK's server speaks the Foxglove WebSocket protocol v1 under the subprotocol
+    // `foxglove.sdk.v1` (the protocol's former name, `foxglove.websocket.v1`, is refused).
+    request
+        .headers_mut()
+        .insert("Sec-WebSocket-Protocol", "foxglove.sdk.v1".parse().unwrap());
     let (mut socket, _) = tungstenite::connect(request).expect("connect to --live");
     let deadline = Instant::now() + Duration::from_secs(20);
     let mut pose_channel = None;
@@ -329,7 +332,7 @@ fn live_server_streams_poses_and_ctrl_c_ends_cleanly() {
     // Mission time, one controller period (50 ms) apart.
     assert!(pose_times_ns
         .windows(2)
-        .all(|w| (w[1] - w[0]).abs_diff(50_000_000) < 10_000));
+        .all(|w| (w[1] - w[0]).abs_diff(50_000_000) < 100_000));
     drop(socket);
 
     // Ctrl-C: the mission stops, the recording is closed and readable, exit status 1.

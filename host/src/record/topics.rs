@@ -40,8 +40,9 @@ pub fn timestamp(t_s: f32) -> Timestamp {
 /// Mission time in nanoseconds (the log time of a message).
 pub fn nanos(t_s: f32) -> u64 {
     let t = if t_s.is_finite() { t_s.max(0.0) } else { 0.0 };
-    // f64 keeps 50 ms periods exact to the nanosecond over days of mission time.
-    ((t as f64) * 1e9).round() as u64
+    // Whole microseconds: an f32 time carries no more (0.05 is 0.0500000007 as f32, which
+    // would stamp the first period 50 000 001 ns).
+    ((t as f64) * 1e6).round() as u64 * 1000
 }
 
 fn rgba(r: f64, g: f64, b: f64, a: f64) -> Color {
