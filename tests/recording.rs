@@ -143,6 +143,73 @@ fn simulate_record_matches_the_run_summary_and_csv() {
     }
 }
 
+/// The README's `--record` example: same command, same output (the simulator and the MCAP
+/// writer are deterministic, so the size and counts are exact).
+#[test]
+fn readme_recording_example_matches() {
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
+        .unwrap();
+    let command = "cargo run --release -p twil-host -- simulate --real worlds/office.da --params worlds/office.par --record out/office.mcap";
+    let at = readme.find(command).expect("the README's --record example");
+    let block = &readme[at..];
+    let start = block.find("```text\n").expect("its output block") + "```text\n".len();
+    let end = start + block[start..].find("```").unwrap();
+    let expected = &block[start..end];
+
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("office.mcap");
+    let o = common::twil()
+        .args(["simulate", "--real"])
+        .arg(common::world("office.da"))
+        .arg("--params")
+        .arg(common::world("office.par"))
+        .arg("--record")
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout).replace(&path.display().to_string(), "out/office.mcap");
+    assert_eq!(stdout, expected);
+}
+
+#[test]
+fn mission_record_follows_the_telemetry() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("mission.mcap");
+    let o = common::twil()
+        .args(["mission", "--remote", "sim", "--json", "--real"])
+        .arg(common::world("office.da"))
+        .arg("--params")
+        .arg(common::world("office.par"))
+        .arg("--record")
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // `--json` keeps stdout to its one object; the recording's line goes to stderr.
+    let result: Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("recorded "));
+    let topics = read_mcap(&path);
+    let names: BTreeSet<&str> = topics.keys().map(String::as_str).collect();
+    assert_eq!(names, ALL_TOPICS.into_iter().collect());
+    // Poses at 5 Hz over the mission, one plan and prefix per plan, a point cloud per sweep
+    // (at least one per stop).
+    let sim_time_s = result["sim_time_s"].as_f64().unwrap();
+    let poses = count(&topics, "/pose") as f64;
+    assert!((poses - sim_time_s * 5.0).abs() <= 3.0, "{poses} poses in {sim_time_s} s");
+    assert_eq!(count(&topics, "/tf") as f64, poses);
+    let plans = result["replans"].as_u64().unwrap() as usize + 1;
+    assert_eq!(count(&topics, "/plan"), plans);
+    assert_eq!(count(&topics, "/prefix"), plans);
+    assert!(count(&topics, "/sonar") >= result["stops"].as_u64().unwrap() as usize);
+    let last_status: Value = serde_json::from_slice(&topics["/status"].last_data).unwrap();
+    assert_eq!(last_status["status"], "reached");
+    // The telemetry carries the voltages, not the references.
+    let control: Value = serde_json::from_slice(&topics["/control"].last_data).unwrap();
+    assert!(control["left_voltage_v"].is_number(), "{control}");
+    assert!(control["reference_x_m"].is_null(), "{control}");
+}
+
 #[test]
 fn trajectory_csv_carries_references_voltages_and_phase() {
     let tmp = tempfile::tempdir().unwrap();

@@ -106,11 +106,11 @@ pub struct RecordSummary {
 }
 
 impl RecordSummary {
-    /// One line: file, size in MB, and the message count per topic.
+    /// One line: file, size in MB, and the message count of every topic written.
     pub fn line(&self) -> String {
         let counts: Vec<String> = topics::TOPICS
             .iter()
-            .map(|t| format!("{t} {}", self.counts.get(t).copied().unwrap_or(0)))
+            .filter_map(|t| self.counts.get(t).map(|n| format!("{t} {n}")))
             .collect();
         match &self.file {
             Some((path, bytes)) => format!(
