@@ -171,9 +171,10 @@ fn out_writes_summary_trajectory_plan_pictures_and_the_gif() {
     );
     assert!(rows.iter().all(|r| r.len() == 11));
     // The telemetry carries pose, voltages and phase, not the references (empty fields).
-    assert!(rows
+    assert!(rows.iter().all(|r| r[..4]
         .iter()
-        .all(|r| r[..4].iter().chain(&r[8..10]).all(|f| f.parse::<f64>().is_ok())));
+        .chain(&r[8..10])
+        .all(|f| f.parse::<f64>().is_ok())));
     assert!(rows.iter().all(|r| r[4].is_empty()));
     assert!(rows.iter().any(|r| r[10] == "follow"));
 

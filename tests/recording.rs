@@ -46,8 +46,7 @@ fn count(topics: &BTreeMap<String, TopicInfo>, topic: &str) -> usize {
 }
 
 const ALL_TOPICS: [&str; 10] = [
-    "/band", "/control", "/map", "/plan", "/pose", "/prefix", "/sonar", "/status", "/tf",
-    "/world",
+    "/band", "/control", "/map", "/plan", "/pose", "/prefix", "/sonar", "/status", "/tf", "/world",
 ];
 
 #[test]
@@ -115,13 +114,19 @@ fn simulate_record_matches_the_run_summary_and_csv() {
     assert!(sweeps >= summary["stops"].as_u64().unwrap() as usize);
     assert_eq!(count(&topics, "/sonar"), sweeps);
     let bands = count(&topics, "/band");
-    assert!(bands == sweeps || bands == sweeps + 1, "{bands} bands, {sweeps} sweeps");
+    assert!(
+        bands == sweeps || bands == sweeps + 1,
+        "{bands} bands, {sweeps} sweeps"
+    );
     assert_eq!(count(&topics, "/plan"), plans);
     assert_eq!(count(&topics, "/prefix"), plans);
     assert_eq!(count(&topics, "/world"), 1);
     // The map only when it changed: the start, then at most once per sweep.
     let maps = count(&topics, "/map");
-    assert!(maps >= 2 && maps <= sweeps + 1, "{maps} maps, {sweeps} sweeps");
+    assert!(
+        maps >= 2 && maps <= sweeps + 1,
+        "{maps} maps, {sweeps} sweeps"
+    );
 
     // Mission time: the poses run from 0 to the end of the run, 50 ms apart (to the
     // 30 µs an f32 time keeps at 500 s), and the last
@@ -130,7 +135,10 @@ fn simulate_record_matches_the_run_summary_and_csv() {
     assert_eq!(pose_times[0], 0);
     let sim_time_s = summary["sim_time_s"].as_f64().unwrap();
     let last_s = *pose_times.last().unwrap() as f64 / 1e9;
-    assert!((last_s - sim_time_s).abs() < 0.01, "{last_s} vs {sim_time_s}");
+    assert!(
+        (last_s - sim_time_s).abs() < 0.01,
+        "{last_s} vs {sim_time_s}"
+    );
     assert!(pose_times
         .windows(2)
         .all(|w| (w[1] - w[0]).abs_diff(50_000_000) < 100_000));
@@ -138,7 +146,12 @@ fn simulate_record_matches_the_run_summary_and_csv() {
     assert_eq!(last_status["status"], "reached");
     // The controller's signals are plottable numbers, as in the CSV.
     let control: Value = serde_json::from_slice(&topics["/control"].last_data).unwrap();
-    for key in ["left_voltage_v", "right_voltage_v", "reference_x_m", "left_speed_ref_rad_s"] {
+    for key in [
+        "left_voltage_v",
+        "right_voltage_v",
+        "reference_x_m",
+        "left_speed_ref_rad_s",
+    ] {
         assert!(control[key].is_number(), "{key}: {control}");
     }
 }
@@ -147,8 +160,9 @@ fn simulate_record_matches_the_run_summary_and_csv() {
 /// writer are deterministic, so the size and counts are exact).
 #[test]
 fn readme_recording_example_matches() {
-    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
-        .unwrap();
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
+            .unwrap();
     let command = "cargo run --release -p twil-host -- simulate --real worlds/office.da --params worlds/office.par --record out/office.mcap";
     let at = readme.find(command).expect("the README's --record example");
     let block = &readme[at..];
@@ -168,7 +182,8 @@ fn readme_recording_example_matches() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let stdout = String::from_utf8_lossy(&o.stdout).replace(&path.display().to_string(), "out/office.mcap");
+    let stdout =
+        String::from_utf8_lossy(&o.stdout).replace(&path.display().to_string(), "out/office.mcap");
     assert_eq!(stdout, expected);
 }
 
@@ -196,7 +211,10 @@ fn mission_record_follows_the_telemetry() {
     // (at least one per stop).
     let sim_time_s = result["sim_time_s"].as_f64().unwrap();
     let poses = count(&topics, "/pose") as f64;
-    assert!((poses - sim_time_s * 5.0).abs() <= 3.0, "{poses} poses in {sim_time_s} s");
+    assert!(
+        (poses - sim_time_s * 5.0).abs() <= 3.0,
+        "{poses} poses in {sim_time_s} s"
+    );
     assert_eq!(count(&topics, "/tf") as f64, poses);
     let plans = result["replans"].as_u64().unwrap() as usize + 1;
     assert_eq!(count(&topics, "/plan"), plans);
@@ -241,7 +259,9 @@ fn trajectory_csv_carries_references_voltages_and_phase() {
     }
     let following: Vec<&Vec<&str>> = rows.iter().filter(|r| r[10] == "follow").collect();
     let volts = |r: &Vec<&str>, i: usize| r[i].parse::<f64>().unwrap();
-    assert!(following.iter().any(|r| volts(r, 8) > 0.5 && volts(r, 9) > 0.5));
+    assert!(following
+        .iter()
+        .any(|r| volts(r, 8) > 0.5 && volts(r, 9) > 0.5));
     assert!(following.iter().all(|r| r[4].parse::<f64>().is_ok()));
 }
 
@@ -351,6 +371,8 @@ fn live_server_streams_poses_and_ctrl_c_ends_cleanly() {
     stderr.read_line(&mut line).unwrap();
     assert!(line.contains(&format!("ws://127.0.0.1:{port}")), "{line}");
 
+    // Connect late: the world has gone out (at mission time 0) before this client was there.
+    std::thread::sleep(Duration::from_millis(300));
     let mut request = format!("ws://127.0.0.1:{port}")
         .into_client_request()
         .unwrap();
@@ -363,7 +385,8 @@ fn live_server_streams_poses_and_ctrl_c_ends_cleanly() {
     let deadline = Instant::now() + Duration::from_secs(20);
     let mut pose_channel = None;
     let mut pose_times_ns: Vec<u64> = Vec::new();
-    while pose_times_ns.len() < 5 {
+    let mut world_times_ns: Vec<u64> = Vec::new();
+    while pose_times_ns.len() < 5 || world_times_ns.is_empty() {
         assert!(Instant::now() < deadline, "no poses within 20 s");
         match socket.read().expect("read") {
             Message::Text(text) => {
@@ -372,30 +395,45 @@ fn live_server_streams_poses_and_ctrl_c_ends_cleanly() {
                     continue;
                 }
                 for ch in v["channels"].as_array().unwrap() {
-                    if ch["topic"] == "/pose" {
-                        assert_eq!(ch["schemaName"], "foxglove.PoseInFrame");
-                        let id = ch["id"].as_u64().unwrap();
-                        pose_channel = Some(id);
-                        let subscribe = serde_json::json!({
-                            "op": "subscribe",
-                            "subscriptions": [{"id": 7, "channelId": id}],
-                        });
-                        socket
-                            .send(Message::Text(subscribe.to_string().into()))
-                            .unwrap();
-                    }
+                    // Subscription 7: the poses; 8: the world, sent once at mission time 0,
+                    // before this client connected (the server resends it to late subscribers).
+                    let subscription = match ch["topic"].as_str() {
+                        Some("/pose") => {
+                            assert_eq!(ch["schemaName"], "foxglove.PoseInFrame");
+                            pose_channel = ch["id"].as_u64();
+                            7
+                        }
+                        Some("/world") => 8,
+                        _ => continue,
+                    };
+                    let subscribe = serde_json::json!({
+                        "op": "subscribe",
+                        "subscriptions": [{"id": subscription, "channelId": ch["id"]}],
+                    });
+                    socket
+                        .send(Message::Text(subscribe.to_string().into()))
+                        .unwrap();
                 }
             }
             // Message data: opcode 1, subscription id (u32 LE), log time (u64 LE), payload.
             Message::Binary(data) if data.first() == Some(&1) && data.len() > 13 => {
                 let subscription = u32::from_le_bytes(data[1..5].try_into().unwrap());
-                assert_eq!(subscription, 7);
-                pose_times_ns.push(u64::from_le_bytes(data[5..13].try_into().unwrap()));
+                let log_time_ns = u64::from_le_bytes(data[5..13].try_into().unwrap());
+                match subscription {
+                    7 => pose_times_ns.push(log_time_ns),
+                    8 => world_times_ns.push(log_time_ns),
+                    other => panic!("data for subscription {other}"),
+                }
             }
             _ => {}
         }
     }
     assert!(pose_channel.is_some());
+    assert_eq!(
+        world_times_ns,
+        vec![0],
+        "the world, once, stamped mission time 0"
+    );
     // Mission time, one controller period (50 ms) apart.
     assert!(pose_times_ns
         .windows(2)

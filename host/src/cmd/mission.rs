@@ -602,7 +602,13 @@ impl Follower {
                         r.plan(t_s, &[], &[]);
                     }
                     let counts = (report.stats.plans, report.stats.stops);
-                    r.status(t_s, Some(MissionPhase::Done), report.status, "finished", counts);
+                    r.status(
+                        t_s,
+                        Some(MissionPhase::Done),
+                        report.status,
+                        "finished",
+                        counts,
+                    );
                 }
                 self.finished = Some(report);
             }
@@ -848,7 +854,10 @@ pub fn run(args: Args) -> Result<()> {
         if let (Some(port), Some(addr)) = (recorder.live_port(), args.record.live) {
             note(
                 &bar,
-                &format!("twil: serving live on ws://{}:{port} (Foxglove: Open connection)", addr.ip()),
+                &format!(
+                    "twil: serving live on ws://{}:{port} (Foxglove: Open connection)",
+                    addr.ip()
+                ),
             );
         }
         follower.record_into(recorder, &inputs);

@@ -151,7 +151,7 @@ pub struct Args {
     #[command(flatten)]
     pub record: RecordArgs,
     /// With `--live`: run mission time this many times faster than the wall clock.
-    #[arg(long, default_value_t = 1.0, value_name = "X")]
+    #[arg(long, default_value_t = 1.0, value_name = "X", requires = "live")]
     pub speed: f64,
 }
 

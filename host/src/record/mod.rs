@@ -20,8 +20,8 @@ use std::sync::{Arc, Mutex};
 use anyhow::{anyhow, Context as _, Result};
 use foxglove::messages::{FrameTransform, Grid, PointCloud, PoseInFrame, SceneUpdate};
 use foxglove::websocket::{Capability, ChannelView, Client, ServerListener};
-use foxglove::{Channel, Context, Encode, McapWriterHandle, PartialMetadata, SinkId};
 use foxglove::WebSocketServerHandle;
+use foxglove::{Channel, Context, Encode, McapWriterHandle, PartialMetadata, SinkId};
 use twil_core::control::Pose;
 use twil_core::geom::PointM;
 use twil_core::grid::Grid400;
@@ -296,10 +296,9 @@ impl Recorder {
 
     /// `/control`.
     pub fn control(&mut self, t_s: f32, sample: &ControlSample) {
-        self.channels.control.log_with_time(
-            &topics::control_message(t_s, sample),
-            topics::nanos(t_s),
-        );
+        self.channels
+            .control
+            .log_with_time(&topics::control_message(t_s, sample), topics::nanos(t_s));
         self.count("/control");
     }
 

@@ -87,8 +87,7 @@ impl SimRecorder {
                 known: setup.known.clone(),
                 start: setup.params.start,
                 goal: setup.params.goal,
-                body_radius_m: (setup.params.robot_radius_m
-                    - twil_core::robot::PLANNING_MARGIN_M)
+                body_radius_m: (setup.params.robot_radius_m - twil_core::robot::PLANNING_MARGIN_M)
                     .max(0.05),
             },
             shape: SweepShape {

@@ -23,7 +23,12 @@ pub struct TelemetryRecorder {
 
 impl TelemetryRecorder {
     /// Start recording: `/world` and the first `/map` (the known obstacles) at time 0.
-    pub fn new(mut recorder: Recorder, scene: &WorldScene, grid: &Grid400, robot: &RobotConfig) -> Self {
+    pub fn new(
+        mut recorder: Recorder,
+        scene: &WorldScene,
+        grid: &Grid400,
+        robot: &RobotConfig,
+    ) -> Self {
         recorder.world(0.0, scene);
         recorder.map(0.0, grid);
         recorder.tick(0.0);
@@ -44,7 +49,14 @@ impl TelemetryRecorder {
 
     /// A phase change: `/status`, and `/band` when a sweep starts (standing: the device
     /// reports no moving sweeps).
-    pub fn phase(&mut self, t_s: f32, phase: MissionPhase, status: MissionStatus, pose: &Pose, counts: (u32, u32)) {
+    pub fn phase(
+        &mut self,
+        t_s: f32,
+        phase: MissionPhase,
+        status: MissionStatus,
+        pose: &Pose,
+        counts: (u32, u32),
+    ) {
         if let MissionPhase::Sweep { full } = phase {
             let half = if full {
                 self.full_half_rad

@@ -5,13 +5,13 @@
 //! by `/tf`. Timestamps are mission time: `t_s` seconds after the start map to `t_s`
 //! seconds after the Unix epoch (a recording starts on 1 January 1970, 00:00:00).
 
-use foxglove::messages::{
-    Color, CylinderPrimitive, FrameTransform, Grid, LinePrimitive, PackedElementField,
-    PointCloud, Pose as FgPose, PoseInFrame, Quaternion, SceneEntity, SceneEntityDeletion,
-    SceneUpdate, Timestamp, Vector2, Vector3,
-};
 use foxglove::messages::{line_primitive, packed_element_field, scene_entity_deletion};
 use foxglove::messages::{ArrowPrimitive, Point3};
+use foxglove::messages::{
+    Color, CylinderPrimitive, FrameTransform, Grid, LinePrimitive, PackedElementField, PointCloud,
+    Pose as FgPose, PoseInFrame, Quaternion, SceneEntity, SceneEntityDeletion, SceneUpdate,
+    Timestamp, Vector2, Vector3,
+};
 use schemars::JsonSchema;
 use serde::Serialize;
 use twil_core::control::Pose;
@@ -124,7 +124,12 @@ pub fn grid_message(t_s: f32, grid: &Grid400, cells: Vec<u8>) -> Grid {
     }
 }
 
-fn line(points: Vec<Point3>, kind: line_primitive::Type, thickness_m: f64, color: Color) -> LinePrimitive {
+fn line(
+    points: Vec<Point3>,
+    kind: line_primitive::Type,
+    thickness_m: f64,
+    color: Color,
+) -> LinePrimitive {
     LinePrimitive {
         r#type: kind as i32,
         pose: Some(identity_pose()),
@@ -146,7 +151,12 @@ fn entity(t_s: f32, id: &str, frame: &str) -> SceneEntity {
 }
 
 /// Polygons as closed outlines, `z_m` above the map (so they draw over the grid).
-fn polygon_lines(obstacles: &Obstacles, z_m: f64, thickness_m: f64, color: Color) -> Vec<LinePrimitive> {
+fn polygon_lines(
+    obstacles: &Obstacles,
+    z_m: f64,
+    thickness_m: f64,
+    color: Color,
+) -> Vec<LinePrimitive> {
     obstacles
         .iter()
         .map(|polygon| {
@@ -467,7 +477,10 @@ mod tests {
         assert_eq!(bytes[2 * 20 + 3], OCCUPIED_VALUE);
         assert_eq!(bytes.iter().filter(|&&b| b != 0).count(), 1);
         let msg = grid_message(1.0, &grid, bytes);
-        assert_eq!((msg.column_count, msg.row_stride, msg.cell_stride), (20, 20, 1));
+        assert_eq!(
+            (msg.column_count, msg.row_stride, msg.cell_stride),
+            (20, 20, 1)
+        );
         assert_eq!(msg.data.len(), 200);
     }
 
@@ -483,7 +496,9 @@ mod tests {
         let points = band_outline(&pose, 95f32.to_radians(), 1.5);
         assert_eq!(points.first(), points.last());
         let first_arc = points[1];
-        let angle = (first_arc.y_m - 2.0).atan2(first_arc.x_m - 1.0).to_degrees();
+        let angle = (first_arc.y_m - 2.0)
+            .atan2(first_arc.x_m - 1.0)
+            .to_degrees();
         assert!((angle + 95.0).abs() < 0.01, "{angle}");
         for p in &points[1..points.len() - 1] {
             let r = ((p.x_m - 1.0).powi(2) + (p.y_m - 2.0).powi(2)).sqrt();
@@ -496,7 +511,11 @@ mod tests {
         let update = path_update(3.0, PathKind::Prefix, &[]);
         assert!(update.entities.is_empty());
         assert_eq!(update.deletions[0].id, "prefix");
-        let update = path_update(3.0, PathKind::Plan, &[PointM::new(0.0, 0.0), PointM::new(1.0, 1.0)]);
+        let update = path_update(
+            3.0,
+            PathKind::Plan,
+            &[PointM::new(0.0, 0.0), PointM::new(1.0, 1.0)],
+        );
         assert_eq!(update.entities[0].lines[0].points.len(), 2);
     }
 
@@ -504,7 +523,10 @@ mod tests {
     fn hits_pack_as_two_floats_each() {
         let cloud = hits_cloud(0.0, &[PointM::new(1.5, -2.0)]);
         assert_eq!(cloud.data.len(), 8);
-        assert_eq!(f32::from_le_bytes(cloud.data[4..8].try_into().unwrap()), -2.0);
+        assert_eq!(
+            f32::from_le_bytes(cloud.data[4..8].try_into().unwrap()),
+            -2.0
+        );
     }
 
     #[test]
