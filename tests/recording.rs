@@ -228,6 +228,64 @@ fn mission_record_follows_the_telemetry() {
     assert!(control["reference_x_m"].is_null(), "{control}");
 }
 
+/// Stops the mission once mission time passes `stop_at_s`; keeps what it was shown.
+struct StopAt {
+    stop_at_s: f32,
+    rows: Vec<twil_host::sim::TrajectoryRow>,
+    sweeps_done: usize,
+    started: bool,
+}
+
+impl twil_host::sim::Observer for StopAt {
+    fn start(&mut self, _: &twil_core::mission::Mission400) {
+        self.started = true;
+    }
+    fn tick(&mut self, view: &twil_host::sim::TickView) -> std::ops::ControlFlow<()> {
+        self.sweeps_done += view
+            .events
+            .iter()
+            .filter(|e| matches!(e, twil_core::mission::MissionEvent::SweepDone { .. }))
+            .count();
+        if view.t_s >= self.stop_at_s {
+            std::ops::ControlFlow::Break(())
+        } else {
+            std::ops::ControlFlow::Continue(())
+        }
+    }
+    fn row(&mut self, row: &twil_host::sim::TrajectoryRow) {
+        self.rows.push(*row);
+    }
+}
+
+#[test]
+fn an_observer_sees_every_row_and_can_stop_the_mission() {
+    use clap::Parser;
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: twil_host::cmd::simulate::Args,
+    }
+    let real = common::world("office.da").display().to_string();
+    let params = common::world("office.par").display().to_string();
+    let cli = Cli::parse_from(["twil", "--real", &real, "--params", &params]);
+    let setup = twil_host::cmd::simulate::setup_from_args(&cli.args).unwrap();
+    let mut observer = StopAt {
+        stop_at_s: 30.0,
+        rows: Vec::new(),
+        sweeps_done: 0,
+        started: false,
+    };
+    let result =
+        twil_host::sim::run_observed(&setup, &mut twil_host::sim::NoProgress, &mut observer)
+            .unwrap();
+    assert!(observer.started);
+    assert_eq!(result.status, twil_host::sim::SimStatus::Aborted);
+    assert!((result.sim_time_s - 30.0).abs() < 0.06, "{}", result.sim_time_s);
+    assert_eq!(observer.rows, result.trajectory);
+    assert_eq!(observer.sweeps_done, result.sweeps as usize);
+    assert!(result.sweeps >= 1);
+}
+
 #[test]
 fn trajectory_csv_carries_references_voltages_and_phase() {
     let tmp = tempfile::tempdir().unwrap();

@@ -201,3 +201,23 @@ impl Observer for SimRecorder {
         self.recorder.control(row.t_s, &row.control);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pace_waits_for_mission_time_at_its_speed() {
+        let pace = Pace::new(100.0);
+        let started = Instant::now();
+        // 2 s of mission time at 100 times the wall clock: 20 ms.
+        pace.wait_for(2.0);
+        let waited = started.elapsed();
+        assert!(waited >= Duration::from_millis(19), "{waited:?}");
+        assert!(waited < Duration::from_millis(500), "{waited:?}");
+        // Mission time already due: no wait.
+        let again = Instant::now();
+        pace.wait_for(1.0);
+        assert!(again.elapsed() < Duration::from_millis(5));
+    }
+}
