@@ -82,6 +82,21 @@ fn simulate_record_matches_the_run_summary_and_csv() {
 
     let names: BTreeSet<&str> = topics.keys().map(String::as_str).collect();
     assert_eq!(names, ALL_TOPICS.into_iter().collect());
+    // A finished file: the summary section (statistics, chunk index) that lets the Foxglove
+    // app seek, counting every message read, in zstd chunks.
+    let bytes = std::fs::read(&mcap_path).unwrap();
+    let mcap_summary = mcap::Summary::read(&bytes)
+        .unwrap()
+        .expect("a summary section");
+    let stats = mcap_summary.stats.expect("statistics");
+    let messages: usize = topics.values().map(|t| t.log_times_ns.len()).sum();
+    assert_eq!(stats.message_count as usize, messages);
+    assert_eq!(stats.channel_count, 10);
+    assert!(!mcap_summary.chunk_indexes.is_empty());
+    assert!(mcap_summary
+        .chunk_indexes
+        .iter()
+        .all(|c| c.compression == "zstd"));
     let expected_schemas = [
         ("/map", "foxglove.Grid"),
         ("/world", "foxglove.SceneUpdate"),
@@ -280,7 +295,11 @@ fn an_observer_sees_every_row_and_can_stop_the_mission() {
             .unwrap();
     assert!(observer.started);
     assert_eq!(result.status, twil_host::sim::SimStatus::Aborted);
-    assert!((result.sim_time_s - 30.0).abs() < 0.06, "{}", result.sim_time_s);
+    assert!(
+        (result.sim_time_s - 30.0).abs() < 0.06,
+        "{}",
+        result.sim_time_s
+    );
     assert_eq!(observer.rows, result.trajectory);
     assert_eq!(observer.sweeps_done, result.sweeps as usize);
     assert!(result.sweeps >= 1);
@@ -381,6 +400,30 @@ fn the_layout_shows_only_topics_twil_writes() {
         .expect("a raw-messages panel")
         .1;
     assert_eq!(raw["topicPath"], "/status");
+}
+
+#[test]
+fn a_record_path_that_cannot_be_created_is_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let blocker = tmp.path().join("not-a-dir");
+    std::fs::write(&blocker, "a file").unwrap();
+    let path = blocker.join("office.mcap");
+    let o = common::twil()
+        .args(["simulate", "--real"])
+        .arg(common::world("office.da"))
+        .arg("--params")
+        .arg(common::world("office.par"))
+        .arg("--record")
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(o.stdout.is_empty());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains(&format!("--record {}", path.display())),
+        "{stderr}"
+    );
 }
 
 /// A TCP port free right now.
