@@ -426,6 +426,34 @@ fn a_record_path_that_cannot_be_created_is_named() {
     );
 }
 
+#[test]
+fn live_paces_mission_time_to_the_wall_clock() {
+    let started = Instant::now();
+    let o = common::twil()
+        .args(["simulate", "--real"])
+        .arg(common::world("corridor.da"))
+        .arg("--params")
+        .arg(common::world("corridor.par"))
+        .args(["--live", "127.0.0.1:0", "--speed", "200"])
+        .output()
+        .unwrap();
+    let wall_s = started.elapsed().as_secs_f64();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    // "reached: 28.90 m travelled in 402.5 s simulated; …"
+    let sim_s: f64 = stdout
+        .split(" s simulated")
+        .next()
+        .and_then(|head| head.rsplit(' ').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no simulated time in {stdout}"));
+    assert!(
+        wall_s >= sim_s / 200.0,
+        "{wall_s} s of wall time for {sim_s} s at 200x"
+    );
+    assert!(stdout.contains("served live; messages: /map "), "{stdout}");
+}
+
 /// A TCP port free right now.
 fn free_port() -> u16 {
     TcpListener::bind("127.0.0.1:0")
