@@ -39,7 +39,6 @@ use twil_core::world::{Obstacles, Params};
 use super::preset::LoopArgs;
 use super::simulate::{parse_size, read_da, read_par, Mode, SonarArg, SonarArgs};
 use crate::record::telemetry::TelemetryRecorder;
-use crate::record::topics::WorldScene;
 use crate::record::{RecordArgs, Recorder};
 use crate::remote::{Remote, RemoteSpec};
 use crate::sim::{output, ControlSample, SimResult, SimSetup, SimStatus, Snapshot, TrajectoryRow};
@@ -399,21 +398,7 @@ impl Follower {
 
     /// Record (and/or serve) what arrives from now on.
     fn record_into(&mut self, recorder: Recorder, inputs: &Inputs) {
-        let scene = WorldScene {
-            real: inputs.real.as_ref(),
-            known: inputs.known.as_ref(),
-            start: inputs.params.start,
-            goal: inputs.params.goal,
-            body_radius_m: Some(
-                (inputs.params.robot_radius_m - twil_core::robot::PLANNING_MARGIN_M).max(0.05),
-            ),
-        };
-        self.recorder = Some(TelemetryRecorder::new(
-            recorder,
-            &scene,
-            &self.grid,
-            &inputs.robot,
-        ));
+        self.recorder = Some(TelemetryRecorder::new(recorder, inputs, &self.grid));
     }
 
     fn pose(&self) -> Pose {
@@ -597,18 +582,7 @@ impl Follower {
                     self.frames.push(snap);
                 }
                 if let Some(r) = &mut self.recorder {
-                    let t_s = report.stats.time_s;
-                    if report.status == MissionStatus::Unreachable {
-                        r.plan(t_s, &[], &[]);
-                    }
-                    let counts = (report.stats.plans, report.stats.stops);
-                    r.status(
-                        t_s,
-                        Some(MissionPhase::Done),
-                        report.status,
-                        "finished",
-                        counts,
-                    );
+                    r.finished(&report);
                 }
                 self.finished = Some(report);
             }
@@ -939,12 +913,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     if let Some(summary) = &recorded {
-        // `--json` keeps stdout to its one object.
-        if args.json {
-            eprintln!("{}", summary.line());
-        } else {
-            println!("{}", summary.line());
-        }
+        summary.print(args.json);
     }
     if interrupted {
         bail!("interrupted (Ctrl-C): the mission was aborted and the device stopped the motors");

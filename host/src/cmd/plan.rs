@@ -473,9 +473,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         if let Some(out) = &args.png {
             println!("picture: {}", out.display());
         }
-        if let Some(summary) = &recorded {
-            println!("{}", summary.line());
-        }
+    }
+    if let Some(summary) = &recorded {
+        summary.print(args.json);
     }
     Ok(())
 }

@@ -414,12 +414,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     if let Some(summary) = &recorded {
-        // `--json` keeps stdout to its one object.
-        if args.json {
-            eprintln!("{}", summary.line());
-        } else {
-            println!("{}", summary.line());
-        }
+        summary.print(args.json);
     }
     if result.status == sim::SimStatus::Aborted {
         bail!("interrupted (Ctrl-C): the simulation was stopped");

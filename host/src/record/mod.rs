@@ -106,6 +106,16 @@ pub struct RecordSummary {
 }
 
 impl RecordSummary {
+    /// Print [`RecordSummary::line`]: on stdout, or on stderr when `--json` keeps stdout to
+    /// its one object.
+    pub fn print(&self, json: bool) {
+        if json {
+            eprintln!("{}", self.line());
+        } else {
+            println!("{}", self.line());
+        }
+    }
+
     /// One line: file, size in MB, and the message count of every topic written.
     pub fn line(&self) -> String {
         let counts: Vec<String> = topics::TOPICS

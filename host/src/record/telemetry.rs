@@ -5,12 +5,12 @@
 use twil_core::control::Pose;
 use twil_core::geom::PointM;
 use twil_core::grid::Grid400;
+use twil_core::link::MissionReport;
 use twil_core::mission::{MissionPhase, MissionStatus};
-use twil_core::robot::RobotConfig;
 
 use super::topics::{StatusMessage, WorldScene};
 use super::Recorder;
-use crate::cmd::mission::{phase_name, status_name};
+use crate::cmd::mission::{phase_name, status_name, Inputs};
 use crate::sim::TrajectoryRow;
 
 /// A [`Recorder`] fed by `twil mission`'s follower.
@@ -22,22 +22,40 @@ pub struct TelemetryRecorder {
 }
 
 impl TelemetryRecorder {
-    /// Start recording: `/world` and the first `/map` (the known obstacles) at time 0.
-    pub fn new(
-        mut recorder: Recorder,
-        scene: &WorldScene,
-        grid: &Grid400,
-        robot: &RobotConfig,
-    ) -> Self {
-        recorder.world(0.0, scene);
+    /// Start recording `inputs`' mission: `/world` and the first `/map` (`grid`: the known
+    /// obstacles) at time 0.
+    pub fn new(mut recorder: Recorder, inputs: &Inputs, grid: &Grid400) -> Self {
+        let scene = WorldScene {
+            real: inputs.real.as_ref(),
+            known: inputs.known.as_ref(),
+            start: inputs.params.start,
+            goal: inputs.params.goal,
+            body_radius_m: Some(
+                (inputs.params.robot_radius_m - twil_core::robot::PLANNING_MARGIN_M).max(0.05),
+            ),
+        };
+        recorder.world(0.0, &scene);
         recorder.map(0.0, grid);
         recorder.tick(0.0);
+        let robot = &inputs.robot;
         Self {
             recorder,
             normal_half_rad: robot.normal_half_sweep_deg.to_radians(),
             full_half_rad: robot.full_half_sweep_deg.to_radians(),
             range_m: robot.sonar_range_m,
         }
+    }
+
+    /// The device's final report: no plan any more if it ended unreachable, and the last
+    /// `/status`.
+    pub fn finished(&mut self, report: &MissionReport) {
+        let t_s = report.stats.time_s;
+        if report.status == MissionStatus::Unreachable {
+            self.recorder.plan(t_s, &[], &[]);
+        }
+        let counts = (report.stats.plans, report.stats.stops);
+        let done = Some(MissionPhase::Done);
+        self.status(t_s, done, report.status, "finished", counts);
     }
 
     /// A pose report, as its trajectory row.
