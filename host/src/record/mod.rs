@@ -71,16 +71,8 @@ impl ServerListener for Subscriptions {
     }
 }
 
-/// The last message of a stateful topic and its time.
-struct Latest<T> {
-    message: Option<(T, u64)>,
-}
-
-impl<T> Default for Latest<T> {
-    fn default() -> Self {
-        Self { message: None }
-    }
-}
+/// The last message of a stateful topic and its log time, nanoseconds.
+type Latest<T> = Option<(T, u64)>;
 
 /// One channel per topic.
 struct Channels {
@@ -211,11 +203,11 @@ impl Recorder {
             subscriptions,
             counts: BTreeMap::new(),
             last_map: Vec::new(),
-            latest_world: Latest::default(),
-            latest_map: Latest::default(),
-            latest_plan: Latest::default(),
-            latest_status: Latest::default(),
-            latest_prefix: Latest::default(),
+            latest_world: None,
+            latest_map: None,
+            latest_plan: None,
+            latest_status: None,
+            latest_prefix: None,
         })
     }
 
@@ -255,7 +247,7 @@ impl Recorder {
     pub fn world(&mut self, t_s: f32, scene: &WorldScene) {
         let msg = topics::world_update(t_s, scene);
         self.channels.world.log_with_time(&msg, topics::nanos(t_s));
-        self.latest_world.message = Some((msg, topics::nanos(t_s)));
+        self.latest_world = Some((msg, topics::nanos(t_s)));
         self.count("/world");
     }
 
@@ -268,7 +260,7 @@ impl Recorder {
         self.last_map.clone_from(&cells);
         let msg = topics::grid_message(t_s, grid, cells);
         self.channels.map.log_with_time(&msg, topics::nanos(t_s));
-        self.latest_map.message = Some((msg, topics::nanos(t_s)));
+        self.latest_map = Some((msg, topics::nanos(t_s)));
         self.count("/map");
     }
 
@@ -287,7 +279,7 @@ impl Recorder {
             PathKind::Prefix => (&self.channels.prefix, &mut self.latest_prefix, "/prefix"),
         };
         channel.log_with_time(&msg, t);
-        latest.message = Some((msg, t));
+        *latest = Some((msg, t));
         self.count(topic);
     }
 
@@ -333,7 +325,7 @@ impl Recorder {
     pub fn status(&mut self, message: StatusMessage) {
         let t = topics::nanos(message.t_s);
         self.channels.status.log_with_time(&message, t);
-        self.latest_status.message = Some((message, t));
+        self.latest_status = Some((message, t));
         self.count("/status");
     }
 
@@ -370,7 +362,7 @@ fn resend<T: Encode>(
     to: Option<SinkId>,
     meta: impl Fn(u64) -> PartialMetadata,
 ) {
-    if let Some((message, t)) = &latest.message {
+    if let Some((message, t)) = latest {
         channel.log_with_meta_to_sink(message, meta(*t), to);
     }
 }
