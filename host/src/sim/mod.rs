@@ -9,7 +9,10 @@
 //!    polygons (the mission only knows its odometry);
 //! 2. apply the pilot's wheel voltages to the plant for one period;
 //! 3. record the true pose, the clearance to the real polygons (negative = collision, which
-//!    aborts the mission with status `collision`) and, for the pictures, snapshots.
+//!    aborts the mission with status `collision`) and, for the pictures, snapshots;
+//! 4. with [`run_observed`], show the tick and the new trajectory row to an [`Observer`]
+//!    (`--record`, `--live`: messages as the mission goes), which may stop the mission
+//!    (Ctrl-C: status `aborted`).
 //!
 //! **Latency model** (`--plan-latency-ms`, [`SimSetup::plan_latency_s`]): the planner runs at
 //! once on the mission's grid (which does not change until the result is back) and its result
