@@ -48,6 +48,7 @@ fn plan_args(world: &str, kind: host_plan::PlannerArg) -> host_plan::Args {
         planner: kind,
         json: false,
         png: None,
+        record: None,
         scale: None,
         remote: None,
     }

@@ -157,10 +157,11 @@ fn out_writes_summary_trajectory_plan_pictures_and_the_gif() {
 
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
     let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("t,x,y,theta"));
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
-        .collect();
+    assert_eq!(
+        lines.next(),
+        Some("t,x,y,theta,ref_x,ref_y,left_speed_ref_rad_s,right_speed_ref_rad_s,left_v,right_v,phase")
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     // Poses at 5 Hz over the whole mission.
     let expected = num(&summary, "sim_time_s") * 5.0;
     assert!(
@@ -168,7 +169,14 @@ fn out_writes_summary_trajectory_plan_pictures_and_the_gif() {
         "{} rows for {expected}",
         rows.len()
     );
-    assert!(rows.iter().all(|r| r.len() == 4));
+    assert!(rows.iter().all(|r| r.len() == 11));
+    // The telemetry carries pose, voltages and phase, not the references (empty fields).
+    assert!(rows.iter().all(|r| r[..4]
+        .iter()
+        .chain(&r[8..10])
+        .all(|f| f.parse::<f64>().is_ok())));
+    assert!(rows.iter().all(|r| r[4].is_empty()));
+    assert!(rows.iter().any(|r| r[10] == "follow"));
 
     let plans = summary["plans"].as_u64().unwrap() as usize;
     assert!(plans > 0);

@@ -274,9 +274,14 @@ fn same_seed_same_trajectory_and_all_outputs_written() {
 
     // trajectory.csv: header and one row per 50 ms period.
     let mut lines = a.lines();
-    assert_eq!(lines.next(), Some("t,x,y,theta"));
+    assert_eq!(
+        lines.next(),
+        Some("t,x,y,theta,ref_x,ref_y,left_speed_ref_rad_s,right_speed_ref_rad_s,left_v,right_v,phase")
+    );
+    // The pose columns (the rest are the controller's signals and the phase: see
+    // tests/recording.rs).
     let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
+        .map(|l| l.split(',').take(4).map(|f| f.parse().unwrap()).collect())
         .collect();
     assert!(rows.len() > 100);
     for pair in rows.windows(2) {

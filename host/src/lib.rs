@@ -7,6 +7,7 @@ pub mod device_sim;
 pub mod files;
 pub mod picture;
 pub mod qemu_cmd;
+pub mod record;
 pub mod remote;
 pub mod sim;
 pub mod world_io;

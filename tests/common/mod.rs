@@ -31,6 +31,7 @@ pub fn plan_args(world: Option<PathBuf>, params: PathBuf) -> twil_host::cmd::pla
         planner: twil_host::cmd::plan::PlannerArg::Astar,
         json: true,
         png: None,
+        record: None,
         scale: None,
         remote: None,
     }

@@ -38,8 +38,10 @@ use twil_core::world::{Obstacles, Params};
 
 use super::preset::LoopArgs;
 use super::simulate::{parse_size, read_da, read_par, Mode, SonarArg, SonarArgs};
+use crate::record::telemetry::TelemetryRecorder;
+use crate::record::{RecordArgs, Recorder};
 use crate::remote::{Remote, RemoteSpec};
-use crate::sim::{output, SimResult, SimSetup, SimStatus, Snapshot, TrajectoryRow};
+use crate::sim::{output, ControlSample, SimResult, SimSetup, SimStatus, Snapshot, TrajectoryRow};
 
 /// Arguments of `twil mission`.
 #[derive(clap::Args, Debug, Clone)]
@@ -95,6 +97,9 @@ pub struct Args {
     /// GIF scale, pixels per cell.
     #[arg(long, default_value_t = 2)]
     pub gif_scale: u32,
+    /// `--record FILE.mcap`, `--live [ADDR]`: the telemetry as Foxglove messages.
+    #[command(flatten)]
+    pub record: RecordArgs,
     /// The device reacts (--on-link-loss) when it hears nothing from the host for this long,
     /// milliseconds: 0 (never) or 200 to 3 600 000. The host sends a heartbeat
     /// (`MissionStatus`) every quarter of it, at most every 500 ms.
@@ -354,6 +359,10 @@ pub(super) struct Follower {
     /// Telemetry chunks that arrived after a gap (a lost chunk before them): the pictured map
     /// and plans miss what was lost (see `mission_link`).
     telemetry_gaps: u32,
+    /// Sweeps whose hits have all arrived.
+    sweeps: u32,
+    /// `--record` / `--live`.
+    recorder: Option<TelemetryRecorder>,
 }
 
 /// Seconds between two frames of `mission.gif`.
@@ -389,7 +398,14 @@ impl Follower {
             next_frame_s: 0.0,
             finished: None,
             telemetry_gaps: 0,
+            sweeps: 0,
+            recorder: None,
         })
+    }
+
+    /// Record (and/or serve) what arrives from now on.
+    fn record_into(&mut self, recorder: Recorder, inputs: &Inputs) {
+        self.recorder = Some(TelemetryRecorder::new(recorder, inputs, &self.grid));
     }
 
     fn pose(&self) -> Pose {
@@ -445,6 +461,9 @@ impl Follower {
             let snap = self.snapshot(t_ms as f32 / 1000.0, number);
             self.plan_snapshots.push(snap);
         }
+        if let (Some(p), Some(r)) = (&self.plan, &mut self.recorder) {
+            r.plan(p.t_ms as f32 / 1000.0, &p.path, &p.prefix);
+        }
         if let Some(p) = &mut self.plan {
             p.pictured = true;
         }
@@ -462,10 +481,20 @@ impl Follower {
                     }
                 }
                 self.poses.push(report);
-                self.trajectory.push(TrajectoryRow {
+                let row = TrajectoryRow {
                     t_s: report.t_ms as f32 / 1000.0,
                     pose: self.pose(),
-                });
+                    control: ControlSample {
+                        left_voltage_v: report.left_voltage_v,
+                        right_voltage_v: report.right_voltage_v,
+                        ..ControlSample::default()
+                    },
+                    phase: self.phase,
+                };
+                if let Some(r) = &mut self.recorder {
+                    r.pose(&row);
+                }
+                self.trajectory.push(row);
                 let t_s = self.t_s();
                 if self.pictures && t_s >= self.next_frame_s {
                     self.next_frame_s = t_s + FRAME_PERIOD_S;
@@ -473,14 +502,25 @@ impl Follower {
                     self.frames.push(snap);
                 }
             }
-            Telemetry::Phase { phase, .. } => {
+            Telemetry::Phase {
+                t_ms,
+                phase,
+                status,
+            } => {
                 if matches!(phase, MissionPhase::Sweep { .. }) && self.phase != Some(phase) {
                     self.stops += 1;
                 }
                 self.phase = Some(phase);
+                let (pose, counts) = (self.pose(), (self.plans, self.stops));
+                if let Some(r) = &mut self.recorder {
+                    r.phase(t_ms as f32 / 1000.0, phase, status, &pose, counts);
+                }
             }
             Telemetry::SweepHits {
-                sweep, first, hits, ..
+                sweep,
+                first,
+                total,
+                hits,
             } => {
                 if sweep != self.sweep || first == 0 {
                     self.sweep = sweep;
@@ -493,6 +533,13 @@ impl Follower {
                     twil_core::raster::mark_point_m(&mut self.grid, *p, self.half);
                 }
                 self.hits.extend_from_slice(&hits);
+                if self.hits.len() == total as usize {
+                    self.sweeps += 1;
+                    let t_s = self.t_s();
+                    if let Some(r) = &mut self.recorder {
+                        r.sweep(t_s, &self.hits, &self.grid);
+                    }
+                }
             }
             Telemetry::Planned { t_ms, plan, .. } => {
                 self.picture_plan(true);
@@ -546,6 +593,9 @@ impl Follower {
                 if self.pictures {
                     let snap = self.snapshot(report.stats.time_s, 0);
                     self.frames.push(snap);
+                }
+                if let Some(r) = &mut self.recorder {
+                    r.finished(&report);
                 }
                 self.finished = Some(report);
             }
@@ -787,6 +837,19 @@ pub fn run(args: Args) -> Result<()> {
     FOLLOWING.store(true, Ordering::SeqCst);
     let _ = ctrlc::set_handler(on_ctrl_c);
     let mut follower = Follower::new(&inputs, args.out.is_some())?;
+    if args.record.wanted() {
+        let recorder = Recorder::open(args.record.record.as_deref(), args.record.live)?;
+        if let (Some(port), Some(addr)) = (recorder.live_port(), args.record.live) {
+            note(
+                &bar,
+                &format!(
+                    "twil: serving live on ws://{}:{port} (Foxglove: Open connection)",
+                    addr.ip()
+                ),
+            );
+        }
+        follower.record_into(recorder, &inputs);
+    }
     let followed = match remote.call(Request::StartMission) {
         Ok(Reply::Ack) => follow(&args, &mut remote, &mut follower, &bar),
         Ok(other) => Err(anyhow!("unexpected reply to StartMission: {other:?}")),
@@ -803,6 +866,11 @@ pub fn run(args: Args) -> Result<()> {
     let link = super::mission_link::LinkReport::of(&remote, follower.telemetry_gaps);
     // Done with the device (QEMU, if any, ends here).
     drop(remote);
+    // Close the recording even when following failed, so what arrived stays readable.
+    let recorded = match follower.recorder.take() {
+        Some(r) => Some(r.into_recorder().close()?),
+        None => None,
+    };
     let interrupted = followed?;
     let report = follower
         .finished
@@ -857,6 +925,9 @@ pub fn run(args: Args) -> Result<()> {
         if let Some(dir) = &args.out {
             println!("wrote {}", dir.display());
         }
+    }
+    if let Some(summary) = &recorded {
+        summary.print(args.json);
     }
     if interrupted {
         bail!("interrupted (Ctrl-C): the mission was aborted and the device stopped the motors");
@@ -1067,6 +1138,7 @@ fn write_outputs(
         distance_m: outcome.distance_m,
         sim_time_s: report.stats.time_s,
         min_clearance_m: outcome.min_clearance_m.unwrap_or(f32::NAN),
+        sweeps: follower.sweeps,
         final_odometry_pose: follower.pose(),
         trajectory: follower.trajectory,
         plans: follower.plan_snapshots,

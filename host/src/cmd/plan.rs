@@ -64,6 +64,10 @@ pub struct Args {
     /// Draw the map, the grown obstacles, the path, start and goal to this PNG file.
     #[arg(long, value_name = "OUT.png")]
     pub png: Option<PathBuf>,
+    /// Write the world, the map and the plan as Foxglove messages to this MCAP file, one
+    /// message per topic (`/world`, `/map`, `/plan`; docs/recording.md).
+    #[arg(long, value_name = "FILE.mcap")]
+    pub record: Option<PathBuf>,
     /// Pixels per cell in the PNG (default: about 800 px for the map's longer side).
     #[arg(long, value_name = "PX")]
     pub scale: Option<u32>,
@@ -486,6 +490,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(out) = &args.png {
         render_png(&world, &outcome, out, args.scale)?;
     }
+    let recorded = match &args.record {
+        Some(path) => Some(record_plan(path, &world, &outcome)?),
+        None => None,
+    };
     if args.json {
         let mut json = plan_json(&outcome);
         json.extra = extra;
@@ -499,7 +507,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             println!("picture: {}", out.display());
         }
     }
+    if let Some(summary) = &recorded {
+        summary.print(args.json);
+    }
     Ok(())
+}
+
+/// `--record`: the world (the `.da` polygons, start, goal), the map the planner used and the
+/// plan, one message each at time 0.
+fn record_plan(
+    path: &Path,
+    world: &World,
+    outcome: &Outcome,
+) -> anyhow::Result<crate::record::RecordSummary> {
+    use crate::record::topics::{PathKind, WorldScene};
+    let mut recorder = crate::record::Recorder::open(Some(path), None)?;
+    recorder.world(
+        0.0,
+        &WorldScene {
+            real: None,
+            known: (!world.obstacles.is_empty()).then_some(&world.obstacles),
+            start: world.params.start,
+            goal: world.params.goal,
+            body_radius_m: None,
+        },
+    );
+    recorder.map(0.0, &world.grid);
+    recorder.path(0.0, PathKind::Plan, &outcome.path);
+    recorder.close()
 }
 
 /// What `expanded` counts: BFS expands cells, A* (and so any-angle) expands jump points.

@@ -10,6 +10,7 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -19,6 +20,9 @@ use twil_core::mission::{MissionMode, MissionStats};
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
+use crate::record::sim::{Pace, SimRecorder};
+use crate::record::topics::StatusMessage;
+use crate::record::{RecordArgs, Recorder};
 use crate::world_io;
 
 use super::preset::{FollowArgs, LoopArgs, LoopChoices};
@@ -144,6 +148,12 @@ pub struct Args {
     /// GIF scale, pixels per cell.
     #[arg(long, default_value_t = 2)]
     pub gif_scale: u32,
+    /// `--record FILE.mcap`, `--live [ADDR]`: Foxglove recording and live view.
+    #[command(flatten)]
+    pub record: RecordArgs,
+    /// With `--live`: run mission time this many times faster than the wall clock.
+    #[arg(long, default_value_t = 1.0, value_name = "X", requires = "live")]
+    pub speed: f64,
 }
 
 /// Read a `.da` file; errors name the file and the line (see [`crate::world_io`]).
@@ -298,6 +308,7 @@ pub fn summary_json(args: &Args, setup: &SimSetup, result: &SimResult) -> serde_
         "seed": args.seed,
         "sonar_range_m": args.sonar_range,
         "moving_sweeps": stats.moving_sweeps,
+        "sweeps": result.sweeps,
         "plans": stats.plans,
         "blocked_replans": stats.blocked_replans,
         "band_cuts": stats.band_cuts,
@@ -360,7 +371,11 @@ pub fn run(args: Args) -> Result<()> {
         b
     };
     let mut progress = Bar(bar);
-    let result = sim::run(&setup, &mut progress)?;
+    let (result, recorded) = if args.record.wanted() {
+        run_recorded(&args, &setup, &mut progress)?
+    } else {
+        (sim::run(&setup, &mut progress)?, None)
+    };
     progress.0.finish_and_clear();
 
     if let Some(dir) = &args.out {
@@ -401,5 +416,58 @@ pub fn run(args: Args) -> Result<()> {
             println!("wrote {}", dir.display());
         }
     }
+    if let Some(summary) = &recorded {
+        summary.print(args.json);
+    }
+    if result.status == sim::SimStatus::Aborted {
+        bail!("interrupted (Ctrl-C): the simulation was stopped");
+    }
     Ok(())
+}
+
+/// Set by Ctrl-C while a recorded or live simulation runs: the mission stops at the next tick
+/// and the recording is closed properly.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+/// Run the simulation with `--record` / `--live`: messages as the mission goes, paced to the
+/// wall clock when live.
+fn run_recorded(
+    args: &Args,
+    setup: &SimSetup,
+    progress: &mut Bar,
+) -> Result<(SimResult, Option<crate::record::RecordSummary>)> {
+    if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1.0e6) {
+        bail!(
+            "--speed: must be a positive factor up to 1e6, got {}",
+            args.speed
+        );
+    }
+    let recorder = Recorder::open(args.record.record.as_deref(), args.record.live)?;
+    if let (Some(port), Some(addr)) = (recorder.live_port(), args.record.live) {
+        eprintln!(
+            "twil: serving live on ws://{}:{port} (Foxglove: Open connection; layout docs/foxglove-layout.json); Ctrl-C stops",
+            addr.ip()
+        );
+    }
+    STOP.store(false, Ordering::SeqCst);
+    // A handler can be set once per process; a second run keeps the first (same flag).
+    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
+    let pace = args.record.live.map(|_| Pace::new(args.speed));
+    let mut observer = SimRecorder::new(recorder, setup, pace, &STOP);
+    let run = sim::run_observed(setup, progress, &mut observer);
+    let mut recorder = observer.into_recorder();
+    if let Ok(result) = &run {
+        // The end as the run saw it (a collision is no mission status).
+        recorder.status(StatusMessage {
+            t_s: result.sim_time_s,
+            phase: "done".into(),
+            status: result.status.name().into(),
+            event: "end of run".into(),
+            plans: result.stats.plans,
+            stops: result.stats.stops,
+        });
+    }
+    // Close the file even when the run failed, so what was recorded stays readable.
+    let summary = recorder.close()?;
+    Ok((run?, Some(summary)))
 }

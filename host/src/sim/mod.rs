@@ -9,7 +9,10 @@
 //!    polygons (the mission only knows its odometry);
 //! 2. apply the pilot's wheel voltages to the plant for one period;
 //! 3. record the true pose, the clearance to the real polygons (negative = collision, which
-//!    aborts the mission with status `collision`) and, for the pictures, snapshots.
+//!    aborts the mission with status `collision`) and, for the pictures, snapshots;
+//! 4. with [`run_observed`], show the tick and the new trajectory row to an [`Observer`]
+//!    (`--record`, `--live`: messages as the mission goes), which may stop the mission
+//!    (Ctrl-C: status `aborted`).
 //!
 //! **Latency model** (`--plan-latency-ms`, [`SimSetup::plan_latency_s`]): the planner runs at
 //! once on the mission's grid (which does not change until the result is back) and its result
@@ -28,13 +31,15 @@ pub mod output;
 pub mod pictures;
 pub mod reason;
 
+use std::ops::ControlFlow;
+
 use anyhow::{bail, Result};
 use twil_core::control::Pose;
 use twil_core::geom::PointM;
 use twil_core::grid::{Grid400, GridGeometry};
 use twil_core::mission::{
-    HostMissionPlanner, LocalRunner, Mission400, MissionConfig, MissionMode, MissionStats,
-    MissionStatus,
+    HostMissionPlanner, LocalRunner, Mission400, MissionConfig, MissionEvent, MissionMode,
+    MissionPhase, MissionStats, MissionStatus, Pilot,
 };
 use twil_core::plan::PlannerKind;
 use twil_core::plant::Plant;
@@ -113,13 +118,88 @@ impl SimStatus {
     }
 }
 
-/// One row of `trajectory.csv`: true pose at a controller period.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One row of `trajectory.csv`: true pose at a controller period, and what drove the robot
+/// there.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TrajectoryRow {
     /// Simulated time, seconds.
     pub t_s: f32,
     /// True pose, world frame.
     pub pose: Pose,
+    /// The controller's signals of the period that ended at `t_s` (zero voltages and no
+    /// references in the first row).
+    pub control: ControlSample,
+    /// The mission's phase after that period (`None` where the telemetry has not told it).
+    pub phase: Option<MissionPhase>,
+}
+
+/// The controller's signals of one period, for the CSV and the `/control` plot. `None`
+/// marks a signal the source does not carry (`twil mission` telemetry has the voltages only).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ControlSample {
+    /// Reference handed to the controller (where the control point should go), world metres.
+    pub reference: Option<PointM>,
+    /// The reference model's output (where the control point should be now), world metres.
+    pub reference_model: Option<PointM>,
+    /// The control point of the odometry pose, world metres.
+    pub control_point: Option<PointM>,
+    /// Wheel speed references, rad/s (left, right).
+    pub speed_ref_rad_s: Option<(f32, f32)>,
+    /// Wheel speeds measured from the encoder counts, rad/s (left, right).
+    pub speed_rad_s: Option<(f32, f32)>,
+    /// Left motor voltage, volts.
+    pub left_voltage_v: f32,
+    /// Right motor voltage, volts.
+    pub right_voltage_v: f32,
+}
+
+impl ControlSample {
+    /// The signals of the pilot's last tick, with the voltages actually applied.
+    pub fn of_pilot(pilot: &Pilot, left_voltage_v: f32, right_voltage_v: f32) -> Self {
+        let out = pilot.last_control();
+        Self {
+            reference: Some(pilot.reference_world()),
+            reference_model: Some(pilot.odom_to_world(out.reference_model)),
+            control_point: Some(pilot.odom_to_world(out.control_point)),
+            speed_ref_rad_s: Some((out.left_speed_ref_rad_s, out.right_speed_ref_rad_s)),
+            speed_rad_s: Some((out.left_speed_rad_s, out.right_speed_rad_s)),
+            left_voltage_v,
+            right_voltage_v,
+        }
+    }
+}
+
+/// What the simulator shows an [`Observer`] after each controller tick.
+pub struct TickView<'a> {
+    /// Mission time of the tick, seconds.
+    pub t_s: f32,
+    /// True pose at the tick.
+    pub pose: Pose,
+    /// The mission after the tick.
+    pub mission: &'a Mission400,
+    /// What the mission reported during the tick.
+    pub events: &'a [MissionEvent],
+}
+
+/// Watches a run as it goes (recordings, the live view): called from the simulation thread.
+pub trait Observer: Send {
+    /// Before the first tick, with the mission set up (its map holds the known obstacles).
+    fn start(&mut self, mission: &Mission400);
+    /// After every tick; `Break` stops the mission (status [`SimStatus::Aborted`]).
+    fn tick(&mut self, view: &TickView) -> ControlFlow<()>;
+    /// Every trajectory row, as it is added.
+    fn row(&mut self, row: &TrajectoryRow);
+}
+
+/// An [`Observer`] that watches nothing.
+pub struct NoObserver;
+
+impl Observer for NoObserver {
+    fn start(&mut self, _: &Mission400) {}
+    fn tick(&mut self, _: &TickView) -> ControlFlow<()> {
+        ControlFlow::Continue(())
+    }
+    fn row(&mut self, _: &TrajectoryRow) {}
 }
 
 /// The state of the mission at one instant, for the pictures.
@@ -166,6 +246,8 @@ pub struct SimResult {
     pub sim_time_s: f32,
     /// Smallest clearance between the robot's body and a real obstacle, metres.
     pub min_clearance_m: f32,
+    /// Sweeps finished (standing and moving).
+    pub sweeps: u32,
     /// True pose per controller period.
     pub trajectory: Vec<TrajectoryRow>,
     /// One snapshot per plan.
@@ -252,18 +334,31 @@ const SIM_STACK_BYTES: usize = 64 << 20;
 /// Run a whole mission. Errors are setup errors (bad config, start off the map…); every
 /// mission outcome is a [`SimResult`]. Runs on its own thread with a large stack.
 pub fn run(setup: &SimSetup, progress: &mut dyn Progress) -> Result<SimResult> {
+    run_observed(setup, progress, &mut NoObserver)
+}
+
+/// [`run`], showing every tick and trajectory row to `observer` as the mission goes.
+pub fn run_observed(
+    setup: &SimSetup,
+    progress: &mut dyn Progress,
+    observer: &mut dyn Observer,
+) -> Result<SimResult> {
     std::thread::scope(|scope| {
         std::thread::Builder::new()
             .name("twil-sim".into())
             .stack_size(SIM_STACK_BYTES)
-            .spawn_scoped(scope, || run_on_this_thread(setup, progress))
+            .spawn_scoped(scope, || run_on_this_thread(setup, progress, observer))
             .map_err(|e| anyhow::anyhow!("cannot start the simulation thread: {e}"))?
             .join()
             .map_err(|_| anyhow::anyhow!("the simulation thread panicked"))?
     })
 }
 
-fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<SimResult> {
+fn run_on_this_thread(
+    setup: &SimSetup,
+    progress: &mut dyn Progress,
+    observer: &mut dyn Observer,
+) -> Result<SimResult> {
     let config = mission_config(setup);
     let robot = config.robot;
     let mut mission = Box::new(
@@ -294,10 +389,17 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
     let mut previous_counts = plant.encoder_counts();
     let mut next_snapshot_s = 0.0f32;
     let mut next_progress_s = 0.0f32;
-    trajectory.push(TrajectoryRow {
+    observer.start(runner.mission());
+    let first = TrajectoryRow {
         t_s,
         pose: plant.pose(),
-    });
+        control: ControlSample::default(),
+        phase: Some(runner.mission().phase()),
+    };
+    observer.row(&first);
+    trajectory.push(first);
+    let mut stopped = false;
+    let mut sweeps = 0u32;
     // A hard cap on loop iterations in case the mission never returns a final status.
     let max_ticks = ((setup.time_limit_s / period_s) as u64).saturating_add(100);
     let mut ticks = 0u64;
@@ -338,6 +440,22 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
                 m.stats().plans,
             ));
         }
+        sweeps += outcome
+            .events
+            .iter()
+            .filter(|e| matches!(e, MissionEvent::SweepDone { .. }))
+            .count() as u32;
+        let view = TickView {
+            t_s,
+            pose: plant.pose(),
+            mission: runner.mission(),
+            events: &outcome.events,
+        };
+        if observer.tick(&view).is_break() {
+            stopped = true;
+            runner.abort();
+            break;
+        }
         if outcome.status != MissionStatus::Running {
             break;
         }
@@ -349,7 +467,18 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
         if d.is_finite() {
             distance_m += d;
         }
-        trajectory.push(TrajectoryRow { t_s, pose: after });
+        let row = TrajectoryRow {
+            t_s,
+            pose: after,
+            control: ControlSample::of_pilot(
+                runner.pilot(),
+                outcome.left_voltage_v,
+                outcome.right_voltage_v,
+            ),
+            phase: Some(runner.mission().phase()),
+        };
+        observer.row(&row);
+        trajectory.push(row);
         let clearance = plant.clearance_m(&setup.real);
         if clearance < min_clearance_m {
             min_clearance_m = clearance;
@@ -385,6 +514,8 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
     let mission = runner.mission();
     let status = if collision {
         SimStatus::Collision
+    } else if stopped {
+        SimStatus::Aborted
     } else {
         match mission.status() {
             MissionStatus::Reached => SimStatus::Reached,
@@ -405,6 +536,7 @@ fn run_on_this_thread(setup: &SimSetup, progress: &mut dyn Progress) -> Result<S
         distance_m,
         sim_time_s: t_s,
         min_clearance_m,
+        sweeps,
         trajectory,
         plans,
         frames,

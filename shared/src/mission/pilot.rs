@@ -10,7 +10,7 @@
 //! believes it is and what the supplier did. The simulator calls the two in turn each period;
 //! the firmware passes the same values between its tasks.
 
-use crate::control::{ControlInput, Controller, Pose};
+use crate::control::{ControlInput, ControlOutput, Controller, Pose};
 use crate::geom::PointM;
 use crate::math::{cos, hypot, sin};
 use crate::robot::RobotConfig;
@@ -277,6 +277,22 @@ impl Pilot {
     /// The odometry pose after the last tick, world frame.
     pub fn pose_world(&self) -> Pose {
         pose_to_world(&self.frame, self.pose_odom)
+    }
+
+    /// What the controller decided at the last tick (references, measured wheel speeds,
+    /// voltages before a stop zeroes them), odometry frame: read by logs and plots only.
+    pub fn last_control(&self) -> ControlOutput {
+        self.controller.last_output()
+    }
+
+    /// The reference handed to the controller at the last tick, world frame.
+    pub fn reference_world(&self) -> PointM {
+        self.frame.odom_to_world(self.reference)
+    }
+
+    /// An odometry-frame point in the world frame.
+    pub fn odom_to_world(&self, point_odom: PointM) -> PointM {
+        self.frame.odom_to_world(point_odom)
     }
 }
 
