@@ -81,7 +81,7 @@ fn ours_preset_is_exactly_the_default() {
     let s = office_summary("ours", &["--preset", "ours"]);
     assert_eq!(s["preset"], "ours", "{s}");
     assert_eq!(s["planner"], "anyangle", "{s}");
-    assert_eq!(s["constant_depth_filter"], true, "{s}");
+    assert_eq!(s["constant_depth_filter"], false, "{s}");
     assert_eq!(s["trust_seen_space"], true, "{s}");
     assert_eq!(s["settle"], "model", "{s}");
     assert_eq!(s["reference_feed_forward"], true, "{s}");
@@ -121,7 +121,7 @@ fn explicit_options_override_the_preset() {
         "seed",
         "--planner",
         "anyangle",
-        "--rcd",
+        "--rcd=false",
         "--seed-prune=false",
         "--settle",
         "model",

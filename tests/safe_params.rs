@@ -85,7 +85,10 @@ fn the_safe_speed_bound_itself_never_collides() {
                 let r = simulate(world, &par, mode, range);
                 let what = format!("{world} {mode} {range} m at {v} m/s");
                 assert_safe(&r, &what);
-                if world != "enclosed" {
+                // At 6 m the beam (without the filter, ours) draws arcs up to 3 m wide that
+                // can close the office's doorways: unreachable, never a collision
+                // (docs/simulate.md, Known limits).
+                if world != "enclosed" && range < 6.0 {
                     assert_eq!(r.status, SimStatus::Reached, "{what}: {:?}", r.stats);
                 }
             }
@@ -260,6 +263,8 @@ fn collision_grid() {
          crossable worlds: {stops}",
         near.1, near.0, far.1, far.0
     );
-    assert!(near.1 <= 1, "{near:?}");
-    assert!(far.1 <= 21, "{far:?}");
+    // Beam sonar, filter off (the default since issue 13): 0 and 0 (the single ray had 0 and
+    // 21; before the body-corridor fix, 10 and 30).
+    assert!(near.1 == 0, "{near:?}");
+    assert!(far.1 == 0, "{far:?}");
 }

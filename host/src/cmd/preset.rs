@@ -57,7 +57,7 @@ impl Preset {
             },
             Self::Ours => LoopChoices {
                 planner: PlannerArg::Anyangle,
-                rcd: true,
+                rcd: false,
                 seed_prune: false,
                 settle: SettleRule::ReferenceModel,
                 reference_feed_forward: true,
@@ -97,7 +97,7 @@ pub struct LoopArgs {
     #[arg(long, value_enum)]
     pub planner: Option<PlannerArg>,
     /// Filter each sweep with the seed's regions-of-constant-depth filter before marking
-    /// (`--rcd=false` turns it off) [default: on in both presets].
+    /// (`--rcd=false` turns it off) [default: the preset's: off; seed: on].
     #[arg(long, value_name = "BOOL", num_args = 0..=1, require_equals = true, default_missing_value = "true")]
     pub rcd: Option<bool>,
     /// Keep only the seed's prefix (within sonar range, visible from the robot); otherwise the
@@ -236,8 +236,7 @@ mod tests {
         // Every choice differs from ours: the preset is not a partial one.
         let ours = Preset::Ours.choices();
         assert_ne!(seed.planner, ours.planner);
-        // The filter is the seed's, and ours too since the beam sonar (docs/robot-model.md).
-        assert_eq!(seed.rcd, ours.rcd);
+        assert_ne!(seed.rcd, ours.rcd);
         assert_ne!(seed.seed_prune, ours.seed_prune);
         assert_ne!(seed.settle, ours.settle);
         assert_ne!(seed.reference_feed_forward, ours.reference_feed_forward);
@@ -249,10 +248,8 @@ mod tests {
     fn ours_is_the_mission_default() {
         let ours = LoopArgs::default().resolve(Some(&FollowArgs::default()));
         let idle = twil_core::mission::MissionConfig::IDLE;
-        assert!(ours.rcd && !ours.seed_prune);
-        // The core's idle configuration keeps the filter off, as its plant keeps the single
-        // ray (the filter is for a beam); the host's default turns both on.
-        assert!(!idle.constant_depth_filter && !idle.robot.sonar_beam);
+        assert!(!ours.rcd && !ours.seed_prune);
+        assert_eq!(idle.constant_depth_filter, ours.rcd);
         assert_eq!(idle.trust_seen_space, !ours.seed_prune);
         assert_eq!(idle.settle, ours.settle);
         assert_eq!(idle.reference_feed_forward, ours.reference_feed_forward);
