@@ -228,6 +228,13 @@ impl GridGeometry {
         Some((clamp(fx), clamp(fy)))
     }
 
+    /// The `(x, y)` of the map cell that contains `point`, or `None` off the map (or for a
+    /// non-finite point).
+    pub fn cell_xy_on_map(&self, point: PointM) -> Option<(i32, i32)> {
+        self.cell_xy_of(point)
+            .filter(|&(x, y)| self.contains_xy(x, y))
+    }
+
     /// The cell that contains `point`.
     pub fn cell_of(&self, point: PointM) -> Result<Cell, GridError> {
         self.cell_xy_of(point)

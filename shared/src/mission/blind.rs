@@ -100,12 +100,10 @@ impl<const W: usize> BlindZone<'_, W> {
 
     fn known(&self, q: PointM) -> bool {
         let g = self.grid.geometry();
-        let Some((x, y)) = g.cell_xy_of(q) else {
+        // Off the map: nothing can be there (the map's edge is a wall to the planner).
+        let Some((x, y)) = g.cell_xy_on_map(q) else {
             return true;
         };
-        if !g.contains_xy(x, y) {
-            return true;
-        }
         if self.grid.is_occupied_xy(x, y) || self.seen.is_occupied_xy(x, y) {
             return true;
         }

@@ -139,12 +139,10 @@ impl<const W: usize> Corridor<'_, W> {
     /// from the sonar, or under the body now.
     fn free_or_seen(&self, q: PointM) -> bool {
         let g = self.grid.geometry();
-        let Some((x, y)) = g.cell_xy_of(q) else {
+        // Off the map: nothing can be there (the map's edge is a wall to the planner).
+        let Some((x, y)) = g.cell_xy_on_map(q) else {
             return true;
         };
-        if !g.contains_xy(x, y) {
-            return true;
-        }
         !self.grid.is_occupied_xy(x, y)
             || self.seen.is_occupied_xy(x, y)
             || self.in_band(q)
@@ -163,12 +161,9 @@ impl<const W: usize> Corridor<'_, W> {
     fn known(&self, q: PointM) -> bool {
         let g = self.grid.geometry();
         // Off the map: nothing can be there (the map's edge is a wall to the planner).
-        let Some((x, y)) = g.cell_xy_of(q) else {
+        let Some((x, y)) = g.cell_xy_on_map(q) else {
             return true;
         };
-        if !g.contains_xy(x, y) {
-            return true;
-        }
         self.grid.is_occupied_xy(x, y) || self.seen.is_occupied_xy(x, y) || self.in_band(q)
     }
 }
