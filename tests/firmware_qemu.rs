@@ -531,6 +531,10 @@ fn start_device_mission_with(
         sonar_beam: false,
         beam_half_angle_deg: 15.0,
         incidence_limit_deg: 70.0,
+        settle: twil_core::mission::SettleRule::ReferenceModel,
+        reference_feed_forward: true,
+        turn_in_place: true,
+        sweep_layout: twil_core::sonar::SweepLayout::Symmetric,
     };
     assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
     assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);

@@ -181,6 +181,11 @@ fn mission_records_the_preset_and_sends_its_setup_fields() {
     assert_eq!(s["planner"], "bfs", "{s}");
     assert_eq!(s["constant_depth_filter"], true, "{s}");
     assert_eq!(s["trust_seen_space"], false, "{s}");
+    // The following choices go to the device too (SetMission fields 16-19).
+    assert_eq!(s["settle"], "seed", "{s}");
+    assert_eq!(s["reference_feed_forward"], false, "{s}");
+    assert_eq!(s["turn_in_place"], false, "{s}");
+    assert_eq!(s["sweep_readings"], "seed", "{s}");
 }
 
 #[test]
@@ -204,7 +209,23 @@ fn mission_preset_seed_sends_what_the_old_flags_sent() {
         run_ok(&args)
     };
     let preset = run(&["--preset", "seed"]);
-    assert_eq!(preset, run(&["--planner", "bfs", "--rcd", "--seed-prune"]));
+    assert_eq!(
+        preset,
+        run(&[
+            "--planner",
+            "bfs",
+            "--rcd",
+            "--seed-prune",
+            "--settle",
+            "seed",
+            "--feed-forward=false",
+            "--turn-in-place=false",
+            "--sweep-readings",
+            "seed",
+        ])
+    );
+    // The following choices change the device's mission: the seed's settle alone does.
+    assert_ne!(run(&["--settle", "seed"]), run(&[]));
     assert_ne!(preset, run(&[]), "the preset changed nothing on the device");
     assert_eq!(run(&["--preset", "ours"]), run(&[]));
 }

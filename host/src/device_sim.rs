@@ -296,6 +296,10 @@ mod tests {
             sonar_beam: false,
             beam_half_angle_deg: 15.0,
             incidence_limit_deg: 70.0,
+            settle: twil_core::mission::SettleRule::ReferenceModel,
+            reference_feed_forward: true,
+            turn_in_place: true,
+            sweep_layout: twil_core::sonar::SweepLayout::Symmetric,
         }
     }
 

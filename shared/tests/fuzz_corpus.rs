@@ -231,6 +231,10 @@ mod seeds {
                 sonar_beam: true,
                 beam_half_angle_deg: 15.0,
                 incidence_limit_deg: 70.0,
+                settle: twil_core::mission::SettleRule::SeedCode,
+                reference_feed_forward: false,
+                turn_in_place: false,
+                sweep_layout: twil_core::sonar::SweepLayout::Seed,
             }),
             Request::WorldChunk {
                 first_vertex: 0,

@@ -36,7 +36,7 @@ use twil_core::plant::Plant;
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
-use super::preset::LoopArgs;
+use super::preset::{FollowArgs, LoopArgs};
 use super::simulate::{parse_size, read_da, read_par, Mode, SonarArg, SonarArgs};
 use crate::record::telemetry::TelemetryRecorder;
 use crate::record::{RecordArgs, Recorder};
@@ -65,10 +65,13 @@ pub struct Args {
     /// Stop-and-sweep or continuous sweeping.
     #[arg(long, value_enum, default_value_t = Mode::Stop)]
     pub mode: Mode,
-    /// Loop choices: `--preset`, `--planner`, `--rcd`, `--seed-prune` (what `SetMission`
-    /// carries; the settle time, reference and sweep readings are the device's own).
+    /// Loop choices: `--preset`, `--planner`, `--rcd`, `--seed-prune`.
     #[command(flatten)]
     pub loop_args: LoopArgs,
+    /// Following choices: `--settle`, `--feed-forward`, `--turn-in-place`, `--sweep-readings`
+    /// (`SetMission` carries them all to the device).
+    #[command(flatten)]
+    pub follow: FollowArgs,
     /// Write trajectory.csv, plan PNGs, mission.gif and summary.json here.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -240,6 +243,11 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
 
 /// The `SetMission` of `args` and `params`.
 impl Args {
+    /// The loop choices of this run: `--preset`'s, with the explicit options applied.
+    pub fn choices(&self) -> super::preset::LoopChoices {
+        self.loop_args.resolve(Some(&self.follow))
+    }
+
     /// `--time-limit`, or the preset's.
     pub fn time_limit_s(&self) -> f32 {
         self.time_limit
@@ -250,21 +258,25 @@ impl Args {
 pub fn mission_setup(args: &Args, params: &Params) -> MissionSetup {
     MissionSetup {
         mode: mission_mode(args.mode),
-        planner: args.loop_args.resolve(None).planner_kind(),
+        planner: args.choices().planner_kind(),
         start: params.start,
         initial_heading_rad: params.initial_heading_deg.to_radians(),
         goal: params.goal,
         speed_m_s: params.speed_m_s,
         sonar_range_m: args.sonar_range,
         time_limit_s: args.time_limit_s(),
-        constant_depth_filter: args.loop_args.resolve(None).rcd,
-        trust_seen_space: !args.loop_args.resolve(None).seed_prune,
+        constant_depth_filter: args.choices().rcd,
+        trust_seen_space: !args.choices().seed_prune,
         noise_seed: args.seed,
         sonar_noise_std_m: args.sonar_noise,
         link_loss: args.link_loss(),
         sonar_beam: args.sonar_model.sonar == SonarArg::Beam,
         beam_half_angle_deg: args.sonar_model.beam_half_angle,
         incidence_limit_deg: args.sonar_model.incidence_limit,
+        settle: args.choices().settle,
+        reference_feed_forward: args.choices().reference_feed_forward,
+        turn_in_place: args.choices().turn_in_place,
+        sweep_layout: args.choices().sweep_layout,
     }
 }
 
@@ -723,9 +735,13 @@ fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value {
         "build": format!("{:?}", outcome.info.build).to_lowercase(),
         "mode": match args.mode { Mode::Stop => "stop", Mode::Continuous => "continuous" },
         "preset": args.loop_args.preset.name(),
-        "planner": args.loop_args.resolve(None).planner_name(),
-        "constant_depth_filter": args.loop_args.resolve(None).rcd,
-        "trust_seen_space": !args.loop_args.resolve(None).seed_prune,
+        "planner": args.choices().planner_name(),
+        "constant_depth_filter": args.choices().rcd,
+        "trust_seen_space": !args.choices().seed_prune,
+        "settle": args.choices().settle_name(),
+        "reference_feed_forward": args.choices().reference_feed_forward,
+        "turn_in_place": args.choices().turn_in_place,
+        "sweep_readings": args.choices().sweep_readings_name(),
         "real": args.real.as_ref().map(|p| p.display().to_string()),
         "known": args.known.as_ref().map(|p| p.display().to_string()),
         "params": args.params.display().to_string(),
@@ -784,13 +800,6 @@ fn check_real(args: &Args, build: Build) -> Result<()> {
 /// Run `twil mission`.
 pub fn run(args: Args) -> Result<()> {
     let inputs = read_inputs(&args)?;
-    if args.loop_args.preset == super::preset::Preset::Seed && !args.json {
-        eprintln!(
-            "twil: --preset seed: the device gets the seed's planner, filter and pruning; \
-             SetMission carries no settle time, reference feed-forward, turn-in-place or sweep layout, so \
-             those are the device's own (`twil simulate --preset seed` has all of them)"
-        );
-    }
     // A simulated device is known before connecting: refuse early.
     match args.remote {
         RemoteSpec::Sim(_) => check_real(&args, Build::Host)?,
@@ -1112,18 +1121,17 @@ fn write_outputs(
         params: inputs.params,
         geometry: inputs.geometry,
         mode: mission_mode(args.mode),
-        planner: args.loop_args.resolve(None).planner_kind(),
+        planner: args.choices().planner_kind(),
         robot: inputs.robot,
         time_limit_s: args.time_limit_s(),
-        constant_depth_filter: args.loop_args.resolve(None).rcd,
-        trust_seen_space: !args.loop_args.resolve(None).seed_prune,
+        constant_depth_filter: args.choices().rcd,
+        trust_seen_space: !args.choices().seed_prune,
         moving_half_sweep_deg: 95.0,
         snapshot_period_s: FRAME_PERIOD_S,
         plan_latency_s: 0.0,
-        // The device's own (SetMission does not carry them).
-        settle: twil_core::mission::SettleRule::ReferenceModel,
-        reference_feed_forward: true,
-        turn_in_place: true,
+        settle: args.choices().settle,
+        reference_feed_forward: args.choices().reference_feed_forward,
+        turn_in_place: args.choices().turn_in_place,
         world_name: crate::sim::pictures::world_name(args.real.as_deref(), args.known.as_deref()),
     };
     let report = &outcome.report;

@@ -2,10 +2,9 @@
 //! default), and the options that override a preset's choices one by one.
 //!
 //! `twil simulate` and `twil mission` share [`LoopArgs`] (planner, regions-of-constant-depth
-//! filter, pruning: what `SetMission` carries to a device); `twil simulate` adds
-//! [`FollowArgs`] (settle time, reference feed-forward, turns in place, sweep readings), which
-//! the link does not carry. Every choice of the seed preset, with the seed's section or function, is listed
-//! in `docs/simulate.md`.
+//! filter, pruning) and [`FollowArgs`] (settle time, reference feed-forward, turns in place,
+//! sweep readings); `SetMission` carries all of them to a device. Every choice of the seed
+//! preset, with the seed's section or function, is listed in `docs/simulate.md`.
 
 use twil_core::mission::SettleRule;
 use twil_core::plan::PlannerKind;
@@ -107,7 +106,7 @@ pub struct LoopArgs {
     pub seed_prune: Option<bool>,
 }
 
-/// Following options of `twil simulate` (not carried by `SetMission` to a device).
+/// Following options of `twil simulate` and `twil mission` (`SetMission` fields 16-19).
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct FollowArgs {
     /// Settle time after each prefix [default: the preset's: model; seed: seed].

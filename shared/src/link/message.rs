@@ -18,8 +18,8 @@ use crate::plan::{PlanStatus, PlannerKind};
 /// Version of this protocol. A host and a device only talk when their versions are equal
 /// ([`Request::Hello`]). 2: missions (requests 10–19, telemetry 3–8, the pose report). 3:
 /// failsafes (`MissionSetup::link_loss`, `MissionReport::stop_cause` / `stop_latency_us`,
-/// the reset cause in `DeviceStatus` and `Telemetry::Boot`). 4: the plant's sonar model in
-/// `SetMission` (fields 13–15) and `MissionStats::blind_cuts`.
+/// the reset cause in `DeviceStatus` and `Telemetry::Boot`). 4: the plant's sonar model and the
+/// following choices of `--preset` in `SetMission` (fields 13–19), `MissionStats::blind_cuts`.
 pub const PROTOCOL_VERSION: u16 = 4;
 
 /// Points carried by one telemetry chunk of hits, prefix or path.
@@ -225,6 +225,14 @@ pub struct MissionSetup {
     pub beam_half_angle_deg: f32,
     /// The beam's incidence limit, degrees (simulated builds).
     pub incidence_limit_deg: f32,
+    /// How long a stop settles (`--settle`).
+    pub settle: crate::mission::SettleRule,
+    /// Add τ × velocity to the controller's reference (`--feed-forward`).
+    pub reference_feed_forward: bool,
+    /// Turn in place at the start of a prefix and at sharp vertices (`--turn-in-place`).
+    pub turn_in_place: bool,
+    /// Which neck positions a sweep reads (`--sweep-readings`).
+    pub sweep_layout: crate::sonar::SweepLayout,
 }
 
 /// How the device's mission stands ([`Reply::Mission`], [`Telemetry::Finished`]).

@@ -552,6 +552,7 @@ impl<const W: usize> RobotLink<'_, W> {
             sonar_beam: setup.sonar_beam,
             sonar_beam_half_angle_deg: setup.beam_half_angle_deg,
             sonar_incidence_limit_deg: setup.incidence_limit_deg,
+            sweep_layout: setup.sweep_layout,
             ..RobotConfig::DEFAULT
         };
         let par = Params {
@@ -568,6 +569,12 @@ impl<const W: usize> RobotLink<'_, W> {
         config.time_limit_s = setup.time_limit_s;
         config.constant_depth_filter = setup.constant_depth_filter;
         config.trust_seen_space = setup.trust_seen_space;
+        config.settle = setup.settle;
+        config.reference_feed_forward = setup.reference_feed_forward;
+        if !setup.turn_in_place {
+            // Direction changes are wrapped to ±π: none is larger.
+            config.turn_in_place_above_rad = core::f32::consts::PI;
+        }
         // Field indices of MissionSetup: 2 start, 3 heading, 4 goal, 5 speed, 6 sonar range,
         // 7 time limit, 11 noise, 12 link-loss policy, 14 beam half-angle, 15 incidence limit.
         if !setup.link_loss.is_valid() {

@@ -210,6 +210,10 @@ pub(super) fn setup(params: &crate::world::Params, mode: MissionMode) -> Mission
         sonar_beam: false,
         beam_half_angle_deg: 15.0,
         incidence_limit_deg: 70.0,
+        settle: crate::mission::SettleRule::ReferenceModel,
+        reference_feed_forward: true,
+        turn_in_place: true,
+        sweep_layout: crate::sonar::SweepLayout::Symmetric,
     }
 }
 
@@ -596,6 +600,10 @@ fn the_largest_mission_messages_fit_a_frame() {
         sonar_beam: true,
         beam_half_angle_deg: f32::MAX,
         incidence_limit_deg: f32::MAX,
+        settle: crate::mission::SettleRule::SeedCode,
+        reference_feed_forward: true,
+        turn_in_place: true,
+        sweep_layout: crate::sonar::SweepLayout::Seed,
     };
     let mut out = [0u8; MAX_FRAME_BYTES];
     assert!(encode(
