@@ -14,6 +14,7 @@
 //! (`worlds/corridor`, 3 m, beam sonar with the filter; `worlds/enclosed`, 1.5 m, continuous).
 //! The cut costs a few centimetres on prefixes that end sideways at the edge of what was read.
 
+use super::polyline_length_m;
 use super::swept::Swept;
 use crate::control::Pose;
 use crate::geom::PointM;
@@ -114,13 +115,6 @@ impl<const W: usize> BlindZone<'_, W> {
         // Read by the last standing sweep, between its rays.
         self.swept.vouches(q)
     }
-}
-
-fn polyline_length_m(points: &[PointM]) -> f32 {
-    points
-        .windows(2)
-        .map(|w| hypot(w[1].x_m - w[0].x_m, w[1].y_m - w[0].y_m))
-        .sum()
 }
 
 /// The point `length_m` along `points` and the unit direction of the segment it lies on.
