@@ -35,7 +35,7 @@ fn qemu() -> (Remote, twil_core::link::DeviceInfo) {
     }
 }
 
-fn plan_args(world: &str, kind: host_plan::PlannerArg) -> host_plan::Args {
+fn plan_args(world: &str, kind: twil_host::classic::Method) -> host_plan::Args {
     host_plan::Args {
         world: Some(common::world(&format!("{world}.da"))),
         params: common::world(&format!("{world}.par")),
@@ -84,7 +84,7 @@ fn mcu_paths_equal_host_paths_on_the_scenario_worlds() {
         "{info:?}"
     );
     for world_name in ["corridor", "office", "pillars"] {
-        let world = host_plan::load(&plan_args(world_name, host_plan::PlannerArg::Astar))
+        let world = host_plan::load(&plan_args(world_name, twil_host::classic::Method::Astar))
             .expect("load world");
         let g = *world.grid.geometry();
         remote

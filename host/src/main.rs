@@ -24,6 +24,8 @@ enum Command {
     Simulate(cmd::simulate::Args),
     /// Run a mission on the device (firmware, QEMU or `--remote sim`) and follow its telemetry.
     Mission(cmd::mission::Args),
+    /// Run every planning method (grid and classic) on one world and compare them.
+    Compare(cmd::compare::Args),
     /// Plan for the two-link manipulator of seed 000 in its configuration space.
     Cspace(cmd::cspace::Args),
     /// Check the link to the firmware (QEMU, TCP or a serial port).
@@ -36,6 +38,7 @@ fn main() {
         Command::Plan(args) => cmd::plan::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Mission(args) => cmd::mission::run(args),
+        Command::Compare(args) => cmd::compare::run(args),
         Command::Cspace(args) => cmd::cspace::run(args),
         Command::Ping(args) => cmd::ping::run(args),
     };

@@ -709,6 +709,7 @@ pub fn plan_on_device(
         },
         path: planned.path,
         elapsed_us,
+        queue_peak: 0,
     };
     let reference = plan_like_the_mcu(world, local.kind)?;
     let matches = outcome.report == reference.report && outcome.path == reference.path;
@@ -742,6 +743,7 @@ pub fn plan_like_the_mcu(
                     report,
                     path: path.to_vec(),
                     elapsed_us: started.elapsed().as_micros() as u64,
+                    queue_peak: 0,
                 })
             })
             .context("cannot start the planner thread")?

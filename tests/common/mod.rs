@@ -28,7 +28,7 @@ pub fn plan_args(world: Option<PathBuf>, params: PathBuf) -> twil_host::cmd::pla
             height_m: 15.0,
         },
         resolution: 0.05,
-        planner: twil_host::cmd::plan::PlannerArg::Astar,
+        planner: twil_host::classic::Method::Astar,
         json: true,
         png: None,
         record: None,

@@ -1,5 +1,6 @@
 //! One module per `twil` subcommand.
 
+pub mod compare;
 pub mod cspace;
 pub mod mission;
 pub mod mission_link;

@@ -24,6 +24,7 @@ use twil_core::plan::{PathM, PlanReport, PlanStatus, Planner, PlannerKind};
 use twil_core::raster::mark_polygon;
 use twil_core::world::{Obstacles, Params};
 
+use crate::classic::Method;
 use crate::picture::{self, palette, Figure, FigureSpec, LegendEntry, Mark, Marker, PanelSpec};
 use crate::world_io;
 
@@ -55,9 +56,10 @@ pub struct Args {
     /// Cell side in metres.
     #[arg(long, default_value_t = 0.05)]
     pub resolution: f32,
-    /// Which planner.
-    #[arg(long, value_enum, default_value_t = PlannerArg::Astar)]
-    pub planner: PlannerArg,
+    /// Which planner: a grid planner (bfs, astar, anyangle; these also run on the device) or
+    /// one of the seeds' classic methods (docs/classic.md).
+    #[arg(long, value_enum, default_value_t = Method::Astar)]
+    pub planner: Method,
     /// Print one JSON object instead of the human summary.
     #[arg(long)]
     pub json: bool,
@@ -88,7 +90,7 @@ pub struct SizeM {
 }
 
 /// Parse `15x15`, `15X10` or `15`.
-fn parse_size(text: &str) -> Result<SizeM, String> {
+pub fn parse_size(text: &str) -> Result<SizeM, String> {
     let number = |t: &str| -> Result<f32, String> {
         match t.trim().parse::<f32>() {
             Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
@@ -106,27 +108,6 @@ fn parse_size(text: &str) -> Result<SizeM, String> {
                 width_m: s,
                 height_m: s,
             })
-        }
-    }
-}
-
-/// Planner choice on the command line.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PlannerArg {
-    /// Breadth-first search (the seed's planner): fewest 8-connected steps.
-    Bfs,
-    /// A* with octile costs: shortest 8-connected path.
-    Astar,
-    /// Any-angle (Theta*-like): straight segments with line of sight, never longer than A*.
-    Anyangle,
-}
-
-impl From<PlannerArg> for PlannerKind {
-    fn from(p: PlannerArg) -> Self {
-        match p {
-            PlannerArg::Bfs => PlannerKind::Bfs,
-            PlannerArg::Astar => PlannerKind::AStar,
-            PlannerArg::Anyangle => PlannerKind::AnyAngle,
         }
     }
 }
@@ -252,6 +233,8 @@ pub struct Outcome {
     pub path: Vec<PointM>,
     /// Wall-clock time of the planner call, microseconds.
     pub elapsed_us: u64,
+    /// Most entries the planner's open list held at once (0 when unknown, e.g. `--remote`).
+    pub queue_peak: u32,
 }
 
 /// Run planner `kind` from the `.par` start to its goal on `world`'s grid.
@@ -276,6 +259,7 @@ pub fn plan(world: &World, kind: PlannerKind) -> anyhow::Result<Outcome> {
                     report,
                     path: path.iter().copied().collect(),
                     elapsed_us,
+                    queue_peak: planner.queue_peak(),
                 })
             })
             .map(|h| h.join())
@@ -446,6 +430,7 @@ pub fn plan_figure(
         caption,
         caption_lines: None,
         panels: vec![PanelSpec::map(g, scale, None)],
+        panels_per_row: None,
         legend,
     })
     .with_context(|| format!("--scale {scale}: the picture"))?;
@@ -481,7 +466,10 @@ pub fn plan_figure(
 /// Run `twil plan`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let world = load(&args)?;
-    let outcome = plan(&world, args.planner.into())?;
+    let Some(kind) = args.planner.grid_planner() else {
+        return run_classic(&args, &world);
+    };
+    let outcome = plan(&world, kind)?;
     let mut extra = serde_json::Map::new();
     let outcome = match &args.remote {
         Some(device) => crate::remote::plan_on_device(device, &world, &outcome, &mut extra)?,
@@ -509,6 +497,36 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let Some(summary) = &recorded {
         summary.print(args.json);
+    }
+    Ok(())
+}
+
+/// `twil plan --planner` with one of the classic methods (`crate::classic`): the same JSON as
+/// the grid planners, plus `min_clearance_m`, `memory_bytes` and the method's own fields.
+fn run_classic(args: &Args, world: &World) -> anyhow::Result<()> {
+    if args.remote.is_some() {
+        bail!(
+            "--planner {} runs on the host only; the device plans with bfs, astar or anyangle",
+            args.planner.as_str()
+        );
+    }
+    if args.record.is_some() {
+        bail!("--record: only the grid planners are recorded (bfs, astar, anyangle)");
+    }
+    let run = crate::classic::run(args.planner, world, &crate::classic::Options::default())?;
+    if let Some(out) = &args.png {
+        crate::classic::picture::figure(world, &run, args.scale)?.save_png(out)?;
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string(&crate::classic::json(world, &run))?
+        );
+    } else {
+        println!("{}", crate::classic::summary(world, &run));
+        if let Some(out) = &args.png {
+            println!("picture: {}", out.display());
+        }
     }
     Ok(())
 }
@@ -552,9 +570,12 @@ mod tests {
     #[test]
     fn command_line_names_match_the_json_names() {
         use clap::ValueEnum;
-        for arg in PlannerArg::value_variants() {
+        for arg in Method::value_variants() {
             let name = arg.to_possible_value().unwrap().get_name().to_string();
-            assert_eq!(planner_name((*arg).into()), name);
+            assert_eq!(arg.as_str(), name);
+            if let Some(kind) = arg.grid_planner() {
+                assert_eq!(planner_name(kind), name);
+            }
         }
     }
 
@@ -627,6 +648,7 @@ mod tests {
             },
             path: vec![PointM::new(0.25, 0.5), PointM::new(7.575_000_3, 0.5)],
             elapsed_us: 3,
+            queue_peak: 0,
         };
         let mut json = plan_json(&outcome);
         assert_eq!(

@@ -244,6 +244,7 @@ fn figure(scene: &Scene<'_>, animated: bool) -> anyhow::Result<Figure> {
         caption: caption(scene),
         caption_lines: None,
         panels: vec![map, work],
+        panels_per_row: None,
         legend: legend(scene, animated),
     })?;
     Ok(fig)

@@ -145,6 +145,8 @@ pub struct FigureSpec {
     pub caption_lines: Option<usize>,
     /// Plots, side by side.
     pub panels: Vec<PanelSpec>,
+    /// At most this many panels on a row, further panels on rows below (`None`: one row).
+    pub panels_per_row: Option<usize>,
     /// Legend entries, below the plots.
     pub legend: Vec<LegendEntry>,
 }
@@ -361,11 +363,14 @@ impl Figure {
                 right,
             });
         }
-        let panels_w: i32 = blocks
-            .iter()
-            .map(|b| b.gutter + b.plot_w + b.right)
-            .sum::<i32>()
-            + PANEL_GAP * (blocks.len() as i32 - 1).max(0);
+        let per_row = spec.panels_per_row.unwrap_or(blocks.len()).max(1);
+        let row_w = |row: &[Block]| {
+            row.iter()
+                .map(|b| b.gutter + b.plot_w + b.right)
+                .sum::<i32>()
+                + PANEL_GAP * (row.len() as i32 - 1).max(0)
+        };
+        let panels_w: i32 = blocks.chunks(per_row).map(row_w).max().unwrap_or(0);
         let width = (panels_w + 2 * PAD).max(MIN_WIDTH_PX as i32);
         let inner_w = (width - 2 * PAD) as f32;
         // Caption.
@@ -381,9 +386,13 @@ impl Figure {
         let panels_top = caption_top + caption.len() as i32 * caption_h + 4;
         // Room for the y title above the top tick label, which reaches half a line above the plot.
         let header_h = label_h + label_h / 2 + 2;
-        let plot_h_max = blocks.iter().map(|b| b.plot_h).max().unwrap_or(0);
         let below_plot = TICK_PX + label_h + label_h + 6;
-        let legend_top = panels_top + header_h + plot_h_max + below_plot + 4;
+        // Each row of panels is as tall as its tallest plot.
+        let row_h: Vec<i32> = blocks
+            .chunks(per_row)
+            .map(|row| header_h + row.iter().map(|b| b.plot_h).max().unwrap_or(0) + below_plot)
+            .collect();
+        let legend_top = panels_top + row_h.iter().sum::<i32>() + 4;
         // Legend grid.
         let entry_w = spec
             .legend
@@ -393,11 +402,11 @@ impl Figure {
             .unwrap_or(1);
         let cols = ((inner_w as i32 - 8) / entry_w).clamp(1, spec.legend.len().max(1) as i32);
         let rows = (spec.legend.len() as i32 + cols - 1) / cols;
-        let row_h = label_h.max(SWATCH_PX + 4);
+        let entry_h = label_h.max(SWATCH_PX + 4);
         let legend_h = if spec.legend.is_empty() {
             0
         } else {
-            rows * row_h + 10
+            rows * entry_h + 10
         };
         let height = legend_top + legend_h + PAD;
         if width as u32 > MAX_SIDE_PX || height as u32 > MAX_SIDE_PX {
@@ -432,14 +441,22 @@ impl Figure {
                 palette::TEXT,
             );
         }
-        // Panels.
-        let mut x = PAD + (width - 2 * PAD - panels_w) / 2;
-        for (p, b) in spec.panels.iter().zip(&blocks) {
+        // Panels, row by row, each row centred.
+        let mut x = 0;
+        let mut top = panels_top;
+        for (i, (p, b)) in spec.panels.iter().zip(&blocks).enumerate() {
+            if i % per_row == 0 {
+                let row = &blocks[i..(i + per_row).min(blocks.len())];
+                x = PAD + (width - 2 * PAD - row_w(row)) / 2;
+                if i > 0 {
+                    top += row_h[i / per_row - 1];
+                }
+            }
             let plot = PxRect {
                 x0: x + b.gutter,
-                y0: panels_top + header_h,
+                y0: top + header_h,
                 x1: x + b.gutter + b.plot_w,
-                y1: panels_top + header_h + b.plot_h,
+                y1: top + header_h + b.plot_h,
             };
             let scale_bar = fig.draw_axes(p, plot, header_h, label_h);
             let mut mask = Mask::new(width as u32, height as u32).ok_or(PictureError::Size {
@@ -476,7 +493,7 @@ impl Figure {
             for (i, e) in spec.legend.iter().enumerate() {
                 let (c, r) = (i as i32 % cols, i as i32 / cols);
                 let sx = x0 + c * entry_w + 4;
-                let sy = lb.y0 + 5 + r * row_h + (row_h - SWATCH_PX) / 2;
+                let sy = lb.y0 + 5 + r * entry_h + (entry_h - SWATCH_PX) / 2;
                 let sw = PxRect {
                     x0: sx,
                     y0: sy,
@@ -485,7 +502,7 @@ impl Figure {
                 };
                 fig.swatch(sw, e.mark);
                 fig.legend_swatches.push(sw);
-                let ty = lb.y0 + 5 + r * row_h + (row_h - label_h) / 2;
+                let ty = lb.y0 + 5 + r * entry_h + (entry_h - label_h) / 2;
                 fig.text(
                     (sx + SWATCH_PX + 6) as f32,
                     ty as f32,

@@ -6,6 +6,7 @@ fn spec(px_per_cell: u32) -> FigureSpec {
         caption: vec!["a caption".into()],
         caption_lines: None,
         panels: vec![PanelSpec::map(g, px_per_cell, Some("title".into()))],
+        panels_per_row: None,
         legend: vec![
             LegendEntry::new("area", Mark::Fill(palette::MAP)),
             LegendEntry::new("path", Mark::Line(palette::PREFIX, 3.0)),

@@ -168,6 +168,7 @@ pub fn snapshot_figure(
             Frame::Animation { .. } => Some(GIF_CAPTION_LINES),
         },
         panels: vec![PanelSpec::map(setup.geometry, px_per_cell, None)],
+        panels_per_row: None,
         legend: legend(setup, result),
     })
     .context("picture")?;
