@@ -169,6 +169,61 @@ fn simulate_record_matches_the_run_summary_and_csv() {
     ] {
         assert!(control[key].is_number(), "{key}: {control}");
     }
+
+    // Read back with the Foxglove SDK's decoders (`twil view`'s reader), the contents match
+    // the run: every pose of the CSV, the last one where the CSV ends, start and goal of the
+    // .par, a 300 x 300 map, and a last plan that ends at the goal.
+    let state = twil_host::record::read::read(&mcap_path, None).unwrap();
+    assert_eq!(state.trail.len(), rows.len());
+    let last_row: Vec<f32> = rows
+        .last()
+        .unwrap()
+        .split(',')
+        .take(3)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let last_pose = state.trail.last().unwrap();
+    assert!((last_pose.x_m - last_row[1]).abs() < 1e-3, "{last_pose:?} vs {last_row:?}");
+    assert!((last_pose.y_m - last_row[2]).abs() < 1e-3, "{last_pose:?} vs {last_row:?}");
+    let goal = state.goal.unwrap();
+    assert_eq!((goal.x_m, goal.y_m), (13.5, 13.0));
+    let start = state.start.unwrap();
+    assert_eq!((start.x_m, start.y_m), (1.5, 1.5));
+    let map = state.map.as_ref().unwrap();
+    assert_eq!((map.geometry().width(), map.geometry().height()), (300, 300));
+    assert!(map.count_occupied() > 0);
+    let plan_end = *state.plan.last().unwrap();
+    assert!(plan_end.distance_m(goal) < 0.1, "{plan_end:?}");
+    assert_eq!(state.status.as_ref().unwrap().status, "reached");
+    assert_eq!(state.real.len(), 9);
+    assert!((state.body_radius_m.unwrap() - 0.3).abs() < 1e-5);
+
+    // `twil view` at 60 s: the poses up to then, and a picture with the trail and the robot.
+    let png = tmp.path().join("view.png");
+    let o = common::twil()
+        .arg("view")
+        .arg(&mcap_path)
+        .arg("--png")
+        .arg(&png)
+        .args(["--at", "60", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let view: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(view["poses"], 1201, "{view}");
+    assert_eq!(view["status"], "running", "{view}");
+    let image = image::open(&png).unwrap().to_rgb8();
+    let has = |c: image::Rgb<u8>| image.pixels().any(|p| *p == c);
+    use twil_host::picture::palette;
+    for (what, colour) in [
+        ("trail", palette::TRAIL),
+        ("robot", palette::ROBOT),
+        ("start", palette::START),
+        ("goal", palette::GOAL),
+        ("scale bar", palette::SCALE_BAR),
+    ] {
+        assert!(has(colour), "no {what} pixel in the view");
+    }
 }
 
 /// The README's `--record` example: same command, same output (the simulator and the MCAP

@@ -28,6 +28,8 @@ enum Command {
     Compare(cmd::compare::Args),
     /// Plan for the two-link manipulator of seed 000 in its configuration space.
     Cspace(cmd::cspace::Args),
+    /// Draw what a recording (--record FILE.mcap) held at a mission time, without Foxglove.
+    View(cmd::view::Args),
     /// Check the link to the firmware (QEMU, TCP or a serial port).
     Ping(cmd::ping::Args),
 }
@@ -41,6 +43,7 @@ fn main() {
         Command::Compare(args) => cmd::compare::run(args),
         Command::Cspace(args) => cmd::cspace::run(args),
         Command::Ping(args) => cmd::ping::run(args),
+        Command::View(args) => cmd::view::run(args),
     };
     if let Err(error) = result {
         eprintln!("twil: {error:#}");

@@ -8,3 +8,4 @@ pub mod ping;
 pub mod plan;
 pub mod preset;
 pub mod simulate;
+pub mod view;

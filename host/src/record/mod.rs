@@ -6,6 +6,7 @@
 //! topic carries is built in [`topics`]; [`sim::SimRecorder`] feeds it from the simulator,
 //! `twil mission` from the telemetry, `twil plan` from its one plan.
 
+pub mod read;
 pub mod sim;
 pub mod telemetry;
 pub mod topics;
