@@ -183,14 +183,23 @@ fn simulate_record_matches_the_run_summary_and_csv() {
         .map(|v| v.parse().unwrap())
         .collect();
     let last_pose = state.trail.last().unwrap();
-    assert!((last_pose.x_m - last_row[1]).abs() < 1e-3, "{last_pose:?} vs {last_row:?}");
-    assert!((last_pose.y_m - last_row[2]).abs() < 1e-3, "{last_pose:?} vs {last_row:?}");
+    assert!(
+        (last_pose.x_m - last_row[1]).abs() < 1e-3,
+        "{last_pose:?} vs {last_row:?}"
+    );
+    assert!(
+        (last_pose.y_m - last_row[2]).abs() < 1e-3,
+        "{last_pose:?} vs {last_row:?}"
+    );
     let goal = state.goal.unwrap();
     assert_eq!((goal.x_m, goal.y_m), (13.5, 13.0));
     let start = state.start.unwrap();
     assert_eq!((start.x_m, start.y_m), (1.5, 1.5));
     let map = state.map.as_ref().unwrap();
-    assert_eq!((map.geometry().width(), map.geometry().height()), (300, 300));
+    assert_eq!(
+        (map.geometry().width(), map.geometry().height()),
+        (300, 300)
+    );
     assert!(map.count_occupied() > 0);
     let plan_end = *state.plan.last().unwrap();
     assert!(plan_end.distance_m(goal) < 0.1, "{plan_end:?}");
@@ -254,6 +263,29 @@ fn readme_recording_example_matches() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout =
         String::from_utf8_lossy(&o.stdout).replace(&path.display().to_string(), "out/office.mcap");
+    assert_eq!(stdout, expected);
+
+    // docs/recording.md's `twil view` example, on the same file.
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/recording.md"))
+            .unwrap();
+    let view = "view out/office.mcap --png docs/img/office-recording.png --at 120";
+    let block = &doc[doc.find(view).expect("the docs' twil view example")..];
+    let start = block.find("```text\n").expect("its output block") + "```text\n".len();
+    let expected = &block[start..start + block[start..].find("```").unwrap()];
+    let png = tmp.path().join("view.png");
+    let o = common::twil()
+        .arg("view")
+        .arg(&path)
+        .arg("--png")
+        .arg(&png)
+        .args(["--at", "120"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout)
+        .replace(&path.display().to_string(), "out/office.mcap")
+        .replace(&png.display().to_string(), "docs/img/office-recording.png");
     assert_eq!(stdout, expected);
 }
 
@@ -640,4 +672,38 @@ fn live_server_streams_poses_and_ctrl_c_ends_cleanly() {
     assert!(count(&topics, "/pose") >= pose_times_ns.len());
     let last_status: Value = serde_json::from_slice(&topics["/status"].last_data).unwrap();
     assert_eq!(last_status["status"], "aborted");
+}
+
+/// `twil view` on something that is not a recording, or before its first message, says so
+/// and names the file; a negative `--at` is refused.
+#[test]
+fn view_refuses_what_is_not_a_recording() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = tmp.path().join("notes.mcap");
+    std::fs::write(&text, "not an mcap file\n").unwrap();
+    let png = tmp.path().join("v.png");
+    let o = common::twil()
+        .arg("view")
+        .arg(&text)
+        .arg("--png")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("notes.mcap") && err.contains("not an MCAP file"),
+        "{err}"
+    );
+    assert!(!png.exists());
+    let o = common::twil()
+        .arg("view")
+        .arg(&text)
+        .arg("--png")
+        .arg(&png)
+        .arg("--at=-1")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--at -1"));
 }

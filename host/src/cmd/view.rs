@@ -47,7 +47,10 @@ pub struct Args {
 /// The picture of `state`, named `name` in the caption.
 pub fn figure(state: &RecordedState, name: &str, px_per_cell: Option<u32>) -> Result<Figure> {
     let Some(map) = &state.map else {
-        bail!("the recording has no /map before {:.1} s: nothing to draw on", state.t_s);
+        bail!(
+            "the recording has no /map before {:.1} s: nothing to draw on",
+            state.t_s
+        );
     };
     let g = *map.geometry();
     let scale = px_per_cell.unwrap_or_else(|| picture::fit_px_per_cell(g, 800));
@@ -83,10 +86,16 @@ pub fn figure(state: &RecordedState, name: &str, px_per_cell: Option<u32>) -> Re
     }
     legend.push(LegendEntry::new("plan", Mark::Line(palette::PLAN, 1.5)));
     if !state.prefix.is_empty() {
-        legend.push(LegendEntry::new("kept prefix", Mark::Line(palette::PREFIX, 3.0)));
+        legend.push(LegendEntry::new(
+            "kept prefix",
+            Mark::Line(palette::PREFIX, 3.0),
+        ));
     }
     if !state.known.is_empty() {
-        legend.push(LegendEntry::new("known obstacles", Mark::Outline(palette::KNOWN)));
+        legend.push(LegendEntry::new(
+            "known obstacles",
+            Mark::Outline(palette::KNOWN),
+        ));
     }
     if !state.real.is_empty() {
         legend.push(LegendEntry::new(
@@ -94,9 +103,15 @@ pub fn figure(state: &RecordedState, name: &str, px_per_cell: Option<u32>) -> Re
             Mark::FillOutline(over_white(palette::REAL, REAL_ALPHA), palette::REAL),
         ));
     }
-    legend.push(LegendEntry::new("robot's map (grown)", Mark::Fill(palette::MAP)));
+    legend.push(LegendEntry::new(
+        "robot's map (grown)",
+        Mark::Fill(palette::MAP),
+    ));
     if !state.hits.is_empty() {
-        legend.push(LegendEntry::new("sonar hits (last sweep)", Mark::Dots(palette::HITS)));
+        legend.push(LegendEntry::new(
+            "sonar hits (last sweep)",
+            Mark::Dots(palette::HITS),
+        ));
     }
     if !state.band.is_empty() {
         legend.push(LegendEntry::new(

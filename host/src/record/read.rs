@@ -80,11 +80,12 @@ fn heading(q: Option<&foxglove::messages::Quaternion>) -> f32 {
 
 /// The first line of entity `id` in `update` as points (None when the entity is absent).
 fn entity_lines(update: &SceneUpdate, id: &str) -> Option<Vec<Vec<PointM>>> {
-    update
-        .entities
-        .iter()
-        .find(|e| e.id == id)
-        .map(|e| e.lines.iter().map(|l| l.points.iter().map(point).collect()).collect())
+    update.entities.iter().find(|e| e.id == id).map(|e| {
+        e.lines
+            .iter()
+            .map(|l| l.points.iter().map(point).collect())
+            .collect()
+    })
 }
 
 fn deleted(update: &SceneUpdate, id: &str) -> bool {
@@ -132,6 +133,13 @@ pub fn read(path: &Path, at_s: Option<f32>) -> Result<RecordedState> {
     let bytes = crate::files::read_capped(path, "recording", MAX_RECORDING_BYTES)?;
     let until_ns = at_s.map(super::topics::nanos);
     let mut state = RecordedState::default();
+    // The MCAP magic: `\x89MCAP` and the major version.
+    if !bytes.starts_with(b"\x89MCAP") {
+        bail!(
+            "{}: not an MCAP file (it does not start with the MCAP magic)",
+            path.display()
+        );
+    }
     let stream = mcap::MessageStream::new(&bytes)
         .with_context(|| format!("{}: not an MCAP file", path.display()))?;
     for message in stream {
@@ -234,7 +242,11 @@ pub fn read(path: &Path, at_s: Option<f32>) -> Result<RecordedState> {
         }
     }
     if state.messages == 0 {
-        bail!("{}: no message before {:.1} s", path.display(), at_s.unwrap_or(0.0));
+        bail!(
+            "{}: no message before {:.1} s",
+            path.display(),
+            at_s.unwrap_or(0.0)
+        );
     }
     Ok(state)
 }
