@@ -375,6 +375,11 @@ pub(super) struct Follower {
     sweeps: u32,
     /// `--record` / `--live`.
     recorder: Option<TelemetryRecorder>,
+    /// Why each plan happened and the band of the latest sweep, read from the device's phase
+    /// and sweep reports (see [`Follower::observe_for_reasons`]).
+    reasons: crate::sim::reason::ReasonTracker,
+    /// Phase changes not yet used to explain a plan: mission time (ms) and phase.
+    phases_to_explain: Vec<(u32, MissionPhase)>,
 }
 
 /// Seconds between two frames of `mission.gif`.
@@ -412,6 +417,15 @@ impl Follower {
             telemetry_gaps: 0,
             sweeps: 0,
             recorder: None,
+            // Stop mode whatever the mission's: the telemetry does not say whether a moving
+            // sweep found the path blocked, so a replan while moving is told as a plain
+            // "a sweep ended" rather than guessed (see `observe_for_reasons`).
+            reasons: crate::sim::reason::ReasonTracker::new(
+                twil_core::mission::MissionMode::Stop,
+                inputs.robot.normal_half_sweep_deg,
+                95.0,
+            ),
+            phases_to_explain: Vec::new(),
         })
     }
 
@@ -450,13 +464,31 @@ impl Follower {
             hits: self.hits.clone(),
             trail_len: self.trajectory.len(),
             plan_number,
-            // The device reports neither its seen space nor why it planned.
+            // The device does not report the space it has seen.
             seen: None,
             stops: self.stops,
             plans: self.plans,
-            reason: None,
-            band: None,
+            reason: self.reasons.reason(),
+            band: self.reasons.band(),
         }
+    }
+
+    /// Tell the reason tracker why the plan reported at `t_ms` happened, from the phases the
+    /// device reported before it, as the mission events they stand for: a standing sweep starts
+    /// a sweep (a full one after the first plan was asked for because the prefix left the
+    /// band), settling means the prefix ended, and no standing sweep since the last plan means
+    /// a sweep taken while moving. Phases stamped at `t_ms` or later are this plan's
+    /// consequences (the device sends a phase change before the plan that caused it), so
+    /// they wait for the next plan.
+    fn explain_plan(&mut self, t_ms: u32, status: twil_core::plan::PlanStatus) {
+        let first = self.reasons.reason().is_none();
+        let events = crate::sim::reason::events_before_plan(
+            &mut self.phases_to_explain,
+            t_ms,
+            status,
+            first,
+        );
+        self.reasons.observe(&events);
     }
 
     /// Picture the current plan once it has all arrived (or will get no more).
@@ -522,6 +554,11 @@ impl Follower {
                 if matches!(phase, MissionPhase::Sweep { .. }) && self.phase != Some(phase) {
                     self.stops += 1;
                 }
+                // Bounded: a device that never plans cannot grow it past a few minutes' worth.
+                if self.phases_to_explain.len() >= 4096 {
+                    self.phases_to_explain.remove(0);
+                }
+                self.phases_to_explain.push((t_ms, phase));
                 self.phase = Some(phase);
                 let (pose, counts) = (self.pose(), (self.plans, self.stops));
                 if let Some(r) = &mut self.recorder {
@@ -553,8 +590,11 @@ impl Follower {
                     }
                 }
             }
-            Telemetry::Planned { t_ms, plan, .. } => {
+            Telemetry::Planned {
+                t_ms, plan, status, ..
+            } => {
                 self.picture_plan(true);
+                self.explain_plan(t_ms, status);
                 self.plans = self.plans.max(plan);
                 self.plan = Some(PlanRecord {
                     number: plan,

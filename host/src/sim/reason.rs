@@ -6,7 +6,7 @@
 //! swept), a full sweep asked for because the kept prefix left the ±band, or (continuous mode)
 //! the end of a moving pass, whose new obstacles may block the path.
 
-use twil_core::mission::{MissionEvent, MissionMode};
+use twil_core::mission::{MissionEvent, MissionMode, MissionPhase};
 use twil_core::plan::PlanStatus;
 
 /// Why a plan was made.
@@ -145,6 +145,55 @@ impl ReasonTracker {
     }
 }
 
+/// The mission events that the phases a device reported before its plan at `t_ms` stand for
+/// (`twil mission` has the device's phase changes, not its events), taken out of `phases`
+/// (mission time in ms, phase; in arrival order), followed by the plan itself.
+///
+/// A standing sweep starts a sweep (a full one after the first plan was asked for because
+/// the prefix left the band), settling means the prefix ended, and no standing sweep since
+/// the last plan means a sweep taken while moving. Phases stamped at `t_ms` or later are the
+/// plan's consequences (the device reports the phase change before the plan that caused it),
+/// so they stay in `phases` for the next plan. The telemetry does not say whether a moving
+/// sweep found the path blocked: `blocked` is always `false`.
+pub fn events_before_plan(
+    phases: &mut Vec<(u32, MissionPhase)>,
+    t_ms: u32,
+    status: PlanStatus,
+    first_plan: bool,
+) -> Vec<MissionEvent> {
+    let mut events = Vec::new();
+    let mut swept = false;
+    let causes = phases.iter().take_while(|(t, _)| *t < t_ms).count();
+    for (_, phase) in phases.drain(..causes) {
+        match phase {
+            MissionPhase::Sweep { full } => {
+                if full && !first_plan {
+                    events.push(MissionEvent::FullSweepRequested);
+                }
+                events.push(MissionEvent::SweepStarted {
+                    full,
+                    moving: false,
+                });
+                swept = true;
+            }
+            MissionPhase::Settle => events.push(MissionEvent::EndOfTrajectory),
+            _ => {}
+        }
+    }
+    if !swept && !first_plan {
+        events.push(MissionEvent::SweepStarted {
+            full: false,
+            moving: true,
+        });
+    }
+    events.push(MissionEvent::Planned {
+        status,
+        blocked: false,
+        prefix_points: 0,
+    });
+    events
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -196,5 +245,39 @@ mod tests {
         assert_eq!(t.reason(), Some(PlanReason::Blocked));
         t.observe(&[planned(false)]);
         assert_eq!(t.reason(), Some(PlanReason::MovingPass));
+    }
+
+    /// The phases `twil mission --remote sim` reports on the office (stop mode), and the
+    /// reasons they give: each plan explained by what came before it, not by its consequences.
+    #[test]
+    fn device_phases_explain_each_plan() {
+        use MissionPhase::{Follow, Settle, Sweep};
+        let mut phases = Vec::new();
+        let mut t = ReasonTracker::new(MissionMode::Stop, 95.0, 95.0);
+        let mut plan = |phases: &mut Vec<(u32, MissionPhase)>, t_ms: u32| {
+            let first = t.reason().is_none();
+            t.observe(&events_before_plan(phases, t_ms, PlanStatus::Found, first));
+            (t.reason().unwrap(), t.band().unwrap().half_angle_deg)
+        };
+        phases.extend([(50, Sweep { full: false }), (3800, Sweep { full: true })]);
+        assert_eq!(plan(&mut phases, 3800), (PlanReason::First, 95.0));
+        phases.push((11050, Follow));
+        assert_eq!(plan(&mut phases, 11050), (PlanReason::BandFullSweep, 180.0));
+        phases.extend([
+            (16300, Settle),
+            (20350, Sweep { full: false }),
+            (24100, Follow),
+        ]);
+        assert_eq!(plan(&mut phases, 24100), (PlanReason::PrefixEnd, 95.0));
+        phases.extend([(30050, Settle), (34100, Sweep { full: false })]);
+        phases.push((37850, Sweep { full: true }));
+        assert_eq!(plan(&mut phases, 37850), (PlanReason::PrefixEnd, 95.0));
+        phases.push((45100, Follow));
+        assert_eq!(plan(&mut phases, 45100), (PlanReason::BandFullSweep, 180.0));
+        // Continuous mode: a plan with no standing sweep since the last one came from a
+        // sweep taken while moving.
+        assert_eq!(plan(&mut phases, 47000), (PlanReason::Sweep, 95.0));
+        assert!(t.band().unwrap().moving);
+        assert!(phases.is_empty());
     }
 }
