@@ -181,7 +181,8 @@ fn malformed_input_names_file_line_and_value() {
         ])
         .output()
         .unwrap();
-    assert!(result.status.success());
+    // No path: exit status 3 (crate::exit), the JSON says why.
+    assert_eq!(result.status.code(), Some(3));
     let json: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
     assert_eq!(json["status"], "goal_blocked");
     assert_eq!(json["path"], serde_json::json!([]));
@@ -317,8 +318,9 @@ fn a_hand_edited_map_is_planned_on_and_a_broken_one_is_named() {
     }
     std::fs::write(&map_path, lines.join("\n") + "\n").unwrap();
     let edited = plan(&["--from-map", map_arg]);
-    assert!(
-        edited.status.success(),
+    assert_eq!(
+        edited.status.code(),
+        Some(3),
         "{}",
         String::from_utf8_lossy(&edited.stderr)
     );

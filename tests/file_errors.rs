@@ -279,3 +279,31 @@ fn huge_joint_limits_name_the_file_line_and_field() {
         "{err}"
     );
 }
+
+/// `twil --help` ends with the exit statuses and the environment variables, as the README
+/// shows them.
+#[test]
+fn help_lists_exit_status_and_environment() {
+    let o = common::twil().arg("--help").output().unwrap();
+    assert!(o.status.success());
+    let help = String::from_utf8_lossy(&o.stdout);
+    let readme = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"),
+    )
+    .unwrap();
+    let at = readme
+        .find("## Scripts: exit status and environment")
+        .expect("the README's section");
+    let block = &readme[at..];
+    let start = block.find("```text\n").unwrap() + "```text\n".len();
+    let expected = &block[start..start + block[start..].find("```").unwrap()];
+    assert!(help.trim_end().ends_with(expected.trim_end()), "{help}");
+    for var in [
+        "TWIL_QEMU_ELF",
+        "TWIL_QEMU_LOG",
+        "TWIL_LINK_DEBUG",
+        "TWIL_SIM_DEBUG",
+    ] {
+        assert!(help.contains(var), "{var}");
+    }
+}

@@ -320,7 +320,7 @@ fn ctrl_c_aborts_the_mission_and_waits_for_its_report() {
     let out = child.wait_with_output().unwrap();
     assert!(started.elapsed() < Duration::from_secs(10));
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
     assert!(
         stderr.contains("the mission was aborted and the device stopped the motors"),
         "{stderr}"
@@ -329,4 +329,26 @@ fn ctrl_c_aborts_the_mission_and_waits_for_its_report() {
     assert_eq!(v["status"], "aborted");
     let t = num(&v, "sim_time_s");
     assert!(t > 5.0 && t < 300.0, "{t}");
+}
+
+/// `twil ping --json` describes the device in one JSON object, and a misspelt `--remote` is a
+/// usage error that suggests the keyword.
+#[test]
+fn ping_json_and_remote_suggestions() {
+    let o = common::twil()
+        .args(["ping", "--remote", "sim", "--count", "3", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["protocol_version"], twil_core::link::PROTOCOL_VERSION);
+    assert_eq!(v["build"], "host");
+    assert_eq!(v["round_trips_ms"].as_array().unwrap().len(), 3);
+    let o = common::twil()
+        .args(["ping", "--remote", "qmeu"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("did you mean `qemu`?"), "{err}");
 }

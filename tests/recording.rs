@@ -656,7 +656,7 @@ fn live_server_streams_poses_and_ctrl_c_ends_cleanly() {
         .all(|w| (w[1] - w[0]).abs_diff(50_000_000) < 100_000));
     drop(socket);
 
-    // Ctrl-C: the mission stops, the recording is closed and readable, exit status 1.
+    // Ctrl-C: the mission stops, the recording is closed and readable, exit status 130.
     let pid = child.0.id().to_string();
     let killed = std::process::Command::new("kill")
         .args(["-INT", &pid])
@@ -666,7 +666,7 @@ fn live_server_streams_poses_and_ctrl_c_ends_cleanly() {
     let mut rest = String::new();
     std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
     let status = child.0.wait().unwrap();
-    assert_eq!(status.code(), Some(1), "{rest}");
+    assert_eq!(status.code(), Some(130), "{rest}");
     assert!(rest.contains("interrupted"), "{rest}");
     let topics = read_mcap(&mcap_path);
     assert!(count(&topics, "/pose") >= pose_times_ns.len());

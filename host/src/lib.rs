@@ -5,6 +5,7 @@ pub mod classic;
 pub mod cmd;
 pub mod cspace;
 pub mod device_sim;
+pub mod exit;
 pub mod files;
 pub mod picture;
 pub mod qemu_cmd;

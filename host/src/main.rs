@@ -1,8 +1,10 @@
 //! `twil`: plan, simulate and talk to the Twil robot.
 //!
 //! Each subcommand lives in its own module under `cmd/` of the `twil_host` library with an `Args` struct (clap) and a
-//! `run` function; this file only dispatches. Errors reach the user as one line on stderr and
-//! exit code 1 (2 for usage errors, from clap).
+//! `run` function; this file only dispatches. Each `run` says how the command ended
+//! ([`twil_host::exit::Ending`]: 0 done, 3 no path, 4 collision, 5 timeout, 6 aborted,
+//! 130 Ctrl-C); errors reach the user as one line on stderr and exit code 1 (2 for usage
+//! errors, from clap).
 
 use twil_host::cmd;
 
@@ -10,7 +12,7 @@ use clap::{Parser, Subcommand};
 
 /// Host tools for the Twil robot: plan on a map, simulate a mission, talk to the firmware.
 #[derive(Parser, Debug)]
-#[command(name = "twil", version, about)]
+#[command(name = "twil", version, about, after_help = twil_host::exit::HELP)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -45,8 +47,11 @@ fn main() {
         Command::Ping(args) => cmd::ping::run(args),
         Command::View(args) => cmd::view::run(args),
     };
-    if let Err(error) = result {
-        eprintln!("twil: {error:#}");
-        std::process::exit(1);
+    match result {
+        Ok(ending) => std::process::exit(ending.code()),
+        Err(error) => {
+            eprintln!("twil: {error:#}");
+            std::process::exit(1);
+        }
     }
 }

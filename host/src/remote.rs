@@ -58,10 +58,32 @@ impl FromStr for RemoteSpec {
             Ok(RemoteSpec::Tcp(addr.to_string()))
         } else if s.is_empty() {
             bail!("`--remote` needs `qemu`, `sim`, `tcp:HOST:PORT` or a serial port path")
-        } else {
+        } else if looks_like_a_port(s) {
             Ok(RemoteSpec::Serial(s.to_string()))
+        } else {
+            // Not a path either: most likely a misspelt keyword.
+            let guess = ["qemu", "sim", "tcp:"]
+                .into_iter()
+                .map(|k| (strsim::damerau_levenshtein(&s.to_lowercase(), k), k))
+                .min()
+                .filter(|(d, _)| *d <= 2)
+                .map(|(_, k)| format!("; did you mean `{k}`?"))
+                .unwrap_or_default();
+            bail!(
+                "`--remote {s}`: expected `qemu`, `sim`, `sim:N`, `tcp:HOST:PORT` or a serial \
+                 port (a path such as /dev/ttyACM0, or COM3){guess}"
+            )
         }
     }
+}
+
+/// A serial port's name: a path (`/dev/ttyACM0`, `./pty`) or a Windows `COMn`.
+fn looks_like_a_port(s: &str) -> bool {
+    let com = s
+        .strip_prefix("COM")
+        .or_else(|| s.strip_prefix("com"))
+        .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
+    s.contains('/') || s.contains('\\') || com
 }
 
 /// How long to wait for a reply (QEMU plans in milliseconds; a board at 115200 baud moves a
@@ -773,6 +795,28 @@ mod tests {
         );
         assert!("tcp:nohost".parse::<RemoteSpec>().is_err());
         assert!("".parse::<RemoteSpec>().is_err());
+        assert_eq!(
+            "COM3".parse::<RemoteSpec>().unwrap(),
+            RemoteSpec::Serial("COM3".into())
+        );
+        // A misspelt keyword is not taken for a serial port: the error suggests the keyword.
+        for (typo, keyword) in [
+            ("qmeu", "qemu"),
+            ("QEMU", "qemu"),
+            ("sm", "sim"),
+            ("tpc:", "tcp:"),
+        ] {
+            let e = typo.parse::<RemoteSpec>().unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("did you mean `{keyword}`?")),
+                "{typo}: {e}"
+            );
+        }
+        let e = "bluetooth".parse::<RemoteSpec>().unwrap_err().to_string();
+        assert!(
+            e.contains("expected `qemu`") && !e.contains("did you mean"),
+            "{e}"
+        );
     }
 
     /// The firmware's device and planner in this process, behind a byte-stream interface.

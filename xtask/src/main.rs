@@ -12,16 +12,51 @@ mod fuzz;
 #[path = "../../host/src/qemu_cmd.rs"]
 mod qemu_cmd;
 
-const USAGE: &str = "usage: cargo xtask <command>
-  test        install qemu-system-arm if missing, build the firmware, check fmt + clippy, run every test
-  firmware    build both firmware ELFs (hardware, and QEMU: twil-firmware-qemu) and print their sizes
-  size        print flash / static RAM / CCM of the built ELFs
-  qemu [PORT] run the QEMU firmware with USART1 on tcp:127.0.0.1:PORT (default: a free port)
-  mcu-bench   instructions per plan on 300x300 grids (open, 20% random, maze) and of the
-              worst marking requests (tests/firmware_requests.rs) under QEMU
-  on-target   build the firmware's on-target tests (defmt-test) and run them under QEMU
-  defmt-log FILE  decode a saved QEMU log (TWIL_QEMU_LOG=FILE twil … --remote qemu)
-  fuzz [TARGET|all] [SECONDS]  run the cargo-fuzz targets of shared/fuzz (nightly + cargo-fuzz; default: all, 60 s each)";
+/// `cargo xtask …`: the project's own commands (firmware, QEMU, CI).
+#[derive(clap::Parser, Debug)]
+#[command(name = "cargo xtask", bin_name = "cargo xtask", about, after_help = ENVIRONMENT)]
+struct Cli {
+    #[command(subcommand)]
+    command: Task,
+}
+
+/// Environment variables the tasks read.
+const ENVIRONMENT: &str = "Environment:
+  CARGO_TARGET_DIR  where the ELFs are built and looked for (default: target/)
+  CARGO             the cargo to run (set by cargo itself)";
+
+#[derive(clap::Subcommand, Debug)]
+enum Task {
+    /// Install qemu-system-arm if missing, build the firmware, check fmt + clippy, run every
+    /// test (the CI entry point, `.ci/run`).
+    Test,
+    /// Build both firmware ELFs (hardware, and QEMU: twil-firmware-qemu) and print their sizes.
+    Firmware,
+    /// Print flash / static RAM / CCM of the built ELFs.
+    Size,
+    /// Run the QEMU firmware with USART1 on tcp:127.0.0.1:PORT.
+    Qemu {
+        /// TCP port (default: a free port).
+        port: Option<String>,
+    },
+    /// Instructions per plan on 300x300 grids (open, 20% random, maze) and of the worst marking
+    /// requests (tests/firmware_requests.rs) under QEMU.
+    McuBench,
+    /// Build the firmware's on-target tests (defmt-test) and run them under QEMU.
+    OnTarget,
+    /// Decode a saved QEMU log (TWIL_QEMU_LOG=FILE twil … --remote qemu).
+    DefmtLog {
+        /// The log file.
+        file: PathBuf,
+    },
+    /// Run the cargo-fuzz targets of shared/fuzz (nightly + cargo-fuzz).
+    Fuzz {
+        /// One target, or `all` (default).
+        target: Option<String>,
+        /// Seconds per target (default 60).
+        seconds: Option<String>,
+    },
+}
 
 /// Target of the firmware.
 const THUMB: &str = "thumbv7em-none-eabihf";
@@ -38,30 +73,18 @@ const QEMU_CCM: std::ops::Range<u64> = 0x2002_0000..0x2003_0000;
 const FLASH: std::ops::Range<u64> = 0x0800_0000..0x0810_0000;
 
 fn main() -> Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    match args.first().map(String::as_str) {
-        Some("test") => test(),
-        Some("firmware") => firmware(),
-        Some("size") => size(),
-        Some("qemu") => qemu(args.get(1).map(String::as_str)),
-        Some("mcu-bench") => mcu_bench(),
-        Some("on-target") => on_target(),
-        Some("fuzz") => fuzz::fuzz(
-            &workspace_root(),
-            args.get(1).map(String::as_str),
-            args.get(2).map(String::as_str),
-        ),
-        Some("defmt-log") => match args.get(1) {
-            Some(file) => defmt_log_file(Path::new(file)),
-            None => {
-                eprintln!("{USAGE}");
-                std::process::exit(2);
-            }
-        },
-        _ => {
-            eprintln!("{USAGE}");
-            std::process::exit(2);
+    use clap::Parser;
+    match Cli::parse().command {
+        Task::Test => test(),
+        Task::Firmware => firmware(),
+        Task::Size => size(),
+        Task::Qemu { port } => qemu(port.as_deref()),
+        Task::McuBench => mcu_bench(),
+        Task::OnTarget => on_target(),
+        Task::Fuzz { target, seconds } => {
+            fuzz::fuzz(&workspace_root(), target.as_deref(), seconds.as_deref())
         }
+        Task::DefmtLog { file } => defmt_log_file(&file),
     }
 }
 

@@ -190,7 +190,7 @@ pub fn figure(world: &World, rows: &[Row]) -> anyhow::Result<Figure> {
 }
 
 /// Run `twil compare`.
-pub fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
     let plan_args = plan::Args {
         world: Some(args.world.clone()),
         params: args.params.clone(),
@@ -252,5 +252,5 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             );
         }
     }
-    Ok(())
+    Ok(crate::exit::Ending::Done)
 }

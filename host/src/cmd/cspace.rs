@@ -6,7 +6,7 @@
 //! the workspace, a GIF of the arm moving along the path, and a JSON summary on stdout. All the
 //! logic is `twil_core::cspace`; this file reads and writes files.
 //!
-//! The exit code is 0 whenever the search ran, whatever its status (`found`, `unreachable`,
+//! The exit code (`crate::exit`) is 0 when a path was found and 3 when none was (`unreachable`,
 //! `start_blocked`, ...); it is 1 for unreadable or malformed files and impossible increments.
 
 use std::io::Write as _;
@@ -184,7 +184,7 @@ pub fn build_map(rob: &Path, robot: &Robot, increments: [f32; 2]) -> anyhow::Res
 }
 
 /// Run `twil cspace`.
-pub fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
     let (start, goal) = (args.start, args.goal);
     let robot = load_robot(&args.rob)?;
     let map = match (&args.from_map, args.increments) {
@@ -341,7 +341,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
             Err(anyhow::Error::new(e).context("writing to stdout"))
         }
-        _ => Ok(()),
+        _ => Ok(crate::exit::Ending::of_plan_status(report.status.as_str())),
     }
 }
 

@@ -838,7 +838,7 @@ fn check_real(args: &Args, build: Build) -> Result<()> {
 }
 
 /// Run `twil mission`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args) -> Result<crate::exit::Ending> {
     let inputs = read_inputs(&args)?;
     // A simulated device is known before connecting: refuse early.
     match args.remote {
@@ -979,9 +979,18 @@ pub fn run(args: Args) -> Result<()> {
         summary.print(args.json);
     }
     if interrupted {
-        bail!("interrupted (Ctrl-C): the mission was aborted and the device stopped the motors");
+        eprintln!(
+            "twil: interrupted (Ctrl-C): the mission was aborted and the device stopped the motors"
+        );
+        return Ok(crate::exit::Ending::Interrupted);
     }
-    Ok(())
+    // A contact with the real world (`--real`) is a collision whatever the device reports.
+    if outcome.min_clearance_m.is_some_and(|c| c < 0.0) {
+        return Ok(crate::exit::Ending::Collision);
+    }
+    Ok(crate::exit::Ending::of_mission_status(status_name(
+        report.status,
+    )))
 }
 
 /// Map, known obstacles, real world, mission setup.

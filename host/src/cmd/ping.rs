@@ -14,11 +14,34 @@ pub struct Args {
     /// Pings to send.
     #[arg(long, default_value_t = 1)]
     pub count: u32,
+    /// Print one JSON object (the device's description and each round trip) instead.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Run `twil ping`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args) -> Result<crate::exit::Ending> {
     let (mut remote, info) = Remote::connect(&args.remote)?;
+    if args.json {
+        let mut round_trips_ms = Vec::new();
+        for i in 0..args.count {
+            let rtt = remote.ping(0x7711_0000 + i)?;
+            round_trips_ms.push((rtt.as_secs_f64() * 1e6).round() / 1e3);
+        }
+        let json = serde_json::json!({
+            "protocol_version": info.protocol_version,
+            "build": format!("{:?}", info.build).to_lowercase(),
+            "grid_capacity_cells": info.grid_capacity_cells,
+            "planner_capacity_cells": info.planner_capacity_cells,
+            "max_polygons": info.max_polygons,
+            "max_vertices": info.max_vertices,
+            "max_frame_bytes": info.max_frame_bytes,
+            "static_ram_bytes": info.static_ram_bytes,
+            "round_trips_ms": round_trips_ms,
+        });
+        println!("{json}");
+        return Ok(crate::exit::Ending::Done);
+    }
     println!(
         "twil firmware: protocol v{}, build {:?}, grid {} cells, planner {} cells, {} polygons / {} vertices, frames up to {} bytes, static RAM {} bytes",
         info.protocol_version,
@@ -38,5 +61,5 @@ pub fn run(args: Args) -> Result<()> {
             rtt.as_secs_f64() * 1e3
         );
     }
-    Ok(())
+    Ok(crate::exit::Ending::Done)
 }

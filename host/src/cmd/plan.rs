@@ -8,10 +8,11 @@
 //! 2. [`plan`] runs one planner of `twil_core::plan` and times it.
 //! 3. [`plan_json`] builds the JSON object; [`render_png`] draws the picture.
 //!
-//! Exit status: 0 whenever the command ran, whatever the plan status (`found`, `unreachable`,
-//! `start_blocked`, `goal_blocked`, `out_of_bounds`: read it from the output); 1 on any error
-//! (unreadable or malformed file, impossible geometry, planner capacity), with one message on
-//! stderr naming the file, the line and the value; 2 on command-line usage errors.
+//! Exit status (`crate::exit`): 0 when a path was found; 3 when none was (`unreachable`,
+//! `start_blocked`, `goal_blocked`, `out_of_bounds`, and the classic methods' `local_minimum`,
+//! `gave_up`; the output says which); 1 on any error (unreadable or malformed file,
+//! impossible geometry, planner capacity), with one message on stderr naming the file, the
+//! line and the value; 2 on command-line usage errors.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -464,7 +465,7 @@ pub fn plan_figure(
 }
 
 /// Run `twil plan`.
-pub fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
     let world = load(&args)?;
     let Some(kind) = args.planner.grid_planner() else {
         return run_classic(&args, &world);
@@ -498,12 +499,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(summary) = &recorded {
         summary.print(args.json);
     }
-    Ok(())
+    Ok(crate::exit::Ending::of_plan_status(status_name(
+        outcome.report.status,
+    )))
 }
 
 /// `twil plan --planner` with one of the classic methods (`crate::classic`): the same JSON as
 /// the grid planners, plus `min_clearance_m`, `memory_bytes` and the method's own fields.
-fn run_classic(args: &Args, world: &World) -> anyhow::Result<()> {
+fn run_classic(args: &Args, world: &World) -> anyhow::Result<crate::exit::Ending> {
     if args.remote.is_some() {
         bail!(
             "--planner {} runs on the host only; the device plans with bfs, astar or anyangle",
@@ -528,7 +531,7 @@ fn run_classic(args: &Args, world: &World) -> anyhow::Result<()> {
             println!("picture: {}", out.display());
         }
     }
-    Ok(())
+    Ok(crate::exit::Ending::of_plan_status(run.status.as_str()))
 }
 
 /// `--record`: the world (the `.da` polygons, start, goal), the map the planner used and the

@@ -357,7 +357,7 @@ impl sim::Progress for Bar {
 }
 
 /// Run `twil simulate`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args) -> Result<crate::exit::Ending> {
     let setup = setup_from_args(&args)?;
     let bar = if args.json || !std::io::stderr().is_terminal() {
         ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden())
@@ -420,9 +420,10 @@ pub fn run(args: Args) -> Result<()> {
         summary.print(args.json);
     }
     if result.status == sim::SimStatus::Aborted {
-        bail!("interrupted (Ctrl-C): the simulation was stopped");
+        eprintln!("twil: interrupted (Ctrl-C): the simulation was stopped");
+        return Ok(crate::exit::Ending::Interrupted);
     }
-    Ok(())
+    Ok(crate::exit::Ending::of_mission_status(result.status.name()))
 }
 
 /// Set by Ctrl-C while a recorded or live simulation runs: the mission stops at the next tick

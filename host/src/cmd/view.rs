@@ -161,7 +161,7 @@ pub fn figure(state: &RecordedState, name: &str, px_per_cell: Option<u32>) -> Re
 }
 
 /// Run `twil view`.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: Args) -> Result<crate::exit::Ending> {
     if let Some(at) = args.at {
         if !(at.is_finite() && at >= 0.0) {
             bail!("--at {at}: a mission time is a number of seconds, 0 or more");
@@ -198,5 +198,5 @@ pub fn run(args: Args) -> Result<()> {
             args.png.display()
         );
     }
-    Ok(())
+    Ok(crate::exit::Ending::Done)
 }
