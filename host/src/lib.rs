@@ -8,6 +8,7 @@ pub mod device_sim;
 pub mod exit;
 pub mod files;
 pub mod picture;
+pub mod planning;
 pub mod qemu_cmd;
 pub mod record;
 pub mod remote;

@@ -688,10 +688,10 @@ impl Drop for Qemu {
 /// few cells more or less, for the same cost).
 pub fn plan_on_device(
     device: &RemoteSpec,
-    world: &crate::cmd::plan::World,
-    local: &crate::cmd::plan::Outcome,
+    world: &crate::planning::World,
+    local: &crate::planning::Outcome,
     extra: &mut serde_json::Map<String, serde_json::Value>,
-) -> Result<crate::cmd::plan::Outcome> {
+) -> Result<crate::planning::Outcome> {
     let (mut remote, info) = Remote::connect(device)?;
     let geometry = *world.grid.geometry();
     if geometry.cell_count() as u64 > info.grid_capacity_cells as u64 {
@@ -721,7 +721,7 @@ pub fn plan_on_device(
     let planned = remote.plan(local.kind, world.params.start, world.params.goal)?;
     let elapsed_us = started.elapsed().as_micros() as u64;
     let s = planned.summary;
-    let outcome = crate::cmd::plan::Outcome {
+    let outcome = crate::planning::Outcome {
         kind: local.kind,
         report: twil_core::plan::PlanReport {
             status: s.status,
@@ -744,9 +744,9 @@ pub fn plan_on_device(
 /// Run the firmware's planner type ([`twil_core::link::mcu::McuPlanner`]) on the host, on
 /// `world`'s map: what the device must answer.
 pub fn plan_like_the_mcu(
-    world: &crate::cmd::plan::World,
+    world: &crate::planning::World,
     kind: PlannerKind,
-) -> Result<crate::cmd::plan::Outcome> {
+) -> Result<crate::planning::Outcome> {
     let grid = &*world.grid;
     let (start, goal) = (world.params.start, world.params.goal);
     std::thread::scope(|scope| {
@@ -760,7 +760,7 @@ pub fn plan_like_the_mcu(
                 let report = planner
                     .plan(kind, grid, start, goal, &mut path)
                     .map_err(|e| anyhow!("the firmware's planner on the host: {e:?}"))?;
-                Ok(crate::cmd::plan::Outcome {
+                Ok(crate::planning::Outcome {
                     kind,
                     report,
                     path: path.to_vec(),

@@ -13,7 +13,7 @@ use std::time::Instant;
 use anyhow::bail;
 use twil_core::geom::PointM;
 
-use crate::cmd::plan::World;
+use crate::planning::World;
 
 pub mod clearance;
 pub mod picture;
@@ -193,7 +193,7 @@ pub fn polyline_length_m(path: &[PointM]) -> f32 {
 }
 
 /// Run `method` on `world` (which must come from `--world`: the classic methods work on its
-/// polygons). The grid planners go through `cmd::plan::plan`.
+/// polygons). The grid planners go through `planning::plan`.
 pub fn run(method: Method, world: &World, options: &Options) -> anyhow::Result<Run> {
     if world.obstacles.is_empty() && world.saved.is_some() {
         bail!(
@@ -205,7 +205,7 @@ pub fn run(method: Method, world: &World, options: &Options) -> anyhow::Result<R
     let mut run = match method {
         Method::Bfs | Method::Astar | Method::Anyangle => {
             let kind = method.grid_planner().expect("a grid planner");
-            let outcome = crate::cmd::plan::plan(world, kind)?;
+            let outcome = crate::planning::plan(world, kind)?;
             grid_run(method, world, &outcome)
         }
         Method::Visgraph
@@ -227,7 +227,7 @@ pub fn run(method: Method, world: &World, options: &Options) -> anyhow::Result<R
 /// A grid planner's outcome as a [`Run`]. Its memory is what this map needs: the bit map (1 bit
 /// a cell), the planner's scratch (4 bits a cell) and the open-list entries it held at its peak
 /// (12 bytes each).
-pub fn grid_run(method: Method, world: &World, outcome: &crate::cmd::plan::Outcome) -> Run {
+pub fn grid_run(method: Method, world: &World, outcome: &crate::planning::Outcome) -> Run {
     let cells = world.grid.geometry().cell_count();
     let mut extra = serde_json::Map::new();
     extra.insert("queue_peak".into(), outcome.queue_peak.into());
@@ -269,8 +269,8 @@ pub fn min_clearance_m(world: &World, run: &Run) -> Option<f32> {
 /// The JSON of `twil plan --planner NAME --json` for any method: the grid planners' fields in
 /// their order, then `min_clearance_m` (null without a path), `memory_bytes`,
 /// `expanded_unit` and the method's own fields.
-pub fn json(world: &World, run: &Run) -> crate::cmd::plan::PlanJson {
-    use crate::cmd::plan::round_m;
+pub fn json(world: &World, run: &Run) -> crate::planning::PlanJson {
+    use crate::planning::round_m;
     let mut extra = serde_json::Map::new();
     extra.insert(
         "min_clearance_m".into(),
@@ -281,7 +281,7 @@ pub fn json(world: &World, run: &Run) -> crate::cmd::plan::PlanJson {
     for (k, v) in &run.extra {
         extra.insert(k.clone(), v.clone());
     }
-    crate::cmd::plan::PlanJson {
+    crate::planning::PlanJson {
         status: run.status.as_str(),
         planner: run.method.as_str(),
         path: run

@@ -5,10 +5,10 @@
 use image::Rgb;
 
 use super::{min_clearance_m, Method, Run, Status};
-use crate::cmd::plan::World;
 use crate::picture::{
     self, palette, Figure, FigureSpec, LegendEntry, Mark, Marker, PanelSpec, Plot,
 };
+use crate::planning::World;
 
 /// Roadmap and graph edges.
 pub const EDGE: Rgb<u8> = Rgb([150, 160, 185]);

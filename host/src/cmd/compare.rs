@@ -20,8 +20,8 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::classic::{self, Method, Options, Run, Status};
-use crate::cmd::plan::{self, SizeM, World};
 use crate::picture::{self, Figure, FigureSpec, PanelSpec};
+use crate::planning::{self, SizeM, World, WorldFiles};
 
 /// Arguments of `twil compare`.
 #[derive(clap::Args, Debug, Clone)]
@@ -33,7 +33,7 @@ pub struct Args {
     #[arg(long, value_name = "P.par")]
     pub params: PathBuf,
     /// Map size in metres, WIDTHxHEIGHT (or one number for a square).
-    #[arg(long, default_value = "15x15", value_parser = plan::parse_size)]
+    #[arg(long, default_value = "15x15", value_parser = planning::parse_size)]
     pub size: SizeM,
     /// Cell side in metres (grid planners, Voronoi, quadtree, potential field).
     #[arg(long, default_value_t = 0.05)]
@@ -191,20 +191,13 @@ pub fn figure(world: &World, rows: &[Row]) -> anyhow::Result<Figure> {
 
 /// Run `twil compare`.
 pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
-    let plan_args = plan::Args {
+    let world = planning::load_world(&WorldFiles {
         world: Some(args.world.clone()),
         params: args.params.clone(),
         map: None,
         size: args.size,
-        resolution: args.resolution,
-        planner: Method::Astar,
-        json: false,
-        png: None,
-        record: None,
-        scale: None,
-        remote: None,
-    };
-    let world = plan::load(&plan_args)?;
+        resolution_m: args.resolution,
+    })?;
     let options = Options {
         sonar_range_m: args.sonar_range,
     };

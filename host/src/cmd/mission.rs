@@ -431,7 +431,21 @@ impl Follower {
 
     /// Record (and/or serve) what arrives from now on.
     fn record_into(&mut self, recorder: Recorder, inputs: &Inputs) {
-        self.recorder = Some(TelemetryRecorder::new(recorder, inputs, &self.grid));
+        let scene = crate::record::topics::WorldScene {
+            real: inputs.real.as_ref(),
+            known: inputs.known.as_ref(),
+            start: inputs.params.start,
+            goal: inputs.params.goal,
+            body_radius_m: Some(
+                (inputs.params.robot_radius_m - twil_core::robot::PLANNING_MARGIN_M).max(0.05),
+            ),
+        };
+        self.recorder = Some(TelemetryRecorder::new(
+            recorder,
+            &scene,
+            &inputs.robot,
+            &self.grid,
+        ));
     }
 
     fn pose(&self) -> Pose {
@@ -661,7 +675,7 @@ impl Follower {
         format!(
             "t {:6.1} s  {:<10}  x {:6.2} y {:6.2} heading {:4.0}°  stops {:3}  {:6.2} m",
             self.t_s(),
-            self.phase.map_or("starting", phase_name),
+            self.phase.map_or("starting", MissionPhase::as_str),
             pose.x_m,
             pose.y_m,
             pose.heading_rad.to_degrees(),
@@ -689,17 +703,6 @@ fn append_chunk(
     true
 }
 
-pub fn phase_name(phase: MissionPhase) -> &'static str {
-    match phase {
-        MissionPhase::Sweep { full: true } => "full sweep",
-        MissionPhase::Sweep { full: false } => "sweep",
-        MissionPhase::Follow => "follow",
-        MissionPhase::Settle => "settle",
-        MissionPhase::Plan => "plan",
-        MissionPhase::Done => "done",
-    }
-}
-
 /// The JSON name of a stop cause.
 pub fn stop_cause_name(cause: StopCause) -> Option<&'static str> {
     match cause {
@@ -708,17 +711,6 @@ pub fn stop_cause_name(cause: StopCause) -> Option<&'static str> {
         StopCause::EmergencyStop => Some("emergency_stop"),
         StopCause::LinkLost => Some("link_lost"),
         StopCause::ControllerOverrun => Some("controller_overrun"),
-    }
-}
-
-/// The JSON name of a mission status.
-pub fn status_name(status: MissionStatus) -> &'static str {
-    match status {
-        MissionStatus::Running => "running",
-        MissionStatus::Reached => "reached",
-        MissionStatus::Unreachable => "unreachable",
-        MissionStatus::Timeout => "timeout",
-        MissionStatus::Aborted => "aborted",
     }
 }
 
@@ -749,7 +741,7 @@ pub struct Outcome {
 pub fn result_json(outcome: &Outcome) -> serde_json::Value {
     let s = &outcome.report.stats;
     json!({
-        "status": status_name(outcome.report.status),
+        "status": outcome.report.status.as_str(),
         "stops": s.stops,
         "full_sweeps": s.full_sweeps,
         "replans": s.replans,
@@ -950,7 +942,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         let s = &report.stats;
         println!(
             "{}: {:.2} m travelled in {:.1} s of mission time; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {}",
-            status_name(report.status),
+            report.status.as_str(),
             outcome.distance_m,
             s.time_s,
             s.stops,
@@ -988,9 +980,9 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     if outcome.min_clearance_m.is_some_and(|c| c < 0.0) {
         return Ok(crate::exit::Ending::Collision);
     }
-    Ok(crate::exit::Ending::of_mission_status(status_name(
-        report.status,
-    )))
+    Ok(crate::exit::Ending::of_mission_status(
+        report.status.as_str(),
+    ))
 }
 
 /// Map, known obstacles, real world, mission setup.

@@ -9,7 +9,6 @@ use twil_core::mission::{Mission400, MissionEvent, MissionPhase, MissionStatus};
 
 use super::topics::{StatusMessage, WorldScene};
 use super::Recorder;
-use crate::cmd::mission::{phase_name, status_name};
 use crate::sim::{Observer, SimSetup, TickView, TrajectoryRow};
 
 /// Runs mission time at `speed` times the wall clock.
@@ -111,8 +110,8 @@ impl SimRecorder {
         let stats = mission.stats();
         self.recorder.status(StatusMessage {
             t_s,
-            phase: phase_name(mission.phase()).into(),
-            status: status_name(mission.status()).into(),
+            phase: mission.phase().as_str().into(),
+            status: mission.status().as_str().into(),
             event: event.into(),
             plans: stats.plans,
             stops: stats.stops,

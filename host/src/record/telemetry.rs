@@ -10,8 +10,8 @@ use twil_core::mission::{MissionPhase, MissionStatus};
 
 use super::topics::{StatusMessage, WorldScene};
 use super::Recorder;
-use crate::cmd::mission::{phase_name, status_name, Inputs};
 use crate::sim::TrajectoryRow;
+use twil_core::robot::RobotConfig;
 
 /// A [`Recorder`] fed by `twil mission`'s follower.
 pub struct TelemetryRecorder {
@@ -22,22 +22,17 @@ pub struct TelemetryRecorder {
 }
 
 impl TelemetryRecorder {
-    /// Start recording `inputs`' mission: `/world` and the first `/map` (`grid`: the known
-    /// obstacles) at time 0.
-    pub fn new(mut recorder: Recorder, inputs: &Inputs, grid: &Grid400) -> Self {
-        let scene = WorldScene {
-            real: inputs.real.as_ref(),
-            known: inputs.known.as_ref(),
-            start: inputs.params.start,
-            goal: inputs.params.goal,
-            body_radius_m: Some(
-                (inputs.params.robot_radius_m - twil_core::robot::PLANNING_MARGIN_M).max(0.05),
-            ),
-        };
-        recorder.world(0.0, &scene);
+    /// Start recording a mission of `robot` in `scene`: `/world` and the first `/map`
+    /// (`grid`: the known obstacles) at time 0.
+    pub fn new(
+        mut recorder: Recorder,
+        scene: &WorldScene,
+        robot: &RobotConfig,
+        grid: &Grid400,
+    ) -> Self {
+        recorder.world(0.0, scene);
         recorder.map(0.0, grid);
         recorder.tick(0.0);
-        let robot = &inputs.robot;
         Self {
             recorder,
             normal_half_rad: robot.normal_half_sweep_deg.to_radians(),
@@ -108,8 +103,8 @@ impl TelemetryRecorder {
     ) {
         self.recorder.status(StatusMessage {
             t_s,
-            phase: phase.map_or("starting", phase_name).into(),
-            status: status_name(status).into(),
+            phase: phase.map_or("starting", MissionPhase::as_str).into(),
+            status: status.as_str().into(),
             event: event.into(),
             plans: counts.0,
             stops: counts.1,

@@ -372,6 +372,20 @@ pub enum MissionStatus {
     Aborted,
 }
 
+impl MissionStatus {
+    /// The status as the JSON and the recordings name it: `running`, `reached`,
+    /// `unreachable`, `timeout`, `aborted`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            MissionStatus::Running => "running",
+            MissionStatus::Reached => "reached",
+            MissionStatus::Unreachable => "unreachable",
+            MissionStatus::Timeout => "timeout",
+            MissionStatus::Aborted => "aborted",
+        }
+    }
+}
+
 /// Why the mission ended unreachable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -402,6 +416,21 @@ pub enum MissionPhase {
     Plan,
     /// Ended; see [`Mission::status`].
     Done,
+}
+
+impl MissionPhase {
+    /// The phase as the JSON and the recordings name it: `sweep`, `full sweep`, `follow`,
+    /// `settle`, `plan`, `done`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            MissionPhase::Sweep { full: true } => "full sweep",
+            MissionPhase::Sweep { full: false } => "sweep",
+            MissionPhase::Follow => "follow",
+            MissionPhase::Settle => "settle",
+            MissionPhase::Plan => "plan",
+            MissionPhase::Done => "done",
+        }
+    }
 }
 
 /// One input of [`Mission::step`].
