@@ -83,12 +83,26 @@ impl BoxM {
         !(self.x_min_m < self.x_max_m && self.y_min_m < self.y_max_m)
     }
 
-    /// Whether the box meets the bounding box of segment `a`–`b`.
-    fn meets_segment_box(&self, a: PointM, b: PointM) -> bool {
-        a.x_m.max(b.x_m) > self.x_min_m
+    /// Whether the box may meet segment `a`–`b`: their bounding boxes overlap and the
+    /// segment's line does not leave all 4 corners strictly on one side (a cheap filter before
+    /// the exact test; long diagonals cross many bounding boxes but few polygons).
+    #[inline]
+    fn may_meet_segment(&self, a: PointM, b: PointM) -> bool {
+        if !(a.x_m.max(b.x_m) > self.x_min_m
             && a.x_m.min(b.x_m) < self.x_max_m
             && a.y_m.max(b.y_m) > self.y_min_m
-            && a.y_m.min(b.y_m) < self.y_max_m
+            && a.y_m.min(b.y_m) < self.y_max_m)
+        {
+            return false;
+        }
+        let side = |x: f32, y: f32| cross(a, b, PointM::new(x, y));
+        let corners = [
+            side(self.x_min_m, self.y_min_m),
+            side(self.x_max_m, self.y_min_m),
+            side(self.x_max_m, self.y_max_m),
+            side(self.x_min_m, self.y_max_m),
+        ];
+        !(corners.iter().all(|&c| c > 0.0) || corners.iter().all(|&c| c < 0.0))
     }
 }
 
@@ -175,19 +189,40 @@ pub fn convex_hull(points: &mut [PointM], out: &mut [PointM]) -> usize {
 /// one interval of the parameter `t ∈ [0, 1]`; the segment enters iff it is not empty.
 pub fn segment_enters(a: PointM, b: PointM, polygon: &[PointM]) -> bool {
     let n = polygon.len();
+    segment_enters_scaled(a, b, polygon, |i| {
+        let (p, q) = (polygon[i], polygon[(i + 1) % n]);
+        1.0 / math::hypot(q.x_m - p.x_m, q.y_m - p.y_m) as f64
+    })
+}
+
+/// [`segment_enters`] with the inverse length of edge `i` (from vertex `i`) given by `inv_len(i)` (a stored
+/// value is much cheaper than a square root: this is the innermost loop of the visibility
+/// graph). An infinite or NaN inverse length (an edge of length 0) makes that edge ignored.
+fn segment_enters_scaled(
+    a: PointM,
+    b: PointM,
+    polygon: &[PointM],
+    inv_len: impl Fn(usize) -> f64,
+) -> bool {
+    let n = polygon.len();
     if n < 3 {
         return false;
     }
     let (mut lo, mut hi) = (0.0f64, 1.0f64);
     for i in 0..n {
         let (p, q) = (polygon[i], polygon[(i + 1) % n]);
-        let len = math::hypot(q.x_m - p.x_m, q.y_m - p.y_m) as f64;
-        if len <= 0.0 {
+        let (ca, cb) = (cross(p, q, a), cross(p, q, b));
+        // Both ends outside this edge's line (or on it): the segment cannot enter.
+        if ca <= 0.0 && cb <= 0.0 {
+            return false;
+        }
+        let k = inv_len(i);
+        if !k.is_finite() {
             continue;
         }
         // Signed distances of a and b inside this edge's line, less the tolerance.
-        let da = cross(p, q, a) / len - EPS_M;
-        let db = cross(p, q, b) / len - EPS_M;
+        let da = ca * k - EPS_M;
+        let db = cb * k - EPS_M;
         let slope = db - da;
         if slope == 0.0 {
             if da < 0.0 {
@@ -214,6 +249,10 @@ pub fn point_inside(p: PointM, polygon: &[PointM]) -> bool {
 #[derive(Clone, Debug)]
 pub struct Grown<const V: usize, const P: usize> {
     polygons: PolygonSet<V, P>,
+    /// 1 / length of the edge that starts at each vertex, in the order of the vertices.
+    inv_len: Vec<f32, V>,
+    /// Index of each polygon's first vertex.
+    firsts: Vec<u16, P>,
     boxes: Vec<BoxM, P>,
     free: BoxM,
     map: BoxM,
@@ -235,6 +274,8 @@ impl<const V: usize, const P: usize> Grown<V, P> {
             return Err(GrowError::NotFinite);
         }
         let mut polygons = PolygonSet::new();
+        let mut inv_len = Vec::new();
+        let mut firsts = Vec::new();
         let mut boxes = Vec::new();
         for polygon in obstacles {
             let n = polygon.len();
@@ -261,12 +302,22 @@ impl<const V: usize, const P: usize> Grown<V, P> {
                 }
             }
             let g = convex_hull(&mut a[..4 * h], b);
+            let first = polygons.vertex_count() as u16;
             polygons.push(&b[..g]).map_err(GrowError::Capacity)?;
+            // Same capacity as the polygons: cannot fail after their push succeeded.
+            let _ = firsts.push(first);
+            for i in 0..g {
+                let (p, q) = (b[i], b[(i + 1) % g]);
+                // Same capacity as the vertices: cannot fail after their push succeeded.
+                let _ = inv_len.push(1.0 / math::hypot(q.x_m - p.x_m, q.y_m - p.y_m));
+            }
             // Same capacity as the polygons: cannot fail after their push succeeded.
             let _ = boxes.push(BoxM::around(&b[..g]));
         }
         Ok(Self {
             polygons,
+            inv_len,
+            firsts,
             boxes,
             free: BoxM {
                 x_min_m: radius_m,
@@ -318,9 +369,10 @@ impl<const V: usize, const P: usize> Grown<V, P> {
         self.polygons.vertex_count()
     }
 
-    /// Bytes these structures take for this world: 8 per vertex, 2 per polygon end, 16 per box.
+    /// Bytes these structures take for this world: 8 per vertex and 4 for its edge's inverse
+    /// length, 2 per polygon end and 2 per polygon start, 16 per bounding box.
     pub fn memory_bytes(&self) -> usize {
-        self.vertex_count() * 8 + self.len() * (2 + 16) + 2 * 16
+        self.vertex_count() * (8 + 4) + self.len() * (2 + 2 + 16) + 2 * 16
     }
 
     /// Where `p` lies.
@@ -343,10 +395,43 @@ impl<const V: usize, const P: usize> Grown<V, P> {
     /// Whether `a` and `b` see each other: the segment enters no grown polygon. (Both ends are
     /// expected in the free box, which is convex, so the segment stays in it.)
     pub fn sees(&self, a: PointM, b: PointM) -> bool {
-        self.polygons
-            .iter()
-            .zip(self.boxes.iter())
-            .all(|(polygon, bx)| !bx.meets_segment_box(a, b) || !segment_enters(a, b, polygon))
+        let mut hint = 0;
+        self.sees_from(a, b, &mut hint)
+    }
+
+    /// [`Grown::sees`], testing grown polygon `*hint` first and leaving in `*hint` the polygon
+    /// that blocked the segment, if one did: segments from the same point are often blocked by
+    /// the same polygon, so a search that keeps the hint between them rarely scans them all.
+    pub fn sees_from(&self, a: PointM, b: PointM, hint: &mut usize) -> bool {
+        if *hint < self.len() && self.blocks(*hint, a, b) {
+            return false;
+        }
+        for i in 0..self.len() {
+            if i != *hint && self.blocks(i, a, b) {
+                *hint = i;
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Whether grown polygon `i` blocks segment `a`–`b`.
+    #[inline]
+    fn blocks(&self, i: usize, a: PointM, b: PointM) -> bool {
+        let (Some(polygon), Some(bx)) = (self.polygons.polygon(i), self.boxes.get(i)) else {
+            return false;
+        };
+        if !bx.may_meet_segment(a, b) {
+            return false;
+        }
+        let first = self.firsts.get(i).map_or(0, |&f| f as usize);
+        let inv = self
+            .inv_len
+            .get(first..first + polygon.len())
+            .unwrap_or(&[]);
+        segment_enters_scaled(a, b, polygon, |e| {
+            inv.get(e).map_or(f64::NAN, |&k| k as f64)
+        })
     }
 }
 
@@ -439,6 +524,11 @@ mod tests {
         assert_eq!(g.place(p(-0.3, 5.0)), PointPlace::OutOfMap);
         assert!(g.sees(p(1.0, 1.0), p(9.0, 1.0)));
         assert!(!g.sees(p(1.0, 3.0), p(9.0, 3.0)));
+        // The hint: an out-of-range one is harmless, and it ends on the blocking polygon.
+        let mut hint = 7;
+        assert!(!g.sees_from(p(1.0, 3.0), p(9.0, 3.0), &mut hint));
+        assert_eq!(hint, 0);
+        assert!(g.sees_from(p(1.0, 1.0), p(9.0, 1.0), &mut hint));
         // Too little scratch is an error, not a panic.
         let mut small = [PointM::default(); 4];
         assert!(matches!(
