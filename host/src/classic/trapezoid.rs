@@ -475,7 +475,12 @@ pub fn run(world: &World) -> anyhow::Result<Run> {
     Ok(Run {
         method: Method::Trapezoid,
         status,
-        length_m: super::polyline_length_m(&path),
+        // (The sum of no legs is -0.0 in f32: say 0.)
+        length_m: if path.is_empty() {
+            0.0
+        } else {
+            super::polyline_length_m(&path)
+        },
         path,
         expanded: cells_visited as u64,
         expanded_unit: "cells",
