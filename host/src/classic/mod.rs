@@ -17,6 +17,8 @@ use crate::planning::World;
 
 pub mod clearance;
 pub mod picture;
+pub mod trapezoid;
+pub mod visgraph;
 
 /// Every planning method `twil plan` and `twil compare` know, in the order `compare` lists them.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -208,12 +210,9 @@ pub fn run(method: Method, world: &World, options: &Options) -> anyhow::Result<R
             let outcome = crate::planning::plan(world, kind)?;
             grid_run(method, world, &outcome)
         }
-        Method::Visgraph
-        | Method::Voronoi
-        | Method::Trapezoid
-        | Method::Quadtree
-        | Method::Potential
-        | Method::Bug => {
+        Method::Visgraph => visgraph::run(world)?,
+        Method::Trapezoid => trapezoid::run(world)?,
+        Method::Voronoi | Method::Quadtree | Method::Potential | Method::Bug => {
             let _ = options;
             bail!("planner {}: not implemented yet", method.as_str())
         }
