@@ -470,14 +470,15 @@ impl Bug {
 
     fn close_loop(&mut self, p: PointM) -> Step {
         self.loop_m = self.arc_m;
-        let ahead_m = self.best_arc_m;
-        let behind_m = (self.loop_m - self.best_arc_m).max(0.0);
-        // The leave point is `best_arc_m` along the loop: go on if the rest of the loop is
-        // shorter, else turn round and keep the obstacle on the other side.
-        if behind_m <= ahead_m {
-            self.return_arc_m = behind_m;
+        // Back at the hit point, the leave point is `best_arc_m` further on the same way round,
+        // or the rest of the loop back the other way: take the shorter (turning round means
+        // keeping the obstacle on the other side).
+        let forward_m = self.best_arc_m;
+        let backward_m = (self.loop_m - self.best_arc_m).max(0.0);
+        if forward_m <= backward_m {
+            self.return_arc_m = forward_m;
         } else {
-            self.return_arc_m = ahead_m;
+            self.return_arc_m = backward_m;
             self.side = -self.side;
         }
         self.phase = Phase::ReturnToLeave;
@@ -681,6 +682,29 @@ mod tests {
         assert!(o.length_m > 5.0 + loop_m, "{}", o.length_m);
         let bound_m = 5.0 + 1.5 * loop_m;
         assert!(o.length_m <= bound_m, "{} > {bound_m}", o.length_m);
+    }
+
+    #[test]
+    fn the_way_back_to_the_leave_point_is_the_shorter_one() {
+        // A tall square off-centre: the hit is near its lower end. Whichever way round the
+        // loop went, going on or turning back, the way from the hit point to the far side's
+        // closest point is about 3.1 m one way and 6.8 m the other; the robot must take the
+        // short one both when it lies ahead and when it lies behind.
+        let loop_m = 2.0 * (1.0 + 2.2) + 2.0 * core::f32::consts::PI * 0.55;
+        for (y0, y1) in [(-0.2, 2.0), (-2.0, 0.2)] {
+            let world = [square(2.0, y0, 3.0, y1)];
+            let o = drive(&world, PointM::new(0.0, 0.0), PointM::new(5.0, 0.0), 20000);
+            assert_eq!(o.phase, Phase::Reached, "{y0}");
+            assert!(o.min_distance_m > 0.4, "{}", o.min_distance_m);
+            // Straight parts (< 5 m) + loop + the short way (~3.1 m), with slack for the
+            // following's wiggles; the long way would add 3.7 m more.
+            assert!(
+                o.length_m < 5.0 + loop_m + 3.1 + 1.2,
+                "{y0}: {}",
+                o.length_m
+            );
+            assert!(o.length_m > 5.0 + loop_m, "{y0}: {}", o.length_m);
+        }
     }
 
     #[test]
