@@ -15,6 +15,7 @@ use twil_core::geom::PointM;
 
 use crate::planning::World;
 
+pub mod bug;
 pub mod clearance;
 pub mod picture;
 pub mod trapezoid;
@@ -212,10 +213,11 @@ pub fn run(method: Method, world: &World, options: &Options) -> anyhow::Result<R
         }
         Method::Visgraph => visgraph::run(world)?,
         Method::Trapezoid => trapezoid::run(world)?,
-        Method::Voronoi | Method::Quadtree | Method::Potential | Method::Bug => {
+        Method::Voronoi | Method::Quadtree | Method::Potential => {
             let _ = options;
             bail!("planner {}: not implemented yet", method.as_str())
         }
+        Method::Bug => bug::run(world, options)?,
     };
     if run.elapsed_us == 0 {
         run.elapsed_us = t0.elapsed().as_micros() as u64;

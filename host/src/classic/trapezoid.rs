@@ -40,7 +40,7 @@ use twil_core::geom::PointM;
 
 use super::visgraph::{grow, HostGrown};
 use super::{Method, Overlay, Run, Status};
-use crate::cmd::plan::World;
+use crate::planning::World;
 
 /// Most cells a decomposition may have (about 100 MB); beyond it the run is refused.
 pub const MAX_CELLS: usize = 1_000_000;

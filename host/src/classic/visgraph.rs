@@ -19,7 +19,7 @@ use twil_core::geom::PointM;
 use twil_core::world::{MAX_POLYGONS, MAX_VERTICES};
 
 use super::{Method, Overlay, Run, Status};
-use crate::cmd::plan::World;
+use crate::planning::World;
 
 /// Grown-polygon capacity for a full `.da`: each polygon may gain the square's 4 corners.
 pub const GROWN_VERTICES: usize = MAX_VERTICES + 4 * MAX_POLYGONS;
