@@ -27,6 +27,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod classic;
 pub mod control;
 pub mod cspace;
 pub mod drivers;
