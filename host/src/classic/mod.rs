@@ -17,6 +17,9 @@ use crate::cmd::plan::World;
 
 pub mod clearance;
 pub mod picture;
+pub mod potential;
+pub mod quadtree;
+pub mod voronoi;
 
 /// Every planning method `twil plan` and `twil compare` know, in the order `compare` lists them.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -208,12 +211,10 @@ pub fn run(method: Method, world: &World, options: &Options) -> anyhow::Result<R
             let outcome = crate::cmd::plan::plan(world, kind)?;
             grid_run(method, world, &outcome)
         }
-        Method::Visgraph
-        | Method::Voronoi
-        | Method::Trapezoid
-        | Method::Quadtree
-        | Method::Potential
-        | Method::Bug => {
+        Method::Voronoi => voronoi::run(world)?,
+        Method::Quadtree => quadtree::run(world)?,
+        Method::Potential => potential::run(world)?,
+        Method::Visgraph | Method::Trapezoid | Method::Bug => {
             let _ = options;
             bail!("planner {}: not implemented yet", method.as_str())
         }
