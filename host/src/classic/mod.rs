@@ -18,7 +18,6 @@ use crate::cmd::plan::World;
 pub mod clearance;
 pub mod picture;
 pub mod potential;
-pub mod quadtree;
 pub mod voronoi;
 
 /// Every planning method `twil plan` and `twil compare` know, in the order `compare` lists them.
@@ -212,9 +211,8 @@ pub fn run(method: Method, world: &World, options: &Options) -> anyhow::Result<R
             grid_run(method, world, &outcome)
         }
         Method::Voronoi => voronoi::run(world)?,
-        Method::Quadtree => quadtree::run(world)?,
         Method::Potential => potential::run(world)?,
-        Method::Visgraph | Method::Trapezoid | Method::Bug => {
+        Method::Visgraph | Method::Trapezoid | Method::Quadtree | Method::Bug => {
             let _ = options;
             bail!("planner {}: not implemented yet", method.as_str())
         }

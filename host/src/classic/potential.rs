@@ -48,7 +48,12 @@ pub fn run(world: &World) -> anyhow::Result<Run> {
         Status::LocalMinimum => {
             // As far as it got: the exact start, then the cells' centres.
             let mut pts = vec![world.params.start];
-            pts.extend(cells.iter().skip(1).map(|&c| g.center_of(g.cell_at(c as usize))));
+            pts.extend(
+                cells
+                    .iter()
+                    .skip(1)
+                    .map(|&c| g.center_of(g.cell_at(c as usize))),
+            );
             run.path = super::voronoi::simplify_collinear(&pts);
             if let Some(&last) = run.path.last() {
                 run.overlay.nodes.push(last);

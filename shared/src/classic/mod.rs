@@ -4,5 +4,4 @@
 pub mod cell_heap;
 pub mod distance;
 pub mod potential;
-pub mod quadtree;
 pub mod voronoi;

@@ -233,8 +233,7 @@ mod tests {
         let geo = GridGeometry::new(200, 200, 0.05).unwrap();
         let (mut grid, mut raw) = (G::new(geo).unwrap(), G::new(geo).unwrap());
         for p in polys {
-            let pts: heapless::Vec<PointM, 8> =
-                p.iter().map(|&(x, y)| PointM::new(x, y)).collect();
+            let pts: heapless::Vec<PointM, 8> = p.iter().map(|&(x, y)| PointM::new(x, y)).collect();
             mark_polygon(&mut grid, &pts, expansion);
             mark_polygon(&mut raw, &pts, 0);
         }
@@ -295,7 +294,10 @@ mod tests {
         // It stopped inside the U, against its back.
         let last = path[r.path_cells - 1];
         let (x, y) = (last % 200, last / 200);
-        assert!((80..116).contains(&x) && (64..140).contains(&y), "({x},{y})");
+        assert!(
+            (80..116).contains(&x) && (64..140).contains(&y),
+            "({x},{y})"
+        );
     }
 
     #[test]
