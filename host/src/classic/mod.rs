@@ -18,8 +18,10 @@ use crate::planning::World;
 pub mod bug;
 pub mod clearance;
 pub mod picture;
+pub mod potential;
 pub mod trapezoid;
 pub mod visgraph;
+pub mod voronoi;
 
 /// Every planning method `twil plan` and `twil compare` know, in the order `compare` lists them.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -213,7 +215,9 @@ pub fn run(method: Method, world: &World, options: &Options) -> anyhow::Result<R
         }
         Method::Visgraph => visgraph::run(world)?,
         Method::Trapezoid => trapezoid::run(world)?,
-        Method::Voronoi | Method::Quadtree | Method::Potential => {
+        Method::Voronoi => voronoi::run(world)?,
+        Method::Potential => potential::run(world)?,
+        Method::Quadtree => {
             let _ = options;
             bail!("planner {}: not implemented yet", method.as_str())
         }
