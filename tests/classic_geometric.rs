@@ -222,3 +222,55 @@ fn twil_plan_prints_the_methods_fields() {
         assert!(v["min_clearance_m"].as_f64().unwrap() >= -1e-4);
     }
 }
+
+/// The README's `twil compare` example: same command, same table but for the wall-clock
+/// `time` column (the methods are deterministic; the timings are not).
+#[test]
+fn readme_compare_table_matches() {
+    let readme = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"),
+    )
+    .unwrap();
+    let command =
+        "compare --world worlds/office.da --params worlds/office.par --out docs/img/compare-office";
+    let block = &readme[readme.find(command).expect("the README's compare example")..];
+    let start = block.find("```text\n").unwrap() + "```text\n".len();
+    let expected = &block[start..start + block[start..].find("```").unwrap()];
+    let tmp = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_twil"))
+        .arg("compare")
+        .arg("--world")
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/office.da"))
+        .arg("--params")
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/office.par"))
+        .arg("--out")
+        .arg(tmp.path())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Every column but `time (ms)`, the sixth.
+    let without_time = |text: &str| -> Vec<String> {
+        text.lines()
+            .filter(|l| l.starts_with('|'))
+            .map(|l| {
+                let mut cells: Vec<&str> = l.split('|').collect();
+                if cells.len() > 6 {
+                    cells.remove(6);
+                }
+                cells.join("|")
+            })
+            .collect()
+    };
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(without_time(&stdout), without_time(expected));
+    assert_eq!(without_time(expected).len(), 10);
+    // The picture has a panel per method and a legend.
+    let image = image::open(tmp.path().join("compare.png"))
+        .unwrap()
+        .to_rgb8();
+    assert!(image.width() > 900 && image.height() > 900);
+}

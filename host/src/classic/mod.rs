@@ -38,8 +38,6 @@ pub enum Method {
     Voronoi,
     /// Exact trapezoidal (vertical) cell decomposition by a sweep line.
     Trapezoid,
-    /// Quadtree approximate decomposition (EMPTY / FULL / MIXED cells).
-    Quadtree,
     /// Potential field: attractive paraboloid plus repulsive term, gradient descent.
     Potential,
     /// Lumelsky's Bug, run in the simulator with the sonar (sensor-based, no map).
@@ -48,14 +46,13 @@ pub enum Method {
 
 impl Method {
     /// Every method, in the order of the comparison table.
-    pub const ALL: [Method; 9] = [
+    pub const ALL: [Method; 8] = [
         Method::Bfs,
         Method::Astar,
         Method::Anyangle,
         Method::Visgraph,
         Method::Voronoi,
         Method::Trapezoid,
-        Method::Quadtree,
         Method::Potential,
         Method::Bug,
     ];
@@ -69,7 +66,6 @@ impl Method {
             Method::Visgraph => "visgraph",
             Method::Voronoi => "voronoi",
             Method::Trapezoid => "trapezoid",
-            Method::Quadtree => "quadtree",
             Method::Potential => "potential",
             Method::Bug => "bug",
         }
@@ -217,10 +213,6 @@ pub fn run(method: Method, world: &World, options: &Options) -> anyhow::Result<R
         Method::Trapezoid => trapezoid::run(world)?,
         Method::Voronoi => voronoi::run(world)?,
         Method::Potential => potential::run(world)?,
-        Method::Quadtree => {
-            let _ = options;
-            bail!("planner {}: not implemented yet", method.as_str())
-        }
         Method::Bug => bug::run(world, options)?,
     };
     if run.elapsed_us == 0 {

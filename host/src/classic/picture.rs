@@ -85,7 +85,8 @@ pub fn result_line(world: &World, run: &Run) -> String {
         s.push_str(&format!(", {:.2} m", run.length_m));
     }
     if let Some(c) = min_clearance_m(world, run) {
-        s.push_str(&format!(", clearance {c:.2} m"));
+        let c = format!("{c:.2}").replace("-0.00", "0.00");
+        s.push_str(&format!(", clearance {c} m"));
     }
     s
 }
@@ -149,9 +150,7 @@ pub fn why(method: Method) -> &'static str {
         Method::Trapezoid => {
             "Vertical trapezoids by a sweep line, through midpoints of shared edges"
         }
-        Method::Quadtree => {
-            "EMPTY cells of a quadtree, MIXED cells refined to the resolution limit"
-        }
+
         Method::Potential => "Descent on an attractive paraboloid plus repulsion from obstacles",
         Method::Bug => "Drive at the goal, follow an obstacle's edge when the sonar blocks the way",
     }

@@ -35,7 +35,7 @@ pub struct Args {
     /// Map size in metres, WIDTHxHEIGHT (or one number for a square).
     #[arg(long, default_value = "15x15", value_parser = planning::parse_size)]
     pub size: SizeM,
-    /// Cell side in metres (grid planners, Voronoi, quadtree, potential field).
+    /// Cell side in metres (grid planners, Voronoi, potential field).
     #[arg(long, default_value_t = 0.05)]
     pub resolution: f32,
     /// Methods to run, comma-separated (default: all).
@@ -116,7 +116,9 @@ pub fn table(rows: &[Row]) -> String {
             r.status.as_str(),
             opt((!r.path.is_empty()).then(|| format!("{:.2}", r.length_m))),
             opt(row.ratio_to_visgraph.map(|x| format!("{x:.3}"))),
-            opt(row.min_clearance_m.map(|c| format!("{c:.3}"))),
+            opt(row
+                .min_clearance_m
+                .map(|c| format!("{:.3}", c + 0.0).replace("-0.000", "0.000"))),
             r.elapsed_us as f64 / 1000.0,
             r.memory_bytes as f64 / 1024.0,
             r.expanded,
@@ -155,9 +157,12 @@ pub fn figure(world: &World, rows: &[Row]) -> anyhow::Result<Figure> {
     let panels = rows
         .iter()
         .map(|row| {
-            let mut title = classic::picture::result_line(world, &row.run);
-            if let Some(x) = row.ratio_to_visgraph {
-                title.push_str(&format!(", ×{x:.3}"));
+            // Short enough not to run into the y axis title; the table has the rest.
+            let r = &row.run;
+            let mut title = format!("{}: ", r.method.as_str());
+            match row.ratio_to_visgraph {
+                Some(x) => title.push_str(&format!("{:.2} m, ×{x:.3}", r.length_m)),
+                None => title.push_str(&r.status.as_str().replace('_', " ")),
             }
             PanelSpec::map(g, scale, Some(title))
         })
