@@ -6,15 +6,25 @@ mod common;
 use common::{twil, world};
 use serde_json::Value;
 
-/// Run `twil ARGS`, expect exit 0, return stdout.
+/// Run `twil ARGS`, expect the exit status its ending calls for (0 reached, 5 timeout: the
+/// missions here are cut at 60 s), return stdout.
 fn run_ok(args: &[&str]) -> String {
     let out = twil().args(args).output().expect("run twil");
-    assert!(
-        out.status.success(),
-        "twil {args:?} failed: {}",
+    let stdout = String::from_utf8(out.stdout).expect("utf-8 stdout");
+    let status = serde_json::from_str::<Value>(stdout.trim())
+        .ok()
+        .and_then(|v| v["status"].as_str().map(str::to_owned));
+    let expected = match status.as_deref() {
+        Some("timeout") => 5,
+        _ => 0,
+    };
+    assert_eq!(
+        out.status.code(),
+        Some(expected),
+        "twil {args:?} ({status:?}) failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    String::from_utf8(out.stdout).expect("utf-8 stdout")
+    stdout
 }
 
 /// `twil simulate` on the office world with `extra`, `--out` a fresh directory; returns the
