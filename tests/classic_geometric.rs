@@ -227,22 +227,16 @@ fn twil_plan_prints_the_methods_fields() {
 /// `time` column (the methods are deterministic; the timings are not).
 #[test]
 fn readme_compare_table_matches() {
-    let readme = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"),
-    )
-    .unwrap();
     let command =
         "compare --world worlds/office.da --params worlds/office.par --out docs/img/compare-office";
-    let block = &readme[readme.find(command).expect("the README's compare example")..];
-    let start = block.find("```text\n").unwrap() + "```text\n".len();
-    let expected = &block[start..start + block[start..].find("```").unwrap()];
+    let expected = common::doc_output_block("README.md", command);
     let tmp = tempfile::tempdir().unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_twil"))
+    let out = common::twil()
         .arg("compare")
         .arg("--world")
-        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/office.da"))
+        .arg(common::world("office.da"))
         .arg("--params")
-        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/office.par"))
+        .arg(common::world("office.par"))
         .arg("--out")
         .arg(tmp.path())
         .output()
@@ -266,8 +260,8 @@ fn readme_compare_table_matches() {
             .collect()
     };
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(without_time(&stdout), without_time(expected));
-    assert_eq!(without_time(expected).len(), 10);
+    assert_eq!(without_time(&stdout), without_time(&expected));
+    assert_eq!(without_time(&expected).len(), 10);
     // The picture has a panel per method and a legend.
     let image = image::open(tmp.path().join("compare.png"))
         .unwrap()

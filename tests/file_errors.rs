@@ -287,16 +287,7 @@ fn help_lists_exit_status_and_environment() {
     let o = common::twil().arg("--help").output().unwrap();
     assert!(o.status.success());
     let help = String::from_utf8_lossy(&o.stdout);
-    let readme = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"),
-    )
-    .unwrap();
-    let at = readme
-        .find("## Scripts: exit status and environment")
-        .expect("the README's section");
-    let block = &readme[at..];
-    let start = block.find("```text\n").unwrap() + "```text\n".len();
-    let expected = &block[start..start + block[start..].find("```").unwrap()];
+    let expected = common::doc_output_block("README.md", "## Scripts: exit status and environment");
     assert!(help.trim_end().ends_with(expected.trim_end()), "{help}");
     for var in [
         "TWIL_QEMU_ELF",

@@ -239,15 +239,8 @@ fn simulate_record_matches_the_run_summary_and_csv() {
 /// writer are deterministic, so the size and counts are exact).
 #[test]
 fn readme_recording_example_matches() {
-    let readme =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
-            .unwrap();
     let command = "cargo run --release -p twil-host -- simulate --real worlds/office.da --params worlds/office.par --record out/office.mcap";
-    let at = readme.find(command).expect("the README's --record example");
-    let block = &readme[at..];
-    let start = block.find("```text\n").expect("its output block") + "```text\n".len();
-    let end = start + block[start..].find("```").unwrap();
-    let expected = &block[start..end];
+    let expected = common::doc_output_block("README.md", command);
 
     let tmp = tempfile::tempdir().unwrap();
     let path = tmp.path().join("office.mcap");
@@ -266,13 +259,8 @@ fn readme_recording_example_matches() {
     assert_eq!(stdout, expected);
 
     // docs/recording.md's `twil view` example, on the same file.
-    let doc =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/recording.md"))
-            .unwrap();
     let view = "view out/office.mcap --png docs/img/office-recording.png --at 120";
-    let block = &doc[doc.find(view).expect("the docs' twil view example")..];
-    let start = block.find("```text\n").expect("its output block") + "```text\n".len();
-    let expected = &block[start..start + block[start..].find("```").unwrap()];
+    let expected = common::doc_output_block("docs/recording.md", view);
     let png = tmp.path().join("view.png");
     let o = common::twil()
         .arg("view")

@@ -206,21 +206,20 @@ pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
     let options = Options {
         sonar_range_m: args.sonar_range,
     };
-    let bar = if args.json || !std::io::stderr().is_terminal() {
-        ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden())
-    } else {
-        let b = ProgressBar::new(Method::ALL.len() as u64);
-        if let Ok(style) = ProgressStyle::with_template("{spinner} planner {pos}/{len}: {msg}") {
-            b.set_style(style);
-        }
-        b
-    };
     let count = if args.planners.is_empty() {
         Method::ALL.len()
     } else {
         args.planners.len()
     };
-    bar.set_length(count as u64);
+    let bar = if args.json || !std::io::stderr().is_terminal() {
+        ProgressBar::with_draw_target(Some(count as u64), ProgressDrawTarget::hidden())
+    } else {
+        let b = ProgressBar::new(count as u64);
+        if let Ok(style) = ProgressStyle::with_template("{spinner} planner {pos}/{len}: {msg}") {
+            b.set_style(style);
+        }
+        b
+    };
     let rows = compare(&world, &args.planners, &options, |m| {
         bar.set_message(m.as_str());
         bar.inc(1);
