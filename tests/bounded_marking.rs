@@ -4,7 +4,7 @@
 //! read through `twil plan`'s own loader; the marking's work counter (`twil_core::raster::Work`)
 //! must stay within `raster::polygon_work_bound`, and `twil plan` must answer.
 
-mod common;
+use crate::common;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use twil_host::classic::{self, Method, Options, Status};
 use twil_host::cmd::plan::{load, SizeM};
 
-mod common;
+use crate::common;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")

@@ -2,7 +2,7 @@
 //! decomposition on every bundled world, against the grid planners; walled-off goals; the work
 //! on a full `.da` (128 polygons, 1024 vertices).
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 use std::time::Instant;

@@ -6,7 +6,7 @@
 //! that our path is collision-free and no longer than the thesis' path, both measured in joint
 //! units on our map.
 
-mod common;
+use crate::common;
 
 use twil_core::cspace::{
     map::{occupancy_at, ConfigMap, Occupancy},

@@ -4,7 +4,7 @@
 //! stderr that names the file, the line (or the size and cap) and the field, quotes values
 //! escaped, and prints no absurd number.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Output;

@@ -6,7 +6,7 @@
 //! clashing. A missing `qemu-system-arm` or ELF makes the tests FAIL with a message saying what
 //! to run; they never pass silently.
 
-mod common;
+use crate::common;
 
 use std::time::{Duration, Instant};
 
@@ -466,7 +466,8 @@ fn device_mission(world: &str, mode: twil_core::mission::MissionMode) -> DeviceM
     use twil_core::link::Telemetry;
     let mut remote = start_device_mission(world, mode);
     let mut telemetry = Vec::new();
-    let deadline = Instant::now() + Duration::from_secs(300);
+    // Generous: the six missions run at once on CI's two cores.
+    let deadline = Instant::now() + Duration::from_secs(600);
     loop {
         match remote.next_frame(deadline).expect("telemetry") {
             Ok(DeviceFrame::Telemetry(Telemetry::Finished(report))) => {
@@ -728,66 +729,82 @@ fn missions_on_the_device_reach_the_goal_like_the_simulator_with_no_overrun() {
     let mut failures = Vec::new();
     // `TWIL_MISSION_WORLDS=office` runs one world (when debugging).
     let only = std::env::var("TWIL_MISSION_WORLDS").ok();
-    for world in ["office", "corridor", "pillars"] {
-        if only
-            .as_deref()
-            .is_some_and(|o| !o.split(',').any(|w| w == world))
-        {
-            continue;
-        }
-        for mode in [MissionMode::Stop, MissionMode::Continuous] {
-            let device = device_mission(world, mode);
-            let sim = simulated_mission(world, mode);
-            let r = device.report;
-            let s = r.stats;
-            eprintln!(
-                "{world} {mode:?}: device {:?} stops {} distance {:.2} m time {:.1} s overruns {} \
-                 max control {} plan {} stack {}; simulator stops {} distance {:.2} m",
-                r.status,
-                s.stops,
-                s.odometry_distance_m,
-                s.time_s,
-                s.controller_overruns,
-                r.max_control_instructions,
-                r.max_plan_instructions,
-                r.stack_high_water_bytes,
-                sim.stops,
-                sim.odometry_distance_m
-            );
-            // Stop mode: the stops are the mission. Continuous mode stops only for full sweeps
-            // where the body corridor beside a turn is unseen, a handful whose number depends
-            // on when each plan comes back (the device's latency is not the simulator's):
-            // measured device / simulator 9 / 5, 9 / 5, 4 / 10 on office, corridor, pillars.
-            // There both must stay a handful (at most 12) instead.
-            let stops_ok = match mode {
-                MissionMode::Stop => {
-                    (s.stops as f32 - sim.stops as f32).abs() <= 0.25 * sim.stops as f32 + 2.5
-                }
-                MissionMode::Continuous => s.stops <= 12 && sim.stops <= 12,
-            };
-            // The device is not bit-identical to the simulator (plan latency, reading times),
-            // and since the body-corridor rule a small difference can add a full sweep and a
-            // detour: measured up to +7.4 % (office, stop mode).
-            let distance_ok = (s.odometry_distance_m - sim.odometry_distance_m).abs()
-                <= 0.10 * sim.odometry_distance_m;
-            if r.status != MissionStatus::Reached
-                || s.controller_overruns != 0
-                || !stops_ok
-                || !distance_ok
-            {
-                failures.push(format!("{world} {mode:?}: {r:?} vs {sim:?}"));
-            }
-            let poses = device
-                .telemetry
+    let runs: Vec<(&str, MissionMode)> = ["office", "corridor", "pillars"]
+        .into_iter()
+        .filter(|world| {
+            only.as_deref()
+                .is_none_or(|o| o.split(',').any(|w| w == *world))
+        })
+        .flat_map(|world| [(world, MissionMode::Stop), (world, MissionMode::Continuous)])
+        .collect();
+    // Each device mission is one QEMU process at `-icount shift=3`: its timing is virtual, so
+    // running the six at once changes no result, and the test takes the time of the slowest
+    // instead of the sum (measured alone: about 50 s each).
+    let results: Vec<(DeviceMission, twil_core::mission::MissionStats)> =
+        std::thread::scope(|scope| {
+            let handles: Vec<_> = runs
                 .iter()
-                .filter(|t| matches!(t, twil_core::link::Telemetry::Pose(_)))
-                .count() as f32;
-            assert!(
-                poses >= 4.0 * s.time_s,
-                "{world} {mode:?}: {poses} poses in {} s",
-                s.time_s
-            );
+                .map(|&(world, mode)| {
+                    scope.spawn(move || {
+                        (device_mission(world, mode), simulated_mission(world, mode))
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                .collect()
+        });
+    for (&(world, mode), (device, sim)) in runs.iter().zip(results) {
+        let r = device.report;
+        let s = r.stats;
+        eprintln!(
+            "{world} {mode:?}: device {:?} stops {} distance {:.2} m time {:.1} s overruns {} \
+                 max control {} plan {} stack {}; simulator stops {} distance {:.2} m",
+            r.status,
+            s.stops,
+            s.odometry_distance_m,
+            s.time_s,
+            s.controller_overruns,
+            r.max_control_instructions,
+            r.max_plan_instructions,
+            r.stack_high_water_bytes,
+            sim.stops,
+            sim.odometry_distance_m
+        );
+        // Stop mode: the stops are the mission. Continuous mode stops only for full sweeps
+        // where the body corridor beside a turn is unseen, a handful whose number depends
+        // on when each plan comes back (the device's latency is not the simulator's):
+        // measured device / simulator 9 / 5, 9 / 5, 4 / 10 on office, corridor, pillars.
+        // There both must stay a handful (at most 12) instead.
+        let stops_ok = match mode {
+            MissionMode::Stop => {
+                (s.stops as f32 - sim.stops as f32).abs() <= 0.25 * sim.stops as f32 + 2.5
+            }
+            MissionMode::Continuous => s.stops <= 12 && sim.stops <= 12,
+        };
+        // The device is not bit-identical to the simulator (plan latency, reading times),
+        // and since the body-corridor rule a small difference can add a full sweep and a
+        // detour: measured up to +7.4 % (office, stop mode).
+        let distance_ok = (s.odometry_distance_m - sim.odometry_distance_m).abs()
+            <= 0.10 * sim.odometry_distance_m;
+        if r.status != MissionStatus::Reached
+            || s.controller_overruns != 0
+            || !stops_ok
+            || !distance_ok
+        {
+            failures.push(format!("{world} {mode:?}: {r:?} vs {sim:?}"));
         }
+        let poses = device
+            .telemetry
+            .iter()
+            .filter(|t| matches!(t, twil_core::link::Telemetry::Pose(_)))
+            .count() as f32;
+        assert!(
+            poses >= 4.0 * s.time_s,
+            "{world} {mode:?}: {poses} poses in {} s",
+            s.time_s
+        );
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }

@@ -18,8 +18,6 @@
 //! and at most `INSTRUCTIONS_PER_WORK_UNIT` per unit of the documented work bound
 //! (`raster::polygon_work_bound`: rows and words).
 
-mod common;
-
 use twil_core::geom::PointM;
 use twil_core::grid::GridGeometry;
 use twil_core::link::handler::MAX_MARKING_ROWS;

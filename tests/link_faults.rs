@@ -8,9 +8,9 @@
 //!   10 times on the office world, and `twil mission --remote tcp:` on the corridor world, 1 %
 //!   of bytes damaged.
 //!
-//! Each test prints its figures (`cargo test -p twil-host --test link_faults -- --nocapture`).
+//! Each test prints its figures (`cargo test -p twil-host --test suite link_faults:: -- --nocapture`).
 
-mod common;
+use crate::common;
 #[path = "common/fault_proxy.rs"]
 mod fault_proxy;
 

@@ -2,7 +2,7 @@
 //! missions on the bundled worlds agree with `twil simulate`, the JSON and the files have the
 //! simulator's shape plus `mcu`, bad inputs are named, Ctrl-C aborts.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeSet;
 use std::process::Output;

@@ -4,7 +4,7 @@
 //! The binary is run as a user would run it (`common::twil()`); the grid it planned on is rebuilt
 //! in-process with `twil_host::cmd::plan::load` to check the returned paths independently.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};

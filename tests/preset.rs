@@ -1,7 +1,7 @@
 //! `--preset seed|ours` on `twil simulate` and `twil mission --remote sim`: the seed preset sets
 //! every listed choice, `ours` is exactly today's default, explicit options override a preset.
 
-mod common;
+use crate::common;
 
 use common::{twil, world};
 use serde_json::Value;

@@ -2,7 +2,7 @@
 //! crate and checked against the run's own files, `twil plan --record`, and a WebSocket
 //! client subscribed to `twil simulate --live` (see docs/recording.md).
 
-mod common;
+use crate::common;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{BufRead, BufReader};

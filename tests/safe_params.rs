@@ -5,7 +5,7 @@
 //! The simulations go through `setup_from_args`, so each one also proves the check accepted
 //! its values. About 30 missions of up to 900 simulated seconds each.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
@@ -230,7 +230,7 @@ fn speeds_and_radii_beyond_the_bounds_are_refused_naming_file_line_and_bound() {
 /// modes, sonar ranges 1.5-6 m, 31 speeds from 0.05 m/s to the bound, at the worlds' radii
 /// (1 488 missions, about 40 s). Prints the counts; fails if they grow past what the docs
 /// state (the single-ray sonar's unseen wall ends: issue 13's beam sonar is to close them).
-/// `cargo test --release -p twil-host --test safe_params -- collision_grid --nocapture`
+/// `cargo test --release -p twil-host --test suite safe_params::collision_grid -- --nocapture`
 #[test]
 fn collision_grid() {
     let dir = tempfile::tempdir().unwrap();

@@ -3,7 +3,7 @@
 //! Most call the simulator as a library (fast, and the result can be inspected); the JSON
 //! shape, the output files, determinism and bad inputs go through the `twil` binary.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeSet;
 use std::path::Path;

@@ -3,7 +3,7 @@
 //! bundled worlds and the lab do not collide, in `twil simulate` with either preset and through
 //! `twil mission --remote sim`. The single ray with the filter collides (docs/robot-model.md).
 
-mod common;
+use crate::common;
 
 use clap::Parser;
 use twil_host::cmd::simulate::{setup_from_args, Args};
