@@ -18,6 +18,10 @@
 //! lists the docs whose examples are counted but not run yet. `SNAPSHOTS=overwrite` rewrites the
 //! output of every failing example in its doc from the program (elisions included: put them
 //! back by hand).
+//!
+//! Run time: 40 examples in 14 to 28 s (`--release`, the 2-core machine shared with other
+//! builds; one thread per doc, the longest being the two missions that write GIFs, about 10 s
+//! each).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -405,8 +409,11 @@ fn every_documented_example_runs_and_prints_what_the_doc_shows() {
 /// printed.
 fn rewrite(texts: &BTreeMap<String, String>, failures: &[(Example, String, String)]) {
     for (doc, text) in texts {
-        let mut mine: Vec<&(Example, String, String)> =
-            failures.iter().filter(|(e, _, _)| &e.doc == doc).collect();
+        // Only shown outputs are rewritten (a status-only example keeps showing none).
+        let mut mine: Vec<&(Example, String, String)> = failures
+            .iter()
+            .filter(|(e, _, _)| &e.doc == doc && e.expected.is_some())
+            .collect();
         if mine.is_empty() {
             continue;
         }
