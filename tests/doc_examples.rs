@@ -8,7 +8,7 @@
 //! with (0 otherwise); the lines up to the next `$ ` or the end of the block are its stdout
 //! followed by its stderr, compared with snapbox (`[..]` elides part of a line, `...` on its own
 //! line elides lines; the doc says why next to each). Commands run through `sh -c` with the
-//! built `twil` first on `PATH`, one doc at a time in a temporary directory that holds a link to
+//! built `twil` first on `PATH`, one doc at a time in a temporary directory that holds a copy of
 //! the repository's `worlds/` and empty `out/` and `docs/img/` folders: the examples of one doc
 //! see each other's files (a recording, then `twil view` of it) but never write into the
 //! repository.
@@ -19,7 +19,7 @@
 //! output of every failing example in its doc from the program (elisions included: put them
 //! back by hand).
 //!
-//! Run time: 40 examples in 14 to 28 s (`--release`, the 2-core machine shared with other
+//! Run time: 52 examples in 14 to 28 s (`--release`, the 2-core machine shared with other
 //! builds; one thread per doc, the longest being the two missions that write GIFs, about 10 s
 //! each).
 
@@ -242,7 +242,16 @@ fn skip_reason(example: &Example) -> Option<usize> {
 /// A temporary directory the examples of one doc run in.
 fn sandbox() -> tempfile::TempDir {
     let dir = tempfile::tempdir().expect("temporary directory");
-    std::os::unix::fs::symlink(repo().join("worlds"), dir.path().join("worlds")).expect("worlds");
+    // A copy (72 KB), not a link: an example that writes into `worlds/` cannot change the
+    // repository's.
+    let worlds = dir.path().join("worlds");
+    std::fs::create_dir_all(&worlds).expect("worlds/");
+    for entry in std::fs::read_dir(repo().join("worlds")).expect("worlds/") {
+        let from = entry.expect("worlds/ entry").path();
+        if from.is_file() {
+            std::fs::copy(&from, worlds.join(from.file_name().expect("name"))).expect("copy");
+        }
+    }
     std::fs::create_dir_all(dir.path().join("out")).expect("out/");
     std::fs::create_dir_all(dir.path().join("docs/img")).expect("docs/img/");
     dir
