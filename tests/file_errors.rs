@@ -280,15 +280,17 @@ fn huge_joint_limits_name_the_file_line_and_field() {
     );
 }
 
-/// `twil --help` ends with the exit statuses and the environment variables, as the README
-/// shows them.
+/// `twil --help` lists the exit statuses and the environment variables (the README shows the
+/// whole list, checked by `tests/doc_examples.rs`).
 #[test]
 fn help_lists_exit_status_and_environment() {
     let o = common::twil().arg("--help").output().unwrap();
     assert!(o.status.success());
     let help = String::from_utf8_lossy(&o.stdout);
-    let expected = common::doc_output_block("README.md", "## Scripts: exit status and environment");
-    assert!(help.trim_end().ends_with(expected.trim_end()), "{help}");
+    assert!(
+        help.contains("Exit status:") && help.contains("Environment:"),
+        "{help}"
+    );
     for var in [
         "TWIL_QEMU_ELF",
         "TWIL_QEMU_LOG",

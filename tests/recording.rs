@@ -235,48 +235,6 @@ fn simulate_record_matches_the_run_summary_and_csv() {
     }
 }
 
-/// The README's `--record` example: same command, same output (the simulator and the MCAP
-/// writer are deterministic, so the size and counts are exact).
-#[test]
-fn readme_recording_example_matches() {
-    let command = "cargo run --release -p twil-host -- simulate --real worlds/office.da --params worlds/office.par --record out/office.mcap";
-    let expected = common::doc_output_block("README.md", command);
-
-    let tmp = tempfile::tempdir().unwrap();
-    let path = tmp.path().join("office.mcap");
-    let o = common::twil()
-        .args(["simulate", "--real"])
-        .arg(common::world("office.da"))
-        .arg("--params")
-        .arg(common::world("office.par"))
-        .arg("--record")
-        .arg(&path)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let stdout =
-        String::from_utf8_lossy(&o.stdout).replace(&path.display().to_string(), "out/office.mcap");
-    assert_eq!(stdout, expected);
-
-    // docs/recording.md's `twil view` example, on the same file.
-    let view = "view out/office.mcap --png docs/img/office-recording.png --at 120";
-    let expected = common::doc_output_block("docs/recording.md", view);
-    let png = tmp.path().join("view.png");
-    let o = common::twil()
-        .arg("view")
-        .arg(&path)
-        .arg("--png")
-        .arg(&png)
-        .args(["--at", "120"])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let stdout = String::from_utf8_lossy(&o.stdout)
-        .replace(&path.display().to_string(), "out/office.mcap")
-        .replace(&png.display().to_string(), "docs/img/office-recording.png");
-    assert_eq!(stdout, expected);
-}
-
 #[test]
 fn mission_record_follows_the_telemetry() {
     let tmp = tempfile::tempdir().unwrap();

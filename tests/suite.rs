@@ -1,5 +1,5 @@
 //! The scenario and end-to-end tests of the `twil` host package, one module per subject, built
-//! as one test binary: one link instead of sixteen, and the slow subjects (QEMU missions,
+//! as one test binary: one link instead of seventeen, and the slow subjects (QEMU missions,
 //! bad links, safe parameters) run beside the quick ones instead of one after the other.
 //!
 //! Run one subject with its module name as the filter, e.g.
@@ -12,6 +12,7 @@ mod classic_bug;
 mod classic_fields;
 mod classic_geometric;
 mod cspace_seed000;
+mod doc_examples;
 mod file_errors;
 mod firmware_qemu;
 mod firmware_requests;

@@ -36,25 +36,3 @@ pub fn plan_args(world: Option<PathBuf>, params: PathBuf) -> twil_host::cmd::pla
         remote: None,
     }
 }
-
-/// The first ```` ```text ```` block after `marker` in the repository file `doc` (e.g.
-/// `README.md`, `docs/recording.md`): the output a documented command is expected to print.
-/// Panics, naming the file and the marker, when either is missing.
-pub fn doc_output_block(doc: &str, marker: &str) -> String {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join(doc);
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let at = text
-        .find(marker)
-        .unwrap_or_else(|| panic!("{doc}: no `{marker}`"));
-    let block = &text[at..];
-    let start = block
-        .find("```text\n")
-        .unwrap_or_else(|| panic!("{doc}: no output block after `{marker}`"))
-        + "```text\n".len();
-    let end = block[start..]
-        .find("```")
-        .unwrap_or_else(|| panic!("{doc}: unclosed output block after `{marker}`"));
-    block[start..start + end].to_string()
-}
