@@ -47,6 +47,7 @@ fn paths_are_collision_free_and_voronoi_keeps_the_largest_clearance() {
             Method::Astar,
             Method::Anyangle,
             Method::Voronoi,
+            Method::Quadtree,
             Method::Potential,
         ] {
             let run = classic::run(m, &w, &Options::default()).unwrap();
