@@ -1,6 +1,6 @@
-//! Issue 15, item 8 (the geometric methods): the visibility graph and the trapezoidal
-//! decomposition on every bundled world, against the grid planners; walled-off goals; the work
-//! on a full `.da` (128 polygons, 1024 vertices).
+//! Issue 15, item 8 (the geometric methods): the visibility graph, the trapezoidal
+//! decomposition and the quadtree on every bundled world, against the grid planners; walled-off
+//! goals; the work on a full `.da` (128 polygons, 1024 vertices).
 
 use crate::common;
 
@@ -56,7 +56,8 @@ fn on_every_bundled_world_the_paths_are_free_and_the_visibility_graph_is_shortes
             assert_eq!(r.path.last(), Some(&world.params.goal));
             assert!((classic::polyline_length_m(&r.path) - r.length_m).abs() < 1e-3);
         }
-        for other in [&trap, &run(Method::Astar), &run(Method::Anyangle)] {
+        let quad = run(Method::Quadtree);
+        for other in [&trap, &quad, &run(Method::Astar), &run(Method::Anyangle)] {
             assert_eq!(other.status, Status::Found, "{name} {:?}", other.method);
             assert!(
                 vis.length_m <= other.length_m + 1e-3,
@@ -74,6 +75,32 @@ fn on_every_bundled_world_the_paths_are_free_and_the_visibility_graph_is_shortes
         assert!(trap.extra["adjacencies"].as_u64().unwrap() >= 1);
         assert!(vis.expanded >= 1 && trap.expanded >= 1);
         assert!(vis.memory_bytes > 0 && trap.memory_bytes > 0);
+    }
+}
+
+#[test]
+fn quadtree_finds_a_path_wherever_astar_does() {
+    for (name, w, h) in WORLDS.into_iter().chain([("trap", 15.0, 15.0)]) {
+        let world = bundled(name, w, h);
+        let run = |m| classic::run(m, &world, &Options::default()).expect("run");
+        let (astar, quad) = (run(Method::Astar), run(Method::Quadtree));
+        assert_eq!(quad.status, astar.status, "{name}");
+        let leaves = quad.extra["leaves"].as_u64().unwrap();
+        assert!(leaves > 1 && quad.extra["refinements"].as_u64().unwrap() >= 1);
+        // Only the leaves are stored: far less than the flat bit grid of the map.
+        assert_eq!(quad.memory_bytes as u64, leaves * 8, "{name}");
+        assert!(quad.memory_bytes < quad.extra["grid_bytes"].as_u64().unwrap() as usize);
+        assert!(!quad.overlay.cells.is_empty() && !quad.overlay.blocked_cells.is_empty());
+        if name == "enclosed" {
+            assert_eq!(quad.status, Status::Unreachable);
+            assert!(quad.path.is_empty());
+            continue;
+        }
+        assert_eq!(quad.status, Status::Found, "{name}");
+        assert_eq!(quad.path.first(), Some(&world.params.start));
+        assert_eq!(quad.path.last(), Some(&world.params.goal));
+        let c = classic::min_clearance_m(&world, &quad).expect("a path");
+        assert!(c >= -0.05, "{name}: clearance {c}");
     }
 }
 
@@ -200,6 +227,7 @@ fn twil_plan_prints_the_methods_fields() {
     for (planner, fields) in [
         ("visgraph", ["nodes", "edges"]),
         ("trapezoid", ["cells", "adjacencies"]),
+        ("quadtree", ["leaves", "refinements"]),
     ] {
         let out = common::twil()
             .args(["plan", "--planner", planner, "--json", "--world"])
@@ -244,10 +272,10 @@ fn compare_prints_a_row_per_method_and_draws_them() {
         String::from_utf8_lossy(&out.stderr)
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
-    // Header, separator and the eight methods.
+    // Header, separator and the nine methods.
     assert_eq!(
         stdout.lines().filter(|l| l.starts_with('|')).count(),
-        10,
+        11,
         "{stdout}"
     );
     // The picture has a panel per method and a legend.

@@ -19,6 +19,7 @@ pub mod bug;
 pub mod clearance;
 pub mod picture;
 pub mod potential;
+pub mod quadtree;
 pub mod trapezoid;
 pub mod visgraph;
 pub mod voronoi;
@@ -38,6 +39,8 @@ pub enum Method {
     Voronoi,
     /// Exact trapezoidal (vertical) cell decomposition by a sweep line.
     Trapezoid,
+    /// Quadtree approximate decomposition: EMPTY-leaf channel, MIXED leaves refined until one.
+    Quadtree,
     /// Potential field: attractive paraboloid plus repulsive term, gradient descent.
     Potential,
     /// Lumelsky's Bug, run in the simulator with the sonar (sensor-based, no map).
@@ -46,13 +49,14 @@ pub enum Method {
 
 impl Method {
     /// Every method, in the order of the comparison table.
-    pub const ALL: [Method; 8] = [
+    pub const ALL: [Method; 9] = [
         Method::Bfs,
         Method::Astar,
         Method::Anyangle,
         Method::Visgraph,
         Method::Voronoi,
         Method::Trapezoid,
+        Method::Quadtree,
         Method::Potential,
         Method::Bug,
     ];
@@ -66,6 +70,7 @@ impl Method {
             Method::Visgraph => "visgraph",
             Method::Voronoi => "voronoi",
             Method::Trapezoid => "trapezoid",
+            Method::Quadtree => "quadtree",
             Method::Potential => "potential",
             Method::Bug => "bug",
         }
@@ -211,6 +216,7 @@ pub fn run(method: Method, world: &World, options: &Options) -> anyhow::Result<R
         }
         Method::Visgraph => visgraph::run(world)?,
         Method::Trapezoid => trapezoid::run(world)?,
+        Method::Quadtree => quadtree::run(world)?,
         Method::Voronoi => voronoi::run(world)?,
         Method::Potential => potential::run(world)?,
         Method::Bug => bug::run(world, options)?,

@@ -150,6 +150,9 @@ pub fn why(method: Method) -> &'static str {
         Method::Trapezoid => {
             "Vertical trapezoids by a sweep line, through midpoints of shared edges"
         }
+        Method::Quadtree => {
+            "Square leaves split where mixed, until the empty ones join start and goal"
+        }
 
         Method::Potential => "Descent on an attractive paraboloid plus repulsion from obstacles",
         Method::Bug => "Drive at the goal, follow an obstacle's edge when the sonar blocks the way",

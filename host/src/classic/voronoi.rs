@@ -9,7 +9,7 @@
 //! `docs/classic.md`.
 
 use twil_core::classic::distance::DIST_PER_CELL;
-use twil_core::classic::voronoi::{self, VoronoiBuffers, RIDGE};
+use twil_core::classic::voronoi::{self, VoronoiBuffers, CONNECTOR, RIDGE};
 use twil_core::geom::PointM;
 
 use super::{polyline_length_m, Method, Run, Status};
@@ -98,9 +98,12 @@ pub fn run(world: &World) -> anyhow::Result<Run> {
         run.path = cells_to_path(world, &path[..report.path_cells]);
         run.length_m = polyline_length_m(&run.path);
     }
-    // The ridge as short edges between 8-adjacent ridge cells (each pair once).
+    // The roadmap (ridge, bridges and connectors) as short edges between 8-adjacent roadmap
+    // cells (each pair once).
     let w = g.width() as i32;
-    let ridge = |x: i32, y: i32| g.contains_xy(x, y) && flags[(y * w + x) as usize] & RIDGE != 0;
+    let ridge = |x: i32, y: i32| {
+        g.contains_xy(x, y) && flags[(y * w + x) as usize] & (RIDGE | CONNECTOR) != 0
+    };
     for i in 0..n {
         let c = g.cell_at(i);
         let (x, y) = (c.x as i32, c.y as i32);
@@ -120,6 +123,7 @@ pub fn run(world: &World) -> anyhow::Result<Run> {
     let e = &mut run.extra;
     e.insert("ridge_cells".into(), report.ridge_cells.into());
     e.insert("connector_cells".into(), report.connector_cells.into());
+    e.insert("bridge_cells".into(), report.bridge_cells.into());
     e.insert("components".into(), report.components.into());
     e.insert(
         "bottleneck_m".into(),

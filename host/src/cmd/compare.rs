@@ -35,7 +35,7 @@ pub struct Args {
     /// Map size in metres, WIDTHxHEIGHT (or one number for a square).
     #[arg(long, default_value = "15x15", value_parser = planning::parse_size)]
     pub size: SizeM,
-    /// Cell side in metres (grid planners, Voronoi, potential field).
+    /// Cell side in metres (grid planners, Voronoi, quadtree, potential field).
     #[arg(long, default_value_t = 0.05)]
     pub resolution: f32,
     /// Methods to run, comma-separated (default: all).

@@ -6,5 +6,6 @@ pub mod cell_heap;
 pub mod distance;
 pub mod grown;
 pub mod potential;
+pub mod quadtree;
 pub mod visgraph;
 pub mod voronoi;

@@ -17,6 +17,13 @@
 //!   single obstacle's concavity, e.g. a room whose walls all touch the border, where labels
 //!   alone give no ridge at all). Both cells of such a pair are marked, so the ridge is a
 //!   4-connected band one or two cells wide.
+//! - **Bridges** keep the roadmap connected. The 60° rule cuts a concavity's medial axis short
+//!   of the point where it meets the rest of the diagram (in `worlds/trap` the axis of the U
+//!   stops 0.25 m before the ridge between the U and the border, so a start inside the U had
+//!   no roadmap path out). From every ridge cell the distance is climbed (steepest ascent); a
+//!   climb that leaves the ridge and reaches another roadmap cell marks its cells as
+//!   [`CONNECTOR`]s, one that ends on a maximum off the roadmap marks nothing. A climb never
+//!   lowers the clearance, and each cell is climbed through once, so this is linear in cells.
 //! - **Retraction** climbs the distance (steepest ascent over the 8 neighbours) until it
 //!   reaches a ridge cell; the clearance never decreases on the way. If it stops on a plateau
 //!   or a maximum that is not marked, the shortest free path to the nearest ridge cell joins
@@ -41,6 +48,8 @@ use crate::plan::PlanStatus;
 pub const RIDGE: u8 = 1;
 /// Flag bit: the cell joins a retraction that stopped off the ridge to the ridge.
 pub const CONNECTOR: u8 = 2;
+/// Flag bit: a bridge climb went through the cell (each cell is climbed through once).
+const CLIMBED: u8 = 4;
 const PARENT_SHIFT: u8 = 4;
 /// Cost of an orthogonal step in the searches (a diagonal costs [`DIAGONAL_COST`]).
 pub const STEP_COST: u32 = 1000;
@@ -100,6 +109,8 @@ pub struct VoronoiReport {
     pub ridge_cells: usize,
     /// Connector cells added for retractions that stopped off the ridge.
     pub connector_cells: usize,
+    /// Connector cells of the bridges between ridge ends and the rest of the roadmap.
+    pub bridge_cells: usize,
     /// Cells popped by the searches.
     pub expanded: u64,
     /// The widest roadmap path's bottleneck: the smallest distance along it, 1/16 cell.
@@ -325,6 +336,56 @@ impl<const W: usize> Ctx<'_, '_, W> {
         }
     }
 
+    /// The free 8-neighbour of `i` with the largest distance, if larger than `i`'s own.
+    fn ascent(&self, i: usize) -> Option<usize> {
+        let mut best = (*self.dist.get(i)?, i);
+        for d in 0..NEIGHBOURS_8.len() {
+            if let Some((j, _)) = self.step(i, d) {
+                if self.dist[j] > best.0 {
+                    best = (self.dist[j], j);
+                }
+            }
+        }
+        (best.1 != i).then_some(best.1)
+    }
+
+    /// Climb from every ridge cell; keep the climbs that leave the ridge and reach the roadmap
+    /// again as connector cells (see the module doc). Returns the cells added.
+    fn bridge_ridge_ends(&mut self) -> usize {
+        let mut added = 0;
+        for i in 0..self.flags.len() {
+            if self.flags[i] & RIDGE == 0 {
+                continue;
+            }
+            let (mut cur, mut marked, mut joined) = (i, 0usize, false);
+            while let Some(j) = self.ascent(cur) {
+                let f = self.flags[j];
+                if f & (RIDGE | CONNECTOR) != 0 {
+                    joined = true;
+                    break;
+                }
+                if f & CLIMBED != 0 {
+                    break; // an earlier climb from here ended off the roadmap
+                }
+                self.flags[j] |= CLIMBED | CONNECTOR;
+                marked += 1;
+                cur = j;
+            }
+            if joined {
+                added += marked;
+                continue;
+            }
+            // A dead end: the climb is deterministic, so walk it again and unmark it.
+            let mut cur = i;
+            for _ in 0..marked {
+                let Some(j) = self.ascent(cur) else { break };
+                self.flags[j] &= !CONNECTOR;
+                cur = j;
+            }
+        }
+        added
+    }
+
     fn on_roadmap(&self, i: usize) -> bool {
         self.flags
             .get(i)
@@ -433,6 +494,7 @@ pub fn plan<const W: usize>(
         path_cells: 0,
         ridge_cells,
         connector_cells: 0,
+        bridge_cells: 0,
         expanded: 0,
         bottleneck: 0,
         components,
@@ -459,6 +521,7 @@ pub fn plan<const W: usize>(
         expanded: 0,
     };
     let _ = ctx.h;
+    report.bridge_cells = ctx.bridge_ridge_ends();
     if s == t {
         if let Some(p) = path.first_mut() {
             *p = s as u32;
