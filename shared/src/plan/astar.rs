@@ -121,7 +121,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
 
 /// Cell-by-cell A* with the octile heuristic, a lazy-deletion queue by reduced-cost class
 /// ([`ClassQueue`]) and the
-/// *arrival pruning* of successors (see the module docs): a closed cell pushes only the
+/// *arrival pruning* of successors (see docs/planners.md): a closed cell pushes only the
 /// neighbours that no other cell covers with a key no larger. The scratch must hold the map
 /// ([`Planner::copy_map`]).
 ///
@@ -263,7 +263,7 @@ pub(super) fn astar_loop<
         let (above, cur, below) = map.windows(index, x, y);
         let window = |w: u32| u32::from(NIBBLE_WINDOWS[(w & 0xFFF) as usize]);
         let m = window(below) | window(cur) << 6 | window(above) << 12;
-        // The targets by arrival step (arrival pruning, see the module docs), each tested
+        // The targets by arrival step (arrival pruning, see docs/planners.md), each tested
         // and pushed with constant offsets: straight on, plus the forced side and diagonal
         // neighbours after a side step; the two sides and the diagonal after a diagonal
         // step; all eight from the start.
@@ -321,7 +321,7 @@ pub(super) fn astar_loop<
                 }
             }};
         }
-        // Corridor contraction (see "Corridors" in the module docs): a cell with one or
+        // Corridor contraction (see "Corridors" in docs/planners.md): a cell with one or
         // two legal neighbours, reached by a side step, has at most one continuation. Walk
         // along the chain of such cells, closing each with its step, up to the first cell
         // that is not one (pushed), the goal or a cell on the map border (pushed), a dead
@@ -337,7 +337,7 @@ pub(super) fn astar_loop<
             let (end, steps, closed) = walk_corridor(map, goal, index, node, rest);
             expanded += closed;
             if end != NIL {
-                // Plain adds: keys are u32 (see "Complexity" in the module docs).
+                // Plain adds: keys are u32 (see "Complexity" in docs/planners.md).
                 let g = state.last.wrapping_sub(h(x as u32, y as u32));
                 let wg = g.wrapping_add(steps.wrapping_mul(STRAIGHT_COST));
                 let key = wg.wrapping_add(h((end >> 4) & 0xFFF, end >> 16));

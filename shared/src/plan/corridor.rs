@@ -42,7 +42,7 @@ pub(super) fn corridor_index(m: u32) -> usize {
 /// walk about 0.15 cells per walk, a maze of 1-cell corridors dozens).
 pub(super) const WALK_GIVE_UP_CREDIT: i32 = -64;
 
-/// Walk a chain of corridor cells (see "Corridors" in the module docs) from the closed cell
+/// Walk a chain of corridor cells (see "Corridors" in docs/planners.md) from the closed cell
 /// `index` (entry `node`, interior) along its open side `rest` (bit `code - 1`, at most one
 /// bit; 0 for a dead end): each corridor cell is closed with its step code. Returns the entry
 /// of the cell to push at the end (`NIL` when nothing is to be pushed: a dead end or a closed

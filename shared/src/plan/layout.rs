@@ -161,7 +161,7 @@ impl CellMap for Flat<'_> {
 pub(super) const FRAMED_WORDS: usize = (1 << 14) + 1;
 
 /// The least scratch (32-bit words) with which the cell-by-cell A* uses its framed layout
-/// (grids up to about 360 × 360 cells; see the module docs): the MCU's planner size.
+/// (grids up to about 360 × 360 cells; see docs/planners.md): the MCU's planner size.
 pub const FRAMED_SCRATCH_WORDS: usize = FRAMED_WORDS;
 
 /// The framed layout: rows padded to whole words with at least one [`BLOCKED`] nibble (the

@@ -23,7 +23,8 @@
 //!   pruning and the sweep-band check (`prune.rs`), tests by subject (`tests/`); costs per
 //!   piece in `#complexity`.
 //!
-//! Budget: 5 M Cortex-M4 instructions per 300 × 300 plan (`cargo xtask mcu-bench` fails past it).
+//! Budget: 5 M Cortex-M4 instructions per 300 × 300 plan (`cargo xtask mcu-bench` fails past
+//! it).
 //!
 //! ```
 //! use twil_core::geom::PointM;

@@ -26,7 +26,6 @@ impl OpenEntry {
 }
 
 /// End of a list of the open list.
-/// End of a list of the open list.
 pub(super) const NIL: u32 = u32::MAX;
 
 /// The open list as the search loop sees it: [`ClassQueue`] (linked lists over the pool, the

@@ -17,16 +17,6 @@ pub(super) const RING_SHARES: [u32; CLASSES] = [0, 0, 8, 30, 104, 4];
 /// Entries of the far list of a [`RingQueue`], in 64ths of the pool (at least one entry).
 pub(super) const RING_FAR_SHARE: u32 = 2;
 
-/// The open list of [`ClassQueue`] (same classes, same order of pops) on fixed *rings* instead
-/// of linked lists: FIFO class `c` is a ring buffer of `(key, node)` in the `f` and `node`
-/// fields of its own range of pool slots (capacities by [`RING_SHARES`]), the stack of class 0
-/// lives in the `next` fields of the pool (up to one entry per slot), the far list is a sorted
-/// array at the pool's front (smallest key last). No free list, no links: a push writes one
-/// slot and moves a tail, a pop reads one slot and moves a head. When a ring (or the far
-/// array) is full, the entries of closed cells are dropped from all (each keeps its order); if
-/// the ring is then still more than 7/8 full the queue gives up (`reclaim_and_push` returns
-/// `None`) and the caller runs the search again with a [`ClassQueue`], so results never depend
-/// on the ring capacities.
 /// One ring of a [`RingQueue`]: next slot to pop (`head`), next slot to write (`tail`;
 /// `head == tail`: empty, and one slot stays unused so that a full ring is told apart), the
 /// end of its slots and its reduced cost (a pushed key is the last popped key plus `cost`).
@@ -38,6 +28,16 @@ pub(super) struct Ring {
     pub(super) cost: u32,
 }
 
+/// The open list of [`ClassQueue`] (same classes, same order of pops) on fixed *rings* instead
+/// of linked lists: FIFO class `c` is a ring buffer of `(key, node)` in the `f` and `node`
+/// fields of its own range of pool slots (capacities by [`RING_SHARES`]), the stack of class 0
+/// lives in the `next` fields of the pool (up to one entry per slot), the far list is a sorted
+/// array at the pool's front (smallest key last). No free list, no links: a push writes one
+/// slot and moves a tail, a pop reads one slot and moves a head. When a ring (or the far
+/// array) is full, the entries of closed cells are dropped from all (each keeps its order); if
+/// the ring is then still more than 7/8 full the queue gives up (`reclaim_and_push` returns
+/// `None`) and the caller runs the search again with a [`ClassQueue`], so results never depend
+/// on the ring capacities.
 pub(super) struct RingQueue<'a> {
     pub(super) pool: &'a mut [OpenEntry],
     /// The hot state of ring `c` in one place (one base address for the loop).

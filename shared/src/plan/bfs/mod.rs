@@ -1,4 +1,7 @@
-//! Bit-parallel layered breadth-first search (see the module doc of [`super`], "BFS").
+//! Bit-parallel layered breadth-first search (see `docs/planners.md`,
+//! "BFS: layered, bit-parallel"). This file: the scratch layout, the free bits, and the
+//! planner's entry points (layered search, the scalar restart in narrow frontiers, the path
+//! rebuild); the search state is in `layers.rs`, the per-word kernel in `kernel.rs`.
 //!
 //! The search works on whole 32-cell words: the layer-`k + 1` cells of a word are found from
 //! the layer-`k` cells of the same word and of the rows below and above with a few shifts,
@@ -26,13 +29,13 @@
 //!
 //! The layer code is 0 for a cell not reached, else `layer mod 3 + 1` (the layer of the side
 //! that reached it). The sides alternate, one layer each; a layer stops the search when it
-//! reaches a cell of the other side (see the module doc of [`super`] for why that gives the
-//! fewest steps). When `FREE` does not fit in the scratch, the free bits are read from the
-//! grid's own packed bits instead (a funnel shift per word: slower, same result); when `SIDE`
-//! does not fit either (narrow grids, where the padding wastes most), the search runs from the
-//! start only, to the goal's layer. The layered search uses no queue entries; the scalar BFS
-//! it falls back to in narrow maps ([`NARROW_CHECK_LAYER`]) uses the nibble layout of
-//! [`super`] and the queue.
+//! reaches a cell of the other side (see `docs/planners.md`, "From both ends", for why that
+//! gives the fewest steps). When `FREE` does not fit in the scratch, the free bits are read
+//! from the grid's own packed bits instead (a funnel shift per word: slower, same result);
+//! when `SIDE` does not fit either (narrow grids, where the padding wastes most), the search
+//! runs from the start only, to the goal's layer. The layered search uses no queue entries;
+//! the scalar BFS it falls back to in narrow maps ([`NARROW_CHECK_LAYER`]) uses the nibble
+//! layout of `codes.rs` and the queue.
 
 use super::{
     scratch_words_for_cells, set_nibble, PathCells, PathOut, PlanError, Planner, Search,
