@@ -6,9 +6,10 @@
 //! [`NIBBLE_WINDOWS`] into an 18-bit mask (the `Z_*` / `O_*` bits below); one arm per arrival
 //! step pushes with constant offsets. Generic over the layout, the open list and two const
 //! switches, so each instance tests nothing per cell that it could know at compile time.
-//! Measured effect (`cargo xtask mcu-bench`, 300 × 300): about 232 Cortex-M4 instructions per
-//! expanded cell, 0.84 pushes per expanded cell on 20 % random obstacles; see
-//! docs/planners.md, "Cell-by-cell A\*: the expansion loop".
+//! Measured (`cargo xtask mcu-bench`, 300 × 300, 2026-12-03): 159 Cortex-M4 instructions per
+//! expanded cell on 20 % random obstacles (4.59 M a plan), 158 in the maze (3.13 M, walked
+//! corridor cells counted as expanded); the steps that got there: docs/planners.md,
+//! "Cell-by-cell A\*: the expansion loop" and the sections before it.
 
 use super::*;
 
