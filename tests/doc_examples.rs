@@ -14,8 +14,7 @@
 //! repository.
 //!
 //! A `twil` command anywhere else (a `sh` block, or a `$ twil` line in another block) fails this
-//! test unless [`SKIPPED`] lists it with the reason it cannot run here; [`NOT_CONVERTED_YET`]
-//! lists the docs whose examples are counted but not run yet. `SNAPSHOTS=overwrite` rewrites the
+//! test unless [`SKIPPED`] lists it with the reason it cannot run here. `SNAPSHOTS=overwrite` rewrites the
 //! output of every failing example in its doc from the program (elisions included: put them
 //! back by hand).
 //!
@@ -80,10 +79,6 @@ const SKIPPED: &[(&str, &str, &str)] = &[
         "a loop over placeholders (SPEEDS, P.par, R): the recipe for a table, not one command",
     ),
 ];
-
-/// Docs another branch is rewriting: their examples are counted, not run, until the lead
-/// converts them to ```` ```console ```` blocks and empties this list.
-const NOT_CONVERTED_YET: &[&str] = &["docs/classic.md", "docs/planners.md"];
 
 /// One command example of a doc.
 #[derive(Debug, Clone)]
@@ -215,7 +210,7 @@ fn parse(doc: &str, text: &str) -> (Vec<Example>, Vec<Example>) {
             // synopsis such as `twil plan --world W.da` is not an example).
             let shell = matches!(lang, "sh" | "bash" | "shell");
             let is_prompt = trimmed.starts_with("$ ");
-            if (shell || is_prompt || NOT_CONVERTED_YET.contains(&doc)) && runs_twil(trimmed) {
+            if (shell || is_prompt) && runs_twil(trimmed) {
                 elsewhere.push(Example {
                     doc: doc.to_string(),
                     line: i + 1,
@@ -317,17 +312,12 @@ fn every_documented_example_runs_and_prints_what_the_doc_shows() {
     let mut texts = BTreeMap::new();
     let mut to_run: Vec<Vec<Example>> = Vec::new();
     let mut skipped = Vec::new();
-    let mut not_converted = Vec::new();
     let mut unlisted = Vec::new();
     let mut used = vec![false; SKIPPED.len()];
     for doc in docs() {
         let text = std::fs::read_to_string(repo().join(&doc)).expect("doc");
         let (console, elsewhere) = parse(&doc, &text);
         texts.insert(doc.clone(), text);
-        if NOT_CONVERTED_YET.contains(&doc.as_str()) {
-            not_converted.extend(console.into_iter().chain(elsewhere));
-            continue;
-        }
         let mut runs = Vec::new();
         for example in console.into_iter().chain(elsewhere) {
             match skip_reason(&example) {
@@ -370,19 +360,12 @@ fn every_documented_example_runs_and_prints_what_the_doc_shows() {
     let ran: usize = to_run.iter().map(Vec::len).sum();
     skipped.sort_by_key(|(e, _)| (e.doc.clone(), e.line));
     println!(
-        "documented examples: {ran} ran, {} skipped, {} not converted yet ({:.1} s)",
+        "documented examples: {ran} ran, {} skipped ({:.1} s)",
         skipped.len(),
-        not_converted.len(),
         started.elapsed().as_secs_f64()
     );
     for (example, reason) in &skipped {
         println!("  skipped {}:{}: {reason}", example.doc, example.line);
-    }
-    for example in &not_converted {
-        println!(
-            "  not converted yet {}:{}: {}",
-            example.doc, example.line, example.command
-        );
     }
 
     if overwrite {
