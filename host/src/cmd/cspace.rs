@@ -16,12 +16,12 @@ use anyhow::{bail, Context};
 use serde::Serialize;
 use twil_core::cspace::{
     map::{ConfigMap, MapError},
-    rob::{parse_rob, Robot},
+    rob::Robot,
     search::{path_is_free, path_length, NodeSet, Search, SearchReport, SearchStatus},
-    text::FileError as TextError,
     tra::Trajectory,
 };
 
+use crate::cspace::load::{load_map, load_robot, load_tra};
 use crate::cspace::render::{self, Scene};
 use crate::files::{self, FileError};
 
@@ -141,32 +141,6 @@ pub fn parse_pair(s: &str) -> Result<[f32; 2], String> {
             "expected two numbers separated by a comma, got `{s}`"
         )),
     }
-}
-
-/// A reader's error named with the file (escaped, on the file's last line at most).
-fn file_error(path: &Path, text: &str, e: &TextError) -> FileError {
-    FileError::at_line(path, text, e.line, &e.to_string())
-}
-
-/// Read and check a `.ROB` file (at most [`files::ROB`] bytes); errors name the file, line,
-/// field and value.
-pub fn load_robot(path: &Path) -> Result<Robot, FileError> {
-    let text = files::read_text(path, files::ROB)?;
-    parse_rob(&text).map_err(|e| file_error(path, &text, &e))
-}
-
-/// Read a `.MAP` file (at most [`files::MAP`] bytes); which joints wrap comes from the robot.
-pub fn load_map(path: &Path, robot: &Robot) -> Result<ConfigMap, FileError> {
-    let text = files::read_text(path, files::MAP)?;
-    let wraps = [robot.joints[0].wraps(), robot.joints[1].wraps()];
-    let (_, map) = ConfigMap::parse_map(&text, wraps).map_err(|e| file_error(path, &text, &e))?;
-    Ok(map)
-}
-
-/// Read a `.TRA` file (at most [`files::TRA`] bytes).
-pub fn load_tra(path: &Path) -> Result<Trajectory, FileError> {
-    let text = files::read_text(path, files::TRA)?;
-    Trajectory::parse(&text).map_err(|e| file_error(path, &text, &e))
 }
 
 /// Build the map of `robot` (read from `rob`). A map too large for its joint limits names the
@@ -349,6 +323,7 @@ pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+    use twil_core::cspace::rob::parse_rob;
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(200))]

@@ -532,7 +532,7 @@ mod tests {
     #[test]
     fn both_panels_have_scale_bars_in_their_units_and_the_legend_shows_every_mark() {
         let rob = format!("{}/../worlds/seed000-nav.ROB", env!("CARGO_MANIFEST_DIR"));
-        let robot = crate::cmd::cspace::load_robot(Path::new(&rob)).unwrap();
+        let robot = crate::cspace::load::load_robot(Path::new(&rob)).unwrap();
         let map = ConfigMap::build(&robot, [2.0, 2.0]).unwrap();
         let path = [[-60.0, -35.0], [40.0, 97.0], [140.0, -5.0]];
         let compare = [[-60.0, -35.0], [140.0, -5.0]];

@@ -3,8 +3,15 @@ extern crate std;
 use std::boxed::Box;
 
 use super::*;
+use crate::control::Pose;
+use crate::geom::PointM;
+use crate::grid::GridGeometry;
+use crate::math::hypot;
+use crate::plan::{PlanError, PlanReport, PlanStatus, PlannerKind};
 use crate::plant::Plant;
-use crate::world::Obstacles;
+use crate::robot::RobotConfig;
+use crate::sonar::{SweepKind, SweepPlan};
+use crate::world::{Obstacles, Params};
 
 fn square(x0: f32, y0: f32, x1: f32, y1: f32) -> [PointM; 4] {
     [
@@ -621,32 +628,6 @@ mod props {
             }
         }
     }
-}
-
-#[test]
-fn the_prefix_starts_at_the_origin_without_the_points_near_it() {
-    let p = |x: f32| PointM::new(x, 0.0);
-    let origin = PointM::new(-1.0, 0.0);
-    let xs = |v: &Vec<PointM, 4>| v.iter().map(|q| q.x_m).collect::<std::vec::Vec<_>>();
-    // Nothing dropped: the origin goes in front.
-    let mut v: Vec<PointM, 4> = Vec::from_slice(&[p(1.0), p(2.0)]).unwrap();
-    start_with(&mut v, 0, origin);
-    assert_eq!(xs(&v), [-1.0, 1.0, 2.0]);
-    // Full: the last point falls off.
-    let mut v: Vec<PointM, 4> = Vec::from_slice(&[p(1.0), p(2.0), p(3.0), p(4.0)]).unwrap();
-    start_with(&mut v, 0, origin);
-    assert_eq!(xs(&v), [-1.0, 1.0, 2.0, 3.0]);
-    // Two dropped.
-    let mut v: Vec<PointM, 4> = Vec::from_slice(&[p(1.0), p(2.0), p(3.0), p(4.0)]).unwrap();
-    start_with(&mut v, 2, origin);
-    assert_eq!(xs(&v), [-1.0, 3.0, 4.0]);
-    // All dropped; empty.
-    let mut v: Vec<PointM, 4> = Vec::from_slice(&[p(1.0), p(2.0)]).unwrap();
-    start_with(&mut v, 2, origin);
-    assert_eq!(xs(&v), [-1.0]);
-    let mut v: Vec<PointM, 4> = Vec::new();
-    start_with(&mut v, 0, origin);
-    assert_eq!(xs(&v), [-1.0]);
 }
 
 #[test]
