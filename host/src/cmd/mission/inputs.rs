@@ -1,0 +1,179 @@
+//! `twil mission`'s inputs: the files read and checked, and the mission set-up sent to the
+//! device (with the explanation of a set-up the device refuses).
+
+use super::*;
+
+/// What the files give, checked.
+pub struct Inputs {
+    /// The mission.
+    pub params: Params,
+    /// Obstacles known before the first sweep.
+    pub known: Option<Obstacles>,
+    /// The real world of a simulated device.
+    pub real: Option<Obstacles>,
+    /// The map.
+    pub geometry: GridGeometry,
+    /// The robot (its body radius measures the clearance).
+    pub robot: RobotConfig,
+}
+
+/// Read and check the files and numbers of `args` (errors name the file and line, or the
+/// option).
+pub fn read_inputs(args: &Args) -> Result<Inputs> {
+    let params = read_par(&args.params)?;
+    let known = args.known.as_deref().map(read_da).transpose()?;
+    let real = args.real.as_deref().map(read_da).transpose()?;
+    let (w, h) = parse_size(&args.size)?;
+    let geometry = GridGeometry::from_size_m(w, h, DEFAULT_RESOLUTION_M)
+        .map_err(|e| anyhow!("--size {}: {e}", args.size))?;
+    if geometry.cell_count() > 400 * 400 {
+        bail!(
+            "--size {}: {} x {} cells; at most 400 x 400",
+            args.size,
+            geometry.width(),
+            geometry.height()
+        );
+    }
+    let robot = args
+        .sonar_model
+        .apply(RobotConfig {
+            sonar_range_m: args.sonar_range,
+            sonar_noise_std_m: args.sonar_noise,
+            noise_seed: args.seed,
+            ..RobotConfig::default()
+        })
+        .with_planning_radius_m(params.robot_radius_m);
+    if let Err(e) = robot.validate() {
+        bail!("robot config: {e}");
+    }
+    // The speed and the radius against what this robot (its sonar range) can be trusted
+    // with, naming the .par's line.
+    crate::world_io::read_par_for(&args.params, &robot)?;
+    let time_limit_s = args.time_limit_s();
+    if !(time_limit_s.is_finite() && time_limit_s > 0.0) {
+        bail!("--time-limit: must be a positive number of seconds, got {time_limit_s}");
+    }
+    if !(args.silence.is_finite() && args.silence > 0.0 && args.silence <= 3600.0) {
+        bail!(
+            "--silence: must be between 0 and 3600 seconds, got {}",
+            args.silence
+        );
+    }
+    if !args.link_loss().is_valid() {
+        bail!(
+            "--link-timeout-ms: must be 0 (never) or {} to {} milliseconds, got {}",
+            LinkLossPolicy::MIN_TIMEOUT_MS,
+            LinkLossPolicy::MAX_TIMEOUT_MS,
+            args.link_timeout_ms
+        );
+    }
+    for (which, p) in [("start", params.start), ("goal", params.goal)] {
+        if geometry.cell_of(p).is_err() {
+            bail!(
+                "{}: the {which} ({}, {}) lies off the {} m map",
+                args.params.display(),
+                p.x_m,
+                p.y_m,
+                args.size
+            );
+        }
+    }
+    Ok(Inputs {
+        params,
+        known,
+        real,
+        geometry,
+        robot,
+    })
+}
+
+/// The `SetMission` of `args` and `params`.
+impl Args {
+    /// The loop choices of this run: `--preset`'s, with the explicit options applied.
+    pub fn choices(&self) -> crate::cmd::preset::LoopChoices {
+        self.loop_args.resolve(Some(&self.follow))
+    }
+
+    /// `--time-limit`, or the preset's.
+    pub fn time_limit_s(&self) -> f32 {
+        self.time_limit
+            .unwrap_or(self.loop_args.preset.time_limit_s())
+    }
+}
+
+pub fn mission_setup(args: &Args, params: &Params) -> MissionSetup {
+    MissionSetup {
+        mode: mission_mode(args.mode),
+        planner: args.choices().planner_kind(),
+        start: params.start,
+        initial_heading_rad: params.initial_heading_deg.to_radians(),
+        goal: params.goal,
+        speed_m_s: params.speed_m_s,
+        sonar_range_m: args.sonar_range,
+        time_limit_s: args.time_limit_s(),
+        constant_depth_filter: args.choices().rcd,
+        trust_seen_space: !args.choices().seed_prune,
+        noise_seed: args.seed,
+        sonar_noise_std_m: args.sonar_noise,
+        link_loss: args.link_loss(),
+        sonar_beam: args.sonar_model.sonar == SonarArg::Beam,
+        beam_half_angle_deg: args.sonar_model.beam_half_angle,
+        incidence_limit_deg: args.sonar_model.incidence_limit,
+        settle: args.choices().settle,
+        reference_feed_forward: args.choices().reference_feed_forward,
+        turn_in_place: args.choices().turn_in_place,
+        sweep_layout: args.choices().sweep_layout,
+    }
+}
+
+pub(super) fn mission_mode(mode: Mode) -> MissionMode {
+    match mode {
+        Mode::Stop => MissionMode::Stop,
+        Mode::Continuous => MissionMode::Continuous,
+    }
+}
+
+/// What the device says about a refused `SetMission`, naming the field and where it came from.
+pub(super) fn explain_bad_mission(args: &Args, error: &ErrorReply) -> String {
+    if error.code != ErrorCode::BadMission {
+        return format!("the device refused the mission: {error}");
+    }
+    if error.detail == 1 {
+        return format!(
+            "the device refused the mission: the start or the goal of {} lies off its map",
+            args.params.display()
+        );
+    }
+    let par = args.params.display();
+    let field = match error.value {
+        0 => "mode (--mode)".to_string(),
+        1 => "planner (--planner)".to_string(),
+        2 => format!("start ({par})"),
+        3 => format!("initial heading ({par})"),
+        4 => format!("goal ({par})"),
+        5 if error.limit > 0 => format!(
+            "speed ({par}; the robot's safe speed is at most {:.3} m/s)",
+            error.limit as f32 / 1000.0
+        ),
+        5 => format!("speed ({par})"),
+        6 => format!("sonar range (--sonar-range {})", args.sonar_range),
+        7 => format!("time limit (--time-limit {})", args.time_limit_s()),
+        11 => format!("sonar noise (--sonar-noise {})", args.sonar_noise),
+        14 => format!(
+            "beam half-angle (--beam-half-angle {})",
+            args.sonar_model.beam_half_angle
+        ),
+        15 => format!(
+            "incidence limit (--incidence-limit {})",
+            args.sonar_model.incidence_limit
+        ),
+        12 => format!("link timeout (--link-timeout-ms {})", args.link_timeout_ms),
+        100 => format!(
+            "planning radius ({par}; at most the sonar range minus {} m)",
+            twil_core::limits::MIN_PREFIX_M
+        ),
+        v if v >= 100 => format!("robot configuration field {} (see the device log)", v - 100),
+        v => format!("field {v}"),
+    };
+    format!("the device refused the mission: its {field} is not a valid value")
+}

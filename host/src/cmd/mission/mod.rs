@@ -1,0 +1,568 @@
+//! `twil mission`: the device runs the mission; the host uploads it, starts it, follows its
+//! telemetry and writes what `twil simulate` writes.
+//!
+//! ```text
+//! twil mission --remote sim --real worlds/office.da --params worlds/office.par --out out/m
+//! twil mission --remote qemu --real R.da --params P.par --known K.da --mode continuous --json
+//! twil mission --remote /dev/ttyUSB0 --params P.par --known K.da
+//! ```
+//!
+//! The session: `Hello` (same protocol version), `ClearMap`, `SetParams` (the `--size` map at
+//! 0.05 m cells, the `.par` radius), the known obstacles (`ObstacleChunk`), on a simulated
+//! device the real world (`ClearWorld`, `WorldChunk`), `SetMission`, `StartMission`; then the
+//! telemetry until `Finished`. The host rebuilds the robot's map from the known obstacles and
+//! the hits of each sweep, marked as the device marks them, for the pictures. Ctrl-C sends
+//! `AbortMission` and waits for `Finished` (the device has zeroed the motors by then). See
+//! `docs/mission.md`.
+//!
+//! Files: this one (arguments, the session, Ctrl-C), `inputs.rs` (the files read and the
+//! mission set-up), `follower.rs` (the telemetry followed into a trajectory, plans and
+//! pictures), `report.rs` (the JSON result and the files written).
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, bail, Context, Result};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde_json::json;
+use twil_core::control::Pose;
+use twil_core::failsafe::{LinkLossPolicy, LinkLossReaction, StopCause};
+use twil_core::geom::PointM;
+use twil_core::grid::{Grid400, GridGeometry, DEFAULT_RESOLUTION_M};
+use twil_core::link::{
+    Build, DeviceFrame, DeviceInfo, ErrorCode, ErrorReply, MapParams, MissionReport, MissionSetup,
+    PoseReport, Reply, Request, Telemetry, PROTOCOL_VERSION,
+};
+use twil_core::mission::{MissionMode, MissionPhase, MissionStatus};
+use twil_core::plant::Plant;
+use twil_core::robot::RobotConfig;
+use twil_core::world::{Obstacles, Params};
+
+use super::simulate::{parse_size, read_da, read_par, Mode, SonarArg, SonarArgs};
+use crate::cmd::preset::{FollowArgs, LoopArgs};
+use crate::record::telemetry::TelemetryRecorder;
+use crate::record::{RecordArgs, Recorder};
+use crate::remote::{Remote, RemoteSpec};
+use crate::sim::{output, ControlSample, SimResult, SimSetup, SimStatus, Snapshot, TrajectoryRow};
+
+mod follower;
+mod inputs;
+mod report;
+
+pub(crate) use follower::Follower;
+use follower::*;
+pub use inputs::*;
+pub use report::*;
+
+/// Arguments of `twil mission`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// The device: `sim` (in this process), `qemu`, `tcp:HOST:PORT` or a serial port.
+    #[arg(long, value_name = "DEVICE")]
+    pub remote: RemoteSpec,
+    /// The mission (.par): radius, speed, initial heading, start, goal.
+    #[arg(long, value_name = "P.par")]
+    pub params: PathBuf,
+    /// Obstacles known before the first sweep (.da).
+    #[arg(long, value_name = "K.da")]
+    pub known: Option<PathBuf>,
+    /// The real world (.da) of a simulated device (`sim`, `qemu`): required there, refused by
+    /// a board.
+    #[arg(long, value_name = "R.da")]
+    pub real: Option<PathBuf>,
+    /// Map size in metres, WIDTHxHEIGHT (0.05 m cells).
+    #[arg(long, default_value = "15x15", value_name = "WxH")]
+    pub size: String,
+    /// Stop-and-sweep or continuous sweeping.
+    #[arg(long, value_enum, default_value_t = Mode::Stop)]
+    pub mode: Mode,
+    /// Loop choices: `--preset`, `--planner`, `--rcd`, `--seed-prune`.
+    #[command(flatten)]
+    pub loop_args: LoopArgs,
+    /// Following choices: `--settle`, `--feed-forward`, `--turn-in-place`, `--sweep-readings`
+    /// (`SetMission` carries them all to the device).
+    #[command(flatten)]
+    pub follow: FollowArgs,
+    /// Write trajectory.csv, plan PNGs, mission.gif and summary.json here.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Print exactly one JSON object on stdout and nothing else.
+    #[arg(long)]
+    pub json: bool,
+    /// Seed of the simulated sonar noise (simulated devices).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Sonar range, metres (0.26 < range ≤ 6).
+    #[arg(long, default_value_t = 1.5)]
+    pub sonar_range: f32,
+    /// Standard deviation of the simulated sonar noise, metres (simulated devices).
+    #[arg(long, default_value_t = 0.0)]
+    pub sonar_noise: f32,
+    /// The simulated sonar (simulated devices).
+    #[command(flatten)]
+    pub sonar_model: SonarArgs,
+    /// Mission time limit, seconds of mission time [default: the preset's: 900; seed: 1800, its
+    /// 18.85 s settles].
+    #[arg(long)]
+    pub time_limit: Option<f32>,
+    /// Give up when the device sends nothing for this many seconds.
+    #[arg(long, default_value_t = 10.0, value_name = "S")]
+    pub silence: f32,
+    /// GIF scale, pixels per cell.
+    #[arg(long, default_value_t = 2)]
+    pub gif_scale: u32,
+    /// `--record FILE.mcap`, `--live [ADDR]`: the telemetry as Foxglove messages.
+    #[command(flatten)]
+    pub record: RecordArgs,
+    /// The device reacts (--on-link-loss) when it hears nothing from the host for this long,
+    /// milliseconds: 0 (never) or 200 to 3 600 000. The host sends a heartbeat
+    /// (`MissionStatus`) every quarter of it, at most every 500 ms.
+    #[arg(long, default_value_t = 2_000, value_name = "MS")]
+    pub link_timeout_ms: u32,
+    /// What the device does when the link is lost: stop (end the mission, motors at zero, hold)
+    /// or continue to the goal.
+    #[arg(long, value_enum, default_value_t = LinkLossArg::Stop)]
+    pub on_link_loss: LinkLossArg,
+}
+
+/// `--on-link-loss`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinkLossArg {
+    /// End the mission (`aborted`, cause "link lost"), motors at zero.
+    Stop,
+    /// Go on to the goal.
+    Continue,
+}
+
+impl Args {
+    /// The link-loss policy of `--link-timeout-ms` and `--on-link-loss`.
+    pub fn link_loss(&self) -> LinkLossPolicy {
+        LinkLossPolicy {
+            timeout_ms: self.link_timeout_ms,
+            reaction: match self.on_link_loss {
+                LinkLossArg::Stop => LinkLossReaction::StopAndHold,
+                LinkLossArg::Continue => LinkLossReaction::Continue,
+            },
+        }
+    }
+}
+
+/// Time between two heartbeats for a link timeout of `timeout_ms` (0: none): a quarter of it,
+/// at most 500 ms, so that three may be lost before the device reacts.
+pub fn heartbeat_period(timeout_ms: u32) -> Option<Duration> {
+    (timeout_ms > 0).then(|| Duration::from_millis((timeout_ms / 4).min(500) as u64))
+}
+
+/// Set by the Ctrl-C handler while a mission runs; the main loop then aborts the mission.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// A mission runs: Ctrl-C aborts it (otherwise Ctrl-C ends the tool, exit code 130).
+static FOLLOWING: AtomicBool = AtomicBool::new(false);
+
+fn on_ctrl_c() {
+    if FOLLOWING.load(Ordering::SeqCst) {
+        INTERRUPTED.store(true, Ordering::SeqCst);
+    } else {
+        eprintln!("twil: interrupted");
+        std::process::exit(130);
+    }
+}
+
+fn remote_name(spec: &RemoteSpec) -> String {
+    match spec {
+        RemoteSpec::Qemu => "qemu".into(),
+        RemoteSpec::Sim(0) => "sim".into(),
+        RemoteSpec::Sim(n) => format!("sim:{n}"),
+        RemoteSpec::Tcp(addr) => format!("tcp:{addr}"),
+        RemoteSpec::Serial(path) => path.clone(),
+    }
+}
+
+/// Check that `--real` fits the device: required by a simulated one, refused by a board.
+fn check_real(args: &Args, build: Build) -> Result<()> {
+    let name = remote_name(&args.remote);
+    match (build, &args.real) {
+        (Build::Hardware, Some(real)) => bail!(
+            "--real {}: `{name}` is a real robot, which drives in the real world; drop --real",
+            real.display()
+        ),
+        (Build::Qemu | Build::Host, None) => bail!(
+            "--real R.da is required with --remote {name}: the simulated robot needs a real world to drive in and its sonar to see"
+        ),
+        _ => Ok(()),
+    }
+}
+
+/// Run `twil mission`.
+pub fn run(args: Args) -> Result<crate::exit::Ending> {
+    let inputs = read_inputs(&args)?;
+    // A simulated device is known before connecting: refuse early.
+    match args.remote {
+        RemoteSpec::Sim(_) => check_real(&args, Build::Host)?,
+        RemoteSpec::Qemu => check_real(&args, Build::Qemu)?,
+        _ => {}
+    }
+    // A QEMU started here runs at -icount shift=3: 8 ns per instruction, no faster than the
+    // 168 MHz chip, so a control period met under QEMU is met on the board.
+    crate::remote::set_qemu_icount_shift(3);
+    let (mut remote, info) = Remote::connect(&args.remote)
+        .with_context(|| format!("--remote {}", remote_name(&args.remote)))?;
+    if info.protocol_version != PROTOCOL_VERSION {
+        bail!(
+            "the device speaks protocol {}, this host {}",
+            info.protocol_version,
+            PROTOCOL_VERSION
+        );
+    }
+    check_real(&args, info.build)?;
+    if inputs.geometry.cell_count() as u64 > info.grid_capacity_cells as u64 {
+        bail!(
+            "--size {}: the map has {} x {} cells but the device's grid holds {} cells",
+            args.size,
+            inputs.geometry.width(),
+            inputs.geometry.height(),
+            info.grid_capacity_cells
+        );
+    }
+    upload(&args, &inputs, &mut remote, info.build)?;
+
+    let bar = if args.json || !std::io::stderr().is_terminal() {
+        ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden())
+    } else {
+        let b = ProgressBar::new_spinner();
+        if let Ok(style) = ProgressStyle::with_template("{spinner} {msg}") {
+            b.set_style(style);
+        }
+        b.enable_steady_tick(Duration::from_millis(200));
+        b
+    };
+    // Ctrl-C from now on aborts the mission instead of killing the tool (a handler can only be
+    // set once per process: a second run in the same process keeps the first).
+    INTERRUPTED.store(false, Ordering::SeqCst);
+    FOLLOWING.store(true, Ordering::SeqCst);
+    let _ = ctrlc::set_handler(on_ctrl_c);
+    let mut follower = Follower::new(&inputs, args.out.is_some())?;
+    if args.record.wanted() {
+        let recorder = Recorder::open(args.record.record.as_deref(), args.record.live)?;
+        if let (Some(port), Some(addr)) = (recorder.live_port(), args.record.live) {
+            note(
+                &bar,
+                &format!(
+                    "twil: serving live on ws://{}:{port} (Foxglove: Open connection)",
+                    addr.ip()
+                ),
+            );
+        }
+        follower.record_into(recorder, &inputs);
+    }
+    let followed = match remote.call(Request::StartMission) {
+        Ok(Reply::Ack) => follow(&args, &mut remote, &mut follower, &bar),
+        Ok(other) => Err(anyhow!("unexpected reply to StartMission: {other:?}")),
+        Err(e) => Err(e.context("starting the mission")),
+    };
+    FOLLOWING.store(false, Ordering::SeqCst);
+    if followed.is_err() {
+        // The host gives up on a mission that may still be running: ask the device, once and
+        // briefly, to stop the motors (useless if the link is dead, harmless otherwise).
+        remote.set_timeout(Duration::from_secs(2));
+        let _ = remote.request(Request::AbortMission);
+    }
+    bar.finish_and_clear();
+    let link = crate::cmd::mission_link::LinkReport::of(&remote, follower.telemetry_gaps);
+    // Done with the device (QEMU, if any, ends here).
+    drop(remote);
+    // Close the recording even when following failed, so what arrived stays readable.
+    let recorded = match follower.recorder.take() {
+        Some(r) => Some(r.into_recorder().close()?),
+        None => None,
+    };
+    let interrupted = followed?;
+    let report = follower
+        .finished
+        .ok_or_else(|| anyhow!("the mission ended without a report"))?;
+
+    let min_clearance_m = inputs.real.as_ref().map(|real| {
+        follower
+            .trajectory
+            .iter()
+            .map(|row| Plant::new(&inputs.robot, row.pose).clearance_m(real))
+            .fold(f32::INFINITY, f32::min)
+    });
+    let outcome = Outcome {
+        report,
+        info,
+        distance_m: follower.distance_m,
+        min_clearance_m,
+        poses: follower.poses.len(),
+        interrupted,
+        link,
+    };
+    if let Some(dir) = &args.out {
+        write_outputs(dir, &args, &inputs, &outcome, follower)?;
+    }
+    if args.json {
+        println!("{}", result_json(&outcome));
+    } else {
+        let s = &report.stats;
+        println!(
+            "{}: {:.2} m travelled in {:.1} s of mission time; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {}",
+            report.status.as_str(),
+            outcome.distance_m,
+            s.time_s,
+            s.stops,
+            s.full_sweeps,
+            s.moving_sweeps,
+            s.plans,
+            outcome
+                .min_clearance_m
+                .map_or("unknown (no --real)".to_string(), |c| format!("{c:.3} m"))
+        );
+        println!(
+            "mcu: {} instructions per control step at most, {} per plan, {} B static RAM, {} B stack",
+            report.max_control_instructions,
+            report.max_plan_instructions,
+            info.static_ram_bytes,
+            report.stack_high_water_bytes
+        );
+        if report.stop_cause != StopCause::None {
+            println!("stopped by the device: {}", report.stop_cause.describe());
+        }
+        if let Some(dir) = &args.out {
+            println!("wrote {}", dir.display());
+        }
+    }
+    if let Some(summary) = &recorded {
+        summary.print(args.json);
+    }
+    if interrupted {
+        eprintln!(
+            "twil: interrupted (Ctrl-C): the mission was aborted and the device stopped the motors"
+        );
+        return Ok(crate::exit::Ending::Interrupted);
+    }
+    // A contact with the real world (`--real`) is a collision whatever the device reports.
+    if outcome.min_clearance_m.is_some_and(|c| c < 0.0) {
+        return Ok(crate::exit::Ending::Collision);
+    }
+    Ok(crate::exit::Ending::of_mission_status(
+        report.status.as_str(),
+    ))
+}
+
+/// Map, known obstacles, real world, mission setup.
+fn upload(args: &Args, inputs: &Inputs, remote: &mut Remote, build: Build) -> Result<()> {
+    let map = MapParams {
+        width_cells: inputs.geometry.width(),
+        height_cells: inputs.geometry.height(),
+        resolution_m: inputs.geometry.resolution_m(),
+        robot_radius_m: inputs.params.robot_radius_m,
+    };
+    remote
+        .call(Request::ClearMap)
+        .context("clearing the device's map")?;
+    remote
+        .call(Request::SetParams(map))
+        .with_context(|| format!("setting the map (--size {})", args.size))?;
+    if let (Some(known), Some(path)) = (&inputs.known, &args.known) {
+        for (i, polygon) in known.iter().enumerate() {
+            remote.upload_polygon(polygon).with_context(|| {
+                format!("{}: uploading known obstacle {}", path.display(), i + 1)
+            })?;
+        }
+    }
+    if let (Some(real), Some(path)) = (&inputs.real, &args.real) {
+        match remote
+            .request(Request::ClearWorld)
+            .context("clearing the device's real world")?
+        {
+            Reply::Ack => {}
+            Reply::Error(e) if e.code == ErrorCode::NotOnThisBuild => bail!(
+                "--remote {}: this device (build {build:?}) keeps no real world, so it cannot run a simulated mission (a firmware without mission support?)",
+                remote_name(&args.remote)
+            ),
+            Reply::Error(e) => bail!("clearing the device's real world: {e}"),
+            other => bail!("unexpected reply to ClearWorld: {other:?}"),
+        }
+        for (i, polygon) in real.iter().enumerate() {
+            remote.upload_world_polygon(polygon).with_context(|| {
+                format!("{}: uploading real obstacle {}", path.display(), i + 1)
+            })?;
+        }
+    }
+    match remote.request(Request::SetMission(mission_setup(args, &inputs.params)))? {
+        Reply::Ack => Ok(()),
+        Reply::Error(e) => bail!("{}", explain_bad_mission(args, &e)),
+        other => bail!("unexpected reply to SetMission: {other:?}"),
+    }
+}
+
+/// A line on stderr, above the live display if there is one.
+fn note(bar: &ProgressBar, line: &str) {
+    if bar.is_hidden() {
+        eprintln!("{line}");
+    } else {
+        bar.println(line);
+    }
+}
+
+/// The error when the device stays quiet for `--silence`.
+fn went_silent(args: &Args, follower: &Follower) -> String {
+    format!(
+        "the device went silent: no telemetry for {} s (mission time {:.1} s)",
+        args.silence,
+        follower.t_s()
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn args(extra: &[&str]) -> Args {
+        let par = concat!(env!("CARGO_MANIFEST_DIR"), "/../worlds/office.par");
+        let mut argv = vec!["twil", "--remote", "sim", "--params", par];
+        argv.extend_from_slice(extra);
+        Cli::parse_from(argv).args
+    }
+
+    /// A device that never says anything.
+    struct Silent;
+
+    impl std::io::Read for Silent {
+        fn read(&mut self, _: &mut [u8]) -> std::io::Result<usize> {
+            std::thread::sleep(Duration::from_millis(20));
+            Err(std::io::ErrorKind::TimedOut.into())
+        }
+    }
+
+    impl std::io::Write for Silent {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_silent_device_is_a_clear_error_after_the_silence_time() {
+        let args = args(&["--silence", "0.3"]);
+        let inputs = read_inputs(&args).unwrap();
+        let mut follower = Follower::new(&inputs, false).unwrap();
+        let mut remote = Remote::over(Silent);
+        let started = Instant::now();
+        let e = follow(&args, &mut remote, &mut follower, &ProgressBar::hidden()).unwrap_err();
+        assert!(started.elapsed() < Duration::from_secs(3));
+        assert!(
+            format!("{e:#}").contains("the device went silent: no telemetry for 0.3 s"),
+            "{e:#}"
+        );
+    }
+
+    /// A device whose mission has ended and whose `Finished` telemetry was lost: it answers
+    /// every request with its report.
+    struct Ended(Vec<u8>);
+    impl std::io::Write for Ended {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            let mut decoder = twil_core::link::FrameDecoder::new();
+            let mut rest = b;
+            while !rest.is_empty() {
+                let (got, r) = decoder.feed::<twil_core::link::RequestFrame>(rest);
+                rest = r;
+                if let Some(Ok(frame)) = got {
+                    let report = MissionReport {
+                        state: twil_core::link::RunState::Ended,
+                        status: MissionStatus::Reached,
+                        phase: MissionPhase::Done,
+                        stats: Default::default(),
+                        max_control_instructions: 0,
+                        max_plan_instructions: 0,
+                        stack_high_water_bytes: 0,
+                        stop_ticks: 0,
+                        stop_latency_us: 0,
+                        stop_cause: twil_core::failsafe::StopCause::None,
+                        emergency_stop: false,
+                    };
+                    let mut out = [0u8; twil_core::link::MAX_FRAME_BYTES];
+                    let reply = DeviceFrame::Reply {
+                        seq: Some(frame.seq),
+                        reply: Reply::Mission(report),
+                    };
+                    let bytes = twil_core::link::frame::encode(&reply, &mut out).unwrap();
+                    self.0.extend_from_slice(bytes);
+                }
+            }
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    impl std::io::Read for Ended {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            if self.0.is_empty() {
+                std::thread::sleep(Duration::from_millis(5));
+                return Err(std::io::ErrorKind::WouldBlock.into());
+            }
+            let n = buf.len().min(self.0.len());
+            buf[..n].copy_from_slice(&self.0[..n]);
+            self.0.drain(..n);
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn a_lost_final_report_is_asked_for_after_a_second_of_quiet() {
+        // No heartbeat (it would ask sooner): the quiet poll alone must find the report.
+        let args = args(&["--link-timeout-ms", "0"]);
+        let inputs = read_inputs(&args).unwrap();
+        let mut follower = Follower::new(&inputs, false).unwrap();
+        let mut remote = Remote::over(Ended(Vec::new()));
+        let started = Instant::now();
+        follow(&args, &mut remote, &mut follower, &ProgressBar::hidden()).unwrap();
+        let waited = started.elapsed();
+        assert!(
+            waited >= crate::cmd::mission_link::POLL_AFTER && waited < Duration::from_secs(3),
+            "{waited:?}"
+        );
+        assert_eq!(
+            follower.finished.map(|r| r.status),
+            Some(MissionStatus::Reached)
+        );
+    }
+
+    #[test]
+    fn real_is_required_by_simulated_devices_and_refused_by_a_board() {
+        let without = args(&[]);
+        let with = args(&["--real", "R.da"]);
+        assert!(check_real(&without, Build::Host).is_err());
+        assert!(check_real(&without, Build::Qemu).is_err());
+        assert!(check_real(&with, Build::Host).is_ok());
+        assert!(check_real(&without, Build::Hardware).is_ok());
+        let e = check_real(&with, Build::Hardware).unwrap_err();
+        assert!(e.to_string().contains("is a real robot"), "{e}");
+    }
+
+    #[test]
+    fn refused_mission_fields_are_named() {
+        let a = args(&[]);
+        let speed = ErrorReply::new(ErrorCode::BadMission, 5, 0);
+        assert!(explain_bad_mission(&a, &speed).contains("speed ("));
+        let off = ErrorReply {
+            code: ErrorCode::BadMission,
+            value: 0,
+            limit: 0,
+            detail: 1,
+        };
+        assert!(explain_bad_mission(&a, &off).contains("lies off its map"));
+    }
+}

@@ -1,0 +1,170 @@
+//! What `twil mission` writes: the JSON result, `summary.json`, `trajectory.csv`, the plan
+//! pictures and `mission.gif`.
+
+use super::*;
+
+/// The JSON name of a stop cause.
+pub fn stop_cause_name(cause: StopCause) -> Option<&'static str> {
+    match cause {
+        StopCause::None => None,
+        StopCause::Host => Some("host"),
+        StopCause::EmergencyStop => Some("emergency_stop"),
+        StopCause::LinkLost => Some("link_lost"),
+        StopCause::ControllerOverrun => Some("controller_overrun"),
+    }
+}
+
+pub(super) fn round3(x: f32) -> f64 {
+    ((x as f64) * 1000.0).round() / 1000.0
+}
+
+/// The outcome of a mission as the host saw it.
+pub struct Outcome {
+    /// The device's final report.
+    pub report: MissionReport,
+    /// Who answered.
+    pub info: DeviceInfo,
+    /// Distance along the reported poses, metres.
+    pub distance_m: f32,
+    /// Smallest clearance of the robot's body to the real polygons along the reported poses
+    /// (`None` without a real world).
+    pub min_clearance_m: Option<f32>,
+    /// Poses reported.
+    pub poses: usize,
+    /// Ctrl-C aborted the mission.
+    pub interrupted: bool,
+    /// What the link lost and repaired (`summary.json`).
+    pub link: crate::cmd::mission_link::LinkReport,
+}
+
+/// The `--json` object: the keys of `twil simulate --json` plus `mcu`.
+pub fn result_json(outcome: &Outcome) -> serde_json::Value {
+    let s = &outcome.report.stats;
+    json!({
+        "status": outcome.report.status.as_str(),
+        "stops": s.stops,
+        "full_sweeps": s.full_sweeps,
+        "replans": s.replans,
+        "distance_m": round3(outcome.distance_m),
+        "sim_time_s": round3(s.time_s),
+        "min_clearance_m": outcome.min_clearance_m.map(round3),
+        "controller_overruns": s.controller_overruns,
+        "mcu": {
+            "max_control_instructions": outcome.report.max_control_instructions,
+            "max_plan_instructions": outcome.report.max_plan_instructions,
+            "static_ram_bytes": outcome.info.static_ram_bytes,
+            "stack_high_water_bytes": outcome.report.stack_high_water_bytes,
+        },
+    })
+}
+
+/// `summary.json`: the `--json` object plus details.
+pub(super) fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value {
+    let mut v = result_json(outcome);
+    let s = &outcome.report.stats;
+    let extra = json!({
+        "remote": remote_name(&args.remote),
+        "build": format!("{:?}", outcome.info.build).to_lowercase(),
+        "mode": match args.mode { Mode::Stop => "stop", Mode::Continuous => "continuous" },
+        "preset": args.loop_args.preset.name(),
+        "planner": args.choices().planner_name(),
+        "constant_depth_filter": args.choices().rcd,
+        "trust_seen_space": !args.choices().seed_prune,
+        "settle": args.choices().settle_name(),
+        "reference_feed_forward": args.choices().reference_feed_forward,
+        "turn_in_place": args.choices().turn_in_place,
+        "sweep_readings": args.choices().sweep_readings_name(),
+        "real": args.real.as_ref().map(|p| p.display().to_string()),
+        "known": args.known.as_ref().map(|p| p.display().to_string()),
+        "params": args.params.display().to_string(),
+        "seed": args.seed,
+        "sonar_range_m": args.sonar_range,
+        "moving_sweeps": s.moving_sweeps,
+        "plans": s.plans,
+        "blocked_replans": s.blocked_replans,
+        "band_cuts": s.band_cuts,
+        "blind_cuts": s.blind_cuts,
+        "readings": s.readings,
+        "hits": s.hits,
+        "odometry_distance_m": round3(s.odometry_distance_m),
+        "saturated_periods": s.saturated_periods,
+        "unreachable_reason": s.unreachable_reason.map(|r| format!("{r:?}")),
+        "plan_errors": s.plan_errors,
+        "poses_reported": outcome.poses,
+        "stop_cause": stop_cause_name(outcome.report.stop_cause),
+        "stop_latency_us": outcome.report.stop_latency_us,
+        "interrupted": outcome.interrupted,
+        "link": outcome.link.json(),
+    });
+    if let (Some(obj), Some(extra)) = (v.as_object_mut(), extra.as_object()) {
+        for (k, val) in extra {
+            obj.insert(k.clone(), val.clone());
+        }
+    }
+    v
+}
+
+/// `summary.json`, `trajectory.csv`, `plan-NNN.png`, `mission.gif`.
+pub(super) fn write_outputs(
+    dir: &std::path::Path,
+    args: &Args,
+    inputs: &Inputs,
+    outcome: &Outcome,
+    follower: Follower,
+) -> Result<()> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create directory", dir.display()))?;
+    let setup = SimSetup {
+        real: inputs.real.clone().unwrap_or_default(),
+        known: inputs.known.clone(),
+        params: inputs.params,
+        geometry: inputs.geometry,
+        mode: mission_mode(args.mode),
+        planner: args.choices().planner_kind(),
+        robot: inputs.robot,
+        time_limit_s: args.time_limit_s(),
+        constant_depth_filter: args.choices().rcd,
+        trust_seen_space: !args.choices().seed_prune,
+        moving_half_sweep_deg: 95.0,
+        snapshot_period_s: FRAME_PERIOD_S,
+        plan_latency_s: 0.0,
+        settle: args.choices().settle,
+        reference_feed_forward: args.choices().reference_feed_forward,
+        turn_in_place: args.choices().turn_in_place,
+        world_name: crate::sim::pictures::world_name(args.real.as_deref(), args.known.as_deref()),
+    };
+    let report = &outcome.report;
+    let result = SimResult {
+        status: match report.status {
+            MissionStatus::Reached => SimStatus::Reached,
+            MissionStatus::Unreachable => SimStatus::Unreachable,
+            MissionStatus::Timeout => SimStatus::Timeout,
+            MissionStatus::Aborted | MissionStatus::Running => SimStatus::Aborted,
+        },
+        stats: report.stats,
+        distance_m: outcome.distance_m,
+        sim_time_s: report.stats.time_s,
+        min_clearance_m: outcome.min_clearance_m.unwrap_or(f32::NAN),
+        sweeps: follower.sweeps,
+        final_odometry_pose: follower.pose(),
+        trajectory: follower.trajectory,
+        plans: follower.plan_snapshots,
+        frames: follower.frames,
+        known_map_plan_length_m: None,
+    };
+    output::write_trajectory_csv(&dir.join("trajectory.csv"), &result)?;
+    output::write_plan_pngs(dir, &setup, &result)?;
+    output::write_gif(
+        &dir.join("mission.gif"),
+        &setup,
+        &result,
+        args.gif_scale.clamp(1, 8),
+    )?;
+    let path = dir.join("summary.json");
+    std::fs::write(
+        &path,
+        serde_json::to_string_pretty(&summary_json(args, outcome))? + "\n",
+    )
+    .with_context(|| format!("{}: cannot write", path.display()))?;
+    Ok(())
+}
