@@ -34,25 +34,26 @@ pub(super) const O_N: u32 = 16;
 pub(super) const O_NE: u32 = 17;
 
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEUE> {
-    /// Cell-by-cell A* (see [`astar_search`]) on a copy of the map, in the [`Framed`] layout
-    /// when it fits the first [`FRAMED_WORDS`] words of the scratch, else the [`Flat`] one, with
-    /// the goal regions from the per-axis table on grids of at most [`GOAL_AXIS_CELLS`] a side.
-    /// `start`: the flat cell index.
+    /// Cell-by-cell A* (see [`astar_search`]) on a copy of the map: in the [`Framed`] layout
+    /// with the goal regions from the per-axis table when the framed map fits the first
+    /// [`FRAMED_WORDS`] words of the scratch and the grid is at most [`GOAL_AXIS_CELLS`] a side,
+    /// else in the [`Flat`] one with the regions computed per cell. `start`: the flat cell index.
     pub(super) fn astar<const GW: usize>(
         &mut self,
         grid: &Grid<GW>,
         start: usize,
         goal_cell: Cell,
     ) -> Result<Search, PlanError> {
-        self.astar_in::<GW, FRAMED_WORDS, true>(grid, start, goal_cell, true)
+        self.astar_in::<GW, FRAMED_WORDS>(grid, start, goal_cell, true)
     }
 
     /// [`Planner::astar`] with a framed view of `WORDS` words (`WORDS − 1` a power of two), or
-    /// in the flat layout when `framed` is false or the framed map does not fit; with
-    /// `AXIS_TABLE` the goal regions come from the per-axis table ([`axis_region`]; on grids
-    /// larger than [`GOAL_AXIS_CELLS`] a side the search runs without it, flat), else they are
-    /// computed per cell ([`goal_region`]; the tests run both on the same maps).
-    pub(super) fn astar_in<const GW: usize, const WORDS: usize, const AXIS_TABLE: bool>(
+    /// in the flat layout when `framed` is false or the framed map does not fit. Only the
+    /// framed search reads the per-axis goal table ([`axis_region`]); the flat one, the
+    /// fallback for grids the framed view cannot hold, computes the regions per cell
+    /// ([`goal_region`]): one instance of the search less in flash (see "What each
+    /// optimisation earns" in docs/planners.md; the tests run both on the same maps).
+    pub(super) fn astar_in<const GW: usize, const WORDS: usize>(
         &mut self,
         grid: &Grid<GW>,
         start: usize,
@@ -63,24 +64,19 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let width = geometry.width() as usize;
         let start_xy = ((start % width) as u32, (start / width) as u32);
         let goal_xy = (goal_cell.x as u32, goal_cell.y as u32);
-        if AXIS_TABLE {
-            let side = width.max(geometry.height() as usize);
-            if side > GOAL_AXIS_CELLS {
-                return self.astar_in::<GW, WORDS, false>(grid, start, goal_cell, false);
-            }
-            let (axis, classes) = self.goal_axis.split_at_mut(GOAL_AXIS_CELLS);
-            for (i, entry) in (0u32..).zip(axis.iter_mut().take(side)) {
-                *entry = goal_axis_entry(i, goal_xy.0, goal_xy.1);
-            }
-            classes.copy_from_slice(&STEP_CLASSES);
-        }
-        if framed && AXIS_TABLE {
+        let side = width.max(geometry.height() as usize);
+        if framed && side <= GOAL_AXIS_CELLS {
             if let Some(mut map) = Framed::<WORDS>::new(&mut self.scratch, &geometry) {
+                let (axis, classes) = self.goal_axis.split_at_mut(GOAL_AXIS_CELLS);
+                for (i, entry) in (0u32..).zip(axis.iter_mut().take(side)) {
+                    *entry = goal_axis_entry(i, goal_xy.0, goal_xy.1);
+                }
+                classes.copy_from_slice(&STEP_CLASSES);
                 map.copy_map(grid);
                 self.layout = Layout::Framed { stride: map.stride };
                 // Rings first; when one stays full, again with the linked lists (exact
                 // `QueueFull` semantics; the same pops in the same order).
-                let ring = astar_search::<_, RingQueue, AXIS_TABLE>(
+                let ring = astar_search::<_, RingQueue, true>(
                     &mut map,
                     &mut self.queue,
                     &self.goal_axis,
@@ -92,7 +88,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     return ring;
                 }
                 map.copy_map(grid);
-                return astar_search::<_, ClassQueue, AXIS_TABLE>(
+                return astar_search::<_, ClassQueue, true>(
                     &mut map,
                     &mut self.queue,
                     &self.goal_axis,
@@ -109,7 +105,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             scratch: self.scratch.get_mut(..used_words).unwrap_or(&mut []),
             interior: Interior::new(&geometry),
         };
-        astar_search::<_, ClassQueue, AXIS_TABLE>(
+        astar_search::<_, ClassQueue, false>(
             &mut map,
             &mut self.queue,
             &self.goal_axis,

@@ -26,7 +26,7 @@ pub struct Planner<const SCRATCH_WORDS: usize, const QUEUE: usize> {
     pub(super) queue: [OpenEntry; QUEUE],
     pub(super) cells: PathCells,
     /// The per-axis goal table of the cell-by-cell A* ([`goal_axis_entry`]), refilled by
-    /// every search on a grid of at most [`GOAL_AXIS_CELLS`] a side.
+    /// every framed search on a grid of at most [`GOAL_AXIS_CELLS`] a side.
     pub(super) goal_axis: [u32; GOAL_TABLE_WORDS],
     pub(super) last: Option<PlanReport>,
     pub(super) queue_peak: u32,

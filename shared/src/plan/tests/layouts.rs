@@ -73,11 +73,11 @@ proptest! {
         }
         let si = g.geometry().index(s);
         let mut framed = Box::new(Planner::<SMALL_FRAMED, 4096>::new());
-        let a = framed.astar_in::<_, SMALL_FRAMED, true>(&g, si, t, true).unwrap();
+        let a = framed.astar_in::<_, SMALL_FRAMED>(&g, si, t, true).unwrap();
         let is_framed = matches!(framed.layout, Layout::Framed { .. });
         prop_assert!(is_framed);
         let mut flat = Box::new(SmallPlanner::new());
-        let b = flat.astar_in::<_, SMALL_FRAMED, true>(&g, si, t, false).unwrap();
+        let b = flat.astar_in::<_, SMALL_FRAMED>(&g, si, t, false).unwrap();
         prop_assert_eq!(flat.layout, Layout::Flat);
         prop_assert_eq!((a.found, a.cost, a.expanded), (b.found, b.cost, b.expanded));
         // The framed search runs on rings: a different measure of the pool used.

@@ -200,13 +200,13 @@ fn ring_and_linked_astar_agree_and_fall_back() {
         // The planner's answer (rings, else linked lists), which also fills the goal table.
         let planned = if small {
             let mut q = Box::new(Planner::<SMALL_FRAMED, 24>::new());
-            let r = q.astar_in::<_, SMALL_FRAMED, true>(&g, si, t, true);
+            let r = q.astar_in::<_, SMALL_FRAMED>(&g, si, t, true);
             assert!(matches!(q.layout, Layout::Framed { .. }));
             r
         } else {
-            p.astar_in::<_, SMALL_FRAMED, true>(&g, si, t, true)
+            p.astar_in::<_, SMALL_FRAMED>(&g, si, t, true)
         };
-        p.astar_in::<_, SMALL_FRAMED, true>(&g, si, t, true).ok();
+        p.astar_in::<_, SMALL_FRAMED>(&g, si, t, true).ok();
         assert!(matches!(p.layout, Layout::Framed { .. }));
         let runs = |p: &mut Planner<SMALL_FRAMED, 4096>, ring: bool| {
             let mut map = Framed::<SMALL_FRAMED>::new(&mut p.scratch, g.geometry()).unwrap();
@@ -354,7 +354,7 @@ fn rings_fit_random_grids() {
         g.set(t, false);
         let mut p = Box::new(Planner::<{ scratch_words_for_cells(160_000) }, 1024>::new());
         let planned = p
-            .astar_in::<_, WORDS, true>(&g, g.geometry().index(s), t, true)
+            .astar_in::<_, WORDS>(&g, g.geometry().index(s), t, true)
             .unwrap();
         assert!(matches!(p.layout, Layout::Framed { .. }));
         let mut map = Framed::<WORDS>::new(&mut p.scratch, g.geometry()).unwrap();
