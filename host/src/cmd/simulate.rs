@@ -472,3 +472,7 @@ fn run_recorded(
     let summary = recorder.close()?;
     Ok((run?, Some(summary)))
 }
+
+#[cfg(test)]
+#[path = "simulate_pictures.rs"]
+mod pictures_tests;
