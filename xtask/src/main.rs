@@ -58,6 +58,11 @@ enum Task {
     },
 }
 
+/// The packages of every host-side cargo run (the firmware builds only for the thumb target).
+/// One selection for the tests, the instruction benchmark and clippy, so that cargo resolves
+/// the same features for all three and each reuses the others' builds.
+const HOST_PACKAGES: [&str; 3] = ["--workspace", "--exclude", "twil-firmware"];
+
 /// Target of the firmware.
 const THUMB: &str = "thumbv7em-none-eabihf";
 /// Static RAM budget of the firmware, bytes: 120 KiB of the 128 KiB SRAM, so that the stack
@@ -379,18 +384,12 @@ fn mcu_bench() -> Result<()> {
     run_mcu_bench()
 }
 
-/// The `mcu_bench` test alone (the firmware is built). It selects the same packages as the
-/// full test run (`--workspace --exclude twil-firmware`), so that both resolve the same
-/// features and the test run reuses this build instead of rebuilding the host crates (measured:
-/// 6 min 23 s of a CI run went to that rebuild when this selected `--package twil-host`).
+/// The `mcu_bench` test alone (the firmware is built), on [`HOST_PACKAGES`] like the full test
+/// run, which then reuses this build (measured: 6 min 23 s of a CI run went to rebuilding the
+/// host crates when this selected `--package twil-host`).
 fn run_mcu_bench() -> Result<()> {
     let mut c = cargo();
-    c.args([
-        "test",
-        "--release",
-        "--workspace",
-        "--exclude",
-        "twil-firmware",
+    c.args(["test", "--release"]).args(HOST_PACKAGES).args([
         "--test",
         "suite",
         "--",
@@ -402,12 +401,7 @@ fn run_mcu_bench() -> Result<()> {
     run(c)?;
     // The worst requests other than `Plan` (marking obstacles), and a ping right after each.
     let mut c = cargo();
-    c.args([
-        "test",
-        "--release",
-        "--workspace",
-        "--exclude",
-        "twil-firmware",
+    c.args(["test", "--release"]).args(HOST_PACKAGES).args([
         "--test",
         "suite",
         "--",
@@ -512,13 +506,7 @@ fn test() -> Result<()> {
     run_mcu_bench()?;
     // Last, so that the run ends with cargo test's own summary.
     let mut c = cargo();
-    c.args([
-        "test",
-        "--release",
-        "--workspace",
-        "--exclude",
-        "twil-firmware",
-    ]);
+    c.args(["test", "--release"]).args(HOST_PACKAGES);
     run(c)
 }
 
@@ -532,12 +520,7 @@ fn lint() -> Result<()> {
     // so that the proc-macros and build scripts clippy compiles are the ones those builds use
     // (the `dev` profile compiles them at opt-level 2, see `Cargo.toml`, and shares nothing).
     let mut c = cargo();
-    c.args([
-        "clippy",
-        "--release",
-        "--workspace",
-        "--exclude",
-        "twil-firmware",
+    c.args(["clippy", "--release"]).args(HOST_PACKAGES).args([
         "--all-targets",
         "--",
         "-D",
