@@ -4,19 +4,13 @@
 //! a goal walled in as unreachable. In-process through `twil_host::classic::run`, plus one run
 //! of the binary for the JSON.
 
-use std::path::PathBuf;
-
 use twil_host::classic::{self, Method, Options, Status};
 use twil_host::cmd::plan::{load, SizeM};
 
 use crate::common;
 
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
 fn world(name: &str, size: Option<(f32, f32)>) -> twil_host::cmd::plan::World {
-    let dir = repo().join("worlds");
+    let dir = common::repo().join("worlds");
     let mut args = common::plan_args(
         Some(dir.join(format!("{name}.da"))),
         dir.join(format!("{name}.par")),
@@ -114,7 +108,7 @@ fn bug_reports_a_walled_in_goal_as_unreachable() {
 
 #[test]
 fn twil_plan_prints_the_bug_fields() {
-    let dir = repo().join("worlds");
+    let dir = common::repo().join("worlds");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_twil"))
         .args(["plan", "--planner", "bug", "--json", "--world"])
         .arg(dir.join("pillars.da"))

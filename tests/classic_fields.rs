@@ -4,16 +4,13 @@
 //! bridged to the rest of the roadmap), and the potential field's honest local minimum in the
 //! trap (`worlds/trap`).
 
-use std::path::PathBuf;
-
 use twil_host::classic::{self, Method, Options, Status};
 use twil_host::cmd::plan::{load, parse_size, Args};
 
 fn world(name: &str, size: &str) -> twil_host::cmd::plan::World {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../worlds");
     load(&Args {
-        world: Some(root.join(format!("{name}.da"))),
-        params: root.join(format!("{name}.par")),
+        world: Some(crate::common::world(&format!("{name}.da"))),
+        params: crate::common::world(&format!("{name}.par")),
         map: None,
         size: parse_size(size).unwrap(),
         resolution: 0.05,

@@ -22,8 +22,10 @@
 //! builds; one thread per doc, the longest being the two missions that write GIFs, about 10 s
 //! each).
 
+use crate::common;
+
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
 
@@ -101,14 +103,10 @@ struct Example {
     output_lines: std::ops::Range<usize>,
 }
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
 /// The docs this test walks, as paths relative to the repository root.
 fn docs() -> Vec<String> {
     let mut docs = vec!["README.md".to_string(), "CONTRIBUTING.md".to_string()];
-    let mut more: Vec<String> = std::fs::read_dir(repo().join("docs"))
+    let mut more: Vec<String> = std::fs::read_dir(common::repo().join("docs"))
         .expect("docs/")
         .filter_map(|e| e.ok())
         .map(|e| e.file_name().to_string_lossy().into_owned())
@@ -244,7 +242,7 @@ fn sandbox() -> tempfile::TempDir {
     // repository's.
     let worlds = dir.path().join("worlds");
     std::fs::create_dir_all(&worlds).expect("worlds/");
-    for entry in std::fs::read_dir(repo().join("worlds")).expect("worlds/") {
+    for entry in std::fs::read_dir(common::repo().join("worlds")).expect("worlds/") {
         let from = entry.expect("worlds/ entry").path();
         if from.is_file() {
             std::fs::copy(&from, worlds.join(from.file_name().expect("name"))).expect("copy");
@@ -318,7 +316,7 @@ fn every_documented_example_runs_and_prints_what_the_doc_shows() {
     let mut unlisted = Vec::new();
     let mut used = vec![false; SKIPPED.len()];
     for doc in docs() {
-        let text = std::fs::read_to_string(repo().join(&doc)).expect("doc");
+        let text = std::fs::read_to_string(common::repo().join(&doc)).expect("doc");
         let (console, elsewhere) = parse(&doc, &text);
         texts.insert(doc.clone(), text);
         let mut runs = Vec::new();
@@ -420,7 +418,7 @@ fn rewrite(texts: &BTreeMap<String, String>, failures: &[(Example, String, Strin
         }
         let mut out = lines.join("\n");
         out.push('\n');
-        std::fs::write(repo().join(doc), out).expect("rewrite doc");
+        std::fs::write(common::repo().join(doc), out).expect("rewrite doc");
         println!("rewrote {doc}");
     }
 }

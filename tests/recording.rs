@@ -401,7 +401,7 @@ fn plan_record_has_one_message_per_topic() {
 
 #[test]
 fn the_layout_shows_only_topics_twil_writes() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/foxglove-layout.json");
+    let path = common::repo().join("docs/foxglove-layout.json");
     let layout: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     let configs = layout["configById"].as_object().unwrap();
     let three_d = configs

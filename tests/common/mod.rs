@@ -1,14 +1,17 @@
-//! Helpers shared by the scenario and end-to-end tests (compiled into each test target).
+//! Helpers shared by the scenario and end-to-end tests (modules of the one test binary,
+//! `tests/suite.rs`).
 #![allow(dead_code)]
 
 use std::path::PathBuf;
 
+/// The repository's root folder.
+pub fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
 /// Path of a file in the repository's `worlds/` folder.
 pub fn world(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join("worlds")
-        .join(name)
+    repo().join("worlds").join(name)
 }
 
 /// The `twil` binary built for this test run.
