@@ -1,53 +1,53 @@
 //! The board: Twil's signals on an **Olimex STM32-H405** (STM32F405RGT6, 8 MHz crystal, port
 //! pins on headers; its own LED is PC12, its button PA0, USB PA11/PA12 with VBUS sensing on
-//! PC4, debug PA13/PA14 (and PA15/PB3/PB4 for JTAG): none of them is used here). Wiring only:
-//! every rule about the signals lives in `twil_core::drivers`.
+//! PC4 and the USB pull-up switched by PC11 ("USB DISC" in the board files), debug PA13/PA14
+//! (and PA15/PB3/PB4 for JTAG): none of them is used here). Wiring only: every rule about the
+//! signals lives in `twil_core::drivers`; docs/firmware.md has the wiring table with the
+//! dividers, pull-ups and pull-downs each signal needs.
 //!
 //! | signal | pin | peripheral | driver |
 //! |---|---|---|---|
 //! | host link TX / RX | PA9 / PA10 | USART1 (in `main.rs`) | `link::Device` |
-//! | top sonar trigger | PB0 | GPIO push-pull | [`SonarRanger`] |
-//! | top sonar echo | PA1 | TIM5 CH2 input capture, both edges, 1 MHz | [`EchoTim5Ch2`] |
-//! | bottom sonar trigger | PB1 | GPIO push-pull | [`SonarRanger`] |
-//! | bottom sonar echo | PA5 | TIM2 CH1 input capture, both edges, 1 MHz | [`EchoTim2Ch1`] |
-//! | neck step / dir | PC8 / PC9 | GPIO push-pull | [`NeckStepper`] |
-//! | neck home switch | PC10 | GPIO input, pull-up, closed = low | [`NeckStepper`] |
+//! | top sonar trigger | PB0 | GPIO push-pull | `body::Head` |
+//! | top sonar echo | PA1 (divider: not 5 V tolerant) | TIM5: CH2 captures the rise, CH1 (on TI2) the fall, 1 MHz, 3 µs filter | [`EchoLatchTim5`] |
+//! | bottom sonar trigger | PB1 | GPIO push-pull | (wired, not used) |
+//! | bottom sonar echo | PA5 (divider: not 5 V tolerant) | TIM2: CH1 the rise, CH2 (on TI1) the fall | [`EchoLatchTim2`] |
+//! | neck step / dir | PC8 / PC9 | GPIO push-pull | `body::Head` |
+//! | neck home switch | PC10 | GPIO input, pull-up, closed = low | `body::Head` |
 //! | left motor PWM / dir | PB14 / PB12 | TIM12 CH1 at 20 kHz / GPIO | [`Motor`] |
 //! | right motor PWM / dir | PB15 / PB13 | TIM12 CH2 at 20 kHz / GPIO | [`Motor`] (mirrored) |
-//! | left encoder A / B | PA6 / PA7 | TIM3 CH1 / CH2, encoder mode | [`WheelEncoder`] |
-//! | right encoder A / B | PB6 / PB7 | TIM4 CH1 / CH2, encoder mode | [`WheelEncoder`] (mirrored) |
-//! | emergency stop | PC11 | GPIO input, pull-up, pressed or broken = high | [`EmergencyStop`] |
-//! | battery voltage | PC0 | ADC1 IN10, through a 47 kΩ / 10 kΩ divider | [`BatteryMonitor`] |
-//! | delays | — | TIM6 (top sonar), TIM7 (bottom sonar), TIM13 (neck), 1 MHz | [`UsDelay`] |
+//! | left encoder A / B | PA6 / PA7 | TIM3 CH1 / CH2, encoder mode, pull-ups, 3 µs filter | [`WheelEncoder`] |
+//! | right encoder A / B | PB6 / PB7 | TIM4 CH1 / CH2, encoder mode, pull-ups, 3 µs filter | [`WheelEncoder`] (mirrored) |
+//! | emergency stop | PB5 | GPIO input, pull-up, pressed or broken = high | [`EmergencyStop`] |
+//! | battery voltage | PC0 | ADC1 IN10 at 21 MHz, through a 47 kΩ / 10 kΩ divider | [`BatteryMonitor`] |
 //!
-//! The two sonars follow the seed's robot (`tsonar`, `bsonar`); the pins are 3.3 V: 5 V sensors
-//! (HC-SR04 echo, 5 V encoders) need a divider or level shifter.
+//! The emergency stop was on PC11 until the H405's board files (NuttX, ChibiOS, Zephyr) showed
+//! PC11 is its USB disconnect line; PB5 is free on the board and on its headers.
 //!
-//! HAL: stm32f4xx-hal 0.23. Its timer `Delay::delay_ns` waits `ns` *microseconds*, so the
-//! delays are wrapped in [`UsDelay`], which rounds nanoseconds up to whole microseconds.
+//! HAL: stm32f4xx-hal 0.23. Register set-ups the HAL does not offer (a capture channel fed by
+//! the other channel's input, input filters on the encoder timers, the HSE's start-up bound)
+//! are written with the PAC, each with its RM0090 register named.
 
-use cortex_m::peripheral::{DCB, DWT};
 use stm32f4xx_hal::{
     adc::{
-        config::{AdcConfig, SampleTime},
+        config::{AdcConfig, Clock as AdcClock, SampleTime, Sequence},
         Adc,
     },
     gpio::{self, Analog, Input, Output, PushPull},
     pac,
     prelude::*,
     qei::Qei,
-    rcc::Rcc,
+    rcc::{self, Rcc},
     timer::{
-        CaptureChannel, CaptureExt, CaptureHzManager, CapturePolarity, DelayUs, Flag, PwmChannel,
-        PwmHzManager, C1, C2,
+        CaptureChannel, CaptureExt, CaptureFilter, CaptureHzManager, CapturePolarity, PwmChannel,
+        C1, C2,
     },
 };
 use twil_core::drivers::motor::battery_v_from_pin_mv;
 use twil_core::drivers::neck_stepper::NeckGeometry;
 use twil_core::drivers::wheel_encoder::max_counts_per_period;
 use twil_core::drivers::{
-    ActiveLevel, EchoCapture, EmergencyStop, Motor, Mounting, NeckStepper, QuadratureCounter,
-    SonarRanger, SonarWindow, WheelEncoder,
+    ActiveLevel, EmergencyStop, Motor, Mounting, QuadratureCounter, SonarWindow, WheelEncoder,
 };
 use twil_core::robot::RobotConfig;
 
@@ -57,68 +57,238 @@ pub const ECHO_TICK_HZ: u32 = 1_000_000;
 pub const MOTOR_PWM_HZ: u32 = 20_000;
 /// Battery divider: battery volts per pin volt ((47 kΩ + 10 kΩ) / 10 kΩ): 15 V → 2.63 V.
 pub const BATTERY_DIVIDER_RATIO: f32 = 5.7;
-/// Core clock, Hz (`main.rs` sets the PLL to it): DWT cycles per second for echo time-outs.
+/// Core clock, Hz (the PLL, from the crystal or the HSI): the cycles of the short pulses.
 pub const SYSCLK_HZ: u32 = 168_000_000;
+/// The H405's crystal, Hz.
+pub const HSE_HZ: u32 = 8_000_000;
+/// How long the crystal may take to start, µs: DS8626 gives 2 ms typical (tSU(HSE)); ST's
+/// own HAL waits 100 ms (`HSE_STARTUP_TIMEOUT`) before it calls the crystal dead.
+pub const HSE_STARTUP_LIMIT_US: u32 = 100_000;
+/// APB2 (PCLK2) at 168 MHz: 84 MHz (DS8626: at most 84 MHz).
+pub const PCLK2_HZ: u32 = 84_000_000;
+/// ADC clock, Hz: PCLK2 / 4. DS8626 (table "ADC characteristics"): fADC at most 36 MHz at
+/// VDDA 2.4 … 3.6 V; the HAL's default, PCLK2 / 2 = 42 MHz, is above it.
+pub const ADC_CLOCK_HZ: u32 = PCLK2_HZ / 4;
+/// Input filter of the echo and encoder timers (RM0090, TIMx_CCMR1 ICxF = 0b1111): sampled at
+/// fDTS / 32 = 2.6 MHz, 8 equal samples, so a level must hold 3.0 µs to count. It rejects the
+/// 20 kHz PWM's switching spikes (tens to hundreds of ns); the encoders' fastest edges are
+/// 335 µs apart (9.36 rad/s × 2000 counts per turn), an echo's two edges are delayed alike.
+pub const INPUT_FILTER: CaptureFilter = CaptureFilter::FdtsDiv32N8;
+/// [`INPUT_FILTER`]'s 4-bit ICxF value, for the encoder timers (the HAL's encoder set-up has
+/// no filter).
+const INPUT_FILTER_BITS: u32 = 0b1111;
 
-/// A timer-based delay whose `delay_ns` really waits nanoseconds (rounded up to microseconds).
-pub struct UsDelay<TIM>(DelayUs<TIM>);
+// The clock tree the constants above assume, checked at compile time.
+const _: () = assert!(ADC_CLOCK_HZ <= 36_000_000);
+const _: () = assert!(SYSCLK_HZ / 2 == PCLK2_HZ);
 
-impl<TIM: stm32f4xx_hal::timer::Instance> embedded_hal::delay::DelayNs for UsDelay<TIM> {
-    fn delay_ns(&mut self, ns: u32) {
-        self.0.delay_us(ns.div_ceil(1_000));
+/// Where the system clock comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub enum ClockSource {
+    /// The 8 MHz crystal, ready after about this many µs.
+    Crystal {
+        /// Start-up time measured in 100 µs steps.
+        startup_us: u32,
+    },
+    /// The crystal did not start within [`HSE_STARTUP_LIMIT_US`]: the HSI (±1 % at 25 °C,
+    /// several % over temperature: sonar ranges and times scale with it; USB impossible).
+    InternalFallback,
+}
+
+/// Start the crystal (bounded wait), then the PLL at [`SYSCLK_HZ`] from it, APB1 42 MHz,
+/// APB2 84 MHz, the 48 MHz clock for USB; the clock security system then watches the
+/// crystal (a failure switches to the HSI and raises the NMI, see `main.rs`). Without a
+/// crystal: the PLL from the HSI, same frequencies, and a logged warning.
+pub fn start_clocks(rcc: Rcc) -> (Rcc, ClockSource) {
+    // RM0090 RCC_CR: HSEON, then HSERDY. The HAL's `freeze` waits for HSERDY without a
+    // bound, so a dead crystal would hang here: it is started and waited for first.
+    rcc.cr().modify(|_, w| w.hseon().set_bit());
+    const STEP_US: u32 = 100;
+    let mut waited_us = 0;
+    // Still on the 16 MHz HSI: `asm::delay` counts core cycles.
+    while rcc.cr().read().hserdy().bit_is_clear() && waited_us < HSE_STARTUP_LIMIT_US {
+        cortex_m::asm::delay(16 * STEP_US);
+        waited_us += STEP_US;
     }
-    fn delay_us(&mut self, us: u32) {
-        self.0.delay_us(us);
-    }
-    fn delay_ms(&mut self, ms: u32) {
-        self.0.delay_ms(ms);
+    if rcc.cr().read().hserdy().bit_is_set() {
+        let rcc = rcc.freeze(
+            rcc::Config::hse(HSE_HZ.Hz())
+                .sysclk(SYSCLK_HZ.Hz())
+                .require_pll48clk(),
+        );
+        // RM0090 RCC_CR CSSON: a crystal that stops switches the core to the HSI and raises
+        // the NMI (`main.rs` zeroes the motors and resets then).
+        rcc.cr().modify(|_, w| w.csson().set_bit());
+        (
+            rcc,
+            ClockSource::Crystal {
+                startup_us: waited_us,
+            },
+        )
+    } else {
+        rcc.cr().modify(|_, w| w.hseon().clear_bit());
+        (
+            rcc.freeze(rcc::Config::hsi().sysclk(SYSCLK_HZ.Hz())),
+            ClockSource::InternalFallback,
+        )
     }
 }
 
-macro_rules! timer_echo {
-    ($name:ident, $TIM:ty, $C:expr, $flag:expr) => {
-        /// An echo timed by a timer channel in input capture on both edges (rising then
-        /// falling: the width is the round trip); the time-out is counted on the DWT cycle
-        /// counter (the capture timer's counter is not readable through the HAL).
+/// Log the clock tree (bring-up step 2).
+pub fn log_clocks(rcc: &Rcc, source: ClockSource) {
+    let c = &rcc.clocks;
+    match source {
+        ClockSource::Crystal { startup_us } => defmt::info!(
+            "bring-up 2: clock: 8 MHz crystal ready after {} us; SYSCLK {} Hz, APB1 {} Hz, APB2 {} Hz, ADC {} Hz, USB {} Hz",
+            startup_us,
+            c.sysclk().raw(),
+            c.pclk1().raw(),
+            c.pclk2().raw(),
+            c.pclk2().raw() / 4,
+            c.pll48clk().map(|f| f.raw()).unwrap_or(0)
+        ),
+        ClockSource::InternalFallback => defmt::warn!(
+            "bring-up 2: clock: the 8 MHz crystal did not start in {} us: running on the HSI (+-1 %), SYSCLK {} Hz",
+            HSE_STARTUP_LIMIT_US,
+            c.sysclk().raw()
+        ),
+    }
+}
+
+type Out<const P: char, const N: u8> = gpio::Pin<P, N, Output<PushPull>>;
+type In<const P: char, const N: u8> = gpio::Pin<P, N, Input>;
+
+/// The four motor-bridge inputs, driven low: what `init` does first.
+pub struct MotorPins {
+    /// Left direction (PB12).
+    pub dir_left: Out<'B', 12>,
+    /// Right direction (PB13).
+    pub dir_right: Out<'B', 13>,
+    /// Left PWM (PB14), low until TIM12 takes it.
+    pub pwm_left: Out<'B', 14>,
+    /// Right PWM (PB15), low until TIM12 takes it.
+    pub pwm_right: Out<'B', 15>,
+}
+
+impl MotorPins {
+    /// Drive the four pins low (push-pull outputs, low level written before the mode).
+    pub fn low(pb12: gpio::PB12, pb13: gpio::PB13, pb14: gpio::PB14, pb15: gpio::PB15) -> Self {
+        Self {
+            dir_left: pb12.into_push_pull_output_in_state(gpio::PinState::Low),
+            dir_right: pb13.into_push_pull_output_in_state(gpio::PinState::Low),
+            pwm_left: pb14.into_push_pull_output_in_state(gpio::PinState::Low),
+            pwm_right: pb15.into_push_pull_output_in_state(gpio::PinState::Low),
+        }
+    }
+}
+
+/// The port B pins the board uses besides the motors' (split at the start of `init`).
+pub struct PortBRest {
+    pub pb0: gpio::PB0,
+    pub pb1: gpio::PB1,
+    pub pb5: gpio::PB5,
+    pub pb6: gpio::PB6,
+    pub pb7: gpio::PB7,
+}
+
+macro_rules! echo_latch {
+    ($name:ident, $TIM:ty, $C:ty, $rise_bit:expr, $fall_bit:expr, $rise_ccr:expr, $fall_ccr:expr) => {
+        /// An echo pulse latched by two capture channels of one 32-bit timer on the same input
+        /// (RM0090 §18.3.6, the PWM-input arrangement without the slave reset): one captures
+        /// the rising edge, the other the falling one, so both times wait in the timer until
+        /// the sonar task reads them after its `Mono::delay`. No interrupt, no busy wait.
         pub struct $name {
-            manager: CaptureHzManager<$TIM>,
-            channel: CaptureChannel<$TIM, { $C }>,
-            armed_at_cycles: u32,
+            _manager: CaptureHzManager<$TIM>,
+            _direct: CaptureChannel<$TIM, $C>,
         }
 
-        impl EchoCapture for $name {
-            fn tick_hz(&self) -> u32 {
-                ECHO_TICK_HZ
+        impl $name {
+            fn regs() -> &'static pac::tim2::RegisterBlock {
+                // SAFETY: TIM2 and TIM5 share TIM2's register layout (the PAC gives TIM5 the
+                // same register types); this latch owns the timer (its manager is held), and
+                // only reads the captures and clears their flags.
+                unsafe { &*(<$TIM>::ptr() as *const pac::tim2::RegisterBlock) }
             }
 
-            fn arm(&mut self) {
-                // Reading the capture register clears its flag; an overcapture is cleared too.
-                let _ = self.channel.get_capture();
-                self.manager.clear_all_flags();
-                self.armed_at_cycles = DWT::cycle_count();
+            /// Forget earlier edges: clear the capture and overcapture flags (TIMx_SR, write 0
+            /// to clear) and read both captures.
+            pub fn arm(&mut self) {
+                let r = Self::regs();
+                let _ = r.ccr($rise_ccr).read().bits();
+                let _ = r.ccr($fall_ccr).read().bits();
+                r.sr().write(|w| unsafe { w.bits(!SR_CAPTURE_FLAGS) });
             }
 
-            fn wait_echo_ticks(&mut self, timeout_ticks: u32) -> Option<u32> {
-                let timeout_cycles = timeout_ticks.saturating_mul(SYSCLK_HZ / ECHO_TICK_HZ);
-                let mut rise: Option<u32> = None;
-                loop {
-                    if self.manager.flags().contains($flag) {
-                        let at = self.channel.get_capture();
-                        match rise {
-                            None => rise = Some(at),
-                            Some(r) => return Some(at.wrapping_sub(r)),
-                        }
-                    }
-                    if DWT::cycle_count().wrapping_sub(self.armed_at_cycles) > timeout_cycles {
-                        return None;
-                    }
-                }
+            /// The latched edges since [`arm`](Self::arm).
+            pub fn edges(&mut self) -> EchoEdges {
+                let r = Self::regs();
+                let sr = r.sr().read().bits();
+                let rise = (sr & (1 << $rise_bit) != 0).then(|| r.ccr($rise_ccr).read().bits());
+                let fall = (sr & (1 << $fall_bit) != 0).then(|| r.ccr($fall_ccr).read().bits());
+                // CCxOF (bit CCxIF + 8): an edge came while the previous one was unread.
+                let extra = sr & ((1 << ($rise_bit + 8)) | (1 << ($fall_bit + 8))) != 0;
+                EchoEdges { rise, fall, extra }
             }
         }
     };
 }
-timer_echo!(EchoTim5Ch2, pac::TIM5, C2, Flag::C2);
-timer_echo!(EchoTim2Ch1, pac::TIM2, C1, Flag::C1);
+
+/// TIMx_SR: CC1IF, CC2IF, CC1OF, CC2OF.
+const SR_CAPTURE_FLAGS: u32 = (1 << 1) | (1 << 2) | (1 << 9) | (1 << 10);
+
+// TIM5: PA1 is CH2 (TI2). CH2 captures TI2's rise (CCR2), CH1 (CC1S = 0b10: TI2) its fall (CCR1).
+echo_latch!(EchoLatchTim5, pac::TIM5, C2, 2, 1, 1, 0);
+// TIM2: PA5 is CH1 (TI1). CH1 captures TI1's rise (CCR1), CH2 (CC2S = 0b10: TI1) its fall (CCR2).
+echo_latch!(EchoLatchTim2, pac::TIM2, C1, 1, 2, 0, 1);
+
+/// The edges an echo latch holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub struct EchoEdges {
+    /// Timer ticks at the rising edge, if one came.
+    pub rise: Option<u32>,
+    /// Timer ticks at the falling edge, if one came.
+    pub fall: Option<u32>,
+    /// More than one edge of a kind came (noise, or an echo line already high at the
+    /// trigger): the reading is not trusted.
+    pub extra: bool,
+}
+
+impl EchoEdges {
+    /// The pulse width in ticks: a rise, then a fall, nothing else. A fall alone, or a fall
+    /// before the rise (the line was high when armed: the previous echo), is no pulse.
+    pub fn width_ticks(&self) -> Option<u32> {
+        match (self.rise, self.fall, self.extra) {
+            (Some(rise), Some(fall), false) => {
+                let width = fall.wrapping_sub(rise);
+                // A fall captured before the rise wraps to more than half the 32-bit range.
+                (width < u32::MAX / 2).then_some(width)
+            }
+            _ => None,
+        }
+    }
+}
+
+/// Put the companion channel (0 = CH1, 1 = CH2) of an echo latch on the other channel's
+/// input, falling edge, enabled. That input's filter is the direct channel's (RM0090: ICxF
+/// filters TIx, which both channels then see). RM0090 TIMx_CCMR1: CCxS = 0b10 selects the
+/// other channel's input (written while CCxE = 0); TIMx_CCER: CCxP = 1, CCxNP = 0 is the
+/// falling edge, CCxE enables the capture.
+fn companion_falling(regs: &pac::tim2::RegisterBlock, companion: u8) {
+    let shift = 8 * u32::from(companion);
+    regs.ccmr1_input().modify(|r, w| unsafe {
+        let mut bits = r.bits();
+        bits &= !(0b11 << shift);
+        bits |= 0b10 << shift;
+        w.bits(bits)
+    });
+    let ccer = 4 * u32::from(companion);
+    regs.ccer().modify(|r, w| unsafe {
+        let mut bits = r.bits();
+        bits &= !(0b1010 << ccer);
+        bits |= (0b0010 | 0b0001) << ccer;
+        w.bits(bits)
+    });
+}
 
 /// A timer in encoder mode (×4: both edges of both channels) as a [`QuadratureCounter`].
 pub struct WheelCounter<TIM: stm32f4xx_hal::qei::Instance>(Qei<TIM>);
@@ -131,50 +301,84 @@ macro_rules! wheel_counter {
                 self.0.count()
             }
         }
+
+        impl WheelCounter<$TIM> {
+            /// The encoder timer with [`INPUT_FILTER`] on both inputs (RM0090 TIMx_CCMR1 IC1F,
+            /// IC2F; the HAL's encoder set-up leaves them at 0, no filter).
+            fn filtered(qei: Qei<$TIM>) -> Self {
+                // SAFETY: the Qei owns the timer; this only sets the two filter fields, which
+                // the encoder mode reads and nothing else writes.
+                let regs = unsafe { &*<$TIM>::ptr() };
+                regs.ccmr1_input().modify(|r, w| unsafe {
+                    w.bits(r.bits() | (INPUT_FILTER_BITS << 4) | (INPUT_FILTER_BITS << 12))
+                });
+                Self(qei)
+            }
+        }
     };
 }
 wheel_counter!(pac::TIM3);
 wheel_counter!(pac::TIM4);
 
-/// The battery voltage, read on ADC1 through the divider.
+/// The battery voltage, read on ADC1 through the divider without waiting: each call reads the
+/// conversion the previous call started (50 ms earlier, one control period; a conversion takes
+/// 23 µs) and starts the next.
 pub struct BatteryMonitor {
     adc: Adc<pac::ADC1>,
-    pin: gpio::PC0<Analog>,
+    _pin: gpio::PC0<Analog>,
 }
 
 impl BatteryMonitor {
-    /// One conversion (480 cycles: the divider's source impedance needs a long sample), volts.
+    /// 480 sample cycles: the divider's 8.2 kΩ source impedance needs a long sample (DS8626,
+    /// "RAIN max" table: 480 cycles allow up to 50 kΩ at 12 bits).
+    pub const SAMPLE: SampleTime = SampleTime::Cycles_480;
+
+    fn new(adc1: pac::ADC1, pin: gpio::PC0, rcc: &mut Rcc) -> Self {
+        let config = AdcConfig::default().clock(AdcClock::Pclk2_div_4);
+        let mut adc = Adc::new(adc1, true, config, rcc);
+        let pin = pin.into_analog();
+        adc.configure_channel(&pin, Sequence::One, Self::SAMPLE);
+        adc.start_conversion();
+        Self { adc, _pin: pin }
+    }
+
+    /// The last conversion in volts at the battery, and the next one started.
     pub fn read_battery_v(&mut self) -> f32 {
-        let sample = self.adc.convert(&self.pin, SampleTime::Cycles_480);
+        let sample = self.adc.current_sample();
+        self.adc.start_conversion();
         battery_v_from_pin_mv(self.adc.sample_to_millivolts(sample), BATTERY_DIVIDER_RATIO)
     }
 }
 
-type Out<const P: char, const N: u8> = gpio::Pin<P, N, Output<PushPull>>;
-type In<const P: char, const N: u8> = gpio::Pin<P, N, Input>;
-
-/// The top sonar.
-pub type SonarTop = SonarRanger<Out<'B', 0>, EchoTim5Ch2, UsDelay<pac::TIM6>>;
-/// The bottom sonar.
-pub type SonarBottom = SonarRanger<Out<'B', 1>, EchoTim2Ch1, UsDelay<pac::TIM7>>;
-/// The neck.
-pub type Neck = NeckStepper<Out<'C', 8>, Out<'C', 9>, In<'C', 10>, UsDelay<pac::TIM13>>;
 /// The left motor.
 pub type MotorLeft = Motor<PwmChannel<pac::TIM12, C1>, Out<'B', 12>>;
 /// The right motor.
 pub type MotorRight = Motor<PwmChannel<pac::TIM12, C2>, Out<'B', 13>>;
 
+/// The sonar head's pins: the top sonar and the neck.
+pub struct HeadPins {
+    /// Top sonar trigger (PB0).
+    pub trigger: Out<'B', 0>,
+    /// Top sonar echo (PA1, TIM5).
+    pub echo: EchoLatchTim5,
+    /// Neck step (PC8).
+    pub step: Out<'C', 8>,
+    /// Neck direction (PC9).
+    pub dir: Out<'C', 9>,
+    /// Neck home switch (PC10, closed = low).
+    pub home: In<'C', 10>,
+}
+
 /// Everything the board module wires, by name.
 pub struct Board {
-    /// Top sonar (full sweeps in the seed).
-    pub sonar_top: SonarTop,
-    /// Bottom sonar (normal sweeps in the seed).
-    // The seed's second sonar: wired and built, not used by the mission yet (one sweeping
-    // sonar, as the simulator's).
+    /// The sonar head.
+    pub head: HeadPins,
+    /// Bottom sonar (the seed's second sonar): wired and set up, not used by the mission yet.
     #[allow(dead_code)]
-    pub sonar_bottom: SonarBottom,
-    /// The sonar neck (not homed yet).
-    pub neck: Neck,
+    pub bottom_sonar: (Out<'B', 1>, EchoLatchTim2),
+    /// The top sonar's window and the neck's geometry.
+    pub window: SonarWindow,
+    pub geometry: NeckGeometry,
     /// Left wheel motor (stopped).
     pub motor_left: MotorLeft,
     /// Right wheel motor (stopped, mirrored).
@@ -184,27 +388,26 @@ pub struct Board {
     /// Right wheel encoder (mirrored).
     pub wheel_right: WheelEncoder<WheelCounter<pac::TIM4>>,
     /// Emergency stop (latched until cleared).
-    pub estop: EmergencyStop<In<'C', 11>>,
+    pub estop: EmergencyStop<In<'B', 5>>,
     /// Battery voltage.
     pub battery: BatteryMonitor,
     /// The PWM timer; kept so that it is never reconfigured behind the motors' back.
     #[allow(dead_code)]
-    pub pwm_timer: PwmHzManager<pac::TIM12>,
+    pub pwm_timer: stm32f4xx_hal::timer::PwmHzManager<pac::TIM12>,
 }
 
 /// The peripherals and pins the board uses (USART1, PA9 and PA10 stay with `main.rs`).
 pub struct BoardParts {
-    /// Timers: echo captures, encoders, delays, PWM.
+    /// Timers: echo captures, encoders, PWM.
     pub tim2: pac::TIM2,
     pub tim3: pac::TIM3,
     pub tim4: pac::TIM4,
     pub tim5: pac::TIM5,
-    pub tim6: pac::TIM6,
-    pub tim7: pac::TIM7,
     pub tim12: pac::TIM12,
-    pub tim13: pac::TIM13,
     /// The battery ADC.
     pub adc1: pac::ADC1,
+    /// The motor pins, already low.
+    pub motor_pins: MotorPins,
     /// Pins, as the GPIO split hands them out.
     pub pa1: gpio::PA1,
     pub pa5: gpio::PA5,
@@ -212,116 +415,107 @@ pub struct BoardParts {
     pub pa7: gpio::PA7,
     pub pb0: gpio::PB0,
     pub pb1: gpio::PB1,
+    pub pb5: gpio::PB5,
     pub pb6: gpio::PB6,
     pub pb7: gpio::PB7,
-    pub pb12: gpio::PB12,
-    pub pb13: gpio::PB13,
-    pub pb14: gpio::PB14,
-    pub pb15: gpio::PB15,
     pub pc0: gpio::PC0,
     pub pc8: gpio::PC8,
     pub pc9: gpio::PC9,
     pub pc10: gpio::PC10,
-    pub pc11: gpio::PC11,
 }
 
 /// Configure every peripheral of the table above and build the drivers: motors stopped, neck
-/// not homed, emergency stop latched. Needs the clocks frozen at [`SYSCLK_HZ`].
-pub fn take(
-    parts: BoardParts,
-    rcc: &mut Rcc,
-    dcb: &mut DCB,
-    dwt: &mut DWT,
-    config: &RobotConfig,
-) -> Board {
-    // The echo time-outs count core cycles.
-    dcb.enable_trace();
-    dwt.enable_cycle_counter();
-
-    let window = SonarWindow::from_config(config);
+/// not homed, emergency stop latched. Needs the clocks frozen at [`SYSCLK_HZ`]. Logs
+/// bring-up step 4 (the set-ups, the first battery reading and the e-stop's level).
+pub fn take(parts: BoardParts, rcc: &mut Rcc, config: &RobotConfig) -> Board {
+    // Echo latches: the direct channel through the HAL (1 MHz, rising), the companion by hand.
     let (top_manager, (_, top_ch, ..)) = parts.tim5.capture_hz(ECHO_TICK_HZ.Hz(), rcc);
     let mut top_ch = top_ch.with(parts.pa1);
-    top_ch.set_polarity(CapturePolarity::ActiveBoth);
+    top_ch.set_polarity(CapturePolarity::ActiveHigh);
+    top_ch.set_filter(INPUT_FILTER);
     top_ch.enable();
+    companion_falling(EchoLatchTim5::regs(), 0);
     let (bottom_manager, (bottom_ch, ..)) = parts.tim2.capture_hz(ECHO_TICK_HZ.Hz(), rcc);
     let mut bottom_ch = bottom_ch.with(parts.pa5);
-    bottom_ch.set_polarity(CapturePolarity::ActiveBoth);
+    bottom_ch.set_polarity(CapturePolarity::ActiveHigh);
+    bottom_ch.set_filter(INPUT_FILTER);
     bottom_ch.enable();
-    let sonar_top = SonarRanger::new(
-        parts.pb0.into_push_pull_output(),
-        EchoTim5Ch2 {
-            manager: top_manager,
-            channel: top_ch,
-            armed_at_cycles: 0,
+    companion_falling(EchoLatchTim2::regs(), 1);
+
+    let head = HeadPins {
+        trigger: parts.pb0.into_push_pull_output_in_state(gpio::PinState::Low),
+        echo: EchoLatchTim5 {
+            _manager: top_manager,
+            _direct: top_ch,
         },
-        UsDelay(parts.tim6.delay_us(rcc)),
-        window,
-    );
-    let sonar_bottom = SonarRanger::new(
-        parts.pb1.into_push_pull_output(),
-        EchoTim2Ch1 {
-            manager: bottom_manager,
-            channel: bottom_ch,
-            armed_at_cycles: 0,
+        step: parts.pc8.into_push_pull_output_in_state(gpio::PinState::Low),
+        dir: parts.pc9.into_push_pull_output_in_state(gpio::PinState::Low),
+        home: parts.pc10.into_pull_up_input(),
+    };
+    let bottom_sonar = (
+        parts.pb1.into_push_pull_output_in_state(gpio::PinState::Low),
+        EchoLatchTim2 {
+            _manager: bottom_manager,
+            _direct: bottom_ch,
         },
-        UsDelay(parts.tim7.delay_us(rcc)),
-        window,
     );
 
-    let neck = NeckStepper::new(
-        parts.pc8.into_push_pull_output(),
-        parts.pc9.into_push_pull_output(),
-        parts.pc10.into_pull_up_input(),
-        UsDelay(parts.tim13.delay_us(rcc)),
-        NeckGeometry::from_config(config),
-    );
-
+    let pins = parts.motor_pins;
     let (pwm_timer, (left_pwm, right_pwm)) = parts.tim12.pwm_hz(MOTOR_PWM_HZ.Hz(), rcc);
-    let mut left_pwm = left_pwm.with(parts.pb14);
-    let mut right_pwm = right_pwm.with(parts.pb15);
+    let mut left_pwm = left_pwm.with(pins.pwm_left);
+    let mut right_pwm = right_pwm.with(pins.pwm_right);
     left_pwm.set_duty(0);
     right_pwm.set_duty(0);
     left_pwm.enable();
     right_pwm.enable();
-    let mut motor_left = Motor::new(
-        left_pwm,
-        parts.pb12.into_push_pull_output(),
-        config.max_voltage_v,
-        true,
-    );
-    let mut motor_right = Motor::new(
-        right_pwm,
-        parts.pb13.into_push_pull_output(),
-        config.max_voltage_v,
-        false,
-    );
+    let mut motor_left = Motor::new(left_pwm, pins.dir_left, config.max_voltage_v, true);
+    let mut motor_right = Motor::new(right_pwm, pins.dir_right, config.max_voltage_v, false);
     // Duty 0 cannot fail on this HAL (its PWM error type is `Infallible`).
     let _ = motor_left.stop();
     let _ = motor_right.stop();
 
     let limit = max_counts_per_period(config);
+    let left_pins = (
+        parts.pa6.internal_pull_up(true),
+        parts.pa7.internal_pull_up(true),
+    );
+    let right_pins = (
+        parts.pb6.internal_pull_up(true),
+        parts.pb7.internal_pull_up(true),
+    );
     let wheel_left = WheelEncoder::new(
-        WheelCounter(Qei::new(parts.tim3, (parts.pa6, parts.pa7), rcc)),
+        WheelCounter::filtered(Qei::new(parts.tim3, left_pins, rcc)),
         Mounting::Normal,
         limit,
     );
     let wheel_right = WheelEncoder::new(
-        WheelCounter(Qei::new(parts.tim4, (parts.pb6, parts.pb7), rcc)),
+        WheelCounter::filtered(Qei::new(parts.tim4, right_pins, rcc)),
         Mounting::Mirrored,
         limit,
     );
 
-    let estop = EmergencyStop::new(parts.pc11.into_pull_up_input(), ActiveLevel::High);
+    let estop_pin = parts.pb5.into_pull_up_input();
+    let estop_pressed = estop_pin.is_high();
+    let estop = EmergencyStop::new(estop_pin, ActiveLevel::High);
 
-    let battery = BatteryMonitor {
-        adc: Adc::new(parts.adc1, true, AdcConfig::default(), rcc),
-        pin: parts.pc0.into_analog(),
-    };
+    let mut battery = BatteryMonitor::new(parts.adc1, parts.pc0, rcc);
+    // The first conversion (started above) takes 23 µs: wait it out once, here in `init`.
+    cortex_m::asm::delay(SYSCLK_HZ / 1_000_000 * 30);
+    let battery_v = battery.read_battery_v();
+    defmt::info!(
+        "bring-up 4: board set up: PWM {} Hz on TIM12 (duty 0), encoders TIM3/TIM4, echo latches TIM5/TIM2 at {} Hz, ADC {} Hz; battery {} V; e-stop input {}",
+        MOTOR_PWM_HZ,
+        ECHO_TICK_HZ,
+        ADC_CLOCK_HZ,
+        battery_v,
+        if estop_pressed { "pressed or open (latched)" } else { "released" }
+    );
 
     Board {
-        sonar_top,
-        sonar_bottom,
-        neck,
+        head,
+        bottom_sonar,
+        window: SonarWindow::from_config(config),
+        geometry: NeckGeometry::from_config(config),
         motor_left,
         motor_right,
         wheel_left,

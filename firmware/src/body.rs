@@ -109,9 +109,19 @@ mod sim {
 #[cfg(feature = "hardware")]
 mod board_body {
     use super::MissionConfig;
-    use crate::board::{Board, MotorLeft, MotorRight, Neck, SonarTop};
-    use twil_core::drivers::emergency_stop::EmergencyStop;
+    use crate::board::{Board, HeadPins, MotorLeft, MotorRight, SYSCLK_HZ};
+    use crate::{instructions, note_worst, Mono};
+    use core::sync::atomic::AtomicU32;
+    use embedded_hal::digital::{InputPin, OutputPin};
+    use rtic_monotonics::systick::prelude::*;
+    use stm32f4xx_hal::gpio;
+    use twil_core::drivers::emergency_stop::{is_active, EmergencyStop};
+    use twil_core::drivers::neck_stepper::{
+        angle_to_steps, NeckError, NeckGeometry, StepDirection, STEP_PULSE_NS,
+    };
+    use twil_core::drivers::sonar_ranger::{range_from_echo_ticks, TRIGGER_PULSE_US};
     use twil_core::drivers::wheel_encoder::WheelEncoder;
+    use twil_core::drivers::SonarWindow;
 
     /// The wheels: encoders, motors, the emergency stop and the battery.
     pub struct Body {
@@ -119,16 +129,8 @@ mod board_body {
         wheel_right: WheelEncoder<crate::board::WheelCounter<stm32f4xx_hal::pac::TIM4>>,
         motor_left: MotorLeft,
         motor_right: MotorRight,
-        estop: EmergencyStop<stm32f4xx_hal::gpio::PC11<stm32f4xx_hal::gpio::Input>>,
+        estop: EmergencyStop<gpio::PB5<gpio::Input>>,
         battery: crate::board::BatteryMonitor,
-    }
-
-    /// The sonar head: the top sonar and the neck stepper.
-    pub struct Head {
-        /// The top sonar.
-        pub sonar: SonarTop,
-        /// The neck.
-        pub neck: Neck,
     }
 
     /// Split the board into the wheels and the sonar head.
@@ -143,8 +145,11 @@ mod board_body {
                 battery: board.battery,
             },
             Head {
-                sonar: board.sonar_top,
-                neck: board.neck,
+                pins: board.head,
+                window: board.window,
+                geometry: board.geometry,
+                position_steps: None,
+                last_trigger: None,
             },
         )
     }
@@ -160,8 +165,8 @@ mod board_body {
             (l, r)
         }
 
-        /// Apply the voltages until the next period, at the measured battery voltage; any
-        /// error stops both motors.
+        /// Apply the voltages until the next period, at the measured battery voltage (the
+        /// conversion started one period ago: no wait); any error stops both motors.
         pub fn drive(&mut self, left_voltage_v: f32, right_voltage_v: f32, _period_s: f32) {
             let battery_v = self.battery.read_battery_v();
             let ok = self
@@ -187,12 +192,130 @@ mod board_body {
     /// A board has no simulated world.
     pub type World = ();
 
+    /// Least time between two triggers, ms: the HC-SR04 holds its echo high up to 38 ms with
+    /// no target and asks for at least 60 ms between pings (its data sheet, "we suggest to use
+    /// over 60 ms measurement cycle"), so an echo of the previous ping cannot be timed.
+    pub const PING_CYCLE_MS: u32 = 60;
+
+    /// Set-up time of the direction input before a step edge, cycles at [`SYSCLK_HZ`]: 1 µs
+    /// (DRV8825: 650 ns, A4988: 200 ns).
+    const DIR_SETUP_CYCLES: u32 = SYSCLK_HZ / 1_000_000;
+
+    /// The sonar head: the top sonar and the neck, driven asynchronously. Every wait of a
+    /// millisecond or more is a `Mono` delay; the only waits in a loop are the 10 µs trigger
+    /// pulse, the 2 µs step pulse and the 1 µs direction set-up, at the sonar task's priority
+    /// (below the USART's and `link_rx`'s).
+    pub struct Head {
+        pins: HeadPins,
+        window: SonarWindow,
+        geometry: NeckGeometry,
+        /// Steps from straight ahead; `None` until homed.
+        position_steps: Option<i32>,
+        /// When the last ping was triggered.
+        last_trigger: Option<<Mono as rtic_monotonics::Monotonic>::Instant>,
+    }
+
     impl Head {
-        /// Turn the neck to `neck_angle_rad` and take one reading (blocking: the neck's steps and
-        /// the echo window); `None` for no echo or a driver fault.
-        pub fn read(&mut self, neck_angle_rad: f32) -> Option<f32> {
-            self.neck.move_to_angle(neck_angle_rad.to_degrees()).ok()?;
-            self.sonar.read().ok().flatten()
+        /// Step towards the home switch until it closes, at most
+        /// `geometry.max_homing_steps` steps (a broken switch ends with `HomeNotFound`, never
+        /// an endless turn). Returns the steps taken.
+        pub async fn home(&mut self) -> Result<u32, NeckError> {
+            self.position_steps = None;
+            let direction = self.geometry.homing_direction;
+            let mut next = Mono::now();
+            let mut steps = 0;
+            loop {
+                let high = self
+                    .pins
+                    .home
+                    .is_high()
+                    .map_err(|_| NeckError::Pin { pin: "home" })?;
+                if is_active::<()>(Ok(high), self.geometry.home_active) {
+                    self.position_steps = Some(self.geometry.home_offset_steps);
+                    return Ok(steps);
+                }
+                if steps >= self.geometry.max_homing_steps {
+                    return Err(NeckError::HomeNotFound { steps });
+                }
+                self.step(direction, steps == 0);
+                steps += 1;
+                next += step_period(&self.geometry);
+                Mono::delay_until(next).await;
+            }
         }
+
+        /// Turn to the step nearest `angle_rad`, then ping; `Ok(None)` is no echo. The
+        /// cycles spent in pulses are noted in `worst` (the waits are not work).
+        pub async fn read(
+            &mut self,
+            angle_rad: f32,
+            worst: &AtomicU32,
+        ) -> Result<Option<f32>, NeckError> {
+            let target = angle_to_steps(&self.geometry, angle_rad.to_degrees())?;
+            let start = self.position_steps.ok_or(NeckError::NotHomed)?;
+            let direction = if target > start {
+                StepDirection::Positive
+            } else {
+                StepDirection::Negative
+            };
+            let mut next = Mono::now();
+            let mut first = true;
+            // Unknown while moving: a fault midway leaves it unknown.
+            self.position_steps = None;
+            for _ in 0..target.abs_diff(start) {
+                let before = instructions();
+                self.step(direction, first);
+                note_worst(worst, instructions().saturating_sub(before));
+                first = false;
+                next += step_period(&self.geometry);
+                Mono::delay_until(next).await;
+            }
+            self.position_steps = Some(target);
+
+            // Ping: no sooner than PING_CYCLE_MS after the last one.
+            if let Some(last) = self.last_trigger {
+                Mono::delay_until(last + PING_CYCLE_MS.millis()).await;
+            }
+            self.pins.echo.arm();
+            let before = instructions();
+            let _ = self.pins.trigger.set_high();
+            cortex_m::asm::delay(TRIGGER_PULSE_US * (SYSCLK_HZ / 1_000_000));
+            let _ = self.pins.trigger.set_low();
+            note_worst(worst, instructions().saturating_sub(before));
+            let now = Mono::now();
+            self.last_trigger = Some(now);
+            // The echo window: both edges are latched by the timer meanwhile.
+            let window_ms = self.window.timeout_us.div_ceil(1_000);
+            Mono::delay_until(now + window_ms.millis()).await;
+            let edges = self.pins.echo.edges();
+            Ok(range_from_echo_ticks(
+                &self.window,
+                edges.width_ticks(),
+                crate::board::ECHO_TICK_HZ,
+            ))
+        }
+
+        /// One step pulse (direction first, with its set-up time when it may have changed).
+        fn step(&mut self, direction: StepDirection, set_direction: bool) {
+            if set_direction {
+                let high = (direction == StepDirection::Positive) == self.geometry.positive_dir_high;
+                let _ = if high {
+                    self.pins.dir.set_high()
+                } else {
+                    self.pins.dir.set_low()
+                };
+                cortex_m::asm::delay(DIR_SETUP_CYCLES);
+            }
+            let _ = self.pins.step.set_high();
+            cortex_m::asm::delay(STEP_PULSE_NS.div_ceil(1_000) * (SYSCLK_HZ / 1_000_000));
+            let _ = self.pins.step.set_low();
+        }
+    }
+
+    /// Time per step as a `Mono` duration (whole milliseconds, at least one).
+    fn step_period(
+        geometry: &NeckGeometry,
+    ) -> <Mono as rtic_monotonics::Monotonic>::Duration {
+        geometry.step_period_ns.div_ceil(1_000_000).max(1).millis()
     }
 }

@@ -1,6 +1,7 @@
 //! The chip-level parts of the Twil firmware that the program (`src/main.rs`) and the on-target
 //! tests (`tests/on_target.rs`) share: where the linker put memory ([`memory`]: the CCM's
-//! start-up copy, static SRAM, the painted stack) and the statics that live in the CCM (the mission, the receive queue and, under QEMU, the real world).
+//! start-up copy, static SRAM, the painted stack) and the statics that live in the CCM (the
+//! mission, the receive and transmit queues and, under QEMU, the real world).
 #![no_std]
 #![deny(missing_docs)]
 
@@ -15,6 +16,12 @@ use twil_core::link::WorldUpload;
 /// Bytes of the receive queue (holds one less).
 pub const RX_QUEUE_BYTES: usize = 1024;
 
+/// Bytes of the transmit queue (holds one less): four of the link's largest frames
+/// (`MAX_FRAME_BYTES` = 512), 178 ms of 115 200 baud. The mission task queues a frame only
+/// when the whole frame fits and pulls telemetry only while a largest frame fits
+/// (backpressure: telemetry waits, it is never cut); the USART1 interrupt sends it.
+pub const TX_QUEUE_BYTES: usize = 2048;
+
 /// The device: the planning service and the mission requests (in SRAM).
 pub type TwilDevice = twil_core::link::mcu::McuRobotDevice;
 /// The mission: its 300 x 300 map (also the planning service's), the seen space, the paths.
@@ -24,6 +31,12 @@ pub type TwilMission = twil_core::link::mcu::McuMission;
 /// start-up copy.
 #[link_section = ".ccmram.rx_queue"]
 static mut RX_QUEUE: Queue<u8, RX_QUEUE_BYTES> = Queue::new();
+
+/// The transmit queue, in the CCM (the USART1 interrupt empties it byte by byte; a DMA
+/// transmit would need it in SRAM: the DMA controllers do not reach the CCM). Only reached
+/// through [`take_ccm_statics`], after the CCM's start-up copy.
+#[link_section = ".ccmram.tx_queue"]
+static mut TX_QUEUE: Queue<u8, TX_QUEUE_BYTES> = Queue::new();
 
 /// The mission in the CCM (50 KB: the SRAM holds the planner). Only reached through
 /// [`take_ccm_statics`], after the copy.
@@ -41,6 +54,8 @@ pub struct CcmStatics {
     pub mission: &'static mut TwilMission,
     /// The receive queue.
     pub rx_queue: &'static mut Queue<u8, RX_QUEUE_BYTES>,
+    /// The transmit queue.
+    pub tx_queue: &'static mut Queue<u8, TX_QUEUE_BYTES>,
     /// The real world (QEMU build).
     #[cfg(feature = "qemu")]
     pub world: &'static mut WorldUpload,
@@ -59,6 +74,7 @@ pub fn take_ccm_statics() -> Option<CcmStatics> {
         Some(CcmStatics {
             mission: &mut *core::ptr::addr_of_mut!(MISSION),
             rx_queue: &mut *core::ptr::addr_of_mut!(RX_QUEUE),
+            tx_queue: &mut *core::ptr::addr_of_mut!(TX_QUEUE),
             #[cfg(feature = "qemu")]
             world: &mut *core::ptr::addr_of_mut!(WORLD),
         })

@@ -11,29 +11,37 @@
 //!
 //! | task | prio | period | does |
 //! |---|---|---|---|
+//! | `usart1` | 5 | per byte (USART1 interrupt: RXNE, TXE) | received bytes into a 256-byte queue, then pends `link_rx`; the next bytes of the transmit queue into the data register. Nothing else: no decoding, no waiting |
 //! | `control` | 4 | 50 ms (`Mono::delay_until`) | encoders → `Pilot::tick` → motors; the stop flag (abort, e-stop) zeroes the motors; the report to `mission` |
-//! | `sonar` | 3 | per request | neck + trigger + echo (board) or a ray cast on the real world (QEMU); the reading to `mission` |
-//! | `usart1_rx` | 2 | per byte (USART1 interrupt) | bytes into the receive queue; an `AbortMission` / `EmergencyStop` frame sets the stop flag at once |
-//! | `mission` | 1 | event-driven | the link's requests and replies, the mission's steps, the planner, the pilot's commands, telemetry |
+//! | `link_rx` | 3 | per batch of bytes (pended by `usart1`) | bytes on to the mission's queue; frames decoded to look for `AbortMission` / `EmergencyStop`, which set the stop flag at once |
+//! | `sonar` | 2 | per request | board: neck steps paced by `Mono`, a trigger, the echo's two edges latched by a timer and read after `Mono::delay`; QEMU: a ray cast on the real world; the reading to `mission` |
+//! | `mission` | 1 | event-driven | the link's requests and replies, the mission's steps, the planner, the pilot's commands, telemetry into the transmit queue |
 //!
-//! The control period never waits for the planner: the planner runs in `mission`, the lowest
-//! priority, and everything above preempts it. Values cross between tasks through `rtic-sync`
-//! channels (reports, sonar requests, readings) and two locked resources (the pilot, taken by
-//! `mission` only to hand it a command; the simulated body and world, QEMU build).
+//! Nothing at or above the receive path waits in a loop: the USART interrupt is the highest
+//! priority and moves one byte per register access, the decoding runs in `link_rx`, and the
+//! sonar waits with `Mono` (its only spins, the 10 µs trigger pulse and the neck's 2 µs step
+//! pulse, are at priority 2, below both). The control period never waits for the planner: the
+//! planner runs in `mission`, the lowest priority, and everything above preempts it. Values
+//! cross between tasks through `rtic-sync` channels (reports, sonar requests, readings),
+//! single-producer queues (bytes) and two locked resources (the pilot, taken by `mission` only
+//! to hand it a command; the body).
 //!
 //! ## Memory
 //!
 //! - SRAM (`.data`, `.bss`): the planner (framed scratch, open list, path cells), the device
-//!   (the planning service without a map of its own), the pilot, RTIC's state. Below it the
-//!   stack (flip-link), painted at reset; its high-water mark is reported.
+//!   (the planning service without a map of its own), the pilot, RTIC's state, the interrupt's
+//!   256-byte receive queue. Below it the stack (flip-link), painted at reset; its high-water
+//!   mark is reported.
 //! - CCM (64 KiB, `.ccmram`, see `build.rs`): the mission (its 300 x 300 map, which is also the
-//!   planning service's, the seen space, the paths), the receive queue and, under QEMU, the
-//!   real world. Copied from flash by `init` before anything reads it.
+//!   planning service's, the seen space, the paths), the mission's receive queue, the transmit
+//!   queue and, under QEMU, the real world. Copied from flash by `init` before anything reads
+//!   it.
 //!
 //! ## Builds
 //!
-//! - default (`hardware`): PLL at 168 MHz from the HSI, defmt over RTT, `panic-probe`, the
-//!   drivers of `board.rs` (Olimex STM32-H405).
+//! - default (`hardware`): PLL at 168 MHz from the board's 8 MHz crystal (HSE; the HSI if the
+//!   crystal does not start, logged), defmt over RTT, `panic-probe`, the drivers of `board.rs`
+//!   (Olimex STM32-H405).
 //! - `--no-default-features --features qemu`: QEMU's `netduinoplus2`; the clock stays on the
 //!   HSI (QEMU does not emulate the RCC); the simulated robot (`twil_core::plant`) stands in for
 //!   the drivers; defmt and panics over semihosting.
@@ -149,21 +157,26 @@ fn instructions() -> u64 {
     raw_clock() / NS_PER_INSTRUCTION.load(Ordering::Relaxed).max(1) as u64
 }
 
-/// Bytes dropped by the receive interrupt (queue full or a line error).
+/// Bytes dropped on the way in (a queue full, or a line error: overrun, framing, noise).
 static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
-/// Set by the receive interrupt on `AbortMission` / `EmergencyStop` (and by the e-stop input):
-/// the control task zeroes the motors at its next tick, before the mission task answers.
+/// Frames not sent because the transmit queue could not take the whole frame (the mission
+/// task checks for room first, so this stays 0 unless that rule is broken).
+static TX_DROPPED_FRAMES: AtomicU32 = AtomicU32::new(0);
+/// Set by `link_rx` on `AbortMission` / `EmergencyStop` (and by the e-stop input): the control
+/// task zeroes the motors at its next tick, before the mission task answers.
 static STOP: AtomicBool = AtomicBool::new(false);
 /// A mission is running: the control task ticks the pilot (otherwise the motors stay at 0).
 static ACTIVE: AtomicBool = AtomicBool::new(false);
 /// Most instructions one control step took (the pilot's tick; not the simulated body's step).
 static MAX_CONTROL_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
-/// Most instructions one sonar reading's work took (QEMU: the ray cast; board: the drivers'
-/// blocking neck move and echo, in cycles), one receive interrupt took, and one step of the
-/// body took (QEMU: the simulated robot, not charged to the control step). Logged when a
-/// mission ends.
+/// Most instructions (QEMU) or cycles (board) one run of each task took, for the latency
+/// table of docs/firmware.md: a sonar reading's own work (QEMU: the ray cast; board: the
+/// neck's pulses and the trigger, not the `Mono` waits), one USART1 interrupt, one `link_rx`
+/// run (decoding), one step of the body (QEMU: the simulated robot, not charged to the control
+/// step; board: the drivers). Logged when a mission ends.
 static WORST_SONAR_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
-static WORST_RX_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
+static WORST_USART_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
+static WORST_DECODE_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
 static WORST_BODY_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
 
 /// Note `spent` instructions in `worst` if it is the most so far.
@@ -190,13 +203,21 @@ static MISSION_TURN_MS: AtomicU32 = AtomicU32::new(0);
 /// Set by the control task when a step missed its period (motors already zeroed); the mission
 /// task ends the mission with `StopCause::ControllerOverrun`.
 static OVERRUN: AtomicBool = AtomicBool::new(false);
+/// The sonar head failed (neck homing, a pin): the mission task ends a running mission with a
+/// sensor fault instead of mapping silence.
+#[cfg(feature = "hardware")]
+static SENSOR_FAULT: AtomicBool = AtomicBool::new(false);
 /// The watchdog gate refused to feed (logged once; on QEMU, which has no IWDG, nothing resets).
 static WATCHDOG_STARVED: AtomicBool = AtomicBool::new(false);
 
-/// Independent watchdog timeout, milliseconds (hardware build): ten control periods. The gate
-/// ([`WatchdogGate`]) stops feeding it when a task makes no progress for
-/// [`WatchdogGate::MISSION_LIMIT_MS`], so a stall resets the chip within that plus this.
-pub const WATCHDOG_TIMEOUT_MS: u32 = 500;
+/// Independent watchdog timeout, milliseconds (hardware build), at the LSI's typical 32 kHz:
+/// three control periods. The LSI runs at 17 … 47 kHz (DS8626, table "LSI oscillator
+/// characteristics"), so the real timeout is 102 … 282 ms: never shorter than two periods
+/// (the control task feeds every period), and a locked-up core, whose last PWM duty keeps
+/// running, is reset within 282 ms. The gate ([`WatchdogGate`]) stops feeding it when a task
+/// makes no progress for [`WatchdogGate::MISSION_LIMIT_MS`], so a stall resets the chip
+/// within that plus this.
+pub const WATCHDOG_TIMEOUT_MS: u32 = 150;
 
 /// The mission's sonar range, metres (f32 bits), for the simulated sonar.
 static SONAR_RANGE_BITS: AtomicU32 = AtomicU32::new(0x3FC0_0000); // 1.5
@@ -207,6 +228,9 @@ const REPORTS: usize = 8;
 const READINGS: usize = 8;
 /// Sonar requests queued from `mission` to `sonar`.
 const SONAR_REQUESTS: usize = 2;
+/// Bytes of the queue from the USART1 interrupt to `link_rx` (holds one less): 22 ms of
+/// 115 200 baud, while `link_rx` runs within a control step's time of the interrupt.
+const IRQ_QUEUE_BYTES: usize = 256;
 
 /// The control period, milliseconds (`RobotConfig::controller_period_s`).
 const PERIOD_MS: u32 = 50;
@@ -224,13 +248,14 @@ mod app {
     use rtic_sync::channel::{Receiver, Sender};
     use rtic_sync::make_channel;
     use stm32f4xx_hal::{
-        pac::USART1,
+        pac::{Interrupt, USART1},
         prelude::*,
         rcc,
         serial::{Config, Rx, Serial, Tx},
     };
     use twil_core::link::{
         DeviceInfo, FrameDecoder, Request, RequestFrame, Telemetry, WorldAccess, WorldUpload,
+        MAX_FRAME_BYTES,
     };
     use twil_core::mission::{Pilot, PilotReport, SonarRequest};
 
@@ -245,6 +270,10 @@ mod app {
     /// A sonar reading: the neck angle and the range (`None`: no echo).
     pub type Reading = (f32, Option<f32>);
 
+    /// The vector `link_rx` is bound to: CAN1's first receive FIFO, whose peripheral is never
+    /// clocked, so only `rtic::pend` (from `usart1`) raises it.
+    const LINK_RX_VECTOR: Interrupt = Interrupt::CAN1_RX0;
+
     #[shared]
     struct Shared {
         pilot: &'static mut Pilot,
@@ -256,8 +285,15 @@ mod app {
     struct Local {
         rx: Rx<USART1>,
         tx: Tx<USART1>,
+        /// `usart1` → `link_rx`: the bytes as they arrive.
+        irq_producer: Producer<'static, u8>,
+        irq_consumer: Consumer<'static, u8>,
+        /// `link_rx` → `mission`: the bytes, checked for stop frames.
         producer: Producer<'static, u8>,
         consumer: Consumer<'static, u8>,
+        /// `mission` → `usart1`: whole frames to send.
+        tx_producer: Producer<'static, u8>,
+        tx_consumer: Consumer<'static, u8>,
         device: &'static mut TwilDevice,
         planner: &'static mut TwilPlanner,
         mission: &'static mut TwilMission,
@@ -269,23 +305,52 @@ mod app {
         planner_memory: TwilPlanner = TwilPlanner::new(),
         device_memory: TwilDevice = TwilDevice::new(DeviceInfo::for_build(Build::Hardware)),
         pilot_memory: Pilot = Pilot::IDLE,
+        irq_queue: heapless::spsc::Queue<u8, IRQ_QUEUE_BYTES> = heapless::spsc::Queue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
+        let mut rcc = cx.device.RCC.constrain();
+        // First of all, the motor bridges' inputs: from reset until here they float (inputs);
+        // now they are driven low, bridges disabled, before anything that could take time.
+        #[cfg(feature = "hardware")]
+        let (gpiob, motor_pins) = {
+            let gpiob = cx.device.GPIOB.split(&mut rcc);
+            let pins = board::MotorPins::low(gpiob.pb12, gpiob.pb13, gpiob.pb14, gpiob.pb15);
+            (
+                board::PortBRest {
+                    pb0: gpiob.pb0,
+                    pb1: gpiob.pb1,
+                    pb5: gpiob.pb5,
+                    pb6: gpiob.pb6,
+                    pb7: gpiob.pb7,
+                },
+                pins,
+            )
+        };
+        #[cfg(feature = "hardware")]
+        log!("bring-up 1: motor outputs PB12..PB15 driven low (bridges off)");
+
         // Why the chip reset: RCC_CSR's flags, then cleared (RMVF) so the next reset reports
         // its own. QEMU does not emulate the RCC: unknown.
         #[cfg(feature = "hardware")]
         let reset_cause = {
-            let csr = cx.device.RCC.csr().read().bits();
-            cx.device.RCC.csr().modify(|_, w| w.rmvf().set_bit());
+            let csr = rcc.csr().read().bits();
+            rcc.csr().modify(|_, w| w.rmvf().set_bit());
             ResetCause::from_rcc_csr(csr)
         };
         #[cfg(feature = "qemu")]
         let reset_cause = ResetCause::Unknown;
-        // QEMU: stay on the HSI (16 MHz), no PLL (its ready flag is never set under QEMU).
+        // QEMU: stay on the HSI (16 MHz), no PLL and no HSE: QEMU 7.2 does not emulate the RCC,
+        // its ready flags never set, so nothing may wait on them.
         #[cfg(feature = "qemu")]
-        let mut rcc = cx.device.RCC.freeze(rcc::Config::hsi());
+        let mut rcc = rcc.freeze(rcc::Config::hsi());
+        // The board: the 8 MHz crystal through the PLL to 168 MHz (the HSI if the crystal does
+        // not start; logged).
         #[cfg(feature = "hardware")]
-        let mut rcc = cx.device.RCC.freeze(rcc::Config::hsi().sysclk(168.MHz()));
+        let mut rcc = {
+            let (rcc, source) = board::start_clocks(rcc);
+            board::log_clocks(&rcc, source);
+            rcc
+        };
 
         let gpioa = cx.device.GPIOA.split(&mut rcc);
         let serial: Serial<USART1> = Serial::new(
@@ -295,8 +360,9 @@ mod app {
             &mut rcc,
         )
         .unwrap_or_else(|_| panic!("115200 baud is reachable from any clock"));
-        let (mut tx, mut rx) = serial.split();
+        let (tx, mut rx) = serial.split();
         rx.listen();
+        log!("bring-up 3: USART1 115200 8N1, TX PA9, RX PA10");
 
         // The monotonic: SysTick at MONO_HZ, never paused (see SYSTICK_HZ for the clock).
         #[cfg(feature = "hardware")]
@@ -311,6 +377,7 @@ mod app {
         // static yet (they are handed out just below).
         unsafe { memory::copy_ccm() };
         let ccm = twil_firmware::take_ccm_statics().expect("init takes the CCM statics once");
+        let (mut tx_producer, tx_consumer) = ccm.tx_queue.split();
         let device = cx.local.device_memory;
         device.handler.set_build(if cfg!(feature = "qemu") {
             Build::Qemu
@@ -321,12 +388,13 @@ mod app {
             .handler
             .set_static_ram_bytes(memory::static_ram_bytes());
         device.handler.set_reset_cause(reset_cause);
+        // Queued now, sent by `usart1` as soon as interrupts are on (after `init`).
         TwilDevice::send_telemetry(
             &Telemetry::Boot {
                 protocol_version: PROTOCOL_VERSION,
                 reset_cause,
             },
-            &mut |bytes: &[u8]| write_all(&mut tx, bytes),
+            &mut |bytes: &[u8]| queue_frame(&mut tx_producer, bytes),
         );
         log!(
             "twil firmware up: static RAM {} bytes, stack {} bytes, reset cause {}",
@@ -335,50 +403,36 @@ mod app {
             reset_cause
         );
         let (producer, consumer) = ccm.rx_queue.split();
+        let (irq_producer, irq_consumer) = cx.local.irq_queue.split();
 
         #[cfg(feature = "qemu")]
         let (body, head, world) = (body::Body::new(), body::Head, ccm.world);
         #[cfg(feature = "hardware")]
         let (body, head, world) = {
-            let gpiob = cx.device.GPIOB.split(&mut rcc);
             let gpioc = cx.device.GPIOC.split(&mut rcc);
             let parts = board::BoardParts {
                 tim2: cx.device.TIM2,
                 tim3: cx.device.TIM3,
                 tim4: cx.device.TIM4,
                 tim5: cx.device.TIM5,
-                tim6: cx.device.TIM6,
-                tim7: cx.device.TIM7,
                 tim12: cx.device.TIM12,
-                tim13: cx.device.TIM13,
                 adc1: cx.device.ADC1,
+                motor_pins,
                 pa1: gpioa.pa1,
                 pa5: gpioa.pa5,
                 pa6: gpioa.pa6,
                 pa7: gpioa.pa7,
                 pb0: gpiob.pb0,
                 pb1: gpiob.pb1,
+                pb5: gpiob.pb5,
                 pb6: gpiob.pb6,
                 pb7: gpiob.pb7,
-                pb12: gpiob.pb12,
-                pb13: gpiob.pb13,
-                pb14: gpiob.pb14,
-                pb15: gpiob.pb15,
                 pc0: gpioc.pc0,
                 pc8: gpioc.pc8,
                 pc9: gpioc.pc9,
                 pc10: gpioc.pc10,
-                pc11: gpioc.pc11,
             };
-            let mut dcb = cx.core.DCB;
-            let mut dwt = cx.core.DWT;
-            let board = board::take(
-                parts,
-                &mut rcc,
-                &mut dcb,
-                &mut dwt,
-                &twil_core::robot::RobotConfig::DEFAULT,
-            );
+            let board = board::take(parts, &mut rcc, &twil_core::robot::RobotConfig::DEFAULT);
             let (body, head) = body::split(board);
             (body, head, ())
         };
@@ -393,12 +447,18 @@ mod app {
             w.start(stm32f4xx_hal::prelude::_fugit_ExtU32::millis(
                 WATCHDOG_TIMEOUT_MS,
             ));
+            log!(
+                "bring-up 5: watchdog (IWDG) started: {} ms at the LSI's typical 32 kHz",
+                WATCHDOG_TIMEOUT_MS
+            );
             w
         };
         #[cfg(feature = "qemu")]
         let watchdog = ();
 
         mission::spawn().unwrap_or_else(|_| panic!("mission spawns once"));
+        // The boot frame goes out once interrupts are enabled.
+        rtic::pend(Interrupt::USART1);
         (
             Shared {
                 pilot: cx.local.pilot_memory,
@@ -408,8 +468,12 @@ mod app {
             Local {
                 rx,
                 tx,
+                irq_producer,
+                irq_consumer,
                 producer,
                 consumer,
+                tx_producer,
+                tx_consumer,
                 device,
                 planner: cx.local.planner_memory,
                 mission: ccm.mission,
@@ -428,29 +492,23 @@ mod app {
         }
     }
 
-    /// Every received byte goes into the queue; a frame that asks to stop sets [`STOP`] at once
-    /// (the mission task, which may be planning, answers it later).
-    #[task(binds = USART1, priority = 2, local = [rx, producer, peek: FrameDecoder = FrameDecoder::new()])]
-    fn usart1_rx(cx: usart1_rx::Context) {
+    /// The USART, both ways, and nothing else: received bytes into the interrupt's queue (then
+    /// `link_rx` is pended to look at them), and queued bytes into the data register while it
+    /// takes them. The highest priority, so that no task can hold a received byte past the
+    /// next one (87 µs at 115 200 baud: the data register holds one byte, the shift register
+    /// the next). TXE raises this interrupt only while bytes wait (`listen` / `unlisten`);
+    /// `mission` pends it after queueing a frame. QEMU 7.2's USART raises no TXE interrupt
+    /// and takes every byte at once, so there the pended run sends the whole queue.
+    #[task(binds = USART1, priority = 5, local = [rx, tx, irq_producer, tx_consumer])]
+    fn usart1(cx: usart1::Context) {
         let before = instructions();
+        let mut received = false;
         loop {
             match cx.local.rx.read() {
                 Ok(byte) => {
-                    if cx.local.producer.enqueue(byte).is_err() {
+                    received = true;
+                    if cx.local.irq_producer.enqueue(byte).is_err() {
                         RX_DROPPED.fetch_add(1, Ordering::Relaxed);
-                    }
-                    let (got, _) = cx.local.peek.feed::<RequestFrame>(&[byte]);
-                    if let Some(Ok(frame)) = got {
-                        if matches!(
-                            frame.request,
-                            Request::AbortMission | Request::EmergencyStop
-                        ) && !STOP.swap(true, Ordering::AcqRel)
-                        {
-                            STOP_ASKED_AT_TICK
-                                .store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
-                            STOP_ASKED_AT_COUNTS.store(systick_counts() as u32, Ordering::Release);
-                            STOP_TICKS.store(0, Ordering::Release);
-                        }
                     }
                 }
                 Err(nb::Error::WouldBlock) => break,
@@ -460,8 +518,54 @@ mod app {
                 }
             }
         }
+        if received {
+            rtic::pend(LINK_RX_VECTOR);
+        }
+        let tx = cx.local.tx;
+        while tx.is_tx_empty() {
+            let Some(byte) = cx.local.tx_consumer.dequeue() else {
+                break;
+            };
+            // The data register is empty: the write cannot block.
+            let _ = tx.write(byte);
+        }
+        if cx.local.tx_consumer.ready() {
+            tx.listen();
+        } else {
+            tx.unlisten();
+        }
         note_worst(
-            &WORST_RX_INSTRUCTIONS,
+            &WORST_USART_INSTRUCTIONS,
+            instructions().saturating_sub(before),
+        );
+    }
+
+    /// The received bytes on to the mission's queue; a frame that asks to stop sets [`STOP`]
+    /// at once (the mission task, which may be planning, answers it later). Decoding a whole
+    /// frame (its CRC and postcard) takes up to ~20 k instructions, longer than a byte time,
+    /// which is why it is here and not in `usart1`.
+    #[task(binds = CAN1_RX0, priority = 3, local = [irq_consumer, producer, peek: FrameDecoder = FrameDecoder::new()])]
+    fn link_rx(cx: link_rx::Context) {
+        let before = instructions();
+        while let Some(byte) = cx.local.irq_consumer.dequeue() {
+            if cx.local.producer.enqueue(byte).is_err() {
+                RX_DROPPED.fetch_add(1, Ordering::Relaxed);
+            }
+            let (got, _) = cx.local.peek.feed::<RequestFrame>(&[byte]);
+            if let Some(Ok(frame)) = got {
+                if matches!(
+                    frame.request,
+                    Request::AbortMission | Request::EmergencyStop
+                ) && !STOP.swap(true, Ordering::AcqRel)
+                {
+                    STOP_ASKED_AT_TICK.store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
+                    STOP_ASKED_AT_COUNTS.store(systick_counts() as u32, Ordering::Release);
+                    STOP_TICKS.store(0, Ordering::Release);
+                }
+            }
+        }
+        note_worst(
+            &WORST_DECODE_INSTRUCTIONS,
             instructions().saturating_sub(before),
         );
     }
@@ -560,13 +664,27 @@ mod app {
         }
     }
 
-    /// One reading per request: it takes the neck's step and the echo window.
-    #[task(priority = 3, shared = [body, world], local = [head])]
+    /// One reading per request: it takes the neck's steps and the echo window, all waited with
+    /// `Mono` (the board), so every task above runs meanwhile. The board homes the neck first.
+    #[task(priority = 2, shared = [body, world], local = [head])]
     async fn sonar(
         mut cx: sonar::Context,
         mut requests: Receiver<'static, SonarRequest, SONAR_REQUESTS>,
         mut readings: Sender<'static, Reading, READINGS>,
     ) {
+        #[cfg(feature = "hardware")]
+        {
+            let _ = (&mut cx.shared.body, &mut cx.shared.world);
+            log!("bring-up 6: neck homing (towards the home switch, paced by Mono)");
+            match cx.local.head.home().await {
+                Ok(steps) => log!("bring-up 6: neck homed: switch closed after {} steps", steps),
+                Err(e) => {
+                    SENSOR_FAULT.store(true, Ordering::Release);
+                    defmt::error!("bring-up 6: neck homing failed: {}: sensor fault", e);
+                }
+            }
+        }
+        let mut first = true;
         while let Ok(request) = requests.recv().await {
             let angle = request.neck_angle_rad;
             #[cfg(feature = "qemu")]
@@ -586,17 +704,25 @@ mod app {
                 range_m
             };
             #[cfg(feature = "hardware")]
-            let range_m = {
-                // The drivers wait out the neck's steps and the echo window themselves.
-                let _ = (&mut cx.shared.body, &mut cx.shared.world);
-                let before = instructions();
-                let range_m = cx.local.head.read(angle);
-                note_worst(
-                    &WORST_SONAR_INSTRUCTIONS,
-                    instructions().saturating_sub(before),
-                );
-                range_m
+            let range_m = match cx.local.head.read(angle, &WORST_SONAR_INSTRUCTIONS).await {
+                Ok(range_m) => range_m,
+                Err(e) => {
+                    // The neck or the trigger failed: the reading is no echo, and the
+                    // mission ends with a sensor fault (the mission task sees the flag).
+                    if !SENSOR_FAULT.swap(true, Ordering::AcqRel) {
+                        defmt::error!("sonar head fault: {}", e);
+                    }
+                    None
+                }
             };
+            if first {
+                first = false;
+                log!(
+                    "bring-up 7: first sonar reading: {} rad, range {} m",
+                    angle,
+                    range_m
+                );
+            }
             if readings.send((angle, range_m)).await.is_err() {
                 return;
             }
@@ -622,7 +748,7 @@ mod app {
     }
 
     /// The mission task: the link, the mission's steps and the planner, at the lowest priority.
-    #[task(priority = 1, shared = [pilot, body, world], local = [consumer, tx, device, planner, mission])]
+    #[task(priority = 1, shared = [pilot, body, world], local = [consumer, tx_producer, device, planner, mission])]
     async fn mission(mut cx: mission::Context) {
         // Calibration of the instruction count: `asm::delay(n)` runs n + 1 times a
         // two-instruction loop, so 500 000 gives 1 000 002 instructions (+ a few for the
@@ -652,7 +778,7 @@ mod app {
         let device = &mut **cx.local.device;
         let mission = &mut **cx.local.mission;
         let planner = &mut **cx.local.planner;
-        let tx = &mut *cx.local.tx;
+        let tx = &mut *cx.local.tx_producer;
         let mut chunk = [0u8; 64];
         let mut reported_end = false;
         loop {
@@ -661,15 +787,22 @@ mod app {
             let now_ms = Mono::now().ticks();
             MISSION_TURN_MS.store(now_ms, Ordering::Release);
             device.set_now_ms(now_ms);
-            // The link: requests in, replies out.
+            // The link: requests in, replies out. At most one frame per round (the bytes up to
+            // its 0x00), and only while its reply fits in the transmit queue: a slow host
+            // holds its own requests back (their bytes wait in the receive queue).
             let mut n = 0;
-            while n < chunk.len() {
-                match cx.local.consumer.dequeue() {
-                    Some(b) => {
-                        chunk[n] = b;
-                        n += 1;
+            if room(tx) >= MAX_FRAME_BYTES {
+                while n < chunk.len() {
+                    match cx.local.consumer.dequeue() {
+                        Some(b) => {
+                            chunk[n] = b;
+                            n += 1;
+                            if b == 0 {
+                                break;
+                            }
+                        }
+                        None => break,
                     }
-                    None => break,
                 }
             }
             if n > 0 {
@@ -684,7 +817,7 @@ mod app {
                     planner,
                     &mut instructions,
                     &mut world,
-                    &mut |bytes: &[u8]| write_all(tx, bytes),
+                    &mut |bytes: &[u8]| queue_frame(tx, bytes),
                 );
             }
             // Failsafes: a control step that missed its period (motors already zeroed), a host
@@ -743,12 +876,14 @@ mod app {
             if ended && !reported_end {
                 let r = device.link(mission).report();
                 log!(
-                    "mission done: worst instructions: control step {}, plan {}, sonar reading {}, receive interrupt {}, body step {}; stack {} bytes; stop cause {}, stop latency {} us",
+                    "mission done: worst instructions: control step {}, plan {}, sonar reading {}, usart1 interrupt {}, link_rx {}, body step {}; frames not sent {}; stack {} bytes; stop cause {}, stop latency {} us",
                     r.max_control_instructions as u32,
                     r.max_plan_instructions as u32,
                     WORST_SONAR_INSTRUCTIONS.load(Ordering::Relaxed),
-                    WORST_RX_INSTRUCTIONS.load(Ordering::Relaxed),
+                    WORST_USART_INSTRUCTIONS.load(Ordering::Relaxed),
+                    WORST_DECODE_INSTRUCTIONS.load(Ordering::Relaxed),
                     WORST_BODY_INSTRUCTIONS.load(Ordering::Relaxed),
+                    TX_DROPPED_FRAMES.load(Ordering::Relaxed),
                     r.stack_high_water_bytes,
                     r.stop_cause,
                     r.stop_latency_us
@@ -761,13 +896,18 @@ mod app {
                     Ordering::Release,
                 );
             }
-            // Telemetry, a few messages per round so that readings and reports are not held up.
+            // Telemetry, a few messages per round so that readings and reports are not held
+            // up, each only while a largest frame fits: otherwise it waits in the device
+            // (backpressure), and the loop sleeps while the USART sends.
             for _ in 0..4 {
+                if room(tx) < MAX_FRAME_BYTES {
+                    break;
+                }
                 let Some(t) = device.link(mission).next_telemetry() else {
                     break;
                 };
                 busy = true;
-                TwilDevice::send_telemetry(&t, &mut |bytes: &[u8]| write_all(tx, bytes));
+                TwilDevice::send_telemetry(&t, &mut |bytes: &[u8]| queue_frame(tx, bytes));
             }
             let now = memory::stack_high_water_bytes();
             if now > high_water {
@@ -819,13 +959,47 @@ mod app {
         );
     }
 
-    /// Write bytes, waiting for the transmitter.
-    fn write_all(tx: &mut Tx<USART1>, bytes: &[u8]) {
-        for &b in bytes {
-            // Writing a byte cannot fail on this USART; WouldBlock is waited out.
-            let _ = nb::block!(tx.write(b));
-        }
+    /// Free bytes in the transmit queue.
+    fn room(tx: &Producer<'static, u8>) -> usize {
+        tx.capacity() - tx.len()
     }
+
+    /// Queue one whole frame for `usart1` and pend it; a frame that does not fit is dropped
+    /// whole (counted), never cut: the receiver would lose the next frame too.
+    fn queue_frame(tx: &mut Producer<'static, u8>, bytes: &[u8]) {
+        if room(tx) < bytes.len() {
+            TX_DROPPED_FRAMES.fetch_add(1, Ordering::Relaxed);
+            return;
+        }
+        for &b in bytes {
+            // Checked above: there is room.
+            let _ = tx.enqueue(b);
+        }
+        rtic::pend(Interrupt::USART1);
+    }
+}
+
+/// Zero both motors with raw register writes, trusting no driver state: TIM12's CCR1 / CCR2
+/// (both motors' PWM, board.rs) to 0 and its outputs off (CCER = 0). For the fault handlers.
+#[cfg(feature = "hardware")]
+fn motors_off_raw() {
+    // SAFETY: called only from fault handlers, which preempt everything and end in a reset:
+    // no task will touch TIM12 again.
+    let tim12 = unsafe { &*stm32f4xx_hal::pac::TIM12::ptr() };
+    tim12.ccr1().write(|w| unsafe { w.bits(0) });
+    tim12.ccr2().write(|w| unsafe { w.bits(0) });
+    tim12.ccer().write(|w| unsafe { w.bits(0) });
+}
+
+/// The NMI: on this chip, the clock security system (the crystal stopped; the core runs on the
+/// HSI now, at 16 MHz instead of 168, so every period would be 10.5 times too long). Motors
+/// off, then a reset: the next boot finds no crystal and runs on the HSI's PLL, logged.
+#[cfg(feature = "hardware")]
+#[cortex_m_rt::exception]
+unsafe fn NonMaskableInt() {
+    motors_off_raw();
+    defmt::error!("the crystal stopped (clock security system): motors zeroed, resetting");
+    cortex_m::peripheral::SCB::sys_reset()
 }
 
 /// A HardFault (a bus or usage fault escalated, or a stack overflow: flip-link puts the stack
@@ -836,13 +1010,7 @@ mod app {
 #[cortex_m_rt::exception]
 unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
     #[cfg(feature = "hardware")]
-    {
-        // TIM12 drives both motors' PWM (board.rs): duty 0 and both outputs disabled.
-        let tim12 = &*stm32f4xx_hal::pac::TIM12::ptr();
-        tim12.ccr1().write(|w| w.bits(0));
-        tim12.ccr2().write(|w| w.bits(0));
-        tim12.ccer().write(|w| w.bits(0));
-    }
+    motors_off_raw();
     defmt::error!("hard fault: motors zeroed, resetting");
     cortex_m::peripheral::SCB::sys_reset()
 }

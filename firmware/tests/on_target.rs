@@ -71,12 +71,18 @@ mod tests {
             "{=usize:#x} not in the CCM section",
             addr
         );
-        // The firmware's own CCM statics: the mission, the receive queue, the real world.
+        // The firmware's own CCM statics: the mission, the two queues, the real world.
         let statics = twil_firmware::take_ccm_statics().unwrap();
         let mission = statics.mission as *const _ as usize;
         let queue = statics.rx_queue as *const _ as usize;
+        let tx_queue = statics.tx_queue as *const _ as usize;
         let world = statics.world as *const _ as usize;
-        assert!(ccm.contains(&mission) && ccm.contains(&queue) && ccm.contains(&world));
+        assert!(
+            ccm.contains(&mission)
+                && ccm.contains(&queue)
+                && ccm.contains(&tx_queue)
+                && ccm.contains(&world)
+        );
         assert!(twil_firmware::take_ccm_statics().is_none());
     }
 
