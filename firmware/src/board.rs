@@ -9,14 +9,14 @@
 //! |---|---|---|---|
 //! | host link TX / RX | PA9 / PA10 | USART1 (in `main.rs`) | `link::Device` |
 //! | top sonar trigger | PB0 | GPIO push-pull | `body::Head` |
-//! | top sonar echo | PA1 (divider: not 5 V tolerant) | TIM5: CH2 captures the rise, CH1 (on TI2) the fall, 1 MHz, 3 µs filter | [`EchoLatchTim5`] |
+//! | top sonar echo | PA1 (an ADC pin, TTa: 3.3 V only; divider) | TIM5: CH2 captures the rise, CH1 (on TI2) the fall, 1 MHz, 3 µs filter | [`EchoLatchTim5`] |
 //! | bottom sonar trigger | PB1 | GPIO push-pull | (wired, not used) |
-//! | bottom sonar echo | PA5 (divider: not 5 V tolerant) | TIM2: CH1 the rise, CH2 (on TI1) the fall | [`EchoLatchTim2`] |
+//! | bottom sonar echo | PA5 (TTa; divider) | TIM2: CH1 the rise, CH2 (on TI1) the fall | [`EchoLatchTim2`] |
 //! | neck step / dir | PC8 / PC9 | GPIO push-pull | `body::Head` |
 //! | neck home switch | PC10 | GPIO input, pull-up, closed = low | `body::Head` |
 //! | left motor PWM / dir | PB14 / PB12 | TIM12 CH1 at 20 kHz / GPIO | [`Motor`] |
 //! | right motor PWM / dir | PB15 / PB13 | TIM12 CH2 at 20 kHz / GPIO | [`Motor`] (mirrored) |
-//! | left encoder A / B | PA6 / PA7 | TIM3 CH1 / CH2, encoder mode, pull-ups, 3 µs filter | [`WheelEncoder`] |
+//! | left encoder A / B | PA6 / PA7 (TTa) | TIM3 CH1 / CH2, encoder mode, pull-ups, 3 µs filter | [`WheelEncoder`] |
 //! | right encoder A / B | PB6 / PB7 | TIM4 CH1 / CH2, encoder mode, pull-ups, 3 µs filter | [`WheelEncoder`] (mirrored) |
 //! | emergency stop | PB5 | GPIO input, pull-up, pressed or broken = high | [`EmergencyStop`] |
 //! | battery voltage | PC0 | ADC1 IN10 at 21 MHz, through a 47 kΩ / 10 kΩ divider | [`BatteryMonitor`] |
@@ -202,6 +202,8 @@ macro_rules! echo_latch {
             _direct: CaptureChannel<$TIM, $C>,
         }
 
+        // The bottom sonar's latch is set up but not read yet (one sweeping sonar).
+        #[allow(dead_code)]
         impl $name {
             fn regs() -> &'static pac::tim2::RegisterBlock {
                 // SAFETY: TIM2 and TIM5 share TIM2's register layout (the PAC gives TIM5 the
@@ -294,7 +296,7 @@ fn companion_falling(regs: &pac::tim2::RegisterBlock, companion: u8) {
 pub struct WheelCounter<TIM: stm32f4xx_hal::qei::Instance>(Qei<TIM>);
 
 macro_rules! wheel_counter {
-    ($TIM:ty) => {
+    ($TIM:ty, $filtered:ident) => {
         impl QuadratureCounter for WheelCounter<$TIM> {
             fn count(&mut self) -> u16 {
                 // TIM3 and TIM4 are 16-bit: the count is the raw register.
@@ -305,7 +307,7 @@ macro_rules! wheel_counter {
         impl WheelCounter<$TIM> {
             /// The encoder timer with [`INPUT_FILTER`] on both inputs (RM0090 TIMx_CCMR1 IC1F,
             /// IC2F; the HAL's encoder set-up leaves them at 0, no filter).
-            fn filtered(qei: Qei<$TIM>) -> Self {
+            fn $filtered(qei: Qei<$TIM>) -> Self {
                 // SAFETY: the Qei owns the timer; this only sets the two filter fields, which
                 // the encoder mode reads and nothing else writes.
                 let regs = unsafe { &*<$TIM>::ptr() };
@@ -317,8 +319,8 @@ macro_rules! wheel_counter {
         }
     };
 }
-wheel_counter!(pac::TIM3);
-wheel_counter!(pac::TIM4);
+wheel_counter!(pac::TIM3, filtered_tim3);
+wheel_counter!(pac::TIM4, filtered_tim4);
 
 /// The battery voltage, read on ADC1 through the divider without waiting: each call reads the
 /// conversion the previous call started (50 ms earlier, one control period; a conversion takes
@@ -484,12 +486,12 @@ pub fn take(parts: BoardParts, rcc: &mut Rcc, config: &RobotConfig) -> Board {
         parts.pb7.internal_pull_up(true),
     );
     let wheel_left = WheelEncoder::new(
-        WheelCounter::filtered(Qei::new(parts.tim3, left_pins, rcc)),
+        WheelCounter::filtered_tim3(Qei::new(parts.tim3, left_pins, rcc)),
         Mounting::Normal,
         limit,
     );
     let wheel_right = WheelEncoder::new(
-        WheelCounter::filtered(Qei::new(parts.tim4, right_pins, rcc)),
+        WheelCounter::filtered_tim4(Qei::new(parts.tim4, right_pins, rcc)),
         Mounting::Mirrored,
         limit,
     );

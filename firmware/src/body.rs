@@ -114,6 +114,7 @@ mod board_body {
     use core::sync::atomic::AtomicU32;
     use embedded_hal::digital::{InputPin, OutputPin};
     use rtic_monotonics::systick::prelude::*;
+    use rtic_monotonics::Timebase;
     use stm32f4xx_hal::gpio;
     use twil_core::drivers::emergency_stop::{is_active, EmergencyStop};
     use twil_core::drivers::neck_stepper::{
@@ -212,7 +213,7 @@ mod board_body {
         /// Steps from straight ahead; `None` until homed.
         position_steps: Option<i32>,
         /// When the last ping was triggered.
-        last_trigger: Option<<Mono as rtic_monotonics::Monotonic>::Instant>,
+        last_trigger: Option<<Mono as Timebase>::Instant>,
     }
 
     impl Head {
@@ -225,10 +226,7 @@ mod board_body {
             let mut next = Mono::now();
             let mut steps = 0;
             loop {
-                let high = self
-                    .pins
-                    .home
-                    .is_high()
+                let high = InputPin::is_high(&mut self.pins.home)
                     .map_err(|_| NeckError::Pin { pin: "home" })?;
                 if is_active::<()>(Ok(high), self.geometry.home_active) {
                     self.position_steps = Some(self.geometry.home_offset_steps);
@@ -278,9 +276,9 @@ mod board_body {
             }
             self.pins.echo.arm();
             let before = instructions();
-            let _ = self.pins.trigger.set_high();
+            let _ = OutputPin::set_high(&mut self.pins.trigger);
             cortex_m::asm::delay(TRIGGER_PULSE_US * (SYSCLK_HZ / 1_000_000));
-            let _ = self.pins.trigger.set_low();
+            let _ = OutputPin::set_low(&mut self.pins.trigger);
             note_worst(worst, instructions().saturating_sub(before));
             let now = Mono::now();
             self.last_trigger = Some(now);
@@ -300,22 +298,22 @@ mod board_body {
             if set_direction {
                 let high = (direction == StepDirection::Positive) == self.geometry.positive_dir_high;
                 let _ = if high {
-                    self.pins.dir.set_high()
+                    OutputPin::set_high(&mut self.pins.dir)
                 } else {
-                    self.pins.dir.set_low()
+                    OutputPin::set_low(&mut self.pins.dir)
                 };
                 cortex_m::asm::delay(DIR_SETUP_CYCLES);
             }
-            let _ = self.pins.step.set_high();
+            let _ = OutputPin::set_high(&mut self.pins.step);
             cortex_m::asm::delay(STEP_PULSE_NS.div_ceil(1_000) * (SYSCLK_HZ / 1_000_000));
-            let _ = self.pins.step.set_low();
+            let _ = OutputPin::set_low(&mut self.pins.step);
         }
     }
 
     /// Time per step as a `Mono` duration (whole milliseconds, at least one).
     fn step_period(
         geometry: &NeckGeometry,
-    ) -> <Mono as rtic_monotonics::Monotonic>::Duration {
+    ) -> <Mono as Timebase>::Duration {
         geometry.step_period_ns.div_ceil(1_000_000).max(1).millis()
     }
 }

@@ -250,7 +250,6 @@ mod app {
     use stm32f4xx_hal::{
         pac::{Interrupt, USART1},
         prelude::*,
-        rcc,
         serial::{Config, Rx, Serial, Tx},
     };
     use twil_core::link::{
@@ -308,6 +307,7 @@ mod app {
         irq_queue: heapless::spsc::Queue<u8, IRQ_QUEUE_BYTES> = heapless::spsc::Queue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
+        #[cfg_attr(feature = "qemu", allow(unused_mut))]
         let mut rcc = cx.device.RCC.constrain();
         // First of all, the motor bridges' inputs: from reset until here they float (inputs);
         // now they are driven low, bridges disabled, before anything that could take time.
@@ -342,7 +342,7 @@ mod app {
         // QEMU: stay on the HSI (16 MHz), no PLL and no HSE: QEMU 7.2 does not emulate the RCC,
         // its ready flags never set, so nothing may wait on them.
         #[cfg(feature = "qemu")]
-        let mut rcc = rcc.freeze(rcc::Config::hsi());
+        let mut rcc = rcc.freeze(stm32f4xx_hal::rcc::Config::hsi());
         // The board: the 8 MHz crystal through the PLL to 168 MHz (the HSI if the crystal does
         // not start; logged).
         #[cfg(feature = "hardware")]
@@ -362,7 +362,6 @@ mod app {
         .unwrap_or_else(|_| panic!("115200 baud is reachable from any clock"));
         let (tx, mut rx) = serial.split();
         rx.listen();
-        log!("bring-up 3: USART1 115200 8N1, TX PA9, RX PA10");
 
         // The monotonic: SysTick at MONO_HZ, never paused (see SYSTICK_HZ for the clock).
         #[cfg(feature = "hardware")]
@@ -402,6 +401,10 @@ mod app {
             memory::stack_bytes(),
             reset_cause
         );
+        // (Board only: under QEMU the line after the first is the calibration's, which
+        // xtask's log test reads.)
+        #[cfg(feature = "hardware")]
+        log!("bring-up 3: USART1 115200 8N1, TX PA9, RX PA10; boot frame queued");
         let (producer, consumer) = ccm.rx_queue.split();
         let (irq_producer, irq_consumer) = cx.local.irq_queue.split();
 
@@ -604,6 +607,7 @@ mod app {
                 }
             }
             if cx.shared.body.lock(|b| b.emergency_stop()) && !STOP.swap(true, Ordering::AcqRel) {
+                log!("emergency-stop input tripped: motors zeroed at this tick");
                 // The e-stop input: the stop is measured from this tick.
                 STOP_ASKED_AT_TICK.store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
                 STOP_ASKED_AT_COUNTS.store(systick_counts() as u32, Ordering::Release);
