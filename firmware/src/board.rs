@@ -445,17 +445,25 @@ pub fn take(parts: BoardParts, rcc: &mut Rcc, config: &RobotConfig) -> Board {
     companion_falling(EchoLatchTim2::regs(), 1);
 
     let head = HeadPins {
-        trigger: parts.pb0.into_push_pull_output_in_state(gpio::PinState::Low),
+        trigger: parts
+            .pb0
+            .into_push_pull_output_in_state(gpio::PinState::Low),
         echo: EchoLatchTim5 {
             _manager: top_manager,
             _direct: top_ch,
         },
-        step: parts.pc8.into_push_pull_output_in_state(gpio::PinState::Low),
-        dir: parts.pc9.into_push_pull_output_in_state(gpio::PinState::Low),
+        step: parts
+            .pc8
+            .into_push_pull_output_in_state(gpio::PinState::Low),
+        dir: parts
+            .pc9
+            .into_push_pull_output_in_state(gpio::PinState::Low),
         home: parts.pc10.into_pull_up_input(),
     };
     let bottom_sonar = (
-        parts.pb1.into_push_pull_output_in_state(gpio::PinState::Low),
+        parts
+            .pb1
+            .into_push_pull_output_in_state(gpio::PinState::Low),
         EchoLatchTim2 {
             _manager: bottom_manager,
             _direct: bottom_ch,

@@ -296,7 +296,8 @@ mod board_body {
         /// One step pulse (direction first, with its set-up time when it may have changed).
         fn step(&mut self, direction: StepDirection, set_direction: bool) {
             if set_direction {
-                let high = (direction == StepDirection::Positive) == self.geometry.positive_dir_high;
+                let high =
+                    (direction == StepDirection::Positive) == self.geometry.positive_dir_high;
                 let _ = if high {
                     OutputPin::set_high(&mut self.pins.dir)
                 } else {
@@ -311,9 +312,7 @@ mod board_body {
     }
 
     /// Time per step as a `Mono` duration (whole milliseconds, at least one).
-    fn step_period(
-        geometry: &NeckGeometry,
-    ) -> <Mono as Timebase>::Duration {
+    fn step_period(geometry: &NeckGeometry) -> <Mono as Timebase>::Duration {
         geometry.step_period_ns.div_ceil(1_000_000).max(1).millis()
     }
 }

@@ -561,7 +561,8 @@ mod app {
                     Request::AbortMission | Request::EmergencyStop
                 ) && !STOP.swap(true, Ordering::AcqRel)
                 {
-                    STOP_ASKED_AT_TICK.store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
+                    STOP_ASKED_AT_TICK
+                        .store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
                     STOP_ASKED_AT_COUNTS.store(systick_counts() as u32, Ordering::Release);
                     STOP_TICKS.store(0, Ordering::Release);
                 }
@@ -681,7 +682,10 @@ mod app {
             let _ = (&mut cx.shared.body, &mut cx.shared.world);
             log!("bring-up 6: neck homing (towards the home switch, paced by Mono)");
             match cx.local.head.home().await {
-                Ok(steps) => log!("bring-up 6: neck homed: switch closed after {} steps", steps),
+                Ok(steps) => log!(
+                    "bring-up 6: neck homed: switch closed after {} steps",
+                    steps
+                ),
                 Err(e) => {
                     SENSOR_FAULT.store(true, Ordering::Release);
                     defmt::error!("bring-up 6: neck homing failed: {}: sensor fault", e);
