@@ -46,7 +46,7 @@ use twil_core::drivers::motor::battery_v_from_pin_mv;
 use twil_core::drivers::neck_stepper::NeckGeometry;
 use twil_core::drivers::wheel_encoder::max_counts_per_period;
 use twil_core::drivers::{
-    ActiveLevel, EchoCapture, EmergencyStop, Motor, Mounting, NeckStepper, QuadratureCounter,
+    ActiveLevel, EchoCapture, EchoEdge, EmergencyStop, Motor, Mounting, NeckStepper, QuadratureCounter,
     SonarRanger, SonarWindow, WheelEncoder,
 };
 use twil_core::robot::RobotConfig;
@@ -76,14 +76,27 @@ impl<TIM: stm32f4xx_hal::timer::Instance> embedded_hal::delay::DelayNs for UsDel
 }
 
 macro_rules! timer_echo {
-    ($name:ident, $TIM:ty, $C:expr, $flag:expr) => {
-        /// An echo timed by a timer channel in input capture on both edges (rising then
-        /// falling: the width is the round trip); the time-out is counted on the DWT cycle
-        /// counter (the capture timer's counter is not readable through the HAL).
+    ($name:ident, $TIM:ty, $C:expr, $flag:expr, $pin_bit:expr) => {
+        /// An echo line on a timer channel in input capture on both edges; the polarity of an
+        /// edge is the pin's level read right after its capture (GPIOA IDR). Edge times count
+        /// from the timer's counter at [`arm`](EchoCapture::arm); the time-out counts DWT
+        /// cycles.
         pub struct $name {
             manager: CaptureHzManager<$TIM>,
             channel: CaptureChannel<$TIM, { $C }>,
             armed_at_cycles: u32,
+            armed_at_count: u32,
+        }
+
+        impl $name {
+            fn counter() -> u32 {
+                // SAFETY: a read of the timer's counter register, which nothing else writes.
+                unsafe { (*<$TIM>::ptr()).cnt().read().bits() }
+            }
+            fn pin_high() -> bool {
+                // SAFETY: a read of GPIOA's input data register (read-only).
+                unsafe { (*pac::GPIOA::ptr()).idr().read().bits() & (1 << $pin_bit) != 0 }
+            }
         }
 
         impl EchoCapture for $name {
@@ -96,29 +109,32 @@ macro_rules! timer_echo {
                 let _ = self.channel.get_capture();
                 self.manager.clear_all_flags();
                 self.armed_at_cycles = DWT::cycle_count();
+                self.armed_at_count = Self::counter();
             }
 
-            fn wait_echo_ticks(&mut self, timeout_ticks: u32) -> Option<u32> {
-                let timeout_cycles = timeout_ticks.saturating_mul(SYSCLK_HZ / ECHO_TICK_HZ);
-                let mut rise: Option<u32> = None;
+            fn next_edge(&mut self, deadline_ticks: u32) -> Option<EchoEdge> {
                 loop {
                     if self.manager.flags().contains($flag) {
                         let at = self.channel.get_capture();
-                        match rise {
-                            None => rise = Some(at),
-                            Some(r) => return Some(at.wrapping_sub(r)),
-                        }
+                        return Some(EchoEdge {
+                            rising: Self::pin_high(),
+                            at_ticks: at.wrapping_sub(self.armed_at_count),
+                        });
                     }
-                    if DWT::cycle_count().wrapping_sub(self.armed_at_cycles) > timeout_cycles {
+                    if self.elapsed_ticks() > deadline_ticks {
                         return None;
                     }
                 }
             }
+
+            fn elapsed_ticks(&mut self) -> u32 {
+                DWT::cycle_count().wrapping_sub(self.armed_at_cycles) / (SYSCLK_HZ / ECHO_TICK_HZ)
+            }
         }
     };
 }
-timer_echo!(EchoTim5Ch2, pac::TIM5, C2, Flag::C2);
-timer_echo!(EchoTim2Ch1, pac::TIM2, C1, Flag::C1);
+timer_echo!(EchoTim5Ch2, pac::TIM5, C2, Flag::C2, 1);
+timer_echo!(EchoTim2Ch1, pac::TIM2, C1, Flag::C1, 5);
 
 /// A timer in encoder mode (×4: both edges of both channels) as a [`QuadratureCounter`].
 pub struct WheelCounter<TIM: stm32f4xx_hal::qei::Instance>(Qei<TIM>);
@@ -253,6 +269,7 @@ pub fn take(
             manager: top_manager,
             channel: top_ch,
             armed_at_cycles: 0,
+            armed_at_count: 0,
         },
         UsDelay(parts.tim6.delay_us(rcc)),
         window,
@@ -263,6 +280,7 @@ pub fn take(
             manager: bottom_manager,
             channel: bottom_ch,
             armed_at_cycles: 0,
+            armed_at_count: 0,
         },
         UsDelay(parts.tim7.delay_us(rcc)),
         window,

@@ -192,7 +192,7 @@ mod board_body {
         /// the echo window); `None` for no echo or a driver fault.
         pub fn read(&mut self, neck_angle_rad: f32) -> Option<f32> {
             self.neck.move_to_angle(neck_angle_rad.to_degrees()).ok()?;
-            self.sonar.read().ok().flatten()
+            self.sonar.read().ok().and_then(|r| r.range_m)
         }
     }
 }
