@@ -466,6 +466,13 @@ fn power_up_homing_sweep_duty_after_the_e_stop_then_a_trip_stops_within_a_period
     assert!(stopped);
     let stopped_after_ns = world.now_ns() - press_ns;
     assert!(stopped_after_ns <= PERIOD_NS, "{stopped_after_ns} ns");
+    println!(
+        "virtual board: homed in {} ms, {} readings in {} ms to the first duty, motors off {} ms after the press",
+        (start_ns - 500 * MS) / MS,
+        rig.readings.len(),
+        (first_duty_ns - start_ns) / MS,
+        stopped_after_ns / MS
+    );
     assert_eq!(
         rig.faults.last().map(|f| f.1),
         Some(StopCause::EmergencyStop)

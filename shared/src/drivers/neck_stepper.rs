@@ -587,7 +587,7 @@ mod tests {
         assert!(periods.windows(2).take(150).all(|w| w[1] <= w[0]));
         assert!(periods.windows(2).skip(150).all(|w| w[1] >= w[0]));
         // Full rate from (1000² − 200²) / (2·4000) = 120 steps on.
-        assert_eq!(periods[119], 1_000_000);
+        assert_eq!(periods[121], 1_000_000);
         assert!(periods[118] > 1_000_000);
         assert_eq!(periods[150], 1_000_000);
         // A bad ramp is the slowest, never a division by zero.
