@@ -24,3 +24,4 @@ mod recording;
 mod safe_params;
 mod sim_scenarios;
 mod sonar_beam;
+mod virtual_board;

@@ -47,7 +47,9 @@ use twil_core::drivers::motor::battery_v_from_pin_mv;
 use twil_core::drivers::neck_stepper::NeckGeometry;
 use twil_core::drivers::wheel_encoder::max_counts_per_period;
 use twil_core::drivers::{
-    ActiveLevel, EmergencyStop, Motor, Mounting, QuadratureCounter, SonarWindow, WheelEncoder,
+    ActiveLevel, BatteryReadError, BatterySensor, Chassis, EchoCapture, EchoEdge, EmergencyStop,
+    Motor, Mounting, NeckStepper, QuadratureCounter, SonarHead, SonarRanger, SonarWindow,
+    WheelEncoder,
 };
 use twil_core::robot::RobotConfig;
 
@@ -200,10 +202,55 @@ macro_rules! echo_latch {
         pub struct $name {
             _manager: CaptureHzManager<$TIM>,
             _direct: CaptureChannel<$TIM, $C>,
+            /// The counter at `arm`: time 0 of the edges.
+            armed_at: u32,
+            /// The latched edges not handed out yet (read once, after the listen time).
+            pending: [Option<EchoEdge>; 2],
         }
 
-        // The bottom sonar's latch is set up but not read yet (one sweeping sonar).
-        #[allow(dead_code)]
+        impl EchoCapture for $name {
+            fn tick_hz(&self) -> u32 {
+                ECHO_TICK_HZ
+            }
+
+            fn arm(&mut self) {
+                self.clear();
+                self.armed_at = Self::regs().cnt().read().bits();
+                self.pending = [None, None];
+            }
+
+            /// Never waits: called after the listen time, it hands out the latched rise and
+            /// fall in time order (the latest of each, if more came: counted).
+            fn next_edge(&mut self, deadline_ticks: u32) -> Option<EchoEdge> {
+                if self.pending == [None, None] {
+                    let edges = self.edges();
+                    if edges.extra {
+                        // Noise the 3 µs filter let through, or a line still high at the
+                        // trigger: the decoder gets the latest edge of each kind.
+                        defmt::warn!("echo: more edges than the latch holds: {}", edges);
+                    }
+                    let since = |at: u32| at.wrapping_sub(self.armed_at);
+                    let rise = edges.rise.map(|at| EchoEdge::rise(since(at)));
+                    let fall = edges.fall.map(|at| EchoEdge::fall(since(at)));
+                    self.pending = match (rise, fall) {
+                        (Some(r), Some(f)) if f.at_ticks < r.at_ticks => [Some(f), Some(r)],
+                        (r, f) => [r, f],
+                    };
+                }
+                let next = self.pending.iter_mut().find(|e| e.is_some())?;
+                let edge = (*next)?;
+                if edge.at_ticks > deadline_ticks {
+                    return None;
+                }
+                *next = None;
+                Some(edge)
+            }
+
+            fn elapsed_ticks(&mut self) -> u32 {
+                Self::regs().cnt().read().bits().wrapping_sub(self.armed_at)
+            }
+        }
+
         impl $name {
             fn regs() -> &'static pac::tim2::RegisterBlock {
                 // SAFETY: TIM2 and TIM5 share TIM2's register layout (the PAC gives TIM5 the
@@ -212,16 +259,25 @@ macro_rules! echo_latch {
                 unsafe { &*(<$TIM>::ptr() as *const pac::tim2::RegisterBlock) }
             }
 
+            fn new(manager: CaptureHzManager<$TIM>, direct: CaptureChannel<$TIM, $C>) -> Self {
+                Self {
+                    _manager: manager,
+                    _direct: direct,
+                    armed_at: 0,
+                    pending: [None, None],
+                }
+            }
+
             /// Forget earlier edges: clear the capture and overcapture flags (TIMx_SR, write 0
             /// to clear) and read both captures.
-            pub fn arm(&mut self) {
+            fn clear(&mut self) {
                 let r = Self::regs();
                 let _ = r.ccr($rise_ccr).read().bits();
                 let _ = r.ccr($fall_ccr).read().bits();
                 r.sr().write(|w| unsafe { w.bits(!SR_CAPTURE_FLAGS) });
             }
 
-            /// The latched edges since [`arm`](Self::arm).
+            /// The latched edges since the last `arm`.
             pub fn edges(&mut self) -> EchoEdges {
                 let r = Self::regs();
                 let sr = r.sr().read().bits();
@@ -243,7 +299,7 @@ echo_latch!(EchoLatchTim5, pac::TIM5, C2, 2, 1, 1, 0);
 // TIM2: PA5 is CH1 (TI1). CH1 captures TI1's rise (CCR1), CH2 (CC2S = 0b10: TI1) its fall (CCR2).
 echo_latch!(EchoLatchTim2, pac::TIM2, C1, 1, 2, 0, 1);
 
-/// The edges an echo latch holds.
+/// The edges an echo latch holds (timer counts).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
 pub struct EchoEdges {
     /// Timer ticks at the rising edge, if one came.
@@ -251,23 +307,8 @@ pub struct EchoEdges {
     /// Timer ticks at the falling edge, if one came.
     pub fall: Option<u32>,
     /// More than one edge of a kind came (noise, or an echo line already high at the
-    /// trigger): the reading is not trusted.
+    /// trigger): only the latest of each is held.
     pub extra: bool,
-}
-
-impl EchoEdges {
-    /// The pulse width in ticks: a rise, then a fall, nothing else. A fall alone, or a fall
-    /// before the rise (the line was high when armed: the previous echo), is no pulse.
-    pub fn width_ticks(&self) -> Option<u32> {
-        match (self.rise, self.fall, self.extra) {
-            (Some(rise), Some(fall), false) => {
-                let width = fall.wrapping_sub(rise);
-                // A fall captured before the rise wraps to more than half the 32-bit range.
-                (width < u32::MAX / 2).then_some(width)
-            }
-            _ => None,
-        }
-    }
 }
 
 /// Put the companion channel (0 = CH1, 1 = CH2) of an echo latch on the other channel's
@@ -324,7 +365,8 @@ wheel_counter!(pac::TIM4, filtered_tim4);
 
 /// The battery voltage, read on ADC1 through the divider without waiting: each call reads the
 /// conversion the previous call started (50 ms earlier, one control period; a conversion takes
-/// 23 µs) and starts the next.
+/// 23 µs) and starts the next. A conversion not done by then (ADC_SR EOC clear: the ADC
+/// stopped) is a [`BatteryReadError`], which the chassis turns into a sensor fault.
 pub struct BatteryMonitor {
     adc: Adc<pac::ADC1>,
     _pin: gpio::PC0<Analog>,
@@ -343,56 +385,69 @@ impl BatteryMonitor {
         adc.start_conversion();
         Self { adc, _pin: pin }
     }
+}
 
+impl BatterySensor for BatteryMonitor {
     /// The last conversion in volts at the battery, and the next one started.
-    pub fn read_battery_v(&mut self) -> f32 {
+    fn read_battery_v(&mut self) -> Result<f32, BatteryReadError> {
+        // SAFETY: a read of ADC1's status register (the conversion's end flag); the reading
+        // of the data register below clears it, as RM0090 says.
+        let done = unsafe { (*pac::ADC1::ptr()).sr().read().eoc().bit_is_set() };
         let sample = self.adc.current_sample();
         self.adc.start_conversion();
-        battery_v_from_pin_mv(self.adc.sample_to_millivolts(sample), BATTERY_DIVIDER_RATIO)
+        if !done {
+            return Err(BatteryReadError);
+        }
+        Ok(battery_v_from_pin_mv(
+            self.adc.sample_to_millivolts(sample),
+            BATTERY_DIVIDER_RATIO,
+        ))
     }
 }
 
-/// The left motor.
-pub type MotorLeft = Motor<PwmChannel<pac::TIM12, C1>, Out<'B', 12>>;
-/// The right motor.
-pub type MotorRight = Motor<PwmChannel<pac::TIM12, C2>, Out<'B', 13>>;
+/// A delay that waits in a loop, for the drivers' sub-10 µs waits only (the trigger pulse,
+/// the step pulse, the direction set-up): everything longer is a `Mono` delay in the sonar
+/// task. Counts core cycles at [`SYSCLK_HZ`].
+pub struct SpinDelay;
 
-/// The sonar head's pins: the top sonar and the neck.
-pub struct HeadPins {
-    /// Top sonar trigger (PB0).
-    pub trigger: Out<'B', 0>,
-    /// Top sonar echo (PA1, TIM5).
-    pub echo: EchoLatchTim5,
-    /// Neck step (PC8).
-    pub step: Out<'C', 8>,
-    /// Neck direction (PC9).
-    pub dir: Out<'C', 9>,
-    /// Neck home switch (PC10, closed = low).
-    pub home: In<'C', 10>,
+impl embedded_hal::delay::DelayNs for SpinDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        cortex_m::asm::delay(ns.div_ceil(1_000).saturating_mul(SYSCLK_HZ / 1_000_000));
+    }
 }
+
+/// The wheels, the e-stop and the battery (`twil_core::drivers::body::Chassis`).
+pub type BoardChassis = Chassis<
+    PwmChannel<pac::TIM12, C1>,
+    Out<'B', 12>,
+    PwmChannel<pac::TIM12, C2>,
+    Out<'B', 13>,
+    WheelCounter<pac::TIM3>,
+    WheelCounter<pac::TIM4>,
+    In<'B', 5>,
+    BatteryMonitor,
+>;
+
+/// The top sonar on the neck (`twil_core::drivers::body::SonarHead`).
+pub type BoardHead = SonarHead<
+    Out<'B', 0>,
+    EchoLatchTim5,
+    SpinDelay,
+    Out<'C', 8>,
+    Out<'C', 9>,
+    In<'C', 10>,
+    SpinDelay,
+>;
 
 /// Everything the board module wires, by name.
 pub struct Board {
-    /// The sonar head.
-    pub head: HeadPins,
+    /// The wheels (motors stopped, disarmed), the e-stop (latched), the battery.
+    pub chassis: BoardChassis,
+    /// The sonar head (the neck not homed).
+    pub head: BoardHead,
     /// Bottom sonar (the seed's second sonar): wired and set up, not used by the mission yet.
     #[allow(dead_code)]
     pub bottom_sonar: (Out<'B', 1>, EchoLatchTim2),
-    /// The top sonar's window and the neck's geometry.
-    pub window: SonarWindow,
-    pub geometry: NeckGeometry,
-    /// Left wheel motor (stopped).
-    pub motor_left: MotorLeft,
-    /// Right wheel motor (stopped, mirrored).
-    pub motor_right: MotorRight,
-    /// Left wheel encoder.
-    pub wheel_left: WheelEncoder<WheelCounter<pac::TIM3>>,
-    /// Right wheel encoder (mirrored).
-    pub wheel_right: WheelEncoder<WheelCounter<pac::TIM4>>,
-    /// Emergency stop (latched until cleared).
-    pub estop: EmergencyStop<In<'B', 5>>,
-    /// Battery voltage.
-    pub battery: BatteryMonitor,
     /// The PWM timer; kept so that it is never reconfigured behind the motors' back.
     #[allow(dead_code)]
     pub pwm_timer: stm32f4xx_hal::timer::PwmHzManager<pac::TIM12>,
@@ -444,30 +499,32 @@ pub fn take(parts: BoardParts, rcc: &mut Rcc, config: &RobotConfig) -> Board {
     bottom_ch.enable();
     companion_falling(EchoLatchTim2::regs(), 1);
 
-    let head = HeadPins {
-        trigger: parts
+    let window = SonarWindow::from_config(config);
+    let sonar = SonarRanger::new(
+        parts
             .pb0
             .into_push_pull_output_in_state(gpio::PinState::Low),
-        echo: EchoLatchTim5 {
-            _manager: top_manager,
-            _direct: top_ch,
-        },
-        step: parts
+        EchoLatchTim5::new(top_manager, top_ch),
+        SpinDelay,
+        window,
+    );
+    let neck = NeckStepper::new(
+        parts
             .pc8
             .into_push_pull_output_in_state(gpio::PinState::Low),
-        dir: parts
+        parts
             .pc9
             .into_push_pull_output_in_state(gpio::PinState::Low),
-        home: parts.pc10.into_pull_up_input(),
-    };
+        parts.pc10.into_pull_up_input(),
+        SpinDelay,
+        NeckGeometry::from_config(config),
+    );
+    let head = SonarHead::new(sonar, neck);
     let bottom_sonar = (
         parts
             .pb1
             .into_push_pull_output_in_state(gpio::PinState::Low),
-        EchoLatchTim2 {
-            _manager: bottom_manager,
-            _direct: bottom_ch,
-        },
+        EchoLatchTim2::new(bottom_manager, bottom_ch),
     );
 
     let pins = parts.motor_pins;
@@ -520,18 +577,19 @@ pub fn take(parts: BoardParts, rcc: &mut Rcc, config: &RobotConfig) -> Board {
         battery_v,
         if estop_pressed { "pressed or open (latched)" } else { "released" }
     );
-
-    Board {
-        head,
-        bottom_sonar,
-        window: SonarWindow::from_config(config),
-        geometry: NeckGeometry::from_config(config),
+    let chassis = Chassis::new(
         motor_left,
         motor_right,
         wheel_left,
         wheel_right,
         estop,
         battery,
+    );
+
+    Board {
+        chassis,
+        head,
+        bottom_sonar,
         pwm_timer,
     }
 }

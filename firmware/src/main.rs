@@ -68,7 +68,7 @@ mod body;
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
-use twil_core::failsafe::{ResetCause, StopCause, WatchdogDecision, WatchdogGate};
+use twil_core::failsafe::{ResetCause, WatchdogDecision, WatchdogGate};
 use twil_core::link::{Build, PROTOCOL_VERSION};
 pub use twil_firmware::{memory, TwilDevice, TwilMission, RX_QUEUE_BYTES};
 
@@ -203,10 +203,6 @@ static MISSION_TURN_MS: AtomicU32 = AtomicU32::new(0);
 /// Set by the control task when a step missed its period (motors already zeroed); the mission
 /// task ends the mission with `StopCause::ControllerOverrun`.
 static OVERRUN: AtomicBool = AtomicBool::new(false);
-/// The sonar head failed (neck homing, a pin): the mission task ends a running mission with a
-/// sensor fault instead of mapping silence.
-#[cfg(feature = "hardware")]
-static SENSOR_FAULT: AtomicBool = AtomicBool::new(false);
 /// The watchdog gate refused to feed (logged once; on QEMU, which has no IWDG, nothing resets).
 static WATCHDOG_STARVED: AtomicBool = AtomicBool::new(false);
 
@@ -226,8 +222,11 @@ static SONAR_RANGE_BITS: AtomicU32 = AtomicU32::new(0x3FC0_0000); // 1.5
 const REPORTS: usize = 8;
 /// Readings queued from `sonar` to `mission`.
 const READINGS: usize = 8;
-/// Sonar requests queued from `mission` to `sonar`.
+/// Commands queued from `mission` to `sonar` (a mission's restart, then its readings).
 const SONAR_REQUESTS: usize = 2;
+/// Stop causes queued from `control` and `sonar` to `mission` (the body's faults: each ends
+/// the mission, so one per mission is all that matters; a full queue drops the later ones).
+const FAULTS: usize = 4;
 /// Bytes of the queue from the USART1 interrupt to `link_rx` (holds one less): 22 ms of
 /// 115 200 baud, while `link_rx` runs within a control step's time of the interrupt.
 const IRQ_QUEUE_BYTES: usize = 256;
@@ -252,6 +251,7 @@ mod app {
         prelude::*,
         serial::{Config, Rx, Serial, Tx},
     };
+    use twil_core::failsafe::StopCause;
     use twil_core::link::{
         DeviceInfo, FrameDecoder, Request, RequestFrame, Telemetry, WorldAccess, WorldUpload,
         MAX_FRAME_BYTES,
@@ -268,6 +268,14 @@ mod app {
 
     /// A sonar reading: the neck angle and the range (`None`: no echo).
     pub type Reading = (f32, Option<f32>);
+
+    /// What the mission task asks of the sonar task.
+    pub enum HeadCommand {
+        /// A mission starts: its robot (sonar window, neck geometry); the board homes the neck.
+        Restart(twil_core::robot::RobotConfig),
+        /// One reading.
+        Read(SonarRequest),
+    }
 
     /// The vector `link_rx` is bound to: CAN1's first receive FIFO, whose peripheral is never
     /// clocked, so only `rtic::pend` (from `usart1`) raises it.
@@ -578,7 +586,11 @@ mod app {
     /// feeds the watchdog while the gate allows it, and zeroes the motors when a step misses
     /// its period.
     #[task(priority = 4, shared = [pilot, body], local = [watchdog])]
-    async fn control(mut cx: control::Context, mut reports: Sender<'static, PilotReport, REPORTS>) {
+    async fn control(
+        mut cx: control::Context,
+        mut reports: Sender<'static, PilotReport, REPORTS>,
+        mut faults: Sender<'static, StopCause, FAULTS>,
+    ) {
         let period_s = PERIOD_MS as f32 / 1000.0;
         let mut next = Mono::now();
         let mut last = Mono::now();
@@ -607,19 +619,15 @@ mod app {
                     }
                 }
             }
-            if cx.shared.body.lock(|b| b.emergency_stop()) && !STOP.swap(true, Ordering::AcqRel) {
-                log!("emergency-stop input tripped: motors zeroed at this tick");
-                // The e-stop input: the stop is measured from this tick.
-                STOP_ASKED_AT_TICK.store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
-                STOP_ASKED_AT_COUNTS.store(systick_counts() as u32, Ordering::Release);
-                STOP_TICKS.store(0, Ordering::Release);
-            }
             let tick = CONTROL_TICKS.fetch_add(1, Ordering::AcqRel).wrapping_add(1);
             if !ACTIVE.load(Ordering::Acquire) {
-                // No mission: the motors stay at 0 (a board's drivers are told so each period;
-                // the simulated robot stands still without being stepped).
+                // No mission: the motors stay at 0 (a board's chassis, disarmed, is told so each
+                // period; the simulated robot stands still without being stepped).
                 #[cfg(feature = "hardware")]
-                cx.shared.body.lock(|b| b.drive(0.0, 0.0, period_s));
+                let stop = cx.shared.body.lock(|b| b.drive(0.0, 0.0, period_s));
+                #[cfg(feature = "qemu")]
+                let stop = None;
+                body_stopped(stop, &mut faults);
                 note_stop(tick, true);
                 continue;
             }
@@ -642,13 +650,23 @@ mod app {
             }
             // The simulated body's own step is not the control step's cost.
             let before = instructions();
-            cx.shared
+            let stop = cx
+                .shared
                 .body
                 .lock(|b| b.drive(report.left_voltage_v, report.right_voltage_v, period_s));
             note_worst(
                 &WORST_BODY_INSTRUCTIONS,
                 instructions().saturating_sub(before),
             );
+            let body_stop = stop.is_some();
+            if body_stop {
+                // The body zeroed its motors; the pilot stops too.
+                cx.shared.pilot.lock(|p| p.stop());
+            }
+            body_stopped(stop, &mut faults);
+            if body_stop {
+                note_stop(tick, true);
+            }
             // The motors have their voltages now: a stop is measured to here.
             note_stop(tick, motors_off);
             // A step that ends after the next one was due: the controller cannot be trusted to
@@ -660,7 +678,8 @@ mod app {
             ) && !OVERRUN.swap(true, Ordering::AcqRel)
             {
                 cx.shared.pilot.lock(|p| p.stop());
-                cx.shared.body.lock(|b| b.drive(0.0, 0.0, period_s));
+                let stop = cx.shared.body.lock(|b| b.drive(0.0, 0.0, period_s));
+                body_stopped(stop, &mut faults);
                 log!("controller overrun at tick {}: motors zeroed", tick);
             }
             // A full queue means the mission task is more than 400 ms behind: the report is
@@ -670,30 +689,47 @@ mod app {
     }
 
     /// One reading per request: it takes the neck's steps and the echo window, all waited with
-    /// `Mono` (the board), so every task above runs meanwhile. The board homes the neck first.
+    /// `Mono` (the board), so every task above runs meanwhile. At a mission's start the board
+    /// homes the neck with the mission's geometry. A fault (the home switch not found, a pin, a
+    /// sonar that stays silent) goes to the mission task, which ends the mission with it.
     #[task(priority = 2, shared = [body, world], local = [head])]
     async fn sonar(
         mut cx: sonar::Context,
-        mut requests: Receiver<'static, SonarRequest, SONAR_REQUESTS>,
+        mut requests: Receiver<'static, HeadCommand, SONAR_REQUESTS>,
         mut readings: Sender<'static, Reading, READINGS>,
+        mut faults: Sender<'static, StopCause, FAULTS>,
     ) {
         #[cfg(feature = "hardware")]
-        {
-            let _ = (&mut cx.shared.body, &mut cx.shared.world);
-            log!("bring-up 6: neck homing (towards the home switch, paced by Mono)");
-            match cx.local.head.home().await {
-                Ok(steps) => log!(
-                    "bring-up 6: neck homed: switch closed after {} steps",
-                    steps
-                ),
-                Err(e) => {
-                    SENSOR_FAULT.store(true, Ordering::Release);
-                    defmt::error!("bring-up 6: neck homing failed: {}: sensor fault", e);
-                }
-            }
-        }
+        let _ = (&mut cx.shared.body, &mut cx.shared.world);
         let mut first = true;
-        while let Ok(request) = requests.recv().await {
+        while let Ok(command) = requests.recv().await {
+            let request = match command {
+                HeadCommand::Restart(robot) => {
+                    #[cfg(feature = "hardware")]
+                    {
+                        log!("bring-up 6: neck homing (towards the home switch, paced by Mono)");
+                        match cx
+                            .local
+                            .head
+                            .restart(&robot, &WORST_SONAR_INSTRUCTIONS)
+                            .await
+                        {
+                            Ok(steps) => log!(
+                                "bring-up 6: neck homed: switch closed after {} steps",
+                                steps
+                            ),
+                            Err(cause) => {
+                                defmt::error!("bring-up 6: neck homing failed: {}", cause);
+                                let _ = faults.send(cause).await;
+                            }
+                        }
+                    }
+                    #[cfg(feature = "qemu")]
+                    let _ = (robot, &mut faults);
+                    continue;
+                }
+                HeadCommand::Read(request) => request,
+            };
             let angle = request.neck_angle_rad;
             #[cfg(feature = "qemu")]
             let range_m = {
@@ -714,12 +750,10 @@ mod app {
             #[cfg(feature = "hardware")]
             let range_m = match cx.local.head.read(angle, &WORST_SONAR_INSTRUCTIONS).await {
                 Ok(range_m) => range_m,
-                Err(e) => {
-                    // The neck or the trigger failed: the reading is no echo, and the
-                    // mission ends with a sensor fault (the mission task sees the flag).
-                    if !SENSOR_FAULT.swap(true, Ordering::AcqRel) {
-                        defmt::error!("sonar head fault: {}", e);
-                    }
+                Err(cause) => {
+                    // No reading to map: the mission ends with the fault instead.
+                    defmt::error!("sonar head fault: {}", cause);
+                    let _ = faults.send(cause).await;
                     None
                 }
             };
@@ -779,9 +813,12 @@ mod app {
 
         let (reports_tx, mut reports) = make_channel!(PilotReport, REPORTS);
         let (readings_tx, mut readings) = make_channel!(Reading, READINGS);
-        let (mut sonar_tx, sonar_rx) = make_channel!(SonarRequest, SONAR_REQUESTS);
-        control::spawn(reports_tx).unwrap_or_else(|_| panic!("control spawns once"));
-        sonar::spawn(sonar_rx, readings_tx).unwrap_or_else(|_| panic!("sonar spawns once"));
+        let (mut sonar_tx, sonar_rx) = make_channel!(HeadCommand, SONAR_REQUESTS);
+        let (faults_tx, mut faults) = make_channel!(StopCause, FAULTS);
+        control::spawn(reports_tx, faults_tx.clone())
+            .unwrap_or_else(|_| panic!("control spawns once"));
+        sonar::spawn(sonar_rx, readings_tx, faults_tx)
+            .unwrap_or_else(|_| panic!("sonar spawns once"));
 
         let device = &mut **cx.local.device;
         let mission = &mut **cx.local.mission;
@@ -844,11 +881,25 @@ mod app {
             if let Some(config) = device.link(mission).take_started() {
                 SONAR_RANGE_BITS.store(config.robot.sonar_range_m.to_bits(), Ordering::Relaxed);
                 MAX_CONTROL_INSTRUCTIONS.store(0, Ordering::Relaxed);
-                cx.shared.body.lock(|b| b.restart(&config));
+                let body = cx.shared.body.lock(|b| b.restart(&config));
                 cx.shared.pilot.lock(|p| p.restart(&config));
                 STOP.store(false, Ordering::Release);
                 STOP_LATENCY_US.store(0, Ordering::Release);
                 ACTIVE.store(true, Ordering::Release);
+                // The head homes with the mission's geometry before its first reading (the
+                // queue is in order).
+                let _ = sonar_tx.send(HeadCommand::Restart(config.robot)).await;
+                log!("mission start: e-stop cleared: {}", body.is_ok());
+                if let Err(cause) = body {
+                    // The e-stop still pressed (or unreadable): the mission ends at once.
+                    device.link(mission).fail(cause);
+                }
+            }
+            // The body's faults (an e-stop press, a sensor) end the mission with their cause.
+            while let Ok(cause) = faults.try_recv() {
+                busy = true;
+                log!("the body stopped the mission: {}", cause);
+                device.link(mission).fail(cause);
             }
             device.note_timing(
                 MAX_CONTROL_INSTRUCTIONS.load(Ordering::Relaxed) as u64,
@@ -874,7 +925,7 @@ mod app {
             }
             if let Some(request) = device.take_sonar_request() {
                 // At most one is out at a time (the mission waits for its answer).
-                let _ = sonar_tx.try_send(request);
+                let _ = sonar_tx.try_send(HeadCommand::Read(request));
             }
             if device.plan_pending() {
                 device.link(mission).run_planner(planner, &mut instructions);
@@ -896,6 +947,10 @@ mod app {
                     r.stop_cause,
                     r.stop_latency_us
                 );
+            }
+            if ended && !reported_end {
+                // Motors at 0 and, on the board, disarmed until the next start.
+                cx.shared.body.lock(|b| b.stop());
             }
             reported_end = ended;
             if device.state() != twil_core::link::RunState::Running {
@@ -926,6 +981,22 @@ mod app {
                 Mono::delay(ms(1)).await;
             }
         }
+    }
+
+    /// The body stopped the motors (`stop`: why, once): an e-stop press is timed like a stop
+    /// frame (from this tick); the cause goes to the mission task, which ends the mission.
+    fn body_stopped(stop: Option<StopCause>, faults: &mut Sender<'static, StopCause, FAULTS>) {
+        let Some(cause) = stop else {
+            return;
+        };
+        if cause == StopCause::EmergencyStop && !STOP.swap(true, Ordering::AcqRel) {
+            log!("emergency-stop input tripped: motors zeroed at this tick");
+            STOP_ASKED_AT_TICK.store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
+            STOP_ASKED_AT_COUNTS.store(systick_counts() as u32, Ordering::Release);
+            STOP_TICKS.store(0, Ordering::Release);
+        }
+        // A full queue: earlier causes are waiting, and the first one ends the mission.
+        let _ = faults.try_send(cause);
     }
 
     /// At control tick `tick`, with zero volts on the motors (`motors_off`): if a stop frame

@@ -269,6 +269,58 @@ pub enum StopCause {
     LinkLost,
     /// A control step missed its period ([`control_period_missed`]).
     ControllerOverrun,
+    /// A part of the robot's body failed (`twil_core::drivers::body`): the mission cannot
+    /// trust what it senses or drives.
+    SensorFault(Sensor),
+}
+
+/// Which part of the body failed ([`StopCause::SensorFault`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Sensor {
+    /// The neck's home switch did not close within the homing travel (or the neck was asked
+    /// to move before homing).
+    NeckHome,
+    /// A neck pin (step, direction, home switch) failed, or a move beyond its limits was asked.
+    Neck,
+    /// The sonar's trigger pin failed, or its capture has no clock.
+    SonarTrigger,
+    /// The sonar did not answer: no edge on its echo line for several pings in a row.
+    SonarSilent,
+    /// The battery could not be read, or reads below the motors' minimum.
+    Battery,
+    /// A motor's PWM channel or direction pin failed.
+    Motor,
+    /// The emergency-stop input could not be read (the motors stopped as if pressed).
+    EmergencyStopInput,
+}
+
+impl Sensor {
+    /// Words for messages.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Sensor::NeckHome => "the neck's home switch was not found",
+            Sensor::Neck => "a neck pin failed",
+            Sensor::SonarTrigger => "the sonar's trigger failed",
+            Sensor::SonarSilent => "the sonar does not answer",
+            Sensor::Battery => "the battery reading failed or is below the minimum",
+            Sensor::Motor => "a motor's PWM or direction pin failed",
+            Sensor::EmergencyStopInput => "the emergency-stop input cannot be read",
+        }
+    }
+
+    /// A short name for JSON (`neck_home`, `battery`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Sensor::NeckHome => "neck_home",
+            Sensor::Neck => "neck",
+            Sensor::SonarTrigger => "sonar_trigger",
+            Sensor::SonarSilent => "sonar_silent",
+            Sensor::Battery => "battery",
+            Sensor::Motor => "motor",
+            Sensor::EmergencyStopInput => "emergency_stop_input",
+        }
+    }
 }
 
 impl StopCause {
@@ -280,6 +332,7 @@ impl StopCause {
             StopCause::EmergencyStop => "emergency stop",
             StopCause::LinkLost => "link lost",
             StopCause::ControllerOverrun => "controller overrun",
+            StopCause::SensorFault(_) => "sensor fault",
         }
     }
 }

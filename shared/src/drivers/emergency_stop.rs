@@ -6,13 +6,21 @@
 //! - the active level is configurable ([`ActiveLevel`]): a normally-closed button to ground
 //!   with a pull-up reads low while all is well and high when pressed *or when its wire
 //!   breaks*, so `ActiveLevel::High` is the safe choice for that wiring;
+//! - **power-up**: the stop starts latched, so a reset never starts the wheels;
 //! - once seen pressed, the stop stays latched: releasing the button does not restart the
-//!   motors, only [`EmergencyStop::clear`] does, and only while the button is released;
-//! - a pin that cannot be read counts as pressed.
+//!   motors, only [`EmergencyStop::clear`] does (the body calls it when a mission starts,
+//!   after the host has cleared its own latch with `ClearEmergencyStop`), and only while the
+//!   button is released;
+//! - even then the motors get duty only once [`poll`](EmergencyStop::poll) has read the button
+//!   released [`RELEASED_POLLS_TO_RUN`] times in a row (a bouncing contact or a hand still on
+//!   the button does not start the wheels);
+//! - a pin that cannot be read counts as pressed, and is told apart
+//!   ([`EmergencyStop::last_trip_was_read_error`]) so it can be reported as a fault of the
+//!   input rather than a press.
 //!
-//! The firmware polls it every control period (or from the pin's interrupt) and, while
-//! [`EmergencyStop::is_latched`], forces both motors to zero with
-//! [`Motor::stop`](super::Motor::stop).
+//! The body ([`super::body::Chassis`]) polls it every control period, before the motors get
+//! their duty, so a press stops them within one period; a press (or a read error) that latches
+//! the stop while a mission runs is *reported* (`StopCause::EmergencyStop`).
 
 use embedded_hal::digital::InputPin;
 
@@ -44,23 +52,33 @@ pub enum EstopError {
     StillPressed,
 }
 
+/// Polls in a row that must read the button released before the motors get duty (3 control
+/// periods: 150 ms, far longer than a contact's bounce of a few milliseconds).
+pub const RELEASED_POLLS_TO_RUN: u32 = 3;
+
 /// The latched emergency-stop input.
 pub struct EmergencyStop<P> {
     pin: P,
     active: ActiveLevel,
     latched: bool,
+    released_polls: u32,
+    last_read_failed: bool,
+    last_trip_read_error: bool,
     read_errors: u32,
     trips: u32,
 }
 
 impl<P: InputPin> EmergencyStop<P> {
-    /// A stop input on `pin`. It starts latched: the motors stay off until the firmware has
-    /// seen the button released and cleared it once (a reset must not start the wheels).
+    /// A stop input on `pin`. It starts latched: the motors stay off until the button has
+    /// been read released and the stop cleared (a reset must not start the wheels).
     pub fn new(pin: P, active: ActiveLevel) -> Self {
         Self {
             pin,
             active,
             latched: true,
+            released_polls: 0,
+            last_read_failed: false,
+            last_trip_read_error: false,
             read_errors: 0,
             trips: 0,
         }
@@ -68,27 +86,43 @@ impl<P: InputPin> EmergencyStop<P> {
 
     fn pressed_now(&mut self) -> bool {
         let level = self.pin.is_high();
-        if level.is_err() {
+        self.last_read_failed = level.is_err();
+        if self.last_read_failed {
             self.read_errors = self.read_errors.wrapping_add(1);
         }
         is_active(level, self.active)
     }
 
-    /// Read the pin; latch if pressed. Returns whether the stop is latched (motors must be off).
-    pub fn poll(&mut self) -> bool {
-        if self.pressed_now() && !self.latched {
+    fn latch(&mut self, read_error: bool) {
+        if !self.latched {
             self.latched = true;
             self.trips = self.trips.wrapping_add(1);
+            self.last_trip_read_error = read_error;
         }
-        self.latched
+    }
+
+    /// Read the pin; latch if pressed (or unreadable), count the released reads. Returns
+    /// whether the motors must be off: latched, or released for fewer than
+    /// [`RELEASED_POLLS_TO_RUN`] polls in a row.
+    pub fn poll(&mut self) -> bool {
+        if self.pressed_now() {
+            self.released_polls = 0;
+            self.latch(self.last_read_failed);
+        } else {
+            self.released_polls = self.released_polls.saturating_add(1);
+        }
+        !self.motors_allowed()
+    }
+
+    /// Whether the motors may have duty: not latched, and released for
+    /// [`RELEASED_POLLS_TO_RUN`] polls in a row (does not read the pin).
+    pub fn motors_allowed(&self) -> bool {
+        !self.latched && self.released_polls >= RELEASED_POLLS_TO_RUN
     }
 
     /// Latch from software (an abort request), as if pressed.
     pub fn trip(&mut self) {
-        if !self.latched {
-            self.latched = true;
-            self.trips = self.trips.wrapping_add(1);
-        }
+        self.latch(false);
     }
 
     /// Whether the stop is latched, without reading the pin.
@@ -96,10 +130,22 @@ impl<P: InputPin> EmergencyStop<P> {
         self.latched
     }
 
-    /// Unlatch, if the button is released now; otherwise stay latched and say why.
+    /// Whether the last latch came from a pin that could not be read (rather than a press).
+    pub fn last_trip_was_read_error(&self) -> bool {
+        self.last_trip_read_error
+    }
+
+    /// Whether the last read of the pin (poll or clear) failed.
+    pub fn last_read_failed(&self) -> bool {
+        self.last_read_failed
+    }
+
+    /// Unlatch, if the button is released now; otherwise stay latched and say why. The
+    /// motors still wait for [`RELEASED_POLLS_TO_RUN`] released polls.
     pub fn clear(&mut self) -> Result<(), EstopError> {
         if self.pressed_now() {
             self.latched = true;
+            self.released_polls = 0;
             Err(EstopError::StillPressed)
         } else {
             self.latched = false;
@@ -143,53 +189,76 @@ mod tests {
         assert!(is_active(Err(()), ActiveLevel::Low));
     }
 
+    /// `n` reads of the released level (active high: low).
+    fn released(n: usize) -> std::vec::Vec<PinTx> {
+        std::vec![PinTx::get(PinState::Low); n]
+    }
+
     #[test]
-    fn starts_latched_and_clears_only_when_released() {
-        let mut pin = PinMock::new(&[
+    fn starts_latched_and_runs_only_after_a_clear_and_three_released_polls() {
+        let mut tx = std::vec![
+            PinTx::get(PinState::High), // poll: pressed at power-up
             PinTx::get(PinState::High), // clear: still pressed (active high)
-            PinTx::get(PinState::Low),  // clear: released
-            PinTx::get(PinState::Low),  // poll: released
-        ]);
+        ];
+        tx.extend(released(1)); // clear: released
+        tx.extend(released(3)); // three polls
+        let mut pin = PinMock::new(&tx);
         let mut stop = EmergencyStop::new(pin.clone(), ActiveLevel::High);
         assert!(stop.is_latched());
+        assert!(stop.poll());
+        assert_eq!(stop.counts(), (0, 0), "already latched: not a new trip");
         assert_eq!(stop.clear(), Err(EstopError::StillPressed));
         assert!(stop.is_latched());
         assert_eq!(stop.clear(), Ok(()));
-        assert!(!stop.poll());
+        assert!(stop.poll(), "released once: not yet");
+        assert!(stop.poll(), "released twice: not yet");
+        assert!(!stop.poll(), "released three times: the motors may run");
+        assert!(stop.motors_allowed());
         pin.done();
     }
 
     #[test]
     fn a_press_latches_until_cleared_even_after_release() {
-        let mut pin = PinMock::new(&[
-            PinTx::get(PinState::High), // clear at start-up: released (active low)
-            PinTx::get(PinState::High), // poll: released
-            PinTx::get(PinState::Low),  // poll: pressed
-            PinTx::get(PinState::High), // poll: released again, still latched
-            PinTx::get(PinState::High), // clear
-            PinTx::get(PinState::High), // poll
-        ]);
-        let mut stop = EmergencyStop::new(pin.clone(), ActiveLevel::Low);
+        let mut tx = released(3); // polls
+        tx.push(PinTx::get(PinState::Low)); // clear
+        tx.push(PinTx::get(PinState::High)); // poll: pressed
+        tx.extend(released(4)); // polls: released again, still latched
+        tx.extend(released(1)); // clear
+        let mut pin = PinMock::new(&tx);
+        let mut stop = EmergencyStop::new(pin.clone(), ActiveLevel::High);
+        for _ in 0..3 {
+            stop.poll();
+        }
         assert_eq!(stop.clear(), Ok(()));
-        assert!(!stop.poll());
+        assert!(
+            stop.motors_allowed(),
+            "three released polls before the clear count"
+        );
         assert!(stop.poll());
-        assert!(stop.poll(), "released button does not unlatch");
-        assert_eq!(stop.clear(), Ok(()));
-        assert!(!stop.poll());
         assert_eq!(stop.counts(), (1, 0));
+        assert!(!stop.last_trip_was_read_error());
+        for _ in 0..4 {
+            assert!(stop.poll(), "released button does not unlatch");
+        }
+        assert_eq!(stop.clear(), Ok(()));
+        assert!(stop.motors_allowed());
         pin.done();
     }
 
     #[test]
-    fn a_read_error_counts_as_pressed() {
-        let mut pin = PinMock::new(&[
-            PinTx::get(PinState::Low), // clear: released (active high)
-            PinTx::get(PinState::Low).with_error(err()),
-            PinTx::get(PinState::Low).with_error(err()), // clear fails too
-        ]);
+    fn a_read_error_counts_as_pressed_and_is_told_apart() {
+        let mut tx = released(3);
+        tx.push(PinTx::get(PinState::Low)); // clear: released
+        tx.push(PinTx::get(PinState::Low).with_error(err()));
+        tx.push(PinTx::get(PinState::Low).with_error(err())); // clear fails too
+        let mut pin = PinMock::new(&tx);
         let mut stop = EmergencyStop::new(pin.clone(), ActiveLevel::High);
+        for _ in 0..3 {
+            stop.poll();
+        }
         assert_eq!(stop.clear(), Ok(()));
         assert!(stop.poll());
+        assert!(stop.last_trip_was_read_error());
         assert_eq!(stop.clear(), Err(EstopError::StillPressed));
         assert_eq!(stop.counts(), (1, 2));
         pin.done();
@@ -202,6 +271,7 @@ mod tests {
         assert_eq!(stop.clear(), Ok(()));
         stop.trip();
         assert!(stop.is_latched());
+        assert!(!stop.motors_allowed());
         assert_eq!(stop.counts(), (1, 0));
         pin.done();
     }

@@ -143,6 +143,11 @@ impl<PWM: SetDutyCycle, DIR: OutputPin> Motor<PWM, DIR> {
         }
     }
 
+    /// Clamp commands to ±`max_voltage_v` from now on (a new mission's config).
+    pub fn set_max_voltage_v(&mut self, max_voltage_v: f32) {
+        self.max_voltage_v = max_voltage_v;
+    }
+
     /// The voltage last applied (after clamping), volts; 0 after a stop or an error.
     pub fn applied_v(&self) -> f32 {
         self.applied_v

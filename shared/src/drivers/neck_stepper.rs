@@ -6,13 +6,33 @@
 //!
 //! Here the driver (an A4988/DRV8825-style step/direction board) gets a step pulse of
 //! [`STEP_PULSE_NS`] high per step, the rest of the step period low, and a direction level set
-//! before the first pulse. Position is counted in steps from straight ahead (positive =
-//! counter-clockwise seen from above, the robot's positive angle). A stepper has no position
-//! sensor, so the position is unknown (`None`) until [`NeckStepper::home`] has stepped towards
-//! the home switch until it closes, bounded by [`NeckGeometry::max_homing_steps`] (a broken
-//! switch gives [`NeckError::HomeNotFound`] after exactly that many steps, never an endless
-//! turn that would wind up the sonar's cable); the switch's position is
+//! [`DIR_SETUP_NS`] before the first pulse. Position is counted in steps from straight ahead
+//! (positive = counter-clockwise seen from above, the robot's positive angle). A stepper has no
+//! position sensor, so the position is unknown (`None`) until homing has stepped towards the
+//! home switch until it closes, bounded by [`NeckGeometry::max_homing_steps`] (a broken switch
+//! gives [`NeckError::HomeNotFound`] after exactly that many steps, never an endless turn that
+//! would wind up the sonar's cable); the switch's position is
 //! [`NeckGeometry::home_offset_steps`].
+//!
+//! Timing (issue 24, finding 5), from the drivers' data sheets: DRV8825 (TI SLVSA73, timing
+//! requirements: DIR set-up before the STEP rising edge t<sub>SU</sub> ≥ 650 ns, DIR hold
+//! ≥ 650 ns, STEP high and low ≥ 1.9 µs); A4988 (Allegro, 200 ns set-up and hold, 1 µs
+//! high and low). So: [`DIR_SETUP_NS`] = 1 µs after every direction change, the pulse
+//! [`STEP_PULSE_NS`] = 2 µs high, and the direction only ever changes after a whole pulse and
+//! its low time (hold: ≥ 2 µs). A stepper started at its full rate can stall and lose steps
+//! with nothing to tell: a move starts at [`NeckGeometry::start_rate_steps_s`] and accelerates
+//! at [`NeckGeometry::accel_steps_s2`] up to the configured rate (`1 / neck_step_time_s`), and
+//! slows down the same way before its last step ([`ramp_period_ns`]); homing runs at the start
+//! rate throughout, so the switch is met slowly. The start rate and acceleration
+//! ([`START_RATE_STEPS_S`], [`ACCEL_STEPS_S2`]) are conservative guesses for a small 1.8°
+//! motor carrying a sonar, to be checked on the robot: raise the start rate until the neck
+//! misses the home switch's position after a sweep, then keep half.
+//!
+//! Two ways to drive it: the blocking [`NeckStepper::home`] / [`NeckStepper::move_to_angle`]
+//! (over a [`DelayNs`]), or, for an async task, [`NeckStepper::begin_homing`] /
+//! [`NeckStepper::begin_move_to_angle`] then [`NeckStepper::step`] until
+//! [`NeckProgress::Done`], sleeping each [`NeckProgress::Wait`] in between (only the 1 µs
+//! set-up and the 2 µs pulse are waited inside).
 //!
 //! Angles are limited to ±(180° + [`NECK_LIMIT_MARGIN_DEG`]): a full sweep needs ±180°, the
 //! margin leaves room for the home switch just beyond it; a request outside is an error. An
@@ -22,11 +42,24 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{InputPin, OutputPin};
 
 use super::emergency_stop::{is_active, ActiveLevel};
-use crate::math::floor;
+use crate::math::{floor, sqrt};
 use crate::robot::RobotConfig;
 
 /// Width of the step pulse, ns (A4988 needs 1 µs, DRV8825 1.9 µs).
 pub const STEP_PULSE_NS: u32 = 2_000;
+
+/// Wait between setting the direction and the next step's rising edge, ns (DRV8825 650 ns,
+/// A4988 200 ns).
+pub const DIR_SETUP_NS: u32 = 1_000;
+
+/// Rate of the first step of a move and of homing, steps per second (see the module doc).
+pub const START_RATE_STEPS_S: f32 = 200.0;
+
+/// Acceleration of a move, steps per second² (200 → 1 000 steps/s in 120 steps, 0.2 s).
+pub const ACCEL_STEPS_S2: f32 = 4_000.0;
+
+/// Longest step period a ramp may ask for, ns (a start rate of 1 step/s).
+pub const MAX_STEP_PERIOD_NS: u32 = 1_000_000_000;
 
 /// How far past ±180° the neck may turn, degrees (two 1.8° steps): room for the home switch.
 pub const NECK_LIMIT_MARGIN_DEG: f32 = 3.6;
@@ -65,8 +98,12 @@ pub struct NeckGeometry {
     pub homing_direction: StepDirection,
     /// Most steps homing may take before it gives up.
     pub max_homing_steps: u32,
-    /// Time per step, ns (pulse high + low).
+    /// Time per step at full rate, ns (pulse high + low).
     pub step_period_ns: u32,
+    /// Rate of the first step of a move, and of homing, steps per second.
+    pub start_rate_steps_s: f32,
+    /// Acceleration (and deceleration) of a move, steps per second².
+    pub accel_steps_s2: f32,
     /// Level of the direction pin for [`StepDirection::Positive`] (`true` = high).
     pub positive_dir_high: bool,
     /// Level of the home switch when closed.
@@ -76,7 +113,8 @@ pub struct NeckGeometry {
 impl NeckGeometry {
     /// The geometry of `config`: its step angle and step time, limits ±(180° + margin), the
     /// home switch at the negative limit, homing towards negative angles over at most the full
-    /// travel plus [`HOMING_EXTRA_STEPS`], direction high = positive, switch active low.
+    /// travel plus [`HOMING_EXTRA_STEPS`], direction high = positive, switch active low, the
+    /// ramp of [`START_RATE_STEPS_S`] and [`ACCEL_STEPS_S2`].
     pub fn from_config(config: &RobotConfig) -> Self {
         let mut g = Self {
             step_deg: config.neck_step_deg,
@@ -85,6 +123,8 @@ impl NeckGeometry {
             homing_direction: StepDirection::Negative,
             max_homing_steps: 0,
             step_period_ns: seconds_to_ns(config.neck_step_time_s),
+            start_rate_steps_s: START_RATE_STEPS_S,
+            accel_steps_s2: ACCEL_STEPS_S2,
             positive_dir_high: true,
             home_active: ActiveLevel::Low,
         };
@@ -127,6 +167,60 @@ fn seconds_to_ns(s: f32) -> u32 {
     } else {
         ns as u32
     }
+}
+
+/// The period of step `index` (0-based) of a move of `total` steps, ns: the rate
+/// `√(start² + 2·accel·k)`, k the steps from the nearer end of the move, capped at the full
+/// rate (`step_period_ns`), never shorter than [`MIN_STEP_PERIOD_NS`] nor longer than
+/// [`MAX_STEP_PERIOD_NS`] (a start rate or acceleration that is not a positive number gives
+/// the longest).
+///
+/// ```
+/// use twil_core::drivers::neck_stepper::{ramp_period_ns, NeckGeometry};
+/// use twil_core::robot::RobotConfig;
+/// let g = NeckGeometry::from_config(&RobotConfig::default());
+/// assert_eq!(ramp_period_ns(&g, 0, 1), 5_000_000); // one step: at the 200 steps/s start rate
+/// assert_eq!(ramp_period_ns(&g, 150, 300), 1_000_000); // mid-way: at the full 1 000 steps/s
+/// ```
+pub fn ramp_period_ns(geometry: &NeckGeometry, index: u32, total: u32) -> u32 {
+    let cruise_ns = geometry.step_period_ns.max(MIN_STEP_PERIOD_NS);
+    let from_end = index.min(total.saturating_sub(1).saturating_sub(index));
+    let start = geometry.start_rate_steps_s;
+    let accel = geometry.accel_steps_s2;
+    if !(start.is_finite() && start > 0.0 && accel.is_finite() && accel >= 0.0) {
+        return MAX_STEP_PERIOD_NS.max(cruise_ns);
+    }
+    let rate = sqrt(start * start + 2.0 * accel * from_end as f32);
+    let ns = 1e9 / rate;
+    if ns.is_nan() || ns >= MAX_STEP_PERIOD_NS as f32 {
+        MAX_STEP_PERIOD_NS.max(cruise_ns)
+    } else {
+        (ns as u32).max(cruise_ns)
+    }
+}
+
+/// Where a stepwise move stands after [`NeckStepper::step`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum NeckProgress {
+    /// A step was sent: wait this long, ns, then call [`NeckStepper::step`] again.
+    Wait {
+        /// Time to the next step, ns.
+        ns: u32,
+    },
+    /// The move (or homing) is over: the position is known. Steps taken.
+    Done {
+        /// Steps sent by the move or homing.
+        steps: u32,
+    },
+}
+
+/// The move under way.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Motion {
+    Idle,
+    Homing { steps: u32 },
+    Moving { target: i32, done: u32, total: u32 },
 }
 
 /// What went wrong with the neck.
@@ -202,6 +296,7 @@ pub struct NeckStepper<STEP, DIR, HOME, D> {
     geometry: NeckGeometry,
     position_steps: Option<i32>,
     steps_taken: u32,
+    motion: Motion,
 }
 
 impl<STEP, DIR, HOME, D> NeckStepper<STEP, DIR, HOME, D>
@@ -221,6 +316,7 @@ where
             geometry,
             position_steps: None,
             steps_taken: 0,
+            motion: Motion::Idle,
         }
     }
 
@@ -229,7 +325,16 @@ where
         self.geometry
     }
 
-    /// Position in steps from straight ahead; `None` until homed (or after a pin error).
+    /// Use `geometry` from now on (a new mission's config). The position becomes unknown: home
+    /// again (the step angle or the switch's place may have changed).
+    pub fn set_geometry(&mut self, geometry: NeckGeometry) {
+        self.geometry = geometry;
+        self.position_steps = None;
+        self.motion = Motion::Idle;
+    }
+
+    /// Position in steps from straight ahead; `None` until homed (or after a pin error, or
+    /// during a move).
     pub fn position_steps(&self) -> Option<i32> {
         self.position_steps
     }
@@ -245,6 +350,7 @@ where
         self.steps_taken
     }
 
+    /// Set the direction level, then wait [`DIR_SETUP_NS`] before any step.
     fn set_direction(&mut self, direction: StepDirection) -> Result<(), NeckError> {
         let high = (direction == StepDirection::Positive) == self.geometry.positive_dir_high;
         let r = if high {
@@ -252,9 +358,12 @@ where
         } else {
             self.dir.set_low()
         };
-        r.map_err(|_| NeckError::Pin { pin: "dir" })
+        r.map_err(|_| NeckError::Pin { pin: "dir" })?;
+        self.delay.delay_ns(DIR_SETUP_NS);
+        Ok(())
     }
 
+    /// One step pulse: high for [`STEP_PULSE_NS`], then low.
     fn pulse(&mut self) -> Result<(), NeckError> {
         self.step
             .set_high()
@@ -262,52 +371,30 @@ where
         self.delay.delay_ns(STEP_PULSE_NS);
         let low = self.step.set_low();
         self.steps_taken = self.steps_taken.wrapping_add(1);
-        low.map_err(|_| NeckError::Pin { pin: "step" })?;
-        let rest_ns = self
-            .geometry
-            .step_period_ns
-            .max(MIN_STEP_PERIOD_NS)
-            .saturating_sub(STEP_PULSE_NS);
-        self.delay.delay_ns(rest_ns);
+        low.map_err(|_| NeckError::Pin { pin: "step" })
+    }
+
+    /// Start homing: the position becomes unknown, the direction is set towards the switch.
+    /// Then call [`step`](Self::step) until [`NeckProgress::Done`].
+    pub fn begin_homing(&mut self) -> Result<(), NeckError> {
+        self.position_steps = None;
+        self.motion = Motion::Idle;
+        self.set_direction(self.geometry.homing_direction)?;
+        self.motion = Motion::Homing { steps: 0 };
         Ok(())
     }
 
-    /// Step towards the home switch until it closes; the position is then
-    /// [`NeckGeometry::home_offset_steps`]. Returns the steps taken. At most
-    /// [`NeckGeometry::max_homing_steps`] steps, then [`NeckError::HomeNotFound`].
-    pub fn home(&mut self) -> Result<u32, NeckError> {
-        self.position_steps = None;
-        self.set_direction(self.geometry.homing_direction)?;
-        let mut steps = 0;
-        loop {
-            // A switch that cannot be read is an error, not "closed": homing would otherwise
-            // stop at a wrong place.
-            let high = self
-                .home
-                .is_high()
-                .map_err(|_| NeckError::Pin { pin: "home" })?;
-            if is_active::<()>(Ok(high), self.geometry.home_active) {
-                self.position_steps = Some(self.geometry.home_offset_steps);
-                return Ok(steps);
-            }
-            if steps >= self.geometry.max_homing_steps {
-                return Err(NeckError::HomeNotFound { steps });
-            }
-            self.pulse()?;
-            steps += 1;
-        }
-    }
-
-    /// Turn to the step nearest `angle_deg`. Returns the steps moved (signed). Errors: not homed,
-    /// out of range (nothing moves), a pin error (the position becomes unknown).
-    pub fn move_to_angle(&mut self, angle_deg: f32) -> Result<i32, NeckError> {
+    /// Start a move to the step nearest `angle_deg`. Errors: out of range, not homed (nothing
+    /// moves), the direction pin.
+    pub fn begin_move_to_angle(&mut self, angle_deg: f32) -> Result<(), NeckError> {
         let target = angle_to_steps(&self.geometry, angle_deg)?;
-        self.move_to_steps(target)
+        self.begin_move_to_steps(target)
     }
 
-    /// Turn to `target_steps` (within the limits). Same contract as
-    /// [`move_to_angle`](Self::move_to_angle).
-    pub fn move_to_steps(&mut self, target_steps: i32) -> Result<i32, NeckError> {
+    /// Start a move to `target_steps` (within the limits); same contract as
+    /// [`begin_move_to_angle`](Self::begin_move_to_angle). The position is unknown until the
+    /// move is done.
+    pub fn begin_move_to_steps(&mut self, target_steps: i32) -> Result<(), NeckError> {
         let limit = self.geometry.limit_steps()?;
         if target_steps.unsigned_abs() > limit.unsigned_abs() {
             return Err(NeckError::AngleOutOfRange {
@@ -318,21 +405,111 @@ where
         let start = self.position_steps.ok_or(NeckError::NotHomed)?;
         // In i64: a home offset set far outside the limits must not overflow.
         let delta = i64::from(target_steps) - i64::from(start);
-        if delta == 0 {
-            return Ok(0);
-        }
-        let direction = if delta > 0 {
-            StepDirection::Positive
-        } else {
-            StepDirection::Negative
-        };
-        // Unknown until every step is done: a pin error midway leaves it unknown.
+        let total = u32::try_from(delta.unsigned_abs()).unwrap_or(u32::MAX);
         self.position_steps = None;
-        self.set_direction(direction)?;
-        for _ in 0..delta.unsigned_abs() {
-            self.pulse()?;
+        self.motion = Motion::Idle;
+        if total > 0 {
+            self.set_direction(if delta > 0 {
+                StepDirection::Positive
+            } else {
+                StepDirection::Negative
+            })?;
         }
-        self.position_steps = Some(target_steps);
+        self.motion = Motion::Moving {
+            target: target_steps,
+            done: 0,
+            total,
+        };
+        Ok(())
+    }
+
+    /// The next step of the move or homing under way: sends one pulse and says how long to
+    /// wait before the next call, or says it is done (then the position is known). With no
+    /// move under way: `Done` with 0 steps. Errors end the move (position unknown):
+    /// [`NeckError::HomeNotFound`] after [`NeckGeometry::max_homing_steps`], a pin error.
+    pub fn step(&mut self) -> Result<NeckProgress, NeckError> {
+        match self.motion {
+            Motion::Idle => Ok(NeckProgress::Done { steps: 0 }),
+            Motion::Homing { steps } => {
+                self.motion = Motion::Idle;
+                // A switch that cannot be read is an error, not "closed": homing would
+                // otherwise stop at a wrong place.
+                let high = self
+                    .home
+                    .is_high()
+                    .map_err(|_| NeckError::Pin { pin: "home" })?;
+                if is_active::<()>(Ok(high), self.geometry.home_active) {
+                    self.position_steps = Some(self.geometry.home_offset_steps);
+                    return Ok(NeckProgress::Done { steps });
+                }
+                if steps >= self.geometry.max_homing_steps {
+                    return Err(NeckError::HomeNotFound { steps });
+                }
+                self.pulse()?;
+                self.motion = Motion::Homing { steps: steps + 1 };
+                // Homing runs at the start rate all the way.
+                let period = ramp_period_ns(&self.geometry, 0, 1);
+                Ok(NeckProgress::Wait {
+                    ns: period.saturating_sub(STEP_PULSE_NS),
+                })
+            }
+            Motion::Moving {
+                target,
+                done,
+                total,
+            } => {
+                self.motion = Motion::Idle;
+                if done >= total {
+                    self.position_steps = Some(target);
+                    return Ok(NeckProgress::Done { steps: total });
+                }
+                self.pulse()?;
+                self.motion = Motion::Moving {
+                    target,
+                    done: done + 1,
+                    total,
+                };
+                let period = ramp_period_ns(&self.geometry, done, total);
+                Ok(NeckProgress::Wait {
+                    ns: period.saturating_sub(STEP_PULSE_NS),
+                })
+            }
+        }
+    }
+
+    /// Run the move under way to its end, waiting with the delay. Returns the steps taken.
+    fn finish(&mut self) -> Result<u32, NeckError> {
+        loop {
+            match self.step()? {
+                NeckProgress::Wait { ns } => self.delay.delay_ns(ns),
+                NeckProgress::Done { steps } => return Ok(steps),
+            }
+        }
+    }
+
+    /// Step towards the home switch until it closes (blocking); the position is then
+    /// [`NeckGeometry::home_offset_steps`]. Returns the steps taken. At most
+    /// [`NeckGeometry::max_homing_steps`] steps, then [`NeckError::HomeNotFound`].
+    pub fn home(&mut self) -> Result<u32, NeckError> {
+        self.begin_homing()?;
+        self.finish()
+    }
+
+    /// Turn to the step nearest `angle_deg` (blocking). Returns the steps moved (signed).
+    /// Errors: not homed, out of range (nothing moves), a pin error (the position becomes
+    /// unknown).
+    pub fn move_to_angle(&mut self, angle_deg: f32) -> Result<i32, NeckError> {
+        let target = angle_to_steps(&self.geometry, angle_deg)?;
+        self.move_to_steps(target)
+    }
+
+    /// Turn to `target_steps` (within the limits, blocking). Same contract as
+    /// [`move_to_angle`](Self::move_to_angle).
+    pub fn move_to_steps(&mut self, target_steps: i32) -> Result<i32, NeckError> {
+        let start = self.position_steps;
+        self.begin_move_to_steps(target_steps)?;
+        self.finish()?;
+        let delta = start.map_or(0, |s| i64::from(target_steps) - i64::from(s));
         Ok(i32::try_from(delta).unwrap_or(if delta > 0 { i32::MAX } else { i32::MIN }))
     }
 
@@ -386,6 +563,7 @@ mod tests {
         assert_eq!(g.home_offset_steps, -102);
         assert_eq!(g.max_homing_steps, 214);
         assert_eq!(g.step_period_ns, 1_000_000);
+        assert_eq!(g.start_rate_steps_s, 200.0);
         let bad = NeckGeometry { step_deg: 0.0, ..g };
         assert_eq!(bad.limit_steps(), Err(NeckError::BadStep { step_deg: 0.0 }));
         let tiny = NeckGeometry {
@@ -396,6 +574,61 @@ mod tests {
             tiny.limit_steps(),
             Err(NeckError::BadLimit { .. })
         ));
+    }
+
+    #[test]
+    fn moves_ramp_up_from_the_start_rate_and_down_again() {
+        let g = geometry();
+        let periods: Vec<u32> = (0..300).map(|i| ramp_period_ns(&g, i, 300)).collect();
+        assert_eq!(periods[0], 5_000_000);
+        assert_eq!(periods[299], 5_000_000);
+        // √(200² + 2·4000·1) = 219.1 steps/s.
+        assert_eq!(periods[1], 4_564_354);
+        assert!(periods.windows(2).take(150).all(|w| w[1] <= w[0]));
+        assert!(periods.windows(2).skip(150).all(|w| w[1] >= w[0]));
+        // Full rate from (1000² − 200²) / (2·4000) = 120 steps on.
+        assert_eq!(periods[121], 1_000_000);
+        assert!(periods[118] > 1_000_000);
+        assert_eq!(periods[150], 1_000_000);
+        // A bad ramp is the slowest, never a division by zero.
+        let stalled = NeckGeometry {
+            start_rate_steps_s: 0.0,
+            ..g
+        };
+        assert_eq!(ramp_period_ns(&stalled, 0, 1), MAX_STEP_PERIOD_NS);
+        let nan = NeckGeometry {
+            accel_steps_s2: f32::NAN,
+            ..g
+        };
+        assert_eq!(ramp_period_ns(&nan, 5, 10), MAX_STEP_PERIOD_NS);
+        assert_eq!(ramp_period_ns(&g, 0, 0), 5_000_000);
+    }
+
+    #[test]
+    fn stepwise_moves_report_their_waits() {
+        let mut step = PinMock::new(&step_pulses(2));
+        let mut dir = PinMock::new(&[PinTx::set(PinState::Low), PinTx::set(PinState::High)]);
+        let mut home = PinMock::new(&home_reads(0, true));
+        let mut neck = NeckStepper::new(
+            step.clone(),
+            dir.clone(),
+            home.clone(),
+            NoopDelay::new(),
+            geometry(),
+        );
+        neck.begin_homing().unwrap();
+        assert_eq!(neck.step(), Ok(NeckProgress::Done { steps: 0 }));
+        neck.begin_move_to_steps(-100).unwrap();
+        assert_eq!(neck.position_steps(), None);
+        assert_eq!(neck.step(), Ok(NeckProgress::Wait { ns: 4_998_000 }));
+        assert_eq!(neck.step(), Ok(NeckProgress::Wait { ns: 4_998_000 }));
+        assert_eq!(neck.step(), Ok(NeckProgress::Done { steps: 2 }));
+        assert_eq!(neck.position_steps(), Some(-100));
+        // Nothing under way: done at once.
+        assert_eq!(neck.step(), Ok(NeckProgress::Done { steps: 0 }));
+        step.done();
+        dir.done();
+        home.done();
     }
 
     #[test]
@@ -428,13 +661,15 @@ mod tests {
         let mut step = PinMock::new(&step_pulses(3));
         let mut dir = PinMock::new(&[PinTx::set(PinState::Low)]); // negative
         let mut home = PinMock::new(&home_reads(3, true));
+        // Direction set-up, then three pulses at the 200 steps/s start rate.
         let mut delay = CheckedDelay::new(&[
+            DelayTx::delay_ns(DIR_SETUP_NS),
             DelayTx::delay_ns(2_000),
-            DelayTx::delay_ns(998_000),
+            DelayTx::delay_ns(4_998_000),
             DelayTx::delay_ns(2_000),
-            DelayTx::delay_ns(998_000),
+            DelayTx::delay_ns(4_998_000),
             DelayTx::delay_ns(2_000),
-            DelayTx::delay_ns(998_000),
+            DelayTx::delay_ns(4_998_000),
         ]);
         let mut neck = NeckStepper::new(step.clone(), dir.clone(), home.clone(), delay.clone(), g);
         assert_eq!(neck.position_steps(), None);

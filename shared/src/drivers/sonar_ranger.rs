@@ -5,24 +5,36 @@
 //! an old echo cannot spill into the next reading), converts the time of flight to a distance
 //! and keeps it only inside `DIST_MIN` … `ALCANCE_SONAR`. Here:
 //!
-//! 1. the trigger pin goes high for [`TRIGGER_PULSE_US`] µs (the minimum of the common
-//!    HC-SR04-style rangers; longer is harmless);
-//! 2. an [`EchoCapture`] (a timer's input capture on the board) returns the round-trip time in
-//!    ticks of its stated rate, or `None` when nothing came back within the window's time-out
-//!    ([`RobotConfig::echo_wait_s`], 35 ms: the round trip of 6 m);
-//! 3. [`range_from_echo_ticks`] converts ticks → seconds → metres with
+//! 1. an [`EchoCapture`] (a timer's input capture on the board) is armed, then the trigger pin
+//!    goes high for [`TRIGGER_PULSE_US`] µs (HC-SR04: at least 10 µs);
+//! 2. the capture hands over the echo line's edges with their polarity, and an
+//!    [`EchoDecoder`](super::echo::EchoDecoder) turns them into a pulse width or the reason
+//!    there is none (`echo.rs`: polarity and order, the glitch filter, the 38 ms no-target
+//!    pulse, the listen time);
+//! 3. [`range_from_echo_ticks`] converts the width → seconds → metres with
 //!    [`sonar::time_of_flight_to_range_m`](crate::sonar::time_of_flight_to_range_m) (343.2 m/s)
 //!    and applies the window ([`RobotConfig::sonar_min_range_m`] 0.26 m …
-//!    [`RobotConfig::sonar_range_m`] 1.5 m): outside it, or a time-out, is `None` = no echo;
-//! 4. the blocking [`SonarRanger::read`] then waits out the rest of the echo window
-//!    ([`settle_delay_us`]), so consecutive readings are at least one window apart, as in the seed.
+//!    [`RobotConfig::sonar_range_m`] 1.5 m, and the time-out [`RobotConfig::echo_wait_s`]):
+//!    outside it is `None` = no echo;
+//! 4. the blocking [`SonarRanger::read`] then waits out the rest of the cycle
+//!    ([`cycle_us`](super::echo::cycle_us), at least the HC-SR04's 60 ms), so a late echo of
+//!    one ping is not heard by the next.
 //!
-//! An async firmware task does the same with the pure functions: arm, pulse, await the capture
-//! with [`timeout_ticks`], convert with [`range_from_echo_ticks`], sleep [`settle_delay_us`].
+//! **Departure from the seed and from the mission's model**: the seed waited one fixed window
+//! per reading and the mission's timing model charges `echo_wait_s + neck_step_time_s` (36 ms)
+//! per reading; an HC-SR04 needs a 60 ms cycle, so on the board a reading takes at least 60 ms
+//! (a 105-reading sweep 6.3 s instead of 3.8 s). The model is left as it is (changing
+//! `RobotConfig::DEFAULT` changes every simulated mission); a ranger with a shorter cycle
+//! (the seed's) would match it.
+//!
+//! An async firmware task does the same with the pure parts: arm, pulse, feed the decoder with
+//! the capture's edges and `Mono::delay_until` its [`deadline_ticks`](super::echo::EchoDecoder::deadline_ticks),
+//! convert with [`range_from_echo_ticks`], sleep the rest of [`cycle_us`](super::echo::cycle_us).
 
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::OutputPin;
 
+use super::echo::{cycle_us, EchoDecoder, EchoEdge, EchoOutcome};
 use crate::robot::RobotConfig;
 use crate::sonar::{time_of_flight_to_range_m, valid_range_m};
 
@@ -33,17 +45,20 @@ pub const TRIGGER_PULSE_US: u32 = 10;
 /// in range and a bad config from stalling the reader for long).
 pub const MAX_ECHO_TIMEOUT_US: u32 = 1_000_000;
 
-/// Times an echo. Implemented on the board by a timer in input-capture mode (or a timer plus an
-/// edge interrupt); in tests by a script.
+/// Watches the echo line. Implemented on the board by a timer in input-capture mode on both
+/// edges (the pin's level read after each capture gives the polarity) or by an edge interrupt
+/// and a free-running timer; in tests by a scripted world.
 pub trait EchoCapture {
-    /// Rate of the ticks returned by [`wait_echo_ticks`](Self::wait_echo_ticks), Hz.
+    /// Rate of the ticks of [`EchoEdge::at_ticks`] and [`elapsed_ticks`](Self::elapsed_ticks), Hz.
     fn tick_hz(&self) -> u32;
-    /// Forget any earlier edge and start watching the echo line. Called just before the
-    /// trigger pulse, so the time of flight counts from the pulse.
+    /// Forget any earlier edge and start watching the echo line: time 0 of the edges. Called
+    /// just before the trigger pulse.
     fn arm(&mut self);
-    /// Wait until the echo has been timed or `timeout_ticks` have passed since
-    /// [`arm`](Self::arm). Returns the round-trip time of flight in ticks, or `None` on time-out.
-    fn wait_echo_ticks(&mut self, timeout_ticks: u32) -> Option<u32>;
+    /// The next edge since [`arm`](Self::arm), in time order, waiting until `deadline_ticks`
+    /// after it at most; `None` when the deadline passed without one.
+    fn next_edge(&mut self, deadline_ticks: u32) -> Option<EchoEdge>;
+    /// Ticks since [`arm`](Self::arm) (saturating).
+    fn elapsed_ticks(&mut self) -> u32;
 }
 
 /// The validity window and time-out of one sonar, from a [`RobotConfig`].
@@ -121,6 +136,17 @@ pub fn echo_ticks_to_time_of_flight_s(echo_ticks: u32, tick_hz: u32) -> Option<f
     }
 }
 
+/// The range of one ping's outcome: a [`EchoOutcome::Pulse`] through
+/// [`range_from_echo_ticks`]; anything else is `None` (no echo).
+pub fn range_from_outcome(window: &SonarWindow, outcome: EchoOutcome, tick_hz: u32) -> Option<f32> {
+    match outcome {
+        EchoOutcome::Pulse { width_ticks } => {
+            range_from_echo_ticks(window, Some(width_ticks), tick_hz)
+        }
+        EchoOutcome::StillHigh | EchoOutcome::Busy | EchoOutcome::Silent => None,
+    }
+}
+
 /// The reading of a captured echo: `None` (no echo) on a time-out, a tick rate of 0 Hz, an echo
 /// later than the time-out, or a range outside `min_range_m … max_range_m`.
 ///
@@ -149,16 +175,21 @@ pub fn range_from_echo_ticks(
     )
 }
 
-/// Time left of the echo window after an echo came back after `echo_ticks`, µs: waited after
-/// each reading so that the next trigger is at least one window after this one. A time-out
-/// used the whole window already (0 left).
-pub fn settle_delay_us(window: &SonarWindow, echo_ticks: Option<u32>, tick_hz: u32) -> u32 {
-    match echo_ticks {
-        None => 0,
-        Some(ticks) => window
-            .timeout_us
-            .saturating_sub(ticks_to_us(ticks, tick_hz)),
-    }
+/// Time left of the cycle ([`cycle_us`](super::echo::cycle_us)) after `elapsed_us` since the
+/// capture was armed, µs: waited after each reading so that the next trigger is at least one
+/// cycle after this one.
+pub fn settle_delay_us(window: &SonarWindow, elapsed_us: u32) -> u32 {
+    cycle_us(window).saturating_sub(elapsed_us)
+}
+
+/// One reading: the range (or no echo) and what the echo line did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SonarReading {
+    /// The range inside the window, metres; `None` for no echo.
+    pub range_m: Option<f32>,
+    /// What the echo line did.
+    pub outcome: EchoOutcome,
 }
 
 /// One ultrasonic ranger: trigger pin, echo capture, a delay, its window.
@@ -194,9 +225,20 @@ impl<TRIG: OutputPin, ECHO: EchoCapture, D: DelayNs> SonarRanger<TRIG, ECHO, D> 
         (self.readings, self.echoes)
     }
 
-    /// Take one reading, blocking for at most one echo window: `Ok(Some(range_m))`, or
-    /// `Ok(None)` for no echo (time-out, too near, too far).
-    pub fn read(&mut self) -> Result<Option<f32>, SonarError> {
+    /// Use `window` from now on (a new mission's config).
+    pub fn set_window(&mut self, window: SonarWindow) {
+        self.window = window;
+    }
+
+    /// The echo capture (an async task feeds the decoder from it itself).
+    pub fn echo_mut(&mut self) -> &mut ECHO {
+        &mut self.echo
+    }
+
+    /// Start a ping: arm the capture, pulse the trigger for [`TRIGGER_PULSE_US`]. Returns the
+    /// decoder to feed with the capture's edges (until its deadline) and the capture's tick
+    /// rate. Errors: the trigger pin (left low), a capture without a clock.
+    pub fn fire(&mut self) -> Result<(EchoDecoder, u32), SonarError> {
         let tick_hz = self.echo.tick_hz();
         if tick_hz == 0 {
             return Err(SonarError::TickRate { tick_hz });
@@ -210,19 +252,40 @@ impl<TRIG: OutputPin, ECHO: EchoCapture, D: DelayNs> SonarRanger<TRIG, ECHO, D> 
         }
         self.delay.delay_us(TRIGGER_PULSE_US);
         self.trigger.set_low().map_err(|_| SonarError::TriggerPin)?;
-        let echo_ticks = self
-            .echo
-            .wait_echo_ticks(timeout_ticks(&self.window, tick_hz));
-        let settle_us = settle_delay_us(&self.window, echo_ticks, tick_hz);
-        if settle_us > 0 {
-            self.delay.delay_us(settle_us);
-        }
-        let range_m = range_from_echo_ticks(&self.window, echo_ticks, tick_hz);
+        Ok((EchoDecoder::new(&self.window, tick_hz), tick_hz))
+    }
+
+    /// End a ping with the decoder's `outcome`: the reading (counted for telemetry).
+    pub fn finish(&mut self, outcome: EchoOutcome, tick_hz: u32) -> SonarReading {
+        let range_m = range_from_outcome(&self.window, outcome, tick_hz);
         self.readings = self.readings.wrapping_add(1);
         if range_m.is_some() {
             self.echoes = self.echoes.wrapping_add(1);
         }
-        Ok(range_m)
+        SonarReading { range_m, outcome }
+    }
+
+    /// Take one reading, blocking for one cycle ([`cycle_us`](super::echo::cycle_us)):
+    /// `Ok(reading)` whose `range_m` is `None` for no echo (no pulse, too near, too far, the
+    /// no-target pulse). Errors: the trigger pin, a capture without a clock.
+    pub fn read(&mut self) -> Result<SonarReading, SonarError> {
+        let (mut decoder, tick_hz) = self.fire()?;
+        let outcome = loop {
+            match self.echo.next_edge(decoder.deadline_ticks()) {
+                Some(edge) => {
+                    if let Some(o) = decoder.feed(edge) {
+                        break o;
+                    }
+                }
+                None => break decoder.expire(),
+            }
+        };
+        let elapsed_us = ticks_to_us(self.echo.elapsed_ticks(), tick_hz);
+        let settle_us = settle_delay_us(&self.window, elapsed_us);
+        if settle_us > 0 {
+            self.delay.delay_us(settle_us);
+        }
+        Ok(self.finish(outcome, tick_hz))
     }
 
     /// Give the pins back.
@@ -234,6 +297,7 @@ impl<TRIG: OutputPin, ECHO: EchoCapture, D: DelayNs> SonarRanger<TRIG, ECHO, D> 
 #[cfg(test)]
 mod tests {
     extern crate std;
+    use std::vec::Vec;
 
     use super::*;
     use embedded_hal_mock::eh1::delay::{CheckedDelay, NoopDelay, Transaction as DelayTx};
@@ -242,21 +306,22 @@ mod tests {
     };
     use embedded_hal_mock::eh1::MockError;
 
-    /// An echo capture that returns a scripted echo and records how it was used.
+    /// An echo capture that hands out scripted edges and records how it was used. Its clock
+    /// stands at the last edge handed out, or at the deadline of a wait without one.
     struct ScriptedEcho {
         tick_hz: u32,
-        echo_ticks: Option<u32>,
+        edges: Vec<EchoEdge>,
         armed: u32,
-        timeout_seen: Option<u32>,
+        now_ticks: u32,
     }
 
     impl ScriptedEcho {
-        fn new(tick_hz: u32, echo_ticks: Option<u32>) -> Self {
+        fn new(tick_hz: u32, edges: &[EchoEdge]) -> Self {
             Self {
                 tick_hz,
-                echo_ticks,
+                edges: edges.to_vec(),
                 armed: 0,
-                timeout_seen: None,
+                now_ticks: 0,
             }
         }
     }
@@ -268,11 +333,21 @@ mod tests {
         fn arm(&mut self) {
             self.armed += 1;
         }
-        fn wait_echo_ticks(&mut self, timeout_ticks: u32) -> Option<u32> {
+        fn next_edge(&mut self, deadline_ticks: u32) -> Option<EchoEdge> {
             assert_eq!(self.armed, 1, "the capture is armed once, before waiting");
-            self.timeout_seen = Some(timeout_ticks);
-            // A real capture never reports an echo after its time-out.
-            self.echo_ticks.filter(|&t| t <= timeout_ticks)
+            match self.edges.first() {
+                Some(e) if e.at_ticks <= deadline_ticks => {
+                    self.now_ticks = e.at_ticks;
+                    Some(self.edges.remove(0))
+                }
+                _ => {
+                    self.now_ticks = deadline_ticks;
+                    None
+                }
+            }
+        }
+        fn elapsed_ticks(&mut self) -> u32 {
+            self.now_ticks
         }
     }
 
@@ -336,6 +411,12 @@ mod tests {
         assert!(range_from_echo_ticks(&wide, Some(34_999), 1_000_000).is_some());
         assert_eq!(range_from_echo_ticks(&wide, Some(35_001), 1_000_000), None);
         assert_eq!(range_from_echo_ticks(&w, Some(5_830), 0), None);
+        // The HC-SR04's no-target pulse is no echo whatever the range window.
+        let no_target = EchoOutcome::Pulse {
+            width_ticks: 38_000,
+        };
+        assert_eq!(range_from_outcome(&wide, no_target, 1_000_000), None);
+        assert_eq!(range_from_outcome(&w, EchoOutcome::Silent, 1_000_000), None);
     }
 
     #[test]
@@ -349,39 +430,70 @@ mod tests {
     }
 
     #[test]
-    fn settle_delay_fills_the_rest_of_the_window() {
+    fn settle_delay_fills_the_rest_of_the_cycle() {
         let w = window();
-        assert_eq!(settle_delay_us(&w, Some(5_830), 1_000_000), 35_000 - 5_830);
-        assert_eq!(settle_delay_us(&w, None, 1_000_000), 0);
-        assert_eq!(settle_delay_us(&w, Some(40_000), 1_000_000), 0);
+        assert_eq!(settle_delay_us(&w, 6_100), 60_000 - 6_100);
+        assert_eq!(settle_delay_us(&w, 48_000), 12_000);
+        assert_eq!(settle_delay_us(&w, 70_000), 0);
     }
 
     #[test]
     fn read_pulses_the_trigger_then_times_the_echo() {
         let mut trigger = PinMock::new(&pulse());
+        // Echo rises 450 µs after arming and lasts 5.83 ms; the fall is final 100 µs later.
+        let fall_final = 450 + 5_830 + 100;
         let mut delay = CheckedDelay::new(&[
             DelayTx::delay_us(TRIGGER_PULSE_US),
-            DelayTx::delay_us(35_000 - 5_830),
+            DelayTx::delay_us(60_000 - fall_final),
         ]);
-        let echo = ScriptedEcho::new(1_000_000, Some(5_830));
+        let echo = ScriptedEcho::new(
+            1_000_000,
+            &[EchoEdge::rise(450), EchoEdge::fall(450 + 5_830)],
+        );
         let mut ranger = SonarRanger::new(trigger.clone(), echo, delay.clone(), window());
-        let r = ranger.read().unwrap().unwrap();
-        assert!((r - 1.0004).abs() < 1e-3);
+        let reading = ranger.read().unwrap();
+        assert!((reading.range_m.unwrap() - 1.0004).abs() < 1e-3);
+        assert_eq!(reading.outcome, EchoOutcome::Pulse { width_ticks: 5_830 });
         assert_eq!(ranger.counts(), (1, 1));
-        let (_, echo, _) = ranger.release();
-        assert_eq!(echo.timeout_seen, Some(35_000));
         trigger.done();
         delay.done();
     }
 
     #[test]
-    fn a_time_out_is_no_echo_and_waits_nothing_more() {
+    fn the_no_target_pulse_is_no_echo_and_the_cycle_is_60_ms() {
         let mut trigger = PinMock::new(&pulse());
-        let mut delay = CheckedDelay::new(&[DelayTx::delay_us(TRIGGER_PULSE_US)]);
-        let echo = ScriptedEcho::new(1_000_000, None);
+        let mut delay = CheckedDelay::new(&[
+            DelayTx::delay_us(TRIGGER_PULSE_US),
+            DelayTx::delay_us(60_000 - (450 + 38_000 + 100)),
+        ]);
+        let echo = ScriptedEcho::new(
+            1_000_000,
+            &[EchoEdge::rise(450), EchoEdge::fall(450 + 38_000)],
+        );
         let mut ranger = SonarRanger::new(trigger.clone(), echo, delay.clone(), window());
-        assert_eq!(ranger.read(), Ok(None));
+        let reading = ranger.read().unwrap();
+        assert_eq!(reading.range_m, None);
         assert_eq!(ranger.counts(), (1, 0));
+        trigger.done();
+        delay.done();
+    }
+
+    #[test]
+    fn silence_is_reported_as_such() {
+        let mut trigger = PinMock::new(&pulse());
+        let mut delay = CheckedDelay::new(&[
+            DelayTx::delay_us(TRIGGER_PULSE_US),
+            DelayTx::delay_us(60_000 - 48_000),
+        ]);
+        let echo = ScriptedEcho::new(1_000_000, &[]);
+        let mut ranger = SonarRanger::new(trigger.clone(), echo, delay.clone(), window());
+        assert_eq!(
+            ranger.read(),
+            Ok(SonarReading {
+                range_m: None,
+                outcome: EchoOutcome::Silent
+            })
+        );
         trigger.done();
         delay.done();
     }
@@ -389,9 +501,10 @@ mod tests {
     #[test]
     fn an_echo_nearer_than_the_minimum_is_no_echo() {
         let mut trigger = PinMock::new(&pulse());
-        let echo = ScriptedEcho::new(1_000_000, Some(1_000)); // 0.17 m
+        // 0.17 m.
+        let echo = ScriptedEcho::new(1_000_000, &[EchoEdge::rise(450), EchoEdge::fall(1_450)]);
         let mut ranger = SonarRanger::new(trigger.clone(), echo, NoopDelay::new(), window());
-        assert_eq!(ranger.read(), Ok(None));
+        assert_eq!(ranger.read().unwrap().range_m, None);
         trigger.done();
     }
 
@@ -403,7 +516,7 @@ mod tests {
             PinTx::set(PinState::High).with_error(err),
             PinTx::set(PinState::Low),
         ]);
-        let echo = ScriptedEcho::new(1_000_000, Some(5_830));
+        let echo = ScriptedEcho::new(1_000_000, &[]);
         let mut ranger = SonarRanger::new(trigger.clone(), echo, NoopDelay::new(), window());
         assert_eq!(ranger.read(), Err(SonarError::TriggerPin));
         assert_eq!(ranger.counts(), (0, 0));
@@ -413,7 +526,7 @@ mod tests {
     #[test]
     fn a_zero_tick_rate_is_an_error_before_any_pin_moves() {
         let mut trigger = PinMock::new(&[]);
-        let echo = ScriptedEcho::new(0, Some(5_830));
+        let echo = ScriptedEcho::new(0, &[]);
         let mut ranger = SonarRanger::new(trigger.clone(), echo, NoopDelay::new(), window());
         assert_eq!(ranger.read(), Err(SonarError::TickRate { tick_hz: 0 }));
         trigger.done();

@@ -146,6 +146,18 @@ impl<Q: QuadratureCounter> WheelEncoder<Q> {
         c
     }
 
+    /// A new mission: `limit_counts` from its config, and the counter's current value as the
+    /// reference of the next period (what the wheels did between missions is not odometry).
+    pub fn restart(&mut self, limit_counts: u32) {
+        self.limit_counts = limit_counts;
+        self.last_raw = self.counter.count();
+    }
+
+    /// The plausibility limit in use, counts per period.
+    pub fn limit_counts(&self) -> u32 {
+        self.limit_counts
+    }
+
     /// Sum of the plausible counts since start, positive = forward.
     pub fn total_counts(&self) -> i64 {
         self.total_counts
@@ -248,5 +260,19 @@ mod tests {
         assert_eq!(enc.total_counts(), -50);
         assert_eq!(enc.implausible_reads(), 1);
         assert!(enc.release().0.is_empty());
+    }
+
+    #[test]
+    fn a_restart_takes_the_new_limit_and_reference() {
+        let script = Script(std::vec![0, 500, 500, 600]);
+        let mut enc = WheelEncoder::new(script, Mounting::Normal, 224);
+        // The wheels turned 500 counts between missions: not this mission's motion.
+        enc.restart(50);
+        assert_eq!(enc.limit_counts(), 50);
+        assert_eq!(enc.read().trusted(), Some(0));
+        assert!(
+            !enc.read().plausible,
+            "100 counts exceed the new limit of 50"
+        );
     }
 }

@@ -20,7 +20,8 @@ use crate::plan::{PlanStatus, PlannerKind};
 /// failsafes (`MissionSetup::link_loss`, `MissionReport::stop_cause` / `stop_latency_us`,
 /// the reset cause in `DeviceStatus` and `Telemetry::Boot`). 4: the plant's sonar model and the
 /// following choices of `--preset` in `SetMission` (fields 13–19), `MissionStats::blind_cuts`.
-pub const PROTOCOL_VERSION: u16 = 4;
+/// 5: `StopCause::SensorFault` (the board's body: homing, sonar, battery, motors, e-stop input).
+pub const PROTOCOL_VERSION: u16 = 5;
 
 /// Points carried by one telemetry chunk of hits, prefix or path.
 pub const TELEMETRY_CHUNK_POINTS: usize = 32;
@@ -259,7 +260,7 @@ pub struct MissionReport {
     /// The emergency stop is latched.
     pub emergency_stop: bool,
     /// Why the mission was stopped from outside its own logic (abort, e-stop, link lost,
-    /// controller overrun); `None` when it ended by itself.
+    /// controller overrun, a sensor fault); `None` when it ended by itself.
     pub stop_cause: StopCause,
     /// Time from the receive interrupt that saw the last stop frame to the control step that
     /// put zero volts on the motors, microseconds (firmware, SysTick at 168 MHz; 0 elsewhere).

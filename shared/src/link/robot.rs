@@ -684,9 +684,15 @@ impl<const W: usize> RobotLink<'_, W> {
         self.d.sonar_request = None;
     }
 
-    /// A failsafe of the shell fired (e.g. [`StopCause::ControllerOverrun`]): a running
-    /// mission ends `Aborted` with `cause`, the pilot is told to stop.
+    /// A failsafe of the shell fired (e.g. [`StopCause::ControllerOverrun`], a
+    /// [`StopCause::SensorFault`] of the body): a running mission ends `Aborted` with `cause`,
+    /// the pilot is told to stop. [`StopCause::EmergencyStop`] (the board's input, reported by
+    /// `drivers::body::Chassis`) also latches the device's stop as the `EmergencyStop` request
+    /// does: a new mission needs `ClearEmergencyStop` first.
     pub fn fail(&mut self, cause: StopCause) {
+        if cause == StopCause::EmergencyStop {
+            self.d.emergency_stop = true;
+        }
         self.stop_mission_for(cause);
     }
 

@@ -326,8 +326,12 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
             info.static_ram_bytes,
             report.stack_high_water_bytes
         );
-        if report.stop_cause != StopCause::None {
-            println!("stopped by the device: {}", report.stop_cause.describe());
+        match report.stop_cause {
+            StopCause::None => {}
+            StopCause::SensorFault(sensor) => {
+                println!("stopped by the device: sensor fault: {}", sensor.describe())
+            }
+            cause => println!("stopped by the device: {}", cause.describe()),
         }
         if let Some(dir) = &args.out {
             println!("wrote {}", dir.display());

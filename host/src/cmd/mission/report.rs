@@ -11,6 +11,7 @@ pub fn stop_cause_name(cause: StopCause) -> Option<&'static str> {
         StopCause::EmergencyStop => Some("emergency_stop"),
         StopCause::LinkLost => Some("link_lost"),
         StopCause::ControllerOverrun => Some("controller_overrun"),
+        StopCause::SensorFault(_) => Some("sensor_fault"),
     }
 }
 

@@ -2,7 +2,7 @@
 //! control step (controller overrun), the reset cause in `Status`.
 
 use super::*;
-use crate::failsafe::{LinkLossPolicy, LinkLossReaction, ResetCause, StopCause};
+use crate::failsafe::{LinkLossPolicy, LinkLossReaction, ResetCause, Sensor, StopCause};
 
 /// A bench whose mission reacts to `timeout_ms` of silence with `reaction`, started.
 fn started_with(timeout_ms: u32, reaction: LinkLossReaction) -> Bench {
@@ -133,6 +133,57 @@ fn a_controller_overrun_ends_the_mission_with_its_cause_and_stops_the_pilot() {
         b.device.link(&mut b.mission).report().stop_cause,
         StopCause::None
     );
+}
+
+#[test]
+fn a_sensor_fault_ends_the_mission_and_crosses_the_wire_with_its_sensor() {
+    let mut b = started_with(0, LinkLossReaction::StopAndHold);
+    for _ in 0..5 {
+        b.tick();
+    }
+    let _ = b.device.take_pilot_command();
+    b.device
+        .link(&mut b.mission)
+        .fail(StopCause::SensorFault(Sensor::NeckHome));
+    assert_eq!(b.device.take_pilot_command(), Some(PilotCommand::Stop));
+    // Through the wire format (postcard, COBS, CRC) and back.
+    let Reply::Mission(report) = b.call(Request::MissionStatus) else {
+        panic!("a mission report");
+    };
+    assert_eq!(report.status, MissionStatus::Aborted);
+    assert_eq!(report.stop_cause, StopCause::SensorFault(Sensor::NeckHome));
+    for sensor in [
+        Sensor::NeckHome,
+        Sensor::Neck,
+        Sensor::SonarTrigger,
+        Sensor::SonarSilent,
+        Sensor::Battery,
+        Sensor::Motor,
+        Sensor::EmergencyStopInput,
+    ] {
+        let cause = StopCause::SensorFault(sensor);
+        let mut buf = [0u8; 8];
+        let bytes = postcard::to_slice(&cause, &mut buf).unwrap();
+        // docs/protocol.md: StopCause 5, then the sensor's index.
+        assert_eq!(bytes[0], 5);
+        assert_eq!(postcard::from_bytes::<StopCause>(bytes).unwrap(), cause);
+    }
+}
+
+#[test]
+fn the_emergency_stop_input_latches_like_the_request() {
+    let mut b = started_with(0, LinkLossReaction::StopAndHold);
+    b.tick();
+    let _ = b.device.take_pilot_command();
+    b.device.link(&mut b.mission).fail(StopCause::EmergencyStop);
+    assert_eq!(b.device.take_pilot_command(), Some(PilotCommand::Stop));
+    let report = b.device.link(&mut b.mission).report();
+    assert_eq!(report.stop_cause, StopCause::EmergencyStop);
+    assert!(report.emergency_stop);
+    // A new mission waits for the host to clear the stop.
+    assert!(matches!(b.call(Request::StartMission), Reply::Error(_)));
+    assert_eq!(b.call(Request::ClearEmergencyStop), Reply::Ack);
+    assert_eq!(b.call(Request::StartMission), Reply::Ack);
 }
 
 #[test]

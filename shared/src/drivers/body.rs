@@ -1,0 +1,382 @@
+//! The robot's body on a board: what the firmware's board build does with the drivers,
+//! written once over embedded-hal 1.0 traits (plus [`EchoCapture`], [`QuadratureCounter`] and
+//! [`BatterySensor`], where embedded-hal has none), so the same code runs on the STM32F405 and,
+//! in `tests/virtual_board.rs`, on pins driven by a scripted world.
+//!
+//! Two halves, as the firmware's tasks hold them:
+//!
+//! - [`Chassis`] (the control task, every 50 ms): the wheels' encoders, the two motors, the
+//!   emergency-stop input and the battery;
+//! - [`SonarHead`] (the sonar task): the neck stepper and the sonar ranger.
+//!
+//! The rules (issue 24, "first power-up"):
+//!
+//! - **power-up**: both motors at duty 0, the e-stop latched, the neck not homed. Nothing
+//!   moves until a mission starts.
+//! - **mission start** (after `RobotDevice::take_started`): [`SonarHead::restart`] takes the
+//!   mission's [`RobotConfig`] (sonar window, neck geometry) and homes the neck;
+//!   [`Chassis::restart`] takes its encoder limit and voltage limit, re-references the
+//!   encoders and clears the e-stop, which only succeeds with the button released. The motors
+//!   then get duty once the button has read released for
+//!   [`RELEASED_POLLS_TO_RUN`](super::emergency_stop::RELEASED_POLLS_TO_RUN) periods in a row.
+//! - **every control period**: [`Chassis::read_counts`] before the pilot's step,
+//!   [`Chassis::drive`] after it. `drive` polls the e-stop *first*, so a press stops both
+//!   motors at the next period (within 50 ms), and reads the battery.
+//! - **faults end the mission, never silently**: every failure the body sees while a mission
+//!   runs comes back once as a [`StopCause`]: [`StopCause::EmergencyStop`] for a press;
+//!   [`StopCause::SensorFault`] with the [`Sensor`] for a homing that did not find the switch,
+//!   a neck or trigger pin error, a sonar that stays silent for [`SILENT_PINGS_TO_FAULT`]
+//!   pings, a battery that cannot be read or is below the minimum, a motor pin error, an
+//!   unreadable e-stop input. The firmware hands it to `RobotDevice::fail`, which ends the
+//!   mission `Aborted` with that cause (the host prints it); the body has already put the
+//!   motors at duty 0 and stays disarmed until the next mission start.
+//!
+//! ## Wiring it (the firmware)
+//!
+//! ```text
+//! init:            let chassis = Chassis::new(motor_l, motor_r, wheel_l, wheel_r, estop, battery);
+//!                  let head = SonarHead::new(sonar, neck);
+//! mission start:   if let Err(cause) = head.restart(&config.robot)
+//!                      .and_then(|_| chassis.restart(&config.robot)) { device.fail(cause) }
+//! control (50 ms): let (l, r) = chassis.read_counts();          // WheelCounts, .trusted()
+//!                  let report = pilot.tick(l, r, dt);
+//!                  let d = chassis.drive(report.left_voltage_v, report.right_voltage_v);
+//!                  if let Some(cause) = d.stop { /* motors already 0 */ device.fail(cause) }
+//! mission ended:   chassis.stop();
+//! sonar request:   head.read(angle_rad)  -> Ok(range or None) | Err(cause) → device.fail(cause)
+//! ```
+//!
+//! The head's blocking [`SonarHead::read`] waits out the neck's steps and one sonar cycle
+//! (≥ 60 ms). An async sonar task uses the same pieces without blocking:
+//! `head.neck_mut().begin_move_to_angle(deg)` then `step()` / `Mono::delay(ns)` until done;
+//! `head.sonar_mut().fire()`, the capture's edges into the returned decoder until its
+//! deadline, `sonar_mut().finish(outcome, tick_hz)`; then [`SonarHead::judge`] on the reading
+//! (silence counting, faults) and [`neck_fault`] on a neck error.
+
+use embedded_hal::delay::DelayNs;
+use embedded_hal::digital::{InputPin, OutputPin};
+use embedded_hal::pwm::SetDutyCycle;
+
+use super::battery::BatterySensor;
+use super::echo::EchoOutcome;
+use super::emergency_stop::EmergencyStop;
+use super::motor::{Motor, MotorError};
+use super::neck_stepper::{NeckError, NeckGeometry, NeckStepper};
+use super::sonar_ranger::{EchoCapture, SonarError, SonarRanger, SonarReading, SonarWindow};
+use super::wheel_encoder::{max_counts_per_period, QuadratureCounter, WheelCounts, WheelEncoder};
+use crate::failsafe::{Sensor, StopCause};
+use crate::robot::RobotConfig;
+
+/// Pings in a row with no edge at all on the echo line before the sonar counts as failed (an
+/// HC-SR04 raises its echo line after every trigger it hears; one lost ping is tolerated).
+pub const SILENT_PINGS_TO_FAULT: u32 = 3;
+
+/// The cause for a neck error: the switch not found (or no homing yet) is
+/// [`Sensor::NeckHome`], anything else [`Sensor::Neck`].
+pub fn neck_fault(error: NeckError) -> StopCause {
+    StopCause::SensorFault(match error {
+        NeckError::HomeNotFound { .. } | NeckError::NotHomed => Sensor::NeckHome,
+        NeckError::AngleOutOfRange { .. }
+        | NeckError::BadStep { .. }
+        | NeckError::BadLimit { .. }
+        | NeckError::Pin { .. } => Sensor::Neck,
+    })
+}
+
+/// The cause for a sonar error.
+pub fn sonar_fault(error: SonarError) -> StopCause {
+    match error {
+        SonarError::TriggerPin | SonarError::TickRate { .. } => {
+            StopCause::SensorFault(Sensor::SonarTrigger)
+        }
+    }
+}
+
+/// What one control period's [`Chassis::drive`] did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Drive {
+    /// Voltage applied to the left motor, volts (0 when stopped).
+    pub left_v: f32,
+    /// Voltage applied to the right motor, volts.
+    pub right_v: f32,
+    /// Set once, on the period the body stopped a running mission: why.
+    pub stop: Option<StopCause>,
+}
+
+impl Drive {
+    const fn off(stop: Option<StopCause>) -> Self {
+        Self {
+            left_v: 0.0,
+            right_v: 0.0,
+            stop,
+        }
+    }
+}
+
+/// The wheels: two motors, two encoders, the emergency stop, the battery.
+pub struct Chassis<PWML, DIRL, PWMR, DIRR, QL, QR, ESTOP, BAT> {
+    motor_left: Motor<PWML, DIRL>,
+    motor_right: Motor<PWMR, DIRR>,
+    wheel_left: WheelEncoder<QL>,
+    wheel_right: WheelEncoder<QR>,
+    estop: EmergencyStop<ESTOP>,
+    battery: BAT,
+    armed: bool,
+    battery_v: f32,
+    motor_errors: u32,
+}
+
+impl<PWML, DIRL, PWMR, DIRR, QL, QR, ESTOP, BAT> Chassis<PWML, DIRL, PWMR, DIRR, QL, QR, ESTOP, BAT>
+where
+    PWML: SetDutyCycle,
+    DIRL: OutputPin,
+    PWMR: SetDutyCycle,
+    DIRR: OutputPin,
+    QL: QuadratureCounter,
+    QR: QuadratureCounter,
+    ESTOP: InputPin,
+    BAT: BatterySensor,
+{
+    /// The chassis at power-up: both motors at duty 0 now, disarmed (no duty until a mission
+    /// starts), the e-stop as built (latched).
+    pub fn new(
+        motor_left: Motor<PWML, DIRL>,
+        motor_right: Motor<PWMR, DIRR>,
+        wheel_left: WheelEncoder<QL>,
+        wheel_right: WheelEncoder<QR>,
+        estop: EmergencyStop<ESTOP>,
+        battery: BAT,
+    ) -> Self {
+        let mut chassis = Self {
+            motor_left,
+            motor_right,
+            wheel_left,
+            wheel_right,
+            estop,
+            battery,
+            armed: false,
+            battery_v: f32::NAN,
+            motor_errors: 0,
+        };
+        chassis.motors_off();
+        chassis
+    }
+
+    /// Both motors to duty 0 (errors are counted: there is nothing safer to do).
+    fn motors_off(&mut self) {
+        let left = self.motor_left.stop();
+        let right = self.motor_right.stop();
+        if left.is_err() || right.is_err() {
+            self.motor_errors = self.motor_errors.wrapping_add(1);
+        }
+    }
+
+    /// Stop and disarm with `cause`, for [`Drive::stop`].
+    fn halt(&mut self, cause: StopCause) -> Drive {
+        self.armed = false;
+        self.motors_off();
+        Drive::off(Some(cause))
+    }
+
+    /// A mission starts: its encoder limit (`max_counts_per_period`) and voltage limit, the
+    /// encoders' reference, and the e-stop cleared. Errors: the button is pressed
+    /// ([`StopCause::EmergencyStop`]) or unreadable
+    /// ([`Sensor::EmergencyStopInput`]); the chassis then stays disarmed.
+    pub fn restart(&mut self, config: &RobotConfig) -> Result<(), StopCause> {
+        self.armed = false;
+        self.motors_off();
+        let limit = max_counts_per_period(config);
+        self.wheel_left.restart(limit);
+        self.wheel_right.restart(limit);
+        self.motor_left.set_max_voltage_v(config.max_voltage_v);
+        self.motor_right.set_max_voltage_v(config.max_voltage_v);
+        match self.estop.clear() {
+            Ok(()) => {
+                self.armed = true;
+                Ok(())
+            }
+            // A broken input is told from a press by the clear's own read.
+            Err(_) if self.estop.last_read_failed() => {
+                Err(StopCause::SensorFault(Sensor::EmergencyStopInput))
+            }
+            Err(_) => Err(StopCause::EmergencyStop),
+        }
+    }
+
+    /// The mission is over (ended, aborted): motors to 0, disarmed until the next
+    /// [`restart`](Self::restart).
+    pub fn stop(&mut self) {
+        self.armed = false;
+        self.motors_off();
+    }
+
+    /// Whether the motors may get duty (a mission started, nothing stopped it). Duty also waits
+    /// for the e-stop's released polls.
+    pub fn is_armed(&self) -> bool {
+        self.armed
+    }
+
+    /// The encoders' counts since the last call (positive = forward); implausible jumps are
+    /// flagged (use [`WheelCounts::trusted`]).
+    pub fn read_counts(&mut self) -> (WheelCounts, WheelCounts) {
+        (self.wheel_left.read(), self.wheel_right.read())
+    }
+
+    /// One control period's output: poll the e-stop, then apply the voltages at the measured
+    /// battery voltage. Disarmed, or while the e-stop waits for its released polls, both
+    /// motors get duty 0. A press, a battery fault or a motor pin fault during a mission puts
+    /// both motors at 0, disarms, and is returned once in [`Drive::stop`].
+    pub fn drive(&mut self, left_v: f32, right_v: f32) -> Drive {
+        let motors_off = self.estop.poll();
+        if self.armed && self.estop.is_latched() {
+            let cause = if self.estop.last_trip_was_read_error() {
+                StopCause::SensorFault(Sensor::EmergencyStopInput)
+            } else {
+                StopCause::EmergencyStop
+            };
+            return self.halt(cause);
+        }
+        if !self.armed || motors_off {
+            self.motors_off();
+            return Drive::off(None);
+        }
+        let battery_v = match self.battery.read_battery_v() {
+            Ok(v) => v,
+            Err(_) => {
+                self.battery_v = f32::NAN;
+                return self.halt(StopCause::SensorFault(Sensor::Battery));
+            }
+        };
+        self.battery_v = battery_v;
+        let left = self.motor_left.set_voltage(left_v, battery_v);
+        let right = self.motor_right.set_voltage(right_v, battery_v);
+        match (left, right) {
+            (Ok(l), Ok(r)) => Drive {
+                left_v: l,
+                right_v: r,
+                stop: None,
+            },
+            (Err(MotorError::BatteryLow { .. }), _) | (_, Err(MotorError::BatteryLow { .. })) => {
+                self.halt(StopCause::SensorFault(Sensor::Battery))
+            }
+            _ => {
+                self.motor_errors = self.motor_errors.wrapping_add(1);
+                self.halt(StopCause::SensorFault(Sensor::Motor))
+            }
+        }
+    }
+
+    /// The battery voltage last read, volts (NaN before the first reading or after a failed
+    /// one).
+    pub fn battery_v(&self) -> f32 {
+        self.battery_v
+    }
+
+    /// The e-stop input (its counts, its state).
+    pub fn estop(&self) -> &EmergencyStop<ESTOP> {
+        &self.estop
+    }
+
+    /// Times a motor refused duty 0 or a command.
+    pub fn motor_errors(&self) -> u32 {
+        self.motor_errors
+    }
+
+    /// The voltages the motors have now, volts.
+    pub fn applied_v(&self) -> (f32, f32) {
+        (self.motor_left.applied_v(), self.motor_right.applied_v())
+    }
+}
+
+/// The sonar head: the neck stepper and the sonar ranger on it.
+pub struct SonarHead<TRIG, ECHO, SD, STEP, DIR, HOME, ND> {
+    sonar: SonarRanger<TRIG, ECHO, SD>,
+    neck: NeckStepper<STEP, DIR, HOME, ND>,
+    silent_pings: u32,
+}
+
+impl<TRIG, ECHO, SD, STEP, DIR, HOME, ND> SonarHead<TRIG, ECHO, SD, STEP, DIR, HOME, ND>
+where
+    TRIG: OutputPin,
+    ECHO: EchoCapture,
+    SD: DelayNs,
+    STEP: OutputPin,
+    DIR: OutputPin,
+    HOME: InputPin,
+    ND: DelayNs,
+{
+    /// The head at power-up: the neck not homed.
+    pub fn new(sonar: SonarRanger<TRIG, ECHO, SD>, neck: NeckStepper<STEP, DIR, HOME, ND>) -> Self {
+        Self {
+            sonar,
+            neck,
+            silent_pings: 0,
+        }
+    }
+
+    /// A mission starts: its sonar window and neck geometry, then homing (blocking: at most
+    /// `max_homing_steps` steps at the start rate, 1.07 s with the default config). Returns
+    /// the homing steps; errors are [`Sensor::NeckHome`] (the switch never closed) or
+    /// [`Sensor::Neck`] (a pin).
+    pub fn restart(&mut self, config: &RobotConfig) -> Result<u32, StopCause> {
+        self.configure(config);
+        self.neck.home().map_err(neck_fault)
+    }
+
+    /// [`restart`](Self::restart) without the homing, for a task that homes stepwise itself
+    /// (`neck_mut().begin_homing()`, then `step()` until done).
+    pub fn configure(&mut self, config: &RobotConfig) {
+        self.sonar.set_window(SonarWindow::from_config(config));
+        self.neck.set_geometry(NeckGeometry::from_config(config));
+        self.silent_pings = 0;
+    }
+
+    /// One reading at `neck_angle_rad` (blocking: the neck's steps, then one sonar cycle):
+    /// `Ok(Some(range_m))`, `Ok(None)` for no echo, or the fault.
+    pub fn read(&mut self, neck_angle_rad: f32) -> Result<Option<f32>, StopCause> {
+        self.neck
+            .move_to_angle(neck_angle_rad.to_degrees())
+            .map_err(neck_fault)?;
+        let reading = self.sonar.read();
+        self.judge(reading)
+    }
+
+    /// The range of one ping's reading, counting silent pings: [`SILENT_PINGS_TO_FAULT`] in a
+    /// row are [`Sensor::SonarSilent`]; a sonar error is [`Sensor::SonarTrigger`].
+    pub fn judge(
+        &mut self,
+        reading: Result<SonarReading, SonarError>,
+    ) -> Result<Option<f32>, StopCause> {
+        let reading = reading.map_err(sonar_fault)?;
+        if reading.outcome == EchoOutcome::Silent {
+            self.silent_pings = self.silent_pings.saturating_add(1);
+            if self.silent_pings >= SILENT_PINGS_TO_FAULT {
+                return Err(StopCause::SensorFault(Sensor::SonarSilent));
+            }
+        } else {
+            self.silent_pings = 0;
+        }
+        Ok(reading.range_m)
+    }
+
+    /// The neck (for a task that steps it itself).
+    pub fn neck_mut(&mut self) -> &mut NeckStepper<STEP, DIR, HOME, ND> {
+        &mut self.neck
+    }
+
+    /// The neck, read-only.
+    pub fn neck(&self) -> &NeckStepper<STEP, DIR, HOME, ND> {
+        &self.neck
+    }
+
+    /// The sonar (for a task that fires it and feeds its decoder itself).
+    pub fn sonar_mut(&mut self) -> &mut SonarRanger<TRIG, ECHO, SD> {
+        &mut self.sonar
+    }
+
+    /// The sonar, read-only.
+    pub fn sonar(&self) -> &SonarRanger<TRIG, ECHO, SD> {
+        &self.sonar
+    }
+}
