@@ -5,9 +5,13 @@
 //!   control task reads its encoder counts and steps it with the voltages for one period (that
 //!   cost is measured apart from the control step's); the sonar task casts the sonar's ray on
 //!   the real world the host uploaded (`WorldChunk`), from the plant's true pose.
-//! - Board build: the drivers of `twil_core::drivers` on the pins of [`crate::board`].
+//! - Board build: `twil_core::drivers::body`'s `Chassis` (control task) and `SonarHead`
+//!   (sonar task) on the pins of [`crate::board`]. The head is driven stepwise, every wait a
+//!   `Mono` delay, so the sonar task never holds the core for more than a pulse.
 //!
-//! Wiring only: the rules live in `twil-core`.
+//! Both report why they stopped the motors (an e-stop press, a sensor fault) as a
+//! `StopCause`, which the mission task hands to the device. Wiring only: the rules live in
+//! `twil-core`.
 
 use twil_core::mission::MissionConfig;
 

@@ -222,8 +222,10 @@ static SONAR_RANGE_BITS: AtomicU32 = AtomicU32::new(0x3FC0_0000); // 1.5
 const REPORTS: usize = 8;
 /// Readings queued from `sonar` to `mission`.
 const READINGS: usize = 8;
-/// Commands queued from `mission` to `sonar` (a mission's restart, then its readings).
-const SONAR_REQUESTS: usize = 2;
+/// Commands queued from `mission` to `sonar`: a mission's restart, its one reading at a time,
+/// and room for a reading of an ended mission still queued (the mission's requests are sent
+/// with `try_send`: one dropped would leave the mission waiting).
+const SONAR_REQUESTS: usize = 3;
 /// Stop causes queued from `control` and `sonar` to `mission` (the body's faults: each ends
 /// the mission, so one per mission is all that matters; a full queue drops the later ones).
 const FAULTS: usize = 4;
