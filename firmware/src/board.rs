@@ -43,6 +43,7 @@ use stm32f4xx_hal::{
         C1, C2,
     },
 };
+use twil_core::drivers::echo::latched_edges;
 use twil_core::drivers::motor::battery_v_from_pin_mv;
 use twil_core::drivers::neck_stepper::NeckGeometry;
 use twil_core::drivers::wheel_encoder::max_counts_per_period;
@@ -229,13 +230,7 @@ macro_rules! echo_latch {
                         // trigger: the decoder gets the latest edge of each kind.
                         defmt::warn!("echo: more edges than the latch holds: {}", edges);
                     }
-                    let since = |at: u32| at.wrapping_sub(self.armed_at);
-                    let rise = edges.rise.map(|at| EchoEdge::rise(since(at)));
-                    let fall = edges.fall.map(|at| EchoEdge::fall(since(at)));
-                    self.pending = match (rise, fall) {
-                        (Some(r), Some(f)) if f.at_ticks < r.at_ticks => [Some(f), Some(r)],
-                        (r, f) => [r, f],
-                    };
+                    self.pending = latched_edges(self.armed_at, edges.rise, edges.fall);
                 }
                 let next = self.pending.iter_mut().find(|e| e.is_some())?;
                 let edge = (*next)?;

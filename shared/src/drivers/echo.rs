@@ -216,10 +216,86 @@ impl EchoDecoder {
     }
 }
 
+/// The edges of a two-channel capture latch, in time order: the board latches the echo's rise
+/// on one capture channel and its fall on another channel fed by the same input (RM0090's
+/// PWM-input arrangement), each holding its latest capture, and reads them once the listen
+/// time is over. `rise_at` / `fall_at` are the captured counter values (`None`: no such edge),
+/// `armed_at` the counter when the ping was armed; all wrap at 2^32. A fall captured before the
+/// rise (the line was still high when armed) comes first, so [`EchoDecoder`] treats it as the
+/// tail of an earlier pulse.
+///
+/// ```
+/// use twil_core::drivers::echo::{latched_edges, EchoEdge};
+/// assert_eq!(
+///     latched_edges(100, Some(1_100), Some(6_930)),
+///     [Some(EchoEdge::rise(1_000)), Some(EchoEdge::fall(6_830))]
+/// );
+/// ```
+pub fn latched_edges(
+    armed_at: u32,
+    rise_at: Option<u32>,
+    fall_at: Option<u32>,
+) -> [Option<EchoEdge>; 2] {
+    let rise = rise_at.map(|at| EchoEdge::rise(at.wrapping_sub(armed_at)));
+    let fall = fall_at.map(|at| EchoEdge::fall(at.wrapping_sub(armed_at)));
+    match (rise, fall) {
+        (Some(r), Some(f)) if f.at_ticks < r.at_ticks => [Some(f), Some(r)],
+        (None, Some(f)) => [Some(f), None],
+        (r, f) => [r, f],
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::robot::RobotConfig;
+
+    #[test]
+    fn a_latched_rise_then_fall_decodes_as_the_pulse_between_them() {
+        let edges = latched_edges(100, Some(1_100), Some(6_930));
+        assert_eq!(
+            edges,
+            [Some(EchoEdge::rise(1_000)), Some(EchoEdge::fall(6_830))]
+        );
+        let mut d = decoder();
+        for e in edges.into_iter().flatten() {
+            assert_eq!(d.feed(e), None);
+        }
+        assert_eq!(d.expire(), EchoOutcome::Pulse { width_ticks: 5_830 });
+    }
+
+    #[test]
+    fn a_latched_fall_before_the_rise_is_an_earlier_pulse_s_tail() {
+        // The line was high at arming: it fell at 200, then rose at 3 000 and stayed high.
+        let edges = latched_edges(0, Some(3_000), Some(200));
+        assert_eq!(
+            edges,
+            [Some(EchoEdge::fall(200)), Some(EchoEdge::rise(3_000))]
+        );
+        assert_eq!(
+            run(&[EchoEdge::fall(200), EchoEdge::rise(3_000)]),
+            EchoOutcome::StillHigh
+        );
+    }
+
+    #[test]
+    fn latched_edges_count_from_the_arming_across_the_counter_s_wrap() {
+        let armed_at = u32::MAX - 9;
+        let edges = latched_edges(armed_at, Some(u32::MAX - 4), Some(5_000));
+        assert_eq!(
+            edges,
+            [Some(EchoEdge::rise(5)), Some(EchoEdge::fall(5_010))]
+        );
+        assert_eq!(
+            latched_edges(armed_at, None, Some(20)),
+            [Some(EchoEdge::fall(30)), None]
+        );
+        assert_eq!(
+            latched_edges(armed_at, Some(20), None),
+            [Some(EchoEdge::rise(30)), None]
+        );
+        assert_eq!(latched_edges(armed_at, None, None), [None, None]);
+    }
 
     const HZ: u32 = 1_000_000;
 
