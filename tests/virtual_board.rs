@@ -433,7 +433,10 @@ fn power_up_homing_sweep_duty_after_the_e_stop_then_a_trip_stops_within_a_period
             rig.readings.iter().zip(&s.pings)
         {
             let asked_deg = angle_rad.to_degrees();
-            assert!((asked_deg - world_deg).abs() <= 0.9, "{asked_deg} vs {world_deg}");
+            assert!(
+                (asked_deg - world_deg).abs() <= 0.9,
+                "{asked_deg} vs {world_deg}"
+            );
             match (range_m, world_range) {
                 (Some(r), Some(w)) => assert!((r - w).abs() < 0.002, "{r} vs {w}"),
                 (None, None) => {}
@@ -493,7 +496,11 @@ fn power_up_homing_sweep_duty_after_the_e_stop_then_a_trip_stops_within_a_period
 fn a_button_held_at_the_start_ends_the_mission_as_an_emergency_stop() {
     let world = World::new();
     world.0.borrow_mut().range_at_deg = Box::new(wall_ahead);
-    world.0.borrow_mut().estop_pressed_at_ns.push((0, 2_000 * MS));
+    world
+        .0
+        .borrow_mut()
+        .estop_pressed_at_ns
+        .push((0, 2_000 * MS));
     let mut rig = Rig::new(world.clone());
     assert_eq!(rig.start_mission(), Reply::Ack);
     assert_eq!(rig.faults, vec![(world.now_ns(), StopCause::EmergencyStop)]);
@@ -571,7 +578,10 @@ fn a_sagging_battery_stops_the_motors_and_is_reported() {
     let stopped = rig.run_until(sag_ns + 1_000 * MS, |r| !r.faults.is_empty());
     assert!(stopped);
     let after_ns = world.now_ns() - sag_ns;
-    assert!((210 * MS..210 * MS + PERIOD_NS).contains(&after_ns), "{after_ns}");
+    assert!(
+        (210 * MS..210 * MS + PERIOD_NS).contains(&after_ns),
+        "{after_ns}"
+    );
     assert_eq!(rig.duty(), [0, 0]);
     assert!(rig.chassis.battery_v() < 10.5);
     assert_eq!(
@@ -614,7 +624,11 @@ fn encoders_counting_backwards_across_zero() {
     for period in 1..=6 {
         world.advance_to(period * PERIOD_NS);
         let (l, r) = c.read_counts();
-        assert_eq!((l.trusted(), r.trusted()), (Some(-40), Some(-40)), "{period}");
+        assert_eq!(
+            (l.trusted(), r.trusted()),
+            (Some(-40), Some(-40)),
+            "{period}"
+        );
     }
     // A mission's restart takes the config's limit (a slow motor: 14 counts per period) and
     // the counters' reference (what the wheels did before is not this mission's motion).
@@ -627,7 +641,10 @@ fn encoders_counting_backwards_across_zero() {
     world.advance_to(61 * PERIOD_NS);
     let (l, r) = c.read_counts();
     assert_eq!((l.counts, r.counts), (-40, -40));
-    assert!(!l.plausible && !r.plausible, "40 counts exceed the slow motor's 14");
+    assert!(
+        !l.plausible && !r.plausible,
+        "40 counts exceed the slow motor's 14"
+    );
 }
 
 #[test]
@@ -670,7 +687,10 @@ fn a_silent_sonar_is_a_fault_on_the_third_ping() {
     h.restart(&RobotConfig::DEFAULT).unwrap();
     assert_eq!(h.read(0.0), Ok(None));
     assert_eq!(h.read(0.0), Ok(None));
-    assert_eq!(h.read(0.0), Err(StopCause::SensorFault(Sensor::SonarSilent)));
+    assert_eq!(
+        h.read(0.0),
+        Err(StopCause::SensorFault(Sensor::SonarSilent))
+    );
     // A mission's restart forgets the count.
     h.restart(&RobotConfig::DEFAULT).unwrap();
     assert_eq!(h.read(0.0), Ok(None));

@@ -338,7 +338,10 @@ where
 
     /// The range of one ping's reading, counting silent pings: [`SILENT_PINGS_TO_FAULT`] in a
     /// row are [`Sensor::SonarSilent`]; a sonar error is [`Sensor::SonarTrigger`].
-    pub fn judge(&mut self, reading: Result<SonarReading, SonarError>) -> Result<Option<f32>, StopCause> {
+    pub fn judge(
+        &mut self,
+        reading: Result<SonarReading, SonarError>,
+    ) -> Result<Option<f32>, StopCause> {
         let reading = reading.map_err(sonar_fault)?;
         if reading.outcome == EchoOutcome::Silent {
             self.silent_pings = self.silent_pings.saturating_add(1);

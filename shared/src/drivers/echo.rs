@@ -306,10 +306,7 @@ mod tests {
     fn an_edge_after_the_deadline_decides_by_the_deadline() {
         let mut d = decoder();
         d.feed(EchoEdge::rise(400));
-        assert_eq!(
-            d.feed(EchoEdge::fall(60_000)),
-            Some(EchoOutcome::StillHigh)
-        );
+        assert_eq!(d.feed(EchoEdge::fall(60_000)), Some(EchoOutcome::StillHigh));
     }
 
     #[test]

@@ -230,7 +230,10 @@ mod tests {
             stop.poll();
         }
         assert_eq!(stop.clear(), Ok(()));
-        assert!(stop.motors_allowed(), "three released polls before the clear count");
+        assert!(
+            stop.motors_allowed(),
+            "three released polls before the clear count"
+        );
         assert!(stop.poll());
         assert_eq!(stop.counts(), (1, 0));
         assert!(!stop.last_trip_was_read_error());

@@ -416,10 +416,7 @@ mod tests {
             width_ticks: 38_000,
         };
         assert_eq!(range_from_outcome(&wide, no_target, 1_000_000), None);
-        assert_eq!(
-            range_from_outcome(&w, EchoOutcome::Silent, 1_000_000),
-            None
-        );
+        assert_eq!(range_from_outcome(&w, EchoOutcome::Silent, 1_000_000), None);
     }
 
     #[test]

@@ -270,6 +270,9 @@ mod tests {
         enc.restart(50);
         assert_eq!(enc.limit_counts(), 50);
         assert_eq!(enc.read().trusted(), Some(0));
-        assert!(!enc.read().plausible, "100 counts exceed the new limit of 50");
+        assert!(
+            !enc.read().plausible,
+            "100 counts exceed the new limit of 50"
+        );
     }
 }

@@ -175,9 +175,7 @@ fn the_emergency_stop_input_latches_like_the_request() {
     let mut b = started_with(0, LinkLossReaction::StopAndHold);
     b.tick();
     let _ = b.device.take_pilot_command();
-    b.device
-        .link(&mut b.mission)
-        .fail(StopCause::EmergencyStop);
+    b.device.link(&mut b.mission).fail(StopCause::EmergencyStop);
     assert_eq!(b.device.take_pilot_command(), Some(PilotCommand::Stop));
     let report = b.device.link(&mut b.mission).report();
     assert_eq!(report.stop_cause, StopCause::EmergencyStop);
