@@ -36,7 +36,7 @@
 //! ```text
 //! init:            let chassis = Chassis::new(motor_l, motor_r, wheel_l, wheel_r, estop, battery);
 //!                  let head = SonarHead::new(sonar, neck);
-//! mission start:   if let Err(cause) = head.restart(&config.robot)
+//! mission start:   if let Err(cause) = head.restart(&config.robot)    // or begin_restart + step
 //!                      .and_then(|_| chassis.restart(&config.robot)) { device.fail(cause) }
 //! control (50 ms): let (l, r) = chassis.read_counts();          // WheelCounts, .trusted()
 //!                  let report = pilot.tick(l, r, dt);
@@ -315,15 +315,25 @@ where
         }
     }
 
-    /// A mission starts: its sonar window and neck geometry, then homing (blocking: at most
-    /// `max_homing_steps` steps at the start rate, 1.07 s with the default config). Returns
-    /// the homing steps; errors are [`Sensor::NeckHome`] (the switch never closed) or
-    /// [`Sensor::Neck`] (a pin).
+    /// A mission starts: its sonar window and neck geometry, then homing, blocking: at most
+    /// `max_homing_steps` steps at the start rate, 214 × 5 ms = 1.07 s with the default
+    /// config, longer than the watchdog gate allows the mission task
+    /// (`WatchdogGate::MISSION_LIMIT_MS`, 1 s): call it from a task the gate does not watch,
+    /// or use [`begin_restart`](Self::begin_restart). Returns the homing steps; errors are
+    /// [`Sensor::NeckHome`] (the switch never closed) or [`Sensor::Neck`] (a pin).
     pub fn restart(&mut self, config: &RobotConfig) -> Result<u32, StopCause> {
+        self.begin_restart(config)?;
+        self.neck.finish().map_err(neck_fault)
+    }
+
+    /// The non-blocking [`restart`](Self::restart): take the config and start homing; then
+    /// call `neck_mut().step()` until [`NeckProgress::Done`](super::NeckProgress::Done),
+    /// sleeping each `Wait`, and map an error with [`neck_fault`].
+    pub fn begin_restart(&mut self, config: &RobotConfig) -> Result<(), StopCause> {
         self.sonar.set_window(SonarWindow::from_config(config));
         self.neck.set_geometry(NeckGeometry::from_config(config));
         self.silent_pings = 0;
-        self.neck.home().map_err(neck_fault)
+        self.neck.begin_homing().map_err(neck_fault)
     }
 
     /// One reading at `neck_angle_rad` (blocking: the neck's steps, then one sonar cycle):
