@@ -315,25 +315,21 @@ where
         }
     }
 
-    /// A mission starts: its sonar window and neck geometry, then homing, blocking: at most
-    /// `max_homing_steps` steps at the start rate, 214 × 5 ms = 1.07 s with the default
-    /// config, longer than the watchdog gate allows the mission task
-    /// (`WatchdogGate::MISSION_LIMIT_MS`, 1 s): call it from a task the gate does not watch,
-    /// or use [`begin_restart`](Self::begin_restart). Returns the homing steps; errors are
-    /// [`Sensor::NeckHome`] (the switch never closed) or [`Sensor::Neck`] (a pin).
+    /// A mission starts: its sonar window and neck geometry, then homing (blocking: at most
+    /// `max_homing_steps` steps at the start rate, 1.07 s with the default config). Returns
+    /// the homing steps; errors are [`Sensor::NeckHome`] (the switch never closed) or
+    /// [`Sensor::Neck`] (a pin).
     pub fn restart(&mut self, config: &RobotConfig) -> Result<u32, StopCause> {
-        self.begin_restart(config)?;
-        self.neck.finish().map_err(neck_fault)
+        self.configure(config);
+        self.neck.home().map_err(neck_fault)
     }
 
-    /// The non-blocking [`restart`](Self::restart): take the config and start homing; then
-    /// call `neck_mut().step()` until [`NeckProgress::Done`](super::NeckProgress::Done),
-    /// sleeping each `Wait`, and map an error with [`neck_fault`].
-    pub fn begin_restart(&mut self, config: &RobotConfig) -> Result<(), StopCause> {
+    /// [`restart`](Self::restart) without the homing, for a task that homes stepwise itself
+    /// (`neck_mut().begin_homing()`, then `step()` until done).
+    pub fn configure(&mut self, config: &RobotConfig) {
         self.sonar.set_window(SonarWindow::from_config(config));
         self.neck.set_geometry(NeckGeometry::from_config(config));
         self.silent_pings = 0;
-        self.neck.begin_homing().map_err(neck_fault)
     }
 
     /// One reading at `neck_angle_rad` (blocking: the neck's steps, then one sonar cycle):
@@ -362,6 +358,18 @@ where
             self.silent_pings = 0;
         }
         Ok(reading.range_m)
+    }
+
+    /// The non-blocking [`restart`](Self::restart): [`configure`](Self::configure), then
+    /// begin homing; the caller steps `neck_mut().step()` until
+    /// [`NeckProgress::Done`](super::NeckProgress::Done), sleeping each `Wait` (counted from
+    /// the step's return), and maps an error with [`neck_fault`]. The blocking `restart`
+    /// takes up to 214 × 5 ms = 1.07 s with the default config, longer than the watchdog gate
+    /// allows the mission task (`WatchdogGate::MISSION_LIMIT_MS`, 1 s): a firmware homes this
+    /// way, in a task that can sleep.
+    pub fn begin_restart(&mut self, config: &RobotConfig) -> Result<(), StopCause> {
+        self.configure(config);
+        self.neck.begin_homing().map_err(neck_fault)
     }
 
     /// The neck (for a task that steps it itself).
