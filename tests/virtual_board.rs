@@ -73,6 +73,11 @@ fn head(w: &World) -> TestHead {
 /// The sonar task's state: what it waits for, and until when.
 enum SonarTask {
     Idle,
+    /// A mission started: homing, then the chassis is armed.
+    Homing {
+        config: RobotConfig,
+        wake_ns: u64,
+    },
     Moving {
         angle_rad: f32,
         wake_ns: u64,
@@ -200,12 +205,17 @@ impl Rig {
     fn serve(&mut self) {
         if let Some(config) = self.device.link(&mut self.mission).take_started() {
             self.pilot = Some(Pilot::new(&config));
-            let body = self
-                .head
-                .restart(&config.robot)
-                .and_then(|_| self.chassis.restart(&config.robot));
-            if let Err(cause) = body {
-                self.fail(cause);
+            // The body takes the mission's config; the sonar task homes the neck without
+            // blocking, then arms the chassis.
+            self.chassis.stop();
+            match self.head.begin_restart(&config.robot) {
+                Ok(()) => {
+                    self.sonar = SonarTask::Homing {
+                        config: config.robot,
+                        wake_ns: self.world.now_ns(),
+                    }
+                }
+                Err(cause) => self.fail(cause),
             }
         }
         loop {
@@ -249,7 +259,9 @@ impl Rig {
     fn sonar_wake_ns(&self) -> u64 {
         match &self.sonar {
             SonarTask::Idle => u64::MAX,
-            SonarTask::Moving { wake_ns, .. } | SonarTask::Settling { wake_ns } => *wake_ns,
+            SonarTask::Moving { wake_ns, .. }
+            | SonarTask::Settling { wake_ns }
+            | SonarTask::Homing { wake_ns, .. } => *wake_ns,
             SonarTask::Listening {
                 decoder, armed_ns, ..
             } => {
@@ -266,11 +278,27 @@ impl Rig {
         match std::mem::replace(&mut self.sonar, SonarTask::Idle) {
             SonarTask::Idle => {}
             SonarTask::Settling { .. } => {}
+            SonarTask::Homing { config, .. } => match self.head.neck_mut().step() {
+                Ok(NeckProgress::Wait { ns }) => {
+                    self.sonar = SonarTask::Homing {
+                        config,
+                        // The wait counts from the end of the step (after its pulse).
+                        wake_ns: self.world.now_ns() + u64::from(ns),
+                    }
+                }
+                Ok(NeckProgress::Done { .. }) => {
+                    if let Err(cause) = self.chassis.restart(&config) {
+                        self.fail(cause);
+                    }
+                }
+                Err(e) => self.fail(neck_fault(e)),
+            },
             SonarTask::Moving { angle_rad, .. } => match self.head.neck_mut().step() {
                 Ok(NeckProgress::Wait { ns }) => {
                     self.sonar = SonarTask::Moving {
                         angle_rad,
-                        wake_ns: now + u64::from(ns),
+                        // The wait counts from the end of the step (after its pulse).
+                        wake_ns: self.world.now_ns() + u64::from(ns),
                     }
                 }
                 Ok(NeckProgress::Done { .. }) => match self.head.sonar_mut().fire() {
@@ -406,16 +434,22 @@ fn power_up_homing_sweep_duty_after_the_e_stop_then_a_trip_stops_within_a_period
     // The mission starts: the neck homes (from 30 steps to the switch at −102, at the start
     // rate), then the chassis is armed.
     assert_eq!(rig.start_mission(), Reply::Ack);
+    assert!(!rig.chassis.is_armed(), "not before the neck is homed");
+    assert!(rig.run_until(2_000 * MS, |r| r.chassis.is_armed()));
     let start_ns = world.now_ns();
     {
         let s = world.0.borrow();
         assert_eq!(s.neck_steps, -102);
         assert_eq!(s.step_times_ns.len(), 132);
         assert!(s.step_times_ns.windows(2).all(|w| w[1] - w[0] >= 5 * MS));
-        assert_eq!(start_ns - 500 * MS, 132 * 5 * MS + u64::from(DIR_SETUP_NS));
+        // 132 steps of 5 ms, the direction set-up of homing and of the first sweep move.
+        assert_eq!(
+            start_ns - 500 * MS,
+            132 * 5 * MS + 2 * u64::from(DIR_SETUP_NS)
+        );
+        assert!(s.pings.is_empty(), "no ping before homing");
     }
     assert!(rig.faults.is_empty(), "{:?}", rig.faults);
-    assert!(rig.chassis.is_armed());
 
     // Until the motors get duty: the sweep, a plan, the first follow.
     let moved = rig.run_until(start_ns + 30_000 * MS, |r| r.duty() != [0, 0]);
@@ -470,7 +504,7 @@ fn power_up_homing_sweep_duty_after_the_e_stop_then_a_trip_stops_within_a_period
     let stopped_after_ns = world.now_ns() - press_ns;
     assert!(stopped_after_ns <= PERIOD_NS, "{stopped_after_ns} ns");
     println!(
-        "virtual board: homed in {} ms, {} readings in {} ms to the first duty, motors off {} ms after the press",
+        "virtual board: homed and armed in {} ms, {} readings in {} ms to the first duty, motors off {} ms after the press",
         (start_ns - 500 * MS) / MS,
         rig.readings.len(),
         (first_duty_ns - start_ns) / MS,
@@ -503,7 +537,12 @@ fn a_button_held_at_the_start_ends_the_mission_as_an_emergency_stop() {
         .push((0, 2_000 * MS));
     let mut rig = Rig::new(world.clone());
     assert_eq!(rig.start_mission(), Reply::Ack);
-    assert_eq!(rig.faults, vec![(world.now_ns(), StopCause::EmergencyStop)]);
+    assert!(rig.run_until(2_000 * MS, |r| !r.faults.is_empty()));
+    // After homing (660 ms), the chassis refuses to arm.
+    assert_eq!(
+        rig.faults,
+        vec![(660 * MS + 1_000, StopCause::EmergencyStop)]
+    );
     assert!(!rig.chassis.is_armed());
     let report = rig.report();
     assert_eq!(report.stop_cause, StopCause::EmergencyStop);
@@ -513,7 +552,8 @@ fn a_button_held_at_the_start_ends_the_mission_as_an_emergency_stop() {
     assert!(matches!(rig.call(Request::StartMission), Reply::Error(_)));
     assert_eq!(rig.call(Request::ClearEmergencyStop), Reply::Ack);
     assert_eq!(rig.call(Request::StartMission), Reply::Ack);
-    assert!(rig.chassis.is_armed());
+    // Homed already: the switch is closed at once.
+    assert!(rig.run_until(2_300 * MS, |r| r.chassis.is_armed()));
     assert!(rig.chassis.estop().motors_allowed());
 }
 
@@ -540,6 +580,8 @@ fn a_neck_whose_home_switch_never_closes_ends_the_mission_with_a_sensor_fault() 
     let mut rig = Rig::new(world.clone());
     rig.run_until(200 * MS, |_| false);
     assert_eq!(rig.start_mission(), Reply::Ack);
+    assert!(rig.run_until(3_000 * MS, |r| !r.faults.is_empty()));
+    assert_eq!(world.now_ns(), 200 * MS + 1_000 + 214 * 5 * MS);
     // Exactly the bounded travel, then the fault: never an endless turn, never silence.
     let geometry = NeckGeometry::from_config(&RobotConfig::DEFAULT);
     assert_eq!(
@@ -566,7 +608,7 @@ fn a_sagging_battery_stops_the_motors_and_is_reported() {
     world.0.borrow_mut().range_at_deg = Box::new(wall_ahead);
     let mut rig = Rig::new(world.clone());
     assert_eq!(rig.start_mission(), Reply::Ack);
-    let moved = rig.run_until(world.now_ns() + 30_000 * MS, |r| r.duty() != [0, 0]);
+    let moved = rig.run_until(30_000 * MS, |r| r.duty() != [0, 0]);
     assert!(moved);
     // 12.6 V sagging at 10 V/s from now: below 10.5 V after 210 ms.
     let sag_ns = world.now_ns();

@@ -36,7 +36,7 @@
 //! ```text
 //! init:            let chassis = Chassis::new(motor_l, motor_r, wheel_l, wheel_r, estop, battery);
 //!                  let head = SonarHead::new(sonar, neck);
-//! mission start:   if let Err(cause) = head.restart(&config.robot)
+//! mission start:   if let Err(cause) = head.restart(&config.robot)    // or begin_restart + step
 //!                      .and_then(|_| chassis.restart(&config.robot)) { device.fail(cause) }
 //! control (50 ms): let (l, r) = chassis.read_counts();          // WheelCounts, .trusted()
 //!                  let report = pilot.tick(l, r, dt);
@@ -358,6 +358,18 @@ where
             self.silent_pings = 0;
         }
         Ok(reading.range_m)
+    }
+
+    /// The non-blocking [`restart`](Self::restart): [`configure`](Self::configure), then
+    /// begin homing; the caller steps `neck_mut().step()` until
+    /// [`NeckProgress::Done`](super::NeckProgress::Done), sleeping each `Wait` (counted from
+    /// the step's return), and maps an error with [`neck_fault`]. The blocking `restart`
+    /// takes up to 214 × 5 ms = 1.07 s with the default config, longer than the watchdog gate
+    /// allows the mission task (`WatchdogGate::MISSION_LIMIT_MS`, 1 s): a firmware homes this
+    /// way, in a task that can sleep.
+    pub fn begin_restart(&mut self, config: &RobotConfig) -> Result<(), StopCause> {
+        self.configure(config);
+        self.neck.begin_homing().map_err(neck_fault)
     }
 
     /// The neck (for a task that steps it itself).

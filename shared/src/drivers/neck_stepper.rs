@@ -477,8 +477,9 @@ where
         }
     }
 
-    /// Run the move under way to its end, waiting with the delay. Returns the steps taken.
-    fn finish(&mut self) -> Result<u32, NeckError> {
+    /// Run the move (or homing) under way to its end, waiting with the delay (blocking).
+    /// Returns the steps taken.
+    pub fn finish(&mut self) -> Result<u32, NeckError> {
         loop {
             match self.step()? {
                 NeckProgress::Wait { ns } => self.delay.delay_ns(ns),
