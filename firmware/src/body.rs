@@ -202,8 +202,7 @@ mod board_body {
             config: &RobotConfig,
             worst: &AtomicU32,
         ) -> Result<u32, StopCause> {
-            self.head.configure(config);
-            self.head.neck_mut().begin_homing().map_err(neck_fault)?;
+            self.head.begin_restart(config)?;
             self.run_neck(worst).await
         }
 
