@@ -235,9 +235,9 @@ const IRQ_QUEUE_BYTES: usize = 256;
 
 /// The control period, milliseconds (`RobotConfig::controller_period_s`).
 const PERIOD_MS: u32 = 50;
-/// One simulated sonar reading takes the neck's step and the echo window (`neck_step_time_s`
-/// + `echo_wait_s`, the seed's figures), milliseconds. Kept so that the missions under QEMU do
-/// not change; the board's HC-SR04 takes at least its 60 ms cycle (docs/firmware.md).
+/// One simulated sonar reading takes the neck's step plus the echo window, milliseconds
+/// (`neck_step_time_s` and `echo_wait_s`, the seed's figures). Kept so that the missions under
+/// QEMU do not change; the board's HC-SR04 takes at least its 60 ms cycle (docs/firmware.md).
 #[cfg(feature = "qemu")]
 const READING_MS: u32 = 36;
 
