@@ -46,8 +46,8 @@ use twil_core::drivers::motor::battery_v_from_pin_mv;
 use twil_core::drivers::neck_stepper::NeckGeometry;
 use twil_core::drivers::wheel_encoder::max_counts_per_period;
 use twil_core::drivers::{
-    ActiveLevel, EchoCapture, EchoEdge, EmergencyStop, Motor, Mounting, NeckStepper,
-    QuadratureCounter, SonarRanger, SonarWindow, WheelEncoder,
+    ActiveLevel, EchoCapture, EchoEdge, EmergencyStop, Motor, Mounting, NeckStepper, QuadratureCounter,
+    SonarRanger, SonarWindow, WheelEncoder,
 };
 use twil_core::robot::RobotConfig;
 
