@@ -392,3 +392,165 @@ where
         &self.sonar
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! The fault paths the virtual board's infallible pins cannot reach: pins that fail.
+    extern crate std;
+    use std::cell::Cell;
+    use std::rc::Rc;
+
+    use super::*;
+    use crate::drivers::battery::BatteryReadError;
+    use crate::drivers::emergency_stop::ActiveLevel;
+    use crate::drivers::wheel_encoder::Mounting;
+
+    /// A pin (or PWM channel) that fails while its flag is set; as an input it reads `level`.
+    #[derive(Clone)]
+    struct Flaky {
+        fail: Rc<Cell<bool>>,
+        level: Rc<Cell<bool>>,
+    }
+
+    impl Flaky {
+        fn new() -> Self {
+            Self {
+                fail: Rc::new(Cell::new(false)),
+                level: Rc::new(Cell::new(false)),
+            }
+        }
+        fn result(&self) -> Result<(), embedded_hal::digital::ErrorKind> {
+            if self.fail.get() {
+                Err(embedded_hal::digital::ErrorKind::Other)
+            } else {
+                Ok(())
+            }
+        }
+    }
+
+    impl embedded_hal::digital::ErrorType for Flaky {
+        type Error = embedded_hal::digital::ErrorKind;
+    }
+    impl OutputPin for Flaky {
+        fn set_low(&mut self) -> Result<(), Self::Error> {
+            self.result()
+        }
+        fn set_high(&mut self) -> Result<(), Self::Error> {
+            self.result()
+        }
+    }
+    impl InputPin for Flaky {
+        fn is_high(&mut self) -> Result<bool, Self::Error> {
+            self.result().map(|_| self.level.get())
+        }
+        fn is_low(&mut self) -> Result<bool, Self::Error> {
+            self.is_high().map(|h| !h)
+        }
+    }
+    impl embedded_hal::pwm::ErrorType for Flaky {
+        type Error = embedded_hal::pwm::ErrorKind;
+    }
+    impl SetDutyCycle for Flaky {
+        fn max_duty_cycle(&self) -> u16 {
+            1000
+        }
+        fn set_duty_cycle(&mut self, _duty: u16) -> Result<(), Self::Error> {
+            self.result()
+                .map_err(|_| embedded_hal::pwm::ErrorKind::Other)
+        }
+    }
+
+    struct Still;
+    impl QuadratureCounter for Still {
+        fn count(&mut self) -> u16 {
+            0
+        }
+    }
+
+    struct Twelve;
+    impl BatterySensor for Twelve {
+        fn read_battery_v(&mut self) -> Result<f32, BatteryReadError> {
+            Ok(12.0)
+        }
+    }
+
+    type TestChassis = Chassis<Flaky, Flaky, Flaky, Flaky, Still, Still, Flaky, Twelve>;
+
+    /// A chassis whose right direction pin is `dir` and e-stop input `estop`, armed.
+    fn armed(dir: &Flaky, estop: &Flaky) -> TestChassis {
+        let mut c = Chassis::new(
+            Motor::new(Flaky::new(), Flaky::new(), 11.7, true),
+            Motor::new(Flaky::new(), dir.clone(), 11.7, false),
+            WheelEncoder::new(Still, Mounting::Normal, 224),
+            WheelEncoder::new(Still, Mounting::Mirrored, 224),
+            EmergencyStop::new(estop.clone(), ActiveLevel::High),
+            Twelve,
+        );
+        for _ in 0..3 {
+            assert_eq!(c.drive(1.0, 1.0), Drive::off(None), "disarmed: no duty");
+        }
+        c.restart(&RobotConfig::DEFAULT).unwrap();
+        assert_eq!(c.drive(1.0, 1.0).left_v, 1.0);
+        c
+    }
+
+    #[test]
+    fn a_motor_pin_error_stops_both_and_is_a_motor_fault() {
+        let (dir, estop) = (Flaky::new(), Flaky::new());
+        let mut c = armed(&dir, &estop);
+        dir.fail.set(true);
+        let d = c.drive(1.0, 1.0);
+        assert_eq!(d, Drive::off(Some(StopCause::SensorFault(Sensor::Motor))));
+        assert_eq!(c.applied_v(), (0.0, 0.0));
+        assert!(!c.is_armed());
+        assert_eq!(c.drive(1.0, 1.0), Drive::off(None), "reported once");
+    }
+
+    #[test]
+    fn an_unreadable_e_stop_is_told_from_a_press() {
+        let (dir, estop) = (Flaky::new(), Flaky::new());
+        let mut c = armed(&dir, &estop);
+        estop.fail.set(true);
+        assert_eq!(
+            c.drive(1.0, 1.0),
+            Drive::off(Some(StopCause::SensorFault(Sensor::EmergencyStopInput)))
+        );
+        // Still broken at the next start: refused with the same cause.
+        assert_eq!(
+            c.restart(&RobotConfig::DEFAULT),
+            Err(StopCause::SensorFault(Sensor::EmergencyStopInput))
+        );
+        // A press is a press.
+        estop.fail.set(false);
+        let mut c = armed(&dir, &estop);
+        estop.level.set(true);
+        assert_eq!(
+            c.drive(1.0, 1.0),
+            Drive::off(Some(StopCause::EmergencyStop))
+        );
+        assert_eq!(
+            c.restart(&RobotConfig::DEFAULT),
+            Err(StopCause::EmergencyStop)
+        );
+    }
+
+    #[test]
+    fn neck_and_sonar_errors_name_their_part() {
+        assert_eq!(
+            neck_fault(NeckError::HomeNotFound { steps: 214 }),
+            StopCause::SensorFault(Sensor::NeckHome)
+        );
+        assert_eq!(
+            neck_fault(NeckError::NotHomed),
+            StopCause::SensorFault(Sensor::NeckHome)
+        );
+        assert_eq!(
+            neck_fault(NeckError::Pin { pin: "step" }),
+            StopCause::SensorFault(Sensor::Neck)
+        );
+        assert_eq!(
+            sonar_fault(SonarError::TriggerPin),
+            StopCause::SensorFault(Sensor::SonarTrigger)
+        );
+    }
+}
