@@ -14,6 +14,7 @@ mod classic_geometric;
 mod cspace_seed000;
 mod doc_examples;
 mod file_errors;
+mod formats_doc;
 mod firmware_qemu;
 mod firmware_requests;
 mod link_faults;

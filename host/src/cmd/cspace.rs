@@ -148,9 +148,13 @@ pub fn parse_pair(s: &str) -> Result<[f32; 2], String> {
 pub fn build_map(rob: &Path, robot: &Robot, increments: [f32; 2]) -> anyhow::Result<ConfigMap> {
     ConfigMap::build(robot, increments).map_err(|e| match e {
         MapError::TooManyValues { line, .. } => {
-            anyhow::Error::new(FileError::new(rob, Some(line), e.to_string()))
+            anyhow::Error::new(
+                FileError::new(rob, Some(line), e.to_string()).see(crate::files::ROB.doc),
+            )
         }
-        MapError::TooManyCells { .. } => anyhow::Error::new(FileError::whole(rob, e)),
+        MapError::TooManyCells { .. } => {
+            anyhow::Error::new(FileError::whole(rob, e).see(crate::files::ROB.doc))
+        }
         MapError::BadIncrement { .. } | MapError::WrapIncrement { .. } => {
             anyhow::anyhow!("--increments: {e}")
         }

@@ -392,6 +392,7 @@ pub(super) fn follow(
     // has advanced by a period.
     let mut last_beat_mission_ms = 0u32;
     let mut last_heard = Instant::now();
+    let mut fault_notes = crate::cmd::mission_link::FaultNotes::from_env();
     loop {
         for t in std::mem::take(&mut remote.telemetry) {
             follower.absorb(t);
@@ -458,14 +459,19 @@ pub(super) fn follow(
         match frame {
             Ok(DeviceFrame::Telemetry(t)) => follower.absorb(t),
             Ok(DeviceFrame::Reply { .. }) => {} // a stale reply
-            Err(fault) => note(
-                bar,
-                &format!("twil: dropped a damaged frame from the device: {fault:?}"),
-            ),
+            Err(fault) => {
+                if let Some(line) = fault_notes.line(&fault) {
+                    note(bar, &line);
+                }
+            }
         }
         if last_draw.elapsed() >= Duration::from_millis(50) {
             last_draw = Instant::now();
-            bar.set_message(follower.status_line());
+            let link = crate::cmd::mission_link::LinkReport::of(remote, follower.telemetry_gaps);
+            bar.set_message(match link.words() {
+                Some(words) => format!("{}  {words}", follower.status_line()),
+                None => follower.status_line(),
+            });
         }
     }
 }
