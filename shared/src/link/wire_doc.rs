@@ -17,7 +17,15 @@ use std::vec::Vec;
 
 use serde_reflection::{ContainerFormat, Format, Named, Registry, Tracer, TracerConfig, VariantFormat};
 
-use super::message::{DeviceFrame, RequestFrame};
+use super::message::{
+    Build, DeviceFrame, ErrorCode, Reply, Request, RequestFrame, RunState, Telemetry,
+};
+use crate::failsafe::{LinkLossReaction, ResetCause, StopCause};
+use crate::mission::{
+    MissionMode, MissionPhase, MissionStatus, SettleRule, UnreachableReason,
+};
+use crate::plan::{PlanStatus, PlannerKind};
+use crate::sonar::SweepLayout;
 
 const PROTOCOL_MD: &str = include_str!("../../../docs/protocol.md");
 
@@ -30,7 +38,37 @@ fn registry() -> Registry {
     tracer
         .trace_simple_type::<DeviceFrame>()
         .expect("trace DeviceFrame");
-    tracer.registry().expect("every enum variant traced")
+    // Tracing a type explores all of its own enum's variants but stops the nested enums at
+    // their first variant that ends the recursion: trace each enum on its own too. The
+    // registry refuses to close over an enum left incomplete, so a new enum nested in these
+    // is caught.
+    macro_rules! trace {
+        ($($t:ty),*) => {
+            $(tracer.trace_simple_type::<$t>().expect(stringify!($t));)*
+        };
+    }
+    trace!(
+        Request,
+        Reply,
+        Telemetry,
+        Build,
+        ResetCause,
+        ErrorCode,
+        LinkLossReaction,
+        MissionMode,
+        MissionPhase,
+        MissionStatus,
+        PlanStatus,
+        PlannerKind,
+        RunState,
+        SettleRule,
+        StopCause,
+        SweepLayout,
+        UnreachableReason
+    );
+    tracer
+        .registry()
+        .expect("every enum variant traced (a new enum on the wire: add it to the list above)")
 }
 
 /// A wire type as the document writes it.
