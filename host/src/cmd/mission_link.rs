@@ -97,9 +97,8 @@ impl LinkReport {
         if self.retries == 0 && self.damaged_frames == 0 && self.telemetry_gaps == 0 {
             return None;
         }
-        let plural = |n: u32, one: &str, many: &str| {
-            format!("{n} {}", if n == 1 { one } else { many })
-        };
+        let plural =
+            |n: u32, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
         Some(format!(
             "link: {} dropped, {} resent, {}",
             plural(self.damaged_frames, "damaged frame", "damaged frames"),

@@ -138,7 +138,12 @@ pub fn figure(state: &RecordedState, name: &str, px_per_cell: Option<u32>) -> Re
     })
     .with_context(|| format!("--scale {scale}: the picture"))?;
     let mut plot = fig.plot(0).context("picture: no plot")?;
-    let ends: Vec<_> = state.start.iter().chain(state.goal.iter()).copied().collect();
+    let ends: Vec<_> = state
+        .start
+        .iter()
+        .chain(state.goal.iter())
+        .copied()
+        .collect();
     for polygon in &state.real {
         if !picture::encloses(polygon, &ends) {
             plot.fill_polygon(&picture::points(polygon), palette::REAL, REAL_ALPHA);

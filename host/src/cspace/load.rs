@@ -31,7 +31,8 @@ pub fn load_robot(path: &Path) -> Result<Robot, FileError> {
 pub fn load_map(path: &Path, robot: &Robot) -> Result<ConfigMap, FileError> {
     let text = files::read_text(path, files::MAP)?;
     let wraps = [robot.joints[0].wraps(), robot.joints[1].wraps()];
-    let (_, map) = ConfigMap::parse_map(&text, wraps).map_err(|e| file_error(path, &text, &e, files::MAP))?;
+    let (_, map) =
+        ConfigMap::parse_map(&text, wraps).map_err(|e| file_error(path, &text, &e, files::MAP))?;
     Ok(map)
 }
 

@@ -15,15 +15,15 @@ use std::format;
 use std::string::{String, ToString};
 use std::vec::Vec;
 
-use serde_reflection::{ContainerFormat, Format, Named, Registry, Tracer, TracerConfig, VariantFormat};
+use serde_reflection::{
+    ContainerFormat, Format, Named, Registry, Tracer, TracerConfig, VariantFormat,
+};
 
 use super::message::{
     Build, DeviceFrame, ErrorCode, Reply, Request, RequestFrame, RunState, Telemetry,
 };
 use crate::failsafe::{LinkLossReaction, ResetCause, StopCause};
-use crate::mission::{
-    MissionMode, MissionPhase, MissionStatus, SettleRule, UnreachableReason,
-};
+use crate::mission::{MissionMode, MissionPhase, MissionStatus, SettleRule, UnreachableReason};
 use crate::plan::{PlanStatus, PlannerKind};
 use crate::sonar::SweepLayout;
 
