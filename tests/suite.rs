@@ -20,6 +20,7 @@ mod formats_doc;
 mod link_faults;
 mod mission_remote;
 mod plan_scenarios;
+mod protocol_client;
 mod preset;
 mod recording;
 mod safe_params;
