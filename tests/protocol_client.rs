@@ -7,9 +7,7 @@
 use std::process::Command;
 
 use twil_core::geom::PointM;
-use twil_core::link::{
-    frame::FrameDecoder, Device, DeviceFrame, MapParams, Request, RequestFrame,
-};
+use twil_core::link::{frame::FrameDecoder, Device, DeviceFrame, MapParams, Request, RequestFrame};
 use twil_core::plan::{Planner, PlannerKind};
 
 use crate::common::repo;
@@ -123,12 +121,24 @@ fn a_client_written_from_protocol_md_alone_talks_to_the_device() {
         let meant = serde_json::to_value(&frame).unwrap();
         let got: serde_json::Value = serde_json::from_str(text).unwrap();
         assert!(same(&got, &meant), "decoded {got}\nthe device sent {meant}");
-        if let Some(kind) = meant["Reply"]["reply"].as_object().and_then(|o| o.keys().next()) {
+        if let Some(kind) = meant["Reply"]["reply"]
+            .as_object()
+            .and_then(|o| o.keys().next())
+        {
             kinds.push(kind.clone());
         }
     }
     // The session reached the replies it was written for.
-    for kind in ["Hello", "Pong", "Obstacles", "Plan", "PathChunk", "MapChunk", "Status", "Error"] {
+    for kind in [
+        "Hello",
+        "Pong",
+        "Obstacles",
+        "Plan",
+        "PathChunk",
+        "MapChunk",
+        "Status",
+        "Error",
+    ] {
         assert!(kinds.iter().any(|k| k == kind), "no {kind} in {kinds:?}");
     }
 }
