@@ -358,3 +358,33 @@ fn ping_json_and_remote_suggestions() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("did you mean `qemu`?"), "{err}");
 }
+
+/// One definition of a stop: the count the host keeps from the device's phases (the live line,
+/// the pictures, the recording's `/status`) ends equal to the device's own (`stops` of the
+/// summary), a full sweep at the place of the last sweep counting with that stop. Issue 26
+/// saw `stops 6` live and `5 stops` at the end. About 5 s (a whole office mission in process).
+#[test]
+fn the_live_stop_count_ends_equal_to_the_devices() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("m.mcap");
+    let (da, par) = (world("office.da"), world("office.par"));
+    let o = run(&[
+        "mission",
+        "--remote",
+        "sim",
+        "--real",
+        &da,
+        "--params",
+        &par,
+        "--record",
+        rec.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let full_sweeps = json["full_sweeps"].as_u64().unwrap();
+    assert!(full_sweeps > 0, "the case needs full sweeps: {json}");
+    let state = twil_host::record::read::read(&rec, None).unwrap();
+    let live = state.status.as_ref().expect("a /status message").stops;
+    assert_eq!(u64::from(live), json["stops"].as_u64().unwrap(), "{json}");
+}

@@ -30,7 +30,14 @@ pub(crate) struct Follower {
     pub(super) trajectory: Vec<TrajectoryRow>,
     pub(super) distance_m: f32,
     pub(super) phase: Option<MissionPhase>,
+    /// Places the robot stood to sweep, counted as the device counts them (`MissionStats::stops`).
     pub(super) stops: u32,
+    /// Where the last standing sweep began, and the start before any pose has come.
+    last_stop: Option<PointM>,
+    start: PointM,
+    /// Within this of the last standing sweep a sweep is the same stop (the device's
+    /// `MissionConfig::stall_distance_m`).
+    same_stop_m: f32,
     pub(super) sweep: u32,
     pub(super) hits: Vec<PointM>,
     pub(super) plan: Option<PlanRecord>,
@@ -68,7 +75,13 @@ impl Follower {
                 twil_core::raster::mark_polygon(&mut grid, polygon, half);
             }
         }
+        let same_stop_m =
+            twil_core::mission::MissionConfig::from_params(&inputs.params, inputs.robot)
+                .stall_distance_m;
         Ok(Self {
+            last_stop: None,
+            start: inputs.params.start,
+            same_stop_m,
             half,
             pictures,
             grid,
@@ -123,6 +136,21 @@ impl Follower {
         self.poses.last().map_or(Pose::default(), |p| {
             Pose::new(p.position.x_m, p.position.y_m, p.heading_rad)
         })
+    }
+
+    /// A standing sweep began: a new stop unless it is where the last one was (a full sweep
+    /// the band or the body corridor asked for right after a sweep), the device's rule
+    /// (`twil_core::mission`, `MissionStats::stops`), so the live line, the pictures and the
+    /// summary give one number.
+    pub(super) fn count_stop(&mut self) {
+        let here = self.poses.last().map_or(self.start, |p| p.position);
+        let same_place = self
+            .last_stop
+            .is_some_and(|p| (here.x_m - p.x_m).hypot(here.y_m - p.y_m) < self.same_stop_m);
+        if !same_place {
+            self.stops += 1;
+        }
+        self.last_stop = Some(here);
     }
 
     /// The mission time of the latest pose, milliseconds.
@@ -237,7 +265,7 @@ impl Follower {
                 status,
             } => {
                 if matches!(phase, MissionPhase::Sweep { .. }) && self.phase != Some(phase) {
-                    self.stops += 1;
+                    self.count_stop();
                 }
                 // Bounded: a device that never plans cannot grow it past a few minutes' worth.
                 if self.phases_to_explain.len() >= 4096 {
