@@ -158,11 +158,17 @@ fn a_10_mb_file_is_refused_by_its_size_before_reading() {
             err.contains("big.txt: is 10000000 bytes, more than the "),
             "{option}: {err}"
         );
+        // Every file error ends citing its format's section (docs/formats.md).
+        assert!(
+            err.trim_end().contains("; see docs/formats.md#"),
+            "{option}: {err}"
+        );
     }
     let err = cspace(&big, &[]);
     assert!(
         err.ends_with(
-            "big.txt: is 10000000 bytes, more than the 1048576 bytes allowed for a .ROB file\n"
+            "big.txt: is 10000000 bytes, more than the 1048576 bytes allowed for a .ROB file; \
+             see docs/formats.md#rob\n"
         ),
         "{err}"
     );
@@ -229,17 +235,22 @@ fn bytes_that_are_not_utf8_are_named_by_line_and_offset() {
     let err = cspace(&rob, &[]);
     assert!(
         err.ends_with(&format!(
-            "latin1.ROB: line 3: not text: byte 0xff at offset {at} is not UTF-8\n"
+            "latin1.ROB: line 3: not text: byte 0xff at offset {at} is not UTF-8; \
+             see docs/formats.md#rob\n"
         )),
         "{err}"
     );
-    for (opt, name) in [("--from-map", "bin.MAP"), ("--compare", "bin.TRA")] {
+    for (opt, name, anchor) in [
+        ("--from-map", "bin.MAP", "map"),
+        ("--compare", "bin.TRA", "tra"),
+    ] {
         let p = dir.path().join(name);
         std::fs::write(&p, b"nav\n-180 -75\n\xc3(\n").unwrap();
         let err = cspace(&world("seed000-nav.ROB"), &[opt, s(&p)]);
         assert!(
             err.ends_with(&format!(
-                "{name}: line 3: not text: byte 0xc3 at offset 13 is not UTF-8\n"
+                "{name}: line 3: not text: byte 0xc3 at offset 13 is not UTF-8; \
+                 see docs/formats.md#{anchor}\n"
             )),
             "{err}"
         );
@@ -261,7 +272,7 @@ fn huge_joint_limits_name_the_file_line_and_field() {
         format!(
             "twil: {}: line 4: field `maximum length` of joint 1: the limits -1e30 to 1e30 in \
              steps of 2 need more than the 4096 values this build holds; use a larger increment \
-             or narrower limits\n",
+             or narrower limits; see docs/formats.md#rob\n",
             rob.display()
         )
     );

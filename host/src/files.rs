@@ -18,7 +18,7 @@
 //! | saved map | `width × height` bytes | one byte per cell |
 //!
 //! A [`FileError`] reads `path: line N: ...` (or `path: ...` when the problem is the whole
-//! file); control and other non-printable characters, in the path or in the detail, appear as
+//! file), then `; see docs/formats.md#da`, the section that describes the format; control and other non-printable characters, in the path or in the detail, appear as
 //! `\u{1b}`-style escapes, so a hostile file cannot drive the terminal.
 
 use std::fmt;
@@ -32,6 +32,8 @@ pub struct Format {
     pub name: &'static str,
     /// Largest accepted size, bytes.
     pub max_bytes: u64,
+    /// Where the format is described, as errors cite it.
+    pub doc: &'static str,
 }
 
 const MIB: u64 = 1024 * 1024;
@@ -40,27 +42,35 @@ const MIB: u64 = 1024 * 1024;
 pub const DA: Format = Format {
     name: "a .da file",
     max_bytes: 4 * MIB,
+    doc: "docs/formats.md#da",
 };
 /// `.par` mission parameters.
 pub const PAR: Format = Format {
     name: "a .par file",
     max_bytes: 64 * 1024,
+    doc: "docs/formats.md#par",
 };
 /// `.ROB` obstacles and arm (`twil cspace --rob`).
 pub const ROB: Format = Format {
     name: "a .ROB file",
     max_bytes: MIB,
+    doc: "docs/formats.md#rob",
 };
 /// `.MAP` configuration map (`twil cspace --from-map`).
 pub const MAP: Format = Format {
     name: "a .MAP file",
     max_bytes: 4 * MIB,
+    doc: "docs/formats.md#map",
 };
 /// `.TRA` path (`twil cspace --compare`).
 pub const TRA: Format = Format {
     name: "a .TRA file",
     max_bytes: MIB,
+    doc: "docs/formats.md#tra",
 };
+
+/// Where the saved map (`twil plan --map`) is described.
+pub const SAVED_MAP_DOC: &str = "docs/formats.md#saved-map";
 
 /// A file could not be used: which file, which line (when known) and why.
 #[derive(Debug, Clone, PartialEq)]
@@ -71,6 +81,8 @@ pub struct FileError {
     pub line: Option<u32>,
     /// What is wrong (already includes `line N: ` when `line` is set), escaped.
     pub detail: String,
+    /// The description of the file's format (`docs/formats.md#da`), cited after the detail.
+    pub see: Option<&'static str>,
 }
 
 impl fmt::Display for FileError {
@@ -80,7 +92,11 @@ impl fmt::Display for FileError {
             "{}: {}",
             printable(&self.path.display().to_string()),
             self.detail
-        )
+        )?;
+        match self.see {
+            Some(doc) => write!(f, "; see {doc}"),
+            None => Ok(()),
+        }
     }
 }
 
@@ -93,7 +109,14 @@ impl FileError {
             path: path.to_path_buf(),
             line,
             detail: printable(&detail.into()),
+            see: None,
         }
+    }
+
+    /// This error, citing `doc` (e.g. [`DA`]`.doc`) as the description of the file's format.
+    pub fn see(mut self, doc: &'static str) -> Self {
+        self.see = Some(doc);
+        self
     }
 
     /// A parse error at `line` of `text` (read from `path`); `detail` is the parser's message
@@ -178,7 +201,7 @@ pub fn read_capped(path: &Path, what: &str, max_bytes: u64) -> Result<Vec<u8>, F
 
 /// [`read_capped`] with the cap of `format`.
 pub fn read_bytes(path: &Path, format: Format) -> Result<Vec<u8>, FileError> {
-    read_capped(path, format.name, format.max_bytes)
+    read_capped(path, format.name, format.max_bytes).map_err(|e| e.see(format.doc))
 }
 
 /// Read a UTF-8 text file of `format`. Invalid UTF-8 is an error naming the line and the byte
@@ -195,6 +218,7 @@ pub fn read_text(path: &Path, format: Format) -> Result<String, FileError> {
             Some(line),
             format!("line {line}: not text: byte 0x{bad:02x} at offset {good} is not UTF-8"),
         )
+        .see(format.doc)
     })
 }
 
@@ -238,8 +262,9 @@ mod tests {
             assert_eq!(
                 e.to_string(),
                 format!(
-                    "/dev/zero: goes on beyond the cap, more than the {} bytes allowed for {}",
-                    format.max_bytes, format.name
+                    "/dev/zero: goes on beyond the cap, more than the {} bytes allowed for {}; \
+                     see {}",
+                    format.max_bytes, format.name, format.doc
                 )
             );
         }
@@ -252,7 +277,7 @@ mod tests {
         assert_eq!(e.line, Some(3));
         assert!(
             e.to_string()
-                .ends_with("x.TRA: line 3: not text: byte 0xc3 at offset 11 is not UTF-8"),
+                .ends_with("x.TRA: line 3: not text: byte 0xc3 at offset 11 is not UTF-8; see docs/formats.md#tra"),
             "{e}"
         );
     }
@@ -285,10 +310,41 @@ mod tests {
     }
 
     #[test]
+    fn every_format_cites_a_section_of_formats_md_that_exists() {
+        let doc = include_str!("../../docs/formats.md");
+        // GitHub's anchors: the heading in lower case, without its punctuation but `-`.
+        let anchors: Vec<String> = doc
+            .lines()
+            .filter_map(|l| l.strip_prefix("## "))
+            .map(|h| {
+                h.to_lowercase()
+                    .chars()
+                    .filter_map(|c| match c {
+                        ' ' => Some('-'),
+                        c if c.is_alphanumeric() || c == '-' || c == '_' => Some(c),
+                        _ => None,
+                    })
+                    .collect()
+            })
+            .collect();
+        for doc_ref in [DA.doc, PAR.doc, ROB.doc, MAP.doc, TRA.doc, SAVED_MAP_DOC] {
+            let anchor = doc_ref.strip_prefix("docs/formats.md#").unwrap();
+            assert!(
+                anchors.iter().any(|a| a == anchor),
+                "{doc_ref}: no such section in {anchors:?}"
+            );
+        }
+    }
+
+    #[test]
     fn directories_and_missing_files_are_named() {
         let dir = tempfile::tempdir().unwrap();
         let e = read_text(dir.path(), ROB).unwrap_err();
-        assert!(e.to_string().ends_with("is a directory, not a file"), "{e}");
+        assert!(
+            e.to_string()
+                .ends_with("is a directory, not a file; see docs/formats.md#rob"),
+            "{e}"
+        );
         let e = read_text(&dir.path().join("none.MAP"), MAP).unwrap_err();
         assert!(e.to_string().contains("none.MAP: cannot open"), "{e}");
     }

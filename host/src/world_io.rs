@@ -30,29 +30,29 @@ use twil_core::robot::RobotConfig;
 use twil_core::world::{parse_da, parse_par, parse_par_for, Obstacles, Params, ParseError};
 
 pub use crate::files::FileError;
-use crate::files::{read_capped, read_text, DA, PAR};
+use crate::files::{read_capped, read_text, DA, PAR, SAVED_MAP_DOC};
 
 /// Value the seed wrote for an occupied cell in a saved map.
 pub const SAVED_MAP_OCCUPIED: u8 = 127;
 
 /// A parse error of `text`, named with the file (the line brought back onto the file's last
 /// line when the text ended early).
-fn parse_error(path: &Path, text: &str, error: &ParseError) -> FileError {
-    FileError::at_line(path, text, error.line, &error.to_string())
+fn parse_error(path: &Path, text: &str, error: &ParseError, doc: &'static str) -> FileError {
+    FileError::at_line(path, text, error.line, &error.to_string()).see(doc)
 }
 
 /// Read a `.da` environment file.
 pub fn read_da(path: &Path) -> Result<Obstacles, FileError> {
     let text = read_text(path, DA)?;
     let mut obstacles = Obstacles::new();
-    parse_da(&text, &mut obstacles).map_err(|e| parse_error(path, &text, &e))?;
+    parse_da(&text, &mut obstacles).map_err(|e| parse_error(path, &text, &e, DA.doc))?;
     Ok(obstacles)
 }
 
 /// Read a `.par` parameter file.
 pub fn read_par(path: &Path) -> Result<Params, FileError> {
     let text = read_text(path, PAR)?;
-    parse_par(&text).map_err(|e| parse_error(path, &text, &e))
+    parse_par(&text).map_err(|e| parse_error(path, &text, &e, PAR.doc))
 }
 
 /// Read a `.par` file for a mission of `robot`: as [`read_par`], and the speed and the radius
@@ -60,7 +60,7 @@ pub fn read_par(path: &Path) -> Result<Params, FileError> {
 /// line, the field and the bound.
 pub fn read_par_for(path: &Path, robot: &RobotConfig) -> Result<Params, FileError> {
     let text = read_text(path, PAR)?;
-    parse_par_for(&text, robot).map_err(|e| parse_error(path, &text, &e))
+    parse_par_for(&text, robot).map_err(|e| parse_error(path, &text, &e, PAR.doc))
 }
 
 /// Mark in `grid` every cell that a saved map (see the module doc) marks occupied, for the
@@ -75,7 +75,8 @@ pub fn read_saved_map<const W: usize>(path: &Path, grid: &mut Grid<W>) -> Result
         path,
         &format!("a saved {w}x{h} map (one byte per cell, x-major); check --size and --resolution"),
         expected as u64,
-    )?;
+    )
+    .map_err(|e| e.see(SAVED_MAP_DOC))?;
     if bytes.len() != expected {
         return Err(FileError::new(
             path,
@@ -85,7 +86,8 @@ pub fn read_saved_map<const W: usize>(path: &Path, grid: &mut Grid<W>) -> Result
                  x-major); check --size and --resolution",
                 bytes.len()
             ),
-        ));
+        )
+        .see(SAVED_MAP_DOC));
     }
     let mut occupied = 0;
     for (i, b) in bytes.iter().enumerate() {

@@ -57,6 +57,9 @@ pub mod message;
 pub mod replay;
 pub mod robot;
 
+#[cfg(test)]
+mod wire_doc;
+
 pub use frame::{FrameDecoder, FrameFault, MAX_FRAME_BYTES};
 
 /// Capacities of the firmware's device (the STM32F405 build). They live here so that the host

@@ -195,6 +195,7 @@ pub fn run(world: &World, options: &Options) -> anyhow::Result<Run> {
         elapsed_us: 0,
         overlay: Overlay {
             nodes,
+            node_label: "hit / leave point",
             ..Overlay::default()
         },
         extra,

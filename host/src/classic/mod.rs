@@ -133,6 +133,8 @@ pub struct Overlay {
     pub blocked_cells: Vec<Vec<PointM>>,
     /// Nodes worth a dot (graph vertices, midpoints of shared edges, hit/leave points).
     pub nodes: Vec<PointM>,
+    /// What the dots are, for the legend; empty: "node".
+    pub node_label: &'static str,
 }
 
 /// One method's answer.
@@ -246,8 +248,10 @@ pub fn grid_run(method: Method, world: &World, outcome: &crate::planning::Outcom
         path: outcome.path.clone(),
         length_m: outcome.report.length_m,
         expanded: outcome.report.expanded as u64,
+        // BFS expands jump points on room maps and cells on cluttered ones, and does not
+        // say which: "nodes" is true of both.
         expanded_unit: match method {
-            Method::Bfs => "cells",
+            Method::Bfs => "nodes",
             _ => "jump points",
         },
         memory_bytes: cells / 8 + cells / 2 + outcome.queue_peak as usize * 12,
@@ -303,7 +307,7 @@ pub fn json(world: &World, run: &Run) -> crate::planning::PlanJson {
 pub fn summary(world: &World, run: &Run) -> String {
     let p = &world.params;
     let mut s = format!(
-        "{} : start ({}, {}) m -> goal ({}, {}) m, robot radius {} m: {}",
+        "{}: start ({}, {}) m -> goal ({}, {}) m, robot radius {} m: {}",
         run.method.as_str(),
         p.start.x_m,
         p.start.y_m,
@@ -320,7 +324,9 @@ pub fn summary(world: &World, run: &Run) -> String {
         ));
     }
     if let Some(c) = min_clearance_m(world, run) {
-        s.push_str(&format!(", clearance {c:.3} m"));
+        // A path that touches a grown obstacle measures -0.0002 m or so: that is 0.000.
+        let c = format!("{c:.3}").replace("-0.000", "0.000");
+        s.push_str(&format!(", clearance {c} m"));
     }
     s.push_str(&format!(
         "\n{} {} in {} us, {} bytes",

@@ -37,8 +37,17 @@ pub fn legend(runs: &[&Run]) -> Vec<LegendEntry> {
     if runs.iter().any(|r| !r.overlay.edges.is_empty()) {
         legend.push(LegendEntry::new("graph / roadmap", Mark::Line(EDGE, 1.5)));
     }
-    if runs.iter().any(|r| !r.overlay.nodes.is_empty()) {
-        legend.push(LegendEntry::new("node", Mark::Marker(Marker::Disc, NODE)));
+    // One entry per kind of dot drawn (graph nodes, a local minimum, hit / leave points).
+    let mut labels: Vec<&str> = Vec::new();
+    for r in runs.iter().filter(|r| !r.overlay.nodes.is_empty()) {
+        let label = match r.overlay.node_label {
+            "" => "node",
+            label => label,
+        };
+        if !labels.contains(&label) {
+            labels.push(label);
+            legend.push(LegendEntry::new(label, Mark::Marker(Marker::Disc, NODE)));
+        }
     }
     legend.extend([
         LegendEntry::new("path", Mark::Line(palette::PREFIX, 3.0)),
@@ -55,9 +64,12 @@ pub fn draw(plot: &mut Plot<'_>, world: &World, run: &Run) {
     for cell in &run.overlay.blocked_cells {
         plot.fill_polygon(&picture::points(cell), BLOCKED, 1.0);
     }
+    let ends = [world.params.start, world.params.goal];
     for polygon in world.obstacles.iter() {
         let pts = picture::points(polygon);
-        plot.fill_polygon(&pts, palette::OBSTACLE, 1.0);
+        if !picture::encloses(polygon, &ends) {
+            plot.fill_polygon(&pts, palette::OBSTACLE, 1.0);
+        }
         plot.stroke_polygon(&pts, palette::OUTLINE, 1.0);
     }
     for cell in &run.overlay.cells {
@@ -66,9 +78,11 @@ pub fn draw(plot: &mut Plot<'_>, world: &World, run: &Run) {
     for edge in &run.overlay.edges {
         plot.polyline(&picture::points(edge), EDGE, 1.0);
     }
-    plot.dots(&picture::points(&run.overlay.nodes), 2.0, NODE);
     let path = picture::points(&run.path);
     plot.polyline(&path, palette::PREFIX, 3.0);
+    // Over the path, and wider than it: the hit and leave points of Bug and the potential
+    // field's minimum lie on the path and were hidden under it.
+    plot.dots(&picture::points(&run.overlay.nodes), 3.5, NODE);
     let p = &world.params;
     plot.marker(p.start.x_m, p.start.y_m, Marker::Disc, 14.0, palette::START);
     plot.marker(p.goal.x_m, p.goal.y_m, Marker::Diamond, 16.0, palette::GOAL);

@@ -57,6 +57,7 @@ pub fn run(world: &World) -> anyhow::Result<Run> {
             run.path = super::voronoi::simplify_collinear(&pts);
             if let Some(&last) = run.path.last() {
                 run.overlay.nodes.push(last);
+                run.overlay.node_label = "local minimum";
             }
         }
         _ => {}

@@ -147,10 +147,12 @@ pub fn parse_pair(s: &str) -> Result<[f32; 2], String> {
 /// `.ROB` file with the lines and fields of the limits; a bad increment names `--increments`.
 pub fn build_map(rob: &Path, robot: &Robot, increments: [f32; 2]) -> anyhow::Result<ConfigMap> {
     ConfigMap::build(robot, increments).map_err(|e| match e {
-        MapError::TooManyValues { line, .. } => {
-            anyhow::Error::new(FileError::new(rob, Some(line), e.to_string()))
+        MapError::TooManyValues { line, .. } => anyhow::Error::new(
+            FileError::new(rob, Some(line), e.to_string()).see(crate::files::ROB.doc),
+        ),
+        MapError::TooManyCells { .. } => {
+            anyhow::Error::new(FileError::whole(rob, e).see(crate::files::ROB.doc))
         }
-        MapError::TooManyCells { .. } => anyhow::Error::new(FileError::whole(rob, e)),
         MapError::BadIncrement { .. } | MapError::WrapIncrement { .. } => {
             anyhow::anyhow!("--increments: {e}")
         }

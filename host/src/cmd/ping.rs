@@ -22,6 +22,7 @@ pub struct Args {
 /// Run `twil ping`.
 pub fn run(args: Args) -> Result<crate::exit::Ending> {
     let (mut remote, info) = Remote::connect(&args.remote)?;
+    let firmware = info.build != twil_core::link::Build::Host;
     if args.json {
         let mut round_trips_ms = Vec::new();
         for i in 0..args.count {
@@ -36,14 +37,23 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
             "max_polygons": info.max_polygons,
             "max_vertices": info.max_vertices,
             "max_frame_bytes": info.max_frame_bytes,
-            "static_ram_bytes": info.static_ram_bytes,
+            "static_ram_bytes": firmware.then_some(info.static_ram_bytes),
             "round_trips_ms": round_trips_ms,
         });
         println!("{json}");
         return Ok(crate::exit::Ending::Done);
     }
+    // The in-process device (`--remote sim`) is no firmware and has no static RAM to report.
+    let (who, ram) = if firmware {
+        (
+            "twil firmware",
+            format!(", static RAM {} bytes", info.static_ram_bytes),
+        )
+    } else {
+        ("twil device (in process, no firmware)", String::new())
+    };
     println!(
-        "twil firmware: protocol v{}, build {:?}, grid {} cells, planner {} cells, {} polygons / {} vertices, frames up to {} bytes, static RAM {} bytes",
+        "{who}: protocol v{}, build {:?}, grid {} cells, planner {} cells, {} polygons / {} vertices, frames up to {} bytes{ram}",
         info.protocol_version,
         info.build,
         info.grid_capacity_cells,
@@ -51,7 +61,6 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         info.max_polygons,
         info.max_vertices,
         info.max_frame_bytes,
-        info.static_ram_bytes
     );
     for i in 0..args.count {
         let rtt = remote.ping(0x7711_0000 + i)?;

@@ -204,9 +204,12 @@ pub fn plan_figure(
         plot.fill_grid(saved, palette::OBSTACLE, 1.0);
     }
     plot.fill_grid(&world.raw, palette::OBSTACLE, 1.0);
+    let ends = [world.params.start, world.params.goal];
     for polygon in world.obstacles.iter() {
         let pts = picture::points(polygon);
-        plot.fill_polygon(&pts, palette::OBSTACLE, 1.0);
+        if !picture::encloses(polygon, &ends) {
+            plot.fill_polygon(&pts, palette::OBSTACLE, 1.0);
+        }
         plot.stroke_polygon(&pts, palette::OUTLINE, 1.0);
     }
     let p = &world.params;
@@ -252,7 +255,8 @@ pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
         println!("{}", serde_json::to_string(&json)?);
     } else {
         println!("{}", summary(&world, &outcome));
-        for (key, value) in &extra {
+        // A figure the device does not measure (`null`) is left out.
+        for (key, value) in extra.iter().filter(|(_, v)| !v.is_null()) {
             println!("{key}: {value}");
         }
         if let Some(out) = &args.png {
@@ -321,10 +325,11 @@ fn record_plan(
     recorder.close()
 }
 
-/// What `expanded` counts: BFS expands cells, A* (and so any-angle) expands jump points.
+/// What `expanded` counts: A* (and so any-angle) expands jump points; BFS jump points on room
+/// maps and cells on cluttered ones (its report does not say which), so "nodes".
 fn expanded_unit(planner: PlannerKind) -> &'static str {
     match planner {
-        PlannerKind::Bfs => "cells",
+        PlannerKind::Bfs => "nodes",
         PlannerKind::AStar | PlannerKind::AnyAngle => "jump points",
     }
 }

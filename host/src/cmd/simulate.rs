@@ -216,7 +216,7 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         })
         .with_planning_radius_m(params.robot_radius_m);
     if let Err(e) = robot.validate() {
-        bail!("robot config: {e}");
+        bail!("{}", crate::cmd::robot_options::message(&e, &robot));
     }
     // The speed and the radius against what this robot (its sonar range) can be trusted
     // with, naming the .par's line.

@@ -24,6 +24,9 @@ use crate::picture::{
 };
 use crate::record::read::{self, RecordedState};
 
+/// Opacity of the earlier sweeps' hits over white (the last sweep's are opaque).
+const FAINT_HITS_ALPHA: f32 = 0.35;
+
 /// Arguments of `twil view`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
@@ -107,10 +110,17 @@ pub fn figure(state: &RecordedState, name: &str, px_per_cell: Option<u32>) -> Re
         "robot's map (grown)",
         Mark::Fill(palette::MAP),
     ));
-    if !state.hits.is_empty() {
+    if !state.last_hits.is_empty() {
         legend.push(LegendEntry::new(
             "sonar hits (last sweep)",
             Mark::Dots(palette::HITS),
+        ));
+    }
+    // Every earlier sweep's hits, faint: the pink streaks along the walls.
+    if !state.hits.is_empty() {
+        legend.push(LegendEntry::new(
+            "sonar hits (earlier sweeps)",
+            Mark::Dots(over_white(palette::HITS, FAINT_HITS_ALPHA)),
         ));
     }
     if !state.band.is_empty() {
@@ -128,8 +138,16 @@ pub fn figure(state: &RecordedState, name: &str, px_per_cell: Option<u32>) -> Re
     })
     .with_context(|| format!("--scale {scale}: the picture"))?;
     let mut plot = fig.plot(0).context("picture: no plot")?;
+    let ends: Vec<_> = state
+        .start
+        .iter()
+        .chain(state.goal.iter())
+        .copied()
+        .collect();
     for polygon in &state.real {
-        plot.fill_polygon(&picture::points(polygon), palette::REAL, REAL_ALPHA);
+        if !picture::encloses(polygon, &ends) {
+            plot.fill_polygon(&picture::points(polygon), palette::REAL, REAL_ALPHA);
+        }
     }
     plot.fill_grid(map.as_ref(), palette::MAP, 1.0);
     for polygon in &state.real {
@@ -141,7 +159,7 @@ pub fn figure(state: &RecordedState, name: &str, px_per_cell: Option<u32>) -> Re
     if !state.band.is_empty() {
         plot.fill_polygon(&picture::points(&state.band), palette::BAND, BAND_ALPHA);
     }
-    let faint = over_white(palette::HITS, 0.35);
+    let faint = over_white(palette::HITS, FAINT_HITS_ALPHA);
     plot.dots(&picture::points(&state.hits), 1.5, faint);
     let trail: Vec<(f32, f32)> = state.trail.iter().map(|p| (p.x_m, p.y_m)).collect();
     plot.polyline(&picture::points(&state.plan), palette::PLAN, 1.5);
@@ -188,8 +206,15 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         });
         println!("{json}");
     } else {
+        // An `--at` past the end draws the end: say so rather than let the time pass as read.
+        let past_end = match args.at {
+            Some(at) if at > state.end_s => {
+                format!(" (--at {at} is past the end: the end is drawn)")
+            }
+            _ => String::new(),
+        };
         println!(
-            "{}: t = {:.1} s of {:.1} s, {} messages, {} poses; picture: {}",
+            "{}: t = {:.1} s of {:.1} s{past_end}, {} messages, {} poses; picture: {}",
             args.recording.display(),
             state.t_s,
             state.end_s,

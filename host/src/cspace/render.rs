@@ -150,19 +150,29 @@ fn has_cells(map: &ConfigMap, which: Occupancy) -> bool {
     (0..nl as i32).any(|j| (0..nc as i32).any(|i| map.occupancy(i, j) == which))
 }
 
+/// The legend's words for the cells where link 1 and link 2 collide: an arm's, or, with two
+/// prismatic joints (the thesis' navigation case), a moving object's (link 2 is the object,
+/// link 1 the slide that carries it).
+fn collision_labels(robot: &Robot) -> [&'static str; 2] {
+    let prismatic = robot
+        .joints
+        .iter()
+        .all(|j| j.kind == twil_core::cspace::rob::JointKind::Prismatic);
+    if prismatic {
+        ["the slide collides", "the object collides"]
+    } else {
+        ["arm 1 collides", "arm 2 collides"]
+    }
+}
+
 fn legend(scene: &Scene<'_>, animated: bool) -> Vec<LegendEntry> {
     let mut l = Vec::new();
+    let [arm1, arm2] = collision_labels(scene.robot);
     if has_cells(scene.map, Occupancy::Arm1) {
-        l.push(LegendEntry::new(
-            "arm 1 collides",
-            Mark::Fill(palette::ARM1_CELL),
-        ));
+        l.push(LegendEntry::new(arm1, Mark::Fill(palette::ARM1_CELL)));
     }
     if has_cells(scene.map, Occupancy::Arm2) {
-        l.push(LegendEntry::new(
-            "arm 2 collides",
-            Mark::Fill(palette::ARM2_CELL),
-        ));
+        l.push(LegendEntry::new(arm2, Mark::Fill(palette::ARM2_CELL)));
     }
     l.push(LegendEntry::new("our path", Mark::Line(PATH, 3.0)));
     if let Some(label) = &scene.compare_label {

@@ -135,6 +135,28 @@ pub fn points(points: &[twil_core::geom::PointM]) -> Vec<(f32, f32)> {
     points.iter().map(|p| (p.x_m, p.y_m)).collect()
 }
 
+/// `polygon` (3 or more vertices) holds one of `inside` (the start, the goal) strictly inside
+/// it (even-odd rule): a room drawn as one enclosing outline. Only a `.da` polygon's edges are
+/// obstacles (docs/formats.md#da), so its inside is floor: pictures draw such a polygon's
+/// outline and no fill, which would paint the whole room as an obstacle.
+pub fn encloses(polygon: &[twil_core::geom::PointM], inside: &[twil_core::geom::PointM]) -> bool {
+    polygon.len() >= 3
+        && inside.iter().any(|p| {
+            let mut odd = false;
+            let mut j = polygon.len() - 1;
+            for (i, a) in polygon.iter().enumerate() {
+                let b = polygon[j];
+                if (a.y_m > p.y_m) != (b.y_m > p.y_m)
+                    && p.x_m < (b.x_m - a.x_m) * (p.y_m - a.y_m) / (b.y_m - a.y_m) + a.x_m
+                {
+                    odd = !odd;
+                }
+                j = i;
+            }
+            odd
+        })
+}
+
 /// What a figure shows around its plots.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FigureSpec {

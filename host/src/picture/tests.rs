@@ -194,3 +194,20 @@ fn a_caption_too_long_for_one_line_wraps_instead_of_being_cut() {
     assert!(fig.size_px().1 > one.1 + 2 * CAPTION_PX as u32);
     assert_eq!(fig.size_px().0, one.0);
 }
+
+#[test]
+fn a_room_around_the_start_is_drawn_as_an_outline_and_an_obstacle_is_filled() {
+    use twil_core::geom::PointM;
+    let room = [
+        PointM::new(0.0, 0.0),
+        PointM::new(4.0, 0.0),
+        PointM::new(4.0, 3.0),
+        PointM::new(0.0, 3.0),
+    ];
+    let start = PointM::new(1.0, 1.0);
+    let outside = PointM::new(5.0, 1.0);
+    assert!(super::encloses(&room, &[outside, start]));
+    assert!(!super::encloses(&room, &[outside]));
+    // A wall (2 vertices) encloses nothing.
+    assert!(!super::encloses(&room[..2], &[start]));
+}

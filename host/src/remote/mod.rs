@@ -735,8 +735,21 @@ pub fn plan_on_device(
     };
     let reference = plan_like_the_mcu(world, local.kind)?;
     let matches = outcome.report == reference.report && outcome.path == reference.path;
-    extra.insert("mcu_instructions".into(), s.mcu_instructions.into());
-    extra.insert("static_ram_bytes".into(), info.static_ram_bytes.into());
+    // Measured on the firmware only: the in-process device (`--remote sim`) counts nothing,
+    // so its figures are absent (`null`), not 0.
+    let measured = info.build != twil_core::link::Build::Host;
+    let figure = |v: u64| {
+        if measured {
+            v.into()
+        } else {
+            serde_json::Value::Null
+        }
+    };
+    extra.insert("mcu_instructions".into(), figure(s.mcu_instructions));
+    extra.insert(
+        "static_ram_bytes".into(),
+        figure(info.static_ram_bytes.into()),
+    );
     extra.insert("matches_host".into(), matches.into());
     Ok(outcome)
 }

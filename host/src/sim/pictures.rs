@@ -176,8 +176,11 @@ pub fn snapshot_figure(
     if let Some(seen) = &snap.seen {
         plot.fill_grid(seen.as_ref(), palette::SEEN, 1.0);
     }
+    let ends = [setup.params.start, setup.params.goal];
     for polygon in setup.real.iter() {
-        plot.fill_polygon(&picture::points(polygon), palette::REAL, REAL_ALPHA);
+        if !picture::encloses(polygon, &ends) {
+            plot.fill_polygon(&picture::points(polygon), palette::REAL, REAL_ALPHA);
+        }
     }
     plot.fill_grid(snap.grid.as_ref(), palette::MAP, 1.0);
     for polygon in setup.real.iter() {

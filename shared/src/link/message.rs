@@ -492,7 +492,7 @@ pub enum ErrorCode {
     /// 9: an obstacle chunk starts at vertex `value` but `limit` were received so far.
     ChunkOutOfOrder,
     /// 10: a number is not finite or out of range (`value` = index of the offending field or
-    /// vertex).
+    /// vertex; `Plan`: 1 start, 2 goal).
     BadArgument,
     /// 11: the planner ran out of memory: `value` = what it needed (cells), `limit` = its
     /// capacity (`detail` tells which: 0 scratch, 1 queue, 2 path).
@@ -509,7 +509,7 @@ pub enum ErrorCode {
     WrongState,
     /// 16: the mission setup is refused: `value` is the index of the offending field of
     /// [`MissionSetup`] (or 100 + the robot config's, see the device log; 100 is the planning
-    /// radius of `SetParams`), `detail` 1 when the start or the goal lies off the map. For the
+    /// radius of `SetParams`), `detail` 1 when that field (2 start, 4 goal) lies off the map. For the
     /// speed (5), `limit` is the robot's safe speed in mm/s.
     BadMission,
     /// 17: marking the obstacles would visit `value` map rows (stored and new vertices × map
@@ -607,7 +607,12 @@ impl core::fmt::Display for ErrorReply {
             }
             ErrorCode::BadMission => {
                 if self.detail == 1 {
-                    write!(f, "the mission's start or goal lies off the map")
+                    let which = match v {
+                        2 => "start",
+                        4 => "goal",
+                        _ => "start or goal",
+                    };
+                    write!(f, "the mission's {which} lies off the map")
                 } else {
                     write!(f, "mission setup field {v} is not a valid value")
                 }

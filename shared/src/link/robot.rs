@@ -613,14 +613,18 @@ impl<const W: usize> RobotLink<'_, W> {
                 _ => bad(100),
             });
         }
+        // Off the map: the field's index (2 start, 4 goal) with detail 1, so a client can
+        // say which.
         let geometry = *self.mission.grid().geometry();
-        if geometry.cell_of(setup.start).is_err() || geometry.cell_of(setup.goal).is_err() {
-            return Err(ErrorReply {
-                code: ErrorCode::BadMission,
-                value: 0,
-                limit: 0,
-                detail: 1,
-            });
+        for (field, point) in [(2, setup.start), (4, setup.goal)] {
+            if geometry.cell_of(point).is_err() {
+                return Err(ErrorReply {
+                    code: ErrorCode::BadMission,
+                    value: field,
+                    limit: 0,
+                    detail: 1,
+                });
+            }
         }
         Ok(config)
     }

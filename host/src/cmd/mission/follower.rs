@@ -30,7 +30,14 @@ pub(crate) struct Follower {
     pub(super) trajectory: Vec<TrajectoryRow>,
     pub(super) distance_m: f32,
     pub(super) phase: Option<MissionPhase>,
+    /// Places the robot stood to sweep, counted as the device counts them (`MissionStats::stops`).
     pub(super) stops: u32,
+    /// Where the last standing sweep began, and the start before any pose has come.
+    last_stop: Option<PointM>,
+    start: PointM,
+    /// Within this of the last standing sweep a sweep is the same stop (the device's
+    /// `MissionConfig::stall_distance_m`).
+    same_stop_m: f32,
     pub(super) sweep: u32,
     pub(super) hits: Vec<PointM>,
     pub(super) plan: Option<PlanRecord>,
@@ -68,7 +75,13 @@ impl Follower {
                 twil_core::raster::mark_polygon(&mut grid, polygon, half);
             }
         }
+        let same_stop_m =
+            twil_core::mission::MissionConfig::from_params(&inputs.params, inputs.robot)
+                .stall_distance_m;
         Ok(Self {
+            last_stop: None,
+            start: inputs.params.start,
+            same_stop_m,
             half,
             pictures,
             grid,
@@ -123,6 +136,21 @@ impl Follower {
         self.poses.last().map_or(Pose::default(), |p| {
             Pose::new(p.position.x_m, p.position.y_m, p.heading_rad)
         })
+    }
+
+    /// A standing sweep began: a new stop unless it is where the last one was (a full sweep
+    /// the band or the body corridor asked for right after a sweep), the device's rule
+    /// (`twil_core::mission`, `MissionStats::stops`), so the live line, the pictures and the
+    /// summary give one number.
+    pub(super) fn count_stop(&mut self) {
+        let here = self.poses.last().map_or(self.start, |p| p.position);
+        let same_place = self
+            .last_stop
+            .is_some_and(|p| (here.x_m - p.x_m).hypot(here.y_m - p.y_m) < self.same_stop_m);
+        if !same_place {
+            self.stops += 1;
+        }
+        self.last_stop = Some(here);
     }
 
     /// The mission time of the latest pose, milliseconds.
@@ -237,7 +265,7 @@ impl Follower {
                 status,
             } => {
                 if matches!(phase, MissionPhase::Sweep { .. }) && self.phase != Some(phase) {
-                    self.stops += 1;
+                    self.count_stop();
                 }
                 // Bounded: a device that never plans cannot grow it past a few minutes' worth.
                 if self.phases_to_explain.len() >= 4096 {
@@ -392,6 +420,7 @@ pub(super) fn follow(
     // has advanced by a period.
     let mut last_beat_mission_ms = 0u32;
     let mut last_heard = Instant::now();
+    let mut fault_notes = crate::cmd::mission_link::FaultNotes::from_env();
     loop {
         for t in std::mem::take(&mut remote.telemetry) {
             follower.absorb(t);
@@ -458,14 +487,19 @@ pub(super) fn follow(
         match frame {
             Ok(DeviceFrame::Telemetry(t)) => follower.absorb(t),
             Ok(DeviceFrame::Reply { .. }) => {} // a stale reply
-            Err(fault) => note(
-                bar,
-                &format!("twil: dropped a damaged frame from the device: {fault:?}"),
-            ),
+            Err(fault) => {
+                if let Some(line) = fault_notes.line(&fault) {
+                    note(bar, &line);
+                }
+            }
         }
         if last_draw.elapsed() >= Duration::from_millis(50) {
             last_draw = Instant::now();
-            bar.set_message(follower.status_line());
+            let link = crate::cmd::mission_link::LinkReport::of(remote, follower.telemetry_gaps);
+            bar.set_message(match link.words() {
+                Some(words) => format!("{}  {words}", follower.status_line()),
+                None => follower.status_line(),
+            });
         }
     }
 }

@@ -44,7 +44,7 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
         })
         .with_planning_radius_m(params.robot_radius_m);
     if let Err(e) = robot.validate() {
-        bail!("robot config: {e}");
+        bail!("{}", crate::cmd::robot_options::message(&e, &robot));
     }
     // The speed and the radius against what this robot (its sonar range) can be trusted
     // with, naming the .par's line.
@@ -139,8 +139,14 @@ pub(super) fn explain_bad_mission(args: &Args, error: &ErrorReply) -> String {
         return format!("the device refused the mission: {error}");
     }
     if error.detail == 1 {
+        // `value` is the field off the map: 2 start, 4 goal.
+        let which = match error.value {
+            2 => "the start",
+            4 => "the goal",
+            _ => "the start or the goal",
+        };
         return format!(
-            "the device refused the mission: the start or the goal of {} lies off its map",
+            "the device refused the mission: {which} of {} lies off its map",
             args.params.display()
         );
     }

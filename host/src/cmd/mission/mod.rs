@@ -319,13 +319,19 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
                 .min_clearance_m
                 .map_or("unknown (no --real)".to_string(), |c| format!("{c:.3} m"))
         );
-        println!(
-            "mcu: {} instructions per control step at most, {} per plan, {} B static RAM, {} B stack",
-            report.max_control_instructions,
-            report.max_plan_instructions,
-            info.static_ram_bytes,
-            report.stack_high_water_bytes
-        );
+        // The in-process device (`--remote sim`) measures nothing: no line of zeros.
+        if report::measured(&outcome) {
+            println!(
+                "mcu: {} instructions per control step at most, {} per plan, {} B static RAM, {} B stack",
+                report.max_control_instructions,
+                report.max_plan_instructions,
+                info.static_ram_bytes,
+                report.stack_high_water_bytes
+            );
+        }
+        if let Some(words) = outcome.link.words() {
+            println!("{words}");
+        }
         match report.stop_cause {
             StopCause::None => {}
             StopCause::SensorFault(sensor) => {
@@ -563,10 +569,11 @@ mod tests {
         assert!(explain_bad_mission(&a, &speed).contains("speed ("));
         let off = ErrorReply {
             code: ErrorCode::BadMission,
-            value: 0,
+            value: 4,
             limit: 0,
             detail: 1,
         };
+        assert!(explain_bad_mission(&a, &off).contains("the goal of"));
         assert!(explain_bad_mission(&a, &off).contains("lies off its map"));
     }
 }

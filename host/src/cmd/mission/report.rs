@@ -50,13 +50,28 @@ pub fn result_json(outcome: &Outcome) -> serde_json::Value {
         "sim_time_s": round3(s.time_s),
         "min_clearance_m": outcome.min_clearance_m.map(round3),
         "controller_overruns": s.controller_overruns,
-        "mcu": {
-            "max_control_instructions": outcome.report.max_control_instructions,
-            "max_plan_instructions": outcome.report.max_plan_instructions,
-            "static_ram_bytes": outcome.info.static_ram_bytes,
-            "stack_high_water_bytes": outcome.report.stack_high_water_bytes,
-        },
+        "mcu": mcu_json(outcome),
     })
+}
+
+/// The firmware's measurements, or `null` when the device is the in-process one
+/// (`--remote sim`), which measures nothing (its report carries zeros).
+fn mcu_json(outcome: &Outcome) -> serde_json::Value {
+    if !measured(outcome) {
+        return serde_json::Value::Null;
+    }
+    json!({
+        "max_control_instructions": outcome.report.max_control_instructions,
+        "max_plan_instructions": outcome.report.max_plan_instructions,
+        "static_ram_bytes": outcome.info.static_ram_bytes,
+        "stack_high_water_bytes": outcome.report.stack_high_water_bytes,
+    })
+}
+
+/// The device is the firmware (a board or QEMU), which measures instructions, stack and stop
+/// latency.
+pub(super) fn measured(outcome: &Outcome) -> bool {
+    outcome.info.build != twil_core::link::Build::Host
 }
 
 /// `summary.json`: the `--json` object plus details.
@@ -93,7 +108,7 @@ pub(super) fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value 
         "plan_errors": s.plan_errors,
         "poses_reported": outcome.poses,
         "stop_cause": stop_cause_name(outcome.report.stop_cause),
-        "stop_latency_us": outcome.report.stop_latency_us,
+        "stop_latency_us": measured(outcome).then_some(outcome.report.stop_latency_us),
         "interrupted": outcome.interrupted,
         "link": outcome.link.json(),
     });

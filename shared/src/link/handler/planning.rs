@@ -23,6 +23,13 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
         planner: &mut Planner<SCRATCH_WORDS, QUEUE>,
         clock: &mut impl FnMut() -> u64,
     ) -> Result<Reply, ErrorReply> {
+        // A NaN or infinite point is a bad argument (field 1 start, 2 goal of `Plan`), not a
+        // point off the map: refused before the planner runs, so the last plan's figures stay.
+        for (field, point) in [(1, start), (2, goal)] {
+            if !point.is_finite() {
+                return Err(ErrorReply::new(ErrorCode::BadArgument, field, 0));
+            }
+        }
         let before = clock();
         let result = planner.plan_at(kind, grid, start, goal);
         let after = clock();

@@ -525,6 +525,32 @@ fn plan_errors_and_results_are_replies() {
 }
 
 #[test]
+fn a_plan_from_or_to_a_non_finite_point_is_a_bad_argument_naming_the_field() {
+    // Not `OutOfBounds` (a status about a real point): the request itself is malformed.
+    let mut d = device();
+    let fine = PointM::new(1.0, 1.0);
+    for (field, start, goal) in [
+        (1, PointM::new(f32::NAN, 1.0), fine),
+        (2, fine, PointM::new(1.0, f32::INFINITY)),
+    ] {
+        let r = call(
+            &mut d,
+            1,
+            Request::Plan {
+                kind: PlannerKind::Bfs,
+                start,
+                goal,
+            },
+        );
+        assert_eq!(
+            r,
+            Reply::Error(ErrorReply::new(ErrorCode::BadArgument, field, 0)),
+            "field {field}"
+        );
+    }
+}
+
+#[test]
 fn a_plan_over_the_link_equals_the_planner_on_the_same_grid() {
     use crate::plan::SCRATCH_WORDS_300;
     let mut d = device();

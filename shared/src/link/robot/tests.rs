@@ -419,17 +419,24 @@ fn requests_in_the_wrong_state_are_refused_and_change_nothing() {
     assert_eq!(b.call(Request::SetParams(map)), Reply::Ack);
     // A goal off the map, a NaN speed, a speed above the safe bound: refused, naming the
     // field (and for the speed, the bound in mm/s).
-    let mut bad = setup(&params, MissionMode::Stop);
-    bad.goal = PointM::new(99.0, 1.0);
-    assert_eq!(
-        b.call(Request::SetMission(bad)),
-        Reply::Error(ErrorReply {
-            code: ErrorCode::BadMission,
-            value: 0,
-            limit: 0,
-            detail: 1
-        })
-    );
+    // Off the map: `value` names the field (2 start, 4 goal), `detail` 1.
+    for (field, start, goal) in [
+        (4, params.start, PointM::new(99.0, 1.0)),
+        (2, PointM::new(-1.0, 1.0), params.goal),
+    ] {
+        let mut bad = setup(&params, MissionMode::Stop);
+        bad.start = start;
+        bad.goal = goal;
+        assert_eq!(
+            b.call(Request::SetMission(bad)),
+            Reply::Error(ErrorReply {
+                code: ErrorCode::BadMission,
+                value: field,
+                limit: 0,
+                detail: 1
+            })
+        );
+    }
     let mut bad = setup(&params, MissionMode::Stop);
     bad.speed_m_s = f32::NAN;
     assert_eq!(
