@@ -336,7 +336,7 @@ fn bad_inputs_exit_1_naming_the_file_and_line() {
 
     let office = common::world("office.da");
     let err = simulate_fails(&office, &["--sonar-range", "9"]);
-    assert!(err.contains("sonar_range_m"), "{err}");
+    assert!(err.contains("--sonar-range 9: at most 6 m"), "{err}");
 
     let err = simulate_fails(&office, &["--size", "5x5"]);
     assert!(err.contains("goal") && err.contains("off"), "{err}");

@@ -22,7 +22,7 @@ use serde_reflection::{
 use super::message::{
     Build, DeviceFrame, ErrorCode, Reply, Request, RequestFrame, RunState, Telemetry,
 };
-use crate::failsafe::{LinkLossReaction, ResetCause, StopCause};
+use crate::failsafe::{LinkLossReaction, ResetCause, Sensor, StopCause};
 use crate::mission::{MissionMode, MissionPhase, MissionStatus, SettleRule, UnreachableReason};
 use crate::plan::{PlanStatus, PlannerKind};
 use crate::sonar::SweepLayout;
@@ -61,6 +61,7 @@ fn registry() -> Registry {
         PlanStatus,
         PlannerKind,
         RunState,
+        Sensor,
         SettleRule,
         StopCause,
         SweepLayout,
