@@ -323,16 +323,17 @@ impl Sensor {
     }
 }
 
-impl StopCause {
-    /// Words for messages.
-    pub fn describe(self) -> &'static str {
+/// Words for messages: a sensor fault names its sensor
+/// (`sensor fault: the sonar does not answer`).
+impl core::fmt::Display for StopCause {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            StopCause::None => "none",
-            StopCause::Host => "aborted by the host",
-            StopCause::EmergencyStop => "emergency stop",
-            StopCause::LinkLost => "link lost",
-            StopCause::ControllerOverrun => "controller overrun",
-            StopCause::SensorFault(_) => "sensor fault",
+            StopCause::None => f.write_str("none"),
+            StopCause::Host => f.write_str("aborted by the host"),
+            StopCause::EmergencyStop => f.write_str("emergency stop"),
+            StopCause::LinkLost => f.write_str("link lost"),
+            StopCause::ControllerOverrun => f.write_str("controller overrun"),
+            StopCause::SensorFault(sensor) => write!(f, "sensor fault: {}", sensor.describe()),
         }
     }
 }

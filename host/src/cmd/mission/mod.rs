@@ -332,12 +332,8 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         if let Some(words) = outcome.link.words() {
             println!("{words}");
         }
-        match report.stop_cause {
-            StopCause::None => {}
-            StopCause::SensorFault(sensor) => {
-                println!("stopped by the device: sensor fault: {}", sensor.describe())
-            }
-            cause => println!("stopped by the device: {}", cause.describe()),
+        if report.stop_cause != StopCause::None {
+            println!("stopped by the device: {}", report.stop_cause);
         }
         if let Some(dir) = &args.out {
             println!("wrote {}", dir.display());
