@@ -395,3 +395,47 @@ fn plans_come_back_after_the_stated_latency_and_missions_still_reach_the_goal() 
         assert_ne!(default.sim_time_s, at_once.sim_time_s, "{mode}");
     }
 }
+
+/// A start that puts the body over an obstacle gets one answer from the three commands that
+/// take a start (issue 26): `start_blocked`, exit 3, and for the missions nothing ran
+/// (before: `twil simulate` said `collision` after 0.00 m, `twil mission --remote sim` said
+/// `unreachable` and exited 4). A world of this test's own, not a bundled one.
+#[test]
+fn a_start_over_an_obstacle_gets_one_answer_from_plan_simulate_and_mission() {
+    let dir = std::env::temp_dir().join(format!("twil-start-blocked-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let da = dir.join("b.da");
+    let par = dir.join("b.par");
+    std::fs::write(&da, "1\n4\n1.0 1.0\n2.0 1.0\n2.0 2.0\n1.0 2.0\n").unwrap();
+    // The body (0.30 m) reaches 0.10 m over the block's left edge.
+    std::fs::write(&par, "0.4\n0.2\n90\n0.8 1.5\n4 4\n").unwrap();
+    let (da, par) = (da.to_str().unwrap(), par.to_str().unwrap());
+    let runs: [&[&str]; 3] = [
+        &["plan", "--world", da, "--params", par, "--json"],
+        &[
+            "simulate", "--real", da, "--params", par, "--size", "5x5", "--json",
+        ],
+        &[
+            "mission", "--remote", "sim", "--real", da, "--params", par, "--size", "5x5", "--json",
+        ],
+    ];
+    for argv in runs {
+        let out = common::twil().args(argv).output().expect("run twil");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let json: serde_json::Value =
+            serde_json::from_str(stdout.lines().last().unwrap_or("")).expect("one JSON line");
+        assert_eq!(json["status"], "start_blocked", "{argv:?}: {stdout}");
+        assert_eq!(out.status.code(), Some(3), "{argv:?}: {stdout}");
+    }
+    // The human line says why and that nothing ran.
+    let out = common::twil()
+        .args(["simulate", "--real", da, "--params", par, "--size", "5x5"])
+        .output()
+        .expect("run twil");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("start_blocked: the robot's body at the start (0.80, 1.50) overlaps an obstacle of b.da (clearance -0.100 m); nothing ran"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

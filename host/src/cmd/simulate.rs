@@ -359,6 +359,15 @@ impl sim::Progress for Bar {
 /// Run `twil simulate`.
 pub fn run(args: Args) -> Result<crate::exit::Ending> {
     let setup = setup_from_args(&args)?;
+    let robot = sim::mission_config(&setup).robot;
+    if let Some(blocked) = sim::start::start_blocked(&robot, setup.params.start, &setup.real) {
+        if args.json {
+            println!("{}", blocked.json());
+        } else {
+            println!("{}", blocked.words(&args.real));
+        }
+        return Ok(crate::exit::Ending::NoPath);
+    }
     let bar = if args.json || !std::io::stderr().is_terminal() {
         ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden())
     } else {

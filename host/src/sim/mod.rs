@@ -30,6 +30,7 @@
 pub mod output;
 pub mod pictures;
 pub mod reason;
+pub mod start;
 
 use std::ops::ControlFlow;
 

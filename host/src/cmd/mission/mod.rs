@@ -198,6 +198,17 @@ fn check_real(args: &Args, build: Build) -> Result<()> {
 /// Run `twil mission`.
 pub fn run(args: Args) -> Result<crate::exit::Ending> {
     let inputs = read_inputs(&args)?;
+    if let (Some(real), Some(path)) = (&inputs.real, &args.real) {
+        let start = inputs.params.start;
+        if let Some(blocked) = crate::sim::start::start_blocked(&inputs.robot, start, real) {
+            if args.json {
+                println!("{}", blocked.json());
+            } else {
+                println!("{}", blocked.words(path));
+            }
+            return Ok(crate::exit::Ending::NoPath);
+        }
+    }
     // A simulated device is known before connecting: refuse early.
     match args.remote {
         RemoteSpec::Sim(_) => check_real(&args, Build::Host)?,
@@ -308,7 +319,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         let s = &report.stats;
         println!(
             "{}: {:.2} m travelled in {:.1} s of mission time; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {}",
-            report.status.as_str(),
+            report::status_word(&outcome),
             outcome.distance_m,
             s.time_s,
             s.stops,
@@ -348,13 +359,10 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         );
         return Ok(crate::exit::Ending::Interrupted);
     }
-    // A contact with the real world (`--real`) is a collision whatever the device reports.
-    if outcome.min_clearance_m.is_some_and(|c| c < 0.0) {
-        return Ok(crate::exit::Ending::Collision);
-    }
-    Ok(crate::exit::Ending::of_mission_status(
-        report.status.as_str(),
-    ))
+    // One word and one status: a contact with the real world is a collision in both.
+    Ok(crate::exit::Ending::of_mission_status(report::status_word(
+        &outcome,
+    )))
 }
 
 /// Map, known obstacles, real world, mission setup.

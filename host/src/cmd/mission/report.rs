@@ -42,7 +42,7 @@ pub struct Outcome {
 pub fn result_json(outcome: &Outcome) -> serde_json::Value {
     let s = &outcome.report.stats;
     json!({
-        "status": outcome.report.status.as_str(),
+        "status": status_word(outcome),
         "stops": s.stops,
         "full_sweeps": s.full_sweeps,
         "replans": s.replans,
@@ -52,6 +52,16 @@ pub fn result_json(outcome: &Outcome) -> serde_json::Value {
         "controller_overruns": s.controller_overruns,
         "mcu": mcu_json(outcome),
     })
+}
+
+/// The mission's status word: the device's, except that a contact with the real world
+/// (`--real`) is a `collision` whatever the device reports, as the exit status says (4).
+pub fn status_word(outcome: &Outcome) -> &'static str {
+    if outcome.min_clearance_m.is_some_and(|c| c < 0.0) {
+        "collision"
+    } else {
+        outcome.report.status.as_str()
+    }
 }
 
 /// The firmware's measurements, or `null` when the device is the in-process one

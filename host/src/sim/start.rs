@@ -1,0 +1,108 @@
+//! A mission whose start puts the robot's body inside an obstacle of the real world gets the
+//! same answer from every command: `start_blocked`, exit status 3, as `twil plan` says of a
+//! start inside a grown obstacle (issue 26). Nothing runs: before this check `twil simulate`
+//! reported a `collision` after 0.00 m and `twil mission --remote sim` printed `unreachable`
+//! and exited 4.
+
+use std::path::Path;
+
+use serde_json::json;
+use twil_core::control::Pose;
+use twil_core::geom::PointM;
+use twil_core::plant::Plant;
+use twil_core::robot::RobotConfig;
+use twil_core::world::Obstacles;
+
+/// The body at the start, when it overlaps an obstacle of `real`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StartBlocked {
+    /// Where the centre is, metres.
+    pub start: PointM,
+    /// The body's clearance there, metres (negative: overlap; `None` when the centre is inside
+    /// a closed polygon, where the distance to its edges says nothing).
+    pub clearance_m: Option<f32>,
+}
+
+/// `Some` when the robot's body (its physical radius) at `start` touches or lies inside an
+/// obstacle of `real`.
+pub fn start_blocked(robot: &RobotConfig, start: PointM, real: &Obstacles) -> Option<StartBlocked> {
+    let plant = Plant::new(
+        robot,
+        Pose {
+            x_m: start.x_m,
+            y_m: start.y_m,
+            heading_rad: 0.0,
+        },
+    );
+    if plant.centre_inside(real) {
+        return Some(StartBlocked {
+            start,
+            clearance_m: None,
+        });
+    }
+    let clearance_m = plant.clearance_m(real);
+    (clearance_m < 0.0).then_some(StartBlocked {
+        start,
+        clearance_m: Some(clearance_m),
+    })
+}
+
+impl StartBlocked {
+    /// The summary line: the status word first, as every mission's line.
+    pub fn words(&self, real: &Path) -> String {
+        let name = real
+            .file_name()
+            .unwrap_or(real.as_os_str())
+            .to_string_lossy();
+        let how = match self.clearance_m {
+            Some(c) => format!("overlaps an obstacle of {name} (clearance {c:.3} m)"),
+            None => format!("is inside an obstacle of {name}"),
+        };
+        format!(
+            "start_blocked: the robot's body at the start ({:.2}, {:.2}) {how}; nothing ran",
+            self.start.x_m, self.start.y_m
+        )
+    }
+
+    /// The `--json` line.
+    pub fn json(&self) -> serde_json::Value {
+        json!({
+            "status": "start_blocked",
+            "distance_m": 0.0,
+            "min_clearance_m": self.clearance_m.map(|c| ((c as f64) * 1000.0).round() / 1000.0),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(x0: f32, y0: f32, side_m: f32) -> Obstacles {
+        let mut o = Obstacles::new();
+        o.push(&[
+            PointM::new(x0, y0),
+            PointM::new(x0 + side_m, y0),
+            PointM::new(x0 + side_m, y0 + side_m),
+            PointM::new(x0, y0 + side_m),
+        ])
+        .unwrap();
+        o
+    }
+
+    #[test]
+    fn a_body_in_or_over_an_obstacle_is_blocked_and_a_clear_one_is_not() {
+        let robot = RobotConfig::default(); // body radius 0.30 m
+        let block = square(1.0, 1.0, 1.0);
+        let inside = start_blocked(&robot, PointM::new(1.5, 1.5), &block).unwrap();
+        assert_eq!(inside.clearance_m, None);
+        assert!(inside
+            .words(Path::new("worlds/b.da"))
+            .starts_with("start_blocked: the robot's body at the start (1.50, 1.50) is inside an obstacle of b.da"));
+        let over = start_blocked(&robot, PointM::new(0.8, 1.5), &block).unwrap();
+        assert!((over.clearance_m.unwrap() + 0.1).abs() < 1e-4, "{over:?}");
+        assert_eq!(over.json()["status"], "start_blocked");
+        assert_eq!(over.json()["min_clearance_m"], -0.1);
+        assert_eq!(start_blocked(&robot, PointM::new(0.5, 1.5), &block), None);
+    }
+}
