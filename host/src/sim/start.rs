@@ -18,13 +18,14 @@ use twil_core::world::Obstacles;
 pub struct StartBlocked {
     /// Where the centre is, metres.
     pub start: PointM,
-    /// The body's clearance there, metres (negative: overlap; `None` when the centre is inside
-    /// a closed polygon, where the distance to its edges says nothing).
-    pub clearance_m: Option<f32>,
+    /// The body's clearance there, metres (negative: overlap).
+    pub clearance_m: f32,
 }
 
-/// `Some` when the robot's body (its physical radius) at `start` touches or lies inside an
-/// obstacle of `real`.
+/// `Some` when the robot's body (its physical radius) at `start` overlaps an edge of an
+/// obstacle of `real`. A polygon is its outline, as for `twil plan` and the simulator's
+/// collision test: a start inside a closed polygon is a robot in a room drawn as one polygon
+/// (docs/formats.md), not a blocked start.
 pub fn start_blocked(robot: &RobotConfig, start: PointM, real: &Obstacles) -> Option<StartBlocked> {
     let plant = Plant::new(
         robot,
@@ -34,17 +35,8 @@ pub fn start_blocked(robot: &RobotConfig, start: PointM, real: &Obstacles) -> Op
             heading_rad: 0.0,
         },
     );
-    if plant.centre_inside(real) {
-        return Some(StartBlocked {
-            start,
-            clearance_m: None,
-        });
-    }
     let clearance_m = plant.clearance_m(real);
-    (clearance_m < 0.0).then_some(StartBlocked {
-        start,
-        clearance_m: Some(clearance_m),
-    })
+    (clearance_m < 0.0).then_some(StartBlocked { start, clearance_m })
 }
 
 impl StartBlocked {
@@ -54,13 +46,10 @@ impl StartBlocked {
             .file_name()
             .unwrap_or(real.as_os_str())
             .to_string_lossy();
-        let how = match self.clearance_m {
-            Some(c) => format!("overlaps an obstacle of {name} (clearance {c:.3} m)"),
-            None => format!("is inside an obstacle of {name}"),
-        };
         format!(
-            "start_blocked: the robot's body at the start ({:.2}, {:.2}) {how}; nothing ran",
-            self.start.x_m, self.start.y_m
+            "start_blocked: the robot's body at the start ({:.2}, {:.2}) overlaps an obstacle of \
+             {name} (clearance {:.3} m); nothing ran",
+            self.start.x_m, self.start.y_m, self.clearance_m
         )
     }
 
@@ -69,7 +58,7 @@ impl StartBlocked {
         json!({
             "status": "start_blocked",
             "distance_m": 0.0,
-            "min_clearance_m": self.clearance_m.map(|c| ((c as f64) * 1000.0).round() / 1000.0),
+            "min_clearance_m": ((self.clearance_m as f64) * 1000.0).round() / 1000.0,
         })
     }
 }
@@ -91,16 +80,18 @@ mod tests {
     }
 
     #[test]
-    fn a_body_in_or_over_an_obstacle_is_blocked_and_a_clear_one_is_not() {
+    fn a_body_over_an_edge_is_blocked_and_one_inside_a_room_is_not() {
         let robot = RobotConfig::default(); // body radius 0.30 m
         let block = square(1.0, 1.0, 1.0);
-        let inside = start_blocked(&robot, PointM::new(1.5, 1.5), &block).unwrap();
-        assert_eq!(inside.clearance_m, None);
-        assert!(inside
-            .words(Path::new("worlds/b.da"))
-            .starts_with("start_blocked: the robot's body at the start (1.50, 1.50) is inside an obstacle of b.da"));
+        // Inside the outline, 0.5 m from every edge: a room drawn as one polygon.
+        assert_eq!(start_blocked(&robot, PointM::new(1.5, 1.5), &block), None);
         let over = start_blocked(&robot, PointM::new(0.8, 1.5), &block).unwrap();
-        assert!((over.clearance_m.unwrap() + 0.1).abs() < 1e-4, "{over:?}");
+        assert!((over.clearance_m + 0.1).abs() < 1e-4, "{over:?}");
+        assert_eq!(
+            over.words(Path::new("worlds/b.da")),
+            "start_blocked: the robot's body at the start (0.80, 1.50) overlaps an obstacle of \
+             b.da (clearance -0.100 m); nothing ran"
+        );
         assert_eq!(over.json()["status"], "start_blocked");
         assert_eq!(over.json()["min_clearance_m"], -0.1);
         assert_eq!(start_blocked(&robot, PointM::new(0.5, 1.5), &block), None);
