@@ -135,19 +135,23 @@ pub struct Remote {
 }
 
 impl Remote {
-    /// Open the link and do the version handshake.
+    /// Open the link and do the version handshake; a QEMU it starts counts instructions
+    /// (`-icount shift=0`).
     pub fn connect(spec: &RemoteSpec) -> Result<(Self, DeviceInfo)> {
-        let mut remote = Self::open(spec)?;
+        Self::connect_paced(spec, 0)
+    }
+
+    /// [`Remote::connect`]; a QEMU it starts runs at `-icount shift=SHIFT` (missions: 3).
+    pub fn connect_paced(spec: &RemoteSpec, shift: u8) -> Result<(Self, DeviceInfo)> {
+        let mut remote = Self::open_paced(spec, shift)?;
         let info = remote.hello()?;
         Ok((remote, info))
     }
 
-    /// Open the link without any exchange.
+    /// Open the link without any exchange; a QEMU it starts counts instructions
+    /// (`-icount shift=0`).
     pub fn open(spec: &RemoteSpec) -> Result<Self> {
-        Self::open_paced(
-            spec,
-            QEMU_ICOUNT_SHIFT.load(std::sync::atomic::Ordering::Relaxed),
-        )
+        Self::open_paced(spec, 0)
     }
 
     /// [`Remote::open`]; a QEMU it starts runs at `-icount shift=SHIFT`.
@@ -527,16 +531,6 @@ impl Remote {
     }
 }
 
-/// The `-icount shift` of the QEMU that `--remote qemu` starts: 0 (instruction counts) unless
-/// set with [`set_qemu_icount_shift`].
-static QEMU_ICOUNT_SHIFT: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
-
-/// Start QEMU at `-icount shift=SHIFT` from now on: 3 for missions (8 ns per instruction, no
-/// faster than the chip), 0 (the default) to count instructions.
-pub fn set_qemu_icount_shift(shift: u8) {
-    QEMU_ICOUNT_SHIFT.store(shift.min(10), std::sync::atomic::Ordering::Relaxed);
-}
-
 fn connect_tcp(addr: &str, patience: Duration) -> Result<TcpStream> {
     let deadline = Instant::now() + patience;
     loop {
@@ -608,13 +602,10 @@ impl Qemu {
     /// Start QEMU on `elf` and return it with the stream to its USART1. QEMU connects to a port
     /// this process listens on (port 0: the OS picks a free one, so parallel runs never clash).
     pub fn start(elf: &Path) -> Result<(Qemu, TcpStream)> {
-        Self::start_paced(
-            elf,
-            QEMU_ICOUNT_SHIFT.load(std::sync::atomic::Ordering::Relaxed),
-        )
+        Self::start_paced(elf, 0)
     }
 
-    /// [`Qemu::start`] at `-icount shift=SHIFT` (see [`set_qemu_icount_shift`]).
+    /// [`Qemu::start`] at `-icount shift=SHIFT` (one instruction per 2^SHIFT ns).
     pub fn start_paced(elf: &Path, shift: u8) -> Result<(Qemu, TcpStream)> {
         let listener =
             TcpListener::bind("127.0.0.1:0").context("cannot listen on a local TCP port")?;

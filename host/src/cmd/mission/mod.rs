@@ -155,6 +155,10 @@ pub fn heartbeat_period(timeout_ms: u32) -> Option<Duration> {
     (timeout_ms > 0).then(|| Duration::from_millis((timeout_ms / 4).min(500) as u64))
 }
 
+/// The `-icount shift` of a QEMU that `twil mission --remote qemu` starts: 8 ns per
+/// instruction (125 M instructions per second), no faster than the 168 MHz chip.
+pub const MISSION_QEMU_ICOUNT_SHIFT: u8 = 3;
+
 /// Set by the Ctrl-C handler while a mission runs; the main loop then aborts the mission.
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
@@ -217,8 +221,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     }
     // A QEMU started here runs at -icount shift=3: 8 ns per instruction, no faster than the
     // 168 MHz chip, so a control period met under QEMU is met on the board.
-    crate::remote::set_qemu_icount_shift(3);
-    let (mut remote, info) = Remote::connect(&args.remote)
+    let (mut remote, info) = Remote::connect_paced(&args.remote, MISSION_QEMU_ICOUNT_SHIFT)
         .with_context(|| format!("--remote {}", remote_name(&args.remote)))?;
     if info.protocol_version != PROTOCOL_VERSION {
         bail!(
