@@ -6,7 +6,8 @@
 //!
 //! ## Layers
 //!
-//! - [`geom`]: points in world metres and grid cells (two types, so they cannot be mixed up).
+//! - [`geom`]: points in world metres and grid cells (two types, so they cannot be mixed up),
+//!   the robot's pose and the length of a polyline.
 //! - [`grid`]: the bit-packed occupancy grid with a capacity fixed at compile time.
 //! - [`raster`]: Bresenham lines and obstacle expansion (marking with the robot's radius).
 //! - [`world`]: obstacle polygons and the seed's `.da` / `.par` text formats.

@@ -206,7 +206,7 @@ mod tests {
     extern crate std;
 
     use super::*;
-    use crate::control::Pose;
+    use crate::geom::Pose;
     use crate::geom::PointM;
     use crate::math::{cos, sin};
     use crate::mission::{MissionConfig, Pilot};

@@ -40,6 +40,20 @@ pub const PLANNING_MARGIN_M: f32 = 0.10;
 /// Most rays a simulated sonar cone may cast per reading.
 pub const MAX_CONE_RAYS: u8 = 31;
 
+/// Which neck positions a sweep reads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SweepLayout {
+    /// `2n + 1` readings from `−n` to `+n` steps: straight ahead and both ends read (105 for
+    /// ±95°, 201 for ±180°).
+    #[default]
+    Symmetric,
+    /// The seed's `sonar_rpc`: the neck goes `n` steps to one side and reads `2n` times,
+    /// stepping after each reading, so the last position (`+n`) is never read: 104 readings
+    /// from −93.6° to +91.8° for ±95°, 200 from −180° to +178.2° for ±180°.
+    Seed,
+}
+
 /// Every constant of the robot model. Units are in the field names.
 ///
 /// The pose of the robot is the midpoint of the wheel axle; the body is a disc of
@@ -103,7 +117,7 @@ pub struct RobotConfig {
     /// Time for one neck step, seconds (seed `TEMPO_MOV_PASSO_MOTOR_SONAR` 0.001).
     pub neck_step_time_s: f32,
     /// Which neck positions a sweep reads (symmetric `2n + 1`; the seed's `2n`).
-    pub sweep_layout: crate::sonar::SweepLayout,
+    pub sweep_layout: SweepLayout,
     /// Full angle of the simulated sonar beam, degrees (0: one ray).
     pub sonar_cone_deg: f32,
     /// Rays cast across the simulated beam (1 ..= [`MAX_CONE_RAYS`]).
@@ -171,7 +185,7 @@ impl RobotConfig {
         full_half_sweep_deg: 180.0,
         echo_wait_s: 0.035,
         neck_step_time_s: 0.001,
-        sweep_layout: crate::sonar::SweepLayout::Symmetric,
+        sweep_layout: SweepLayout::Symmetric,
         sonar_cone_deg: 0.0,
         sonar_cone_rays: 1,
         sonar_noise_std_m: 0.0,

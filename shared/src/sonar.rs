@@ -60,12 +60,15 @@
 use heapless::Vec;
 use serde::{Deserialize, Serialize};
 
-use crate::control::Pose;
+use crate::geom::Pose;
 use crate::geom::PointM;
 use crate::grid::Grid;
 use crate::math::{abs, cos, floor, sin};
 use crate::raster::mark_point_m;
 use crate::robot::{RobotConfig, SPEED_OF_SOUND_M_S};
+// The layout is part of the robot's configuration (`robot.rs`, which so need not import this
+// file: issue 27, no cycle between files); here too, where sweeps are planned.
+pub use crate::robot::SweepLayout;
 
 /// Readings of the widest sweep: 360° / 1.8° + 1 (both ±180° ends).
 pub const SWEEP_CAPACITY: usize = 201;
@@ -80,20 +83,6 @@ pub enum SweepKind {
     Normal,
     /// ±[`RobotConfig::full_half_sweep_deg`] (180°), a full look around.
     Full,
-}
-
-/// Which neck positions a sweep reads.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum SweepLayout {
-    /// `2n + 1` readings from `−n` to `+n` steps: straight ahead and both ends read (105 for
-    /// ±95°, 201 for ±180°).
-    #[default]
-    Symmetric,
-    /// The seed's `sonar_rpc`: the neck goes `n` steps to one side and reads `2n` times,
-    /// stepping after each reading, so the last position (`+n`) is never read: 104 readings
-    /// from −93.6° to +91.8° for ±95°, 200 from −180° to +178.2° for ±180°.
-    Seed,
 }
 
 /// Time of flight (out and back) of an echo from `range_m`, seconds, at 343.2 m/s.

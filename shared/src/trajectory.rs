@@ -52,7 +52,7 @@
 
 use heapless::Vec;
 
-use crate::geom::PointM;
+use crate::geom::{polyline_length_m, PointM};
 use crate::math::{abs, atan2, cos, hypot, sin, wrap_angle_rad};
 
 /// Largest number of points a supplied trajectory can hold (the mission's prefix capacity,
@@ -352,11 +352,7 @@ impl TrajectorySupplier {
     /// Total duration at cruise speed of the path, seconds, without turns (for progress
     /// estimates).
     pub fn cruise_time_s(&self) -> f32 {
-        let mut length_m = 0.0;
-        for w in self.points.windows(2) {
-            length_m += distance_m(w[0], w[1]);
-        }
-        length_m / self.config.speed_m_s
+        polyline_length_m(&self.points) / self.config.speed_m_s
     }
 
     /// Advance by `period_s` (the controller period) and return the reference for this period.
@@ -502,7 +498,8 @@ impl TrajectorySupplier {
 }
 
 /// Euclidean distance with [`hypot`] (segment lengths must be exact enough for the
-/// constant-speed profile; `PointM::distance_m` uses the fast estimate).
+/// constant-speed profile; the same sum as `PointM::distance_m`, which
+/// [`polyline_length_m`] adds up).
 fn distance_m(a: PointM, b: PointM) -> f32 {
     hypot(b.x_m - a.x_m, b.y_m - a.y_m)
 }
@@ -713,7 +710,7 @@ mod tests {
                 let config = SupplierConfig { speed_m_s: speed, settle_time_s: 0.5, ..SupplierConfig::default() };
                 let mut s = TrajectorySupplier::new();
                 s.start(&path, &FrameTransform::identity(), heading, &config).unwrap();
-                let length: f32 = path.windows(2).map(|w| distance_m(w[0], w[1])).sum();
+                let length = polyline_length_m(&path);
                 let turns = path.len() as f32 * core::f32::consts::PI / config.turn_rate_rad_s;
                 let max_ticks = ((length / speed + turns) / 0.05) as usize + path.len() * 2 + 20;
                 let mut ends = 0;

@@ -5,6 +5,7 @@ use std::process::Command;
 
 use anyhow::{bail, Context, Result};
 
+mod cycles;
 mod defmt_log;
 mod fuzz;
 
@@ -27,8 +28,8 @@ const ENVIRONMENT: &str = "Environment:
 
 #[derive(clap::Subcommand, Debug)]
 enum Task {
-    /// Install qemu-system-arm if missing, build the firmware, check fmt + clippy, run every
-    /// test (the CI entry point, `.ci/run`).
+    /// Install qemu-system-arm if missing, check import cycles, build the firmware, check fmt +
+    /// clippy, run every test (the CI entry point, `.ci/run`).
     Test,
     /// Build both firmware ELFs (hardware, and QEMU: twil-firmware-qemu) and print their sizes.
     Firmware,
@@ -42,6 +43,9 @@ enum Task {
     /// Instructions per plan on 300x300 grids (open, 20% random, maze) and of the worst marking
     /// requests (tests/firmware_requests.rs) under QEMU.
     McuBench,
+    /// Fail on an import cycle between the files of shared/, host/ or firmware/ (each printed
+    /// as a chain of files) beyond the allow-list in xtask/src/cycles.rs.
+    Cycles,
     /// Build the firmware's on-target tests (defmt-test) and run them under QEMU.
     OnTarget,
     /// Decode a saved QEMU log (TWIL_QEMU_LOG=FILE twil … --remote qemu).
@@ -86,6 +90,7 @@ fn main() -> Result<()> {
         Task::Qemu { port } => qemu(port.as_deref()),
         Task::McuBench => mcu_bench(),
         Task::OnTarget => on_target(),
+        Task::Cycles => cycles::check(&workspace_root()),
         Task::Fuzz { target, seconds } => {
             fuzz::fuzz(&workspace_root(), target.as_deref(), seconds.as_deref())
         }
@@ -497,6 +502,8 @@ fn run_on_target(elf: &Path) -> Result<()> {
 }
 
 fn test() -> Result<()> {
+    // Seconds, before anything is built.
+    cycles::check(&workspace_root())?;
     ensure_qemu()?;
     firmware()?;
     // The firmware's own tests, on the (emulated) chip.

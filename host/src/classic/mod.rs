@@ -195,10 +195,8 @@ impl Default for Options {
     }
 }
 
-/// Euclidean length of a polyline, metres.
-pub fn polyline_length_m(path: &[PointM]) -> f32 {
-    path.windows(2).map(|w| w[0].distance_m(w[1])).sum()
-}
+/// Euclidean length of a polyline, metres (the core's one sum).
+pub use twil_core::geom::polyline_length_m;
 
 /// Run `method` on `world` (which must come from `--world`: the classic methods work on its
 /// polygons). The grid planners go through `planning::plan`.

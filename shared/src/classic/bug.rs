@@ -43,7 +43,7 @@
 //!
 //! Measured (`twil plan --planner bug`, sonar 3 m, step 0.02 m): see `docs/classic.md`.
 
-use crate::control::Pose;
+use crate::geom::Pose;
 use crate::geom::PointM;
 use crate::math::{abs, atan2, cos, hypot, sin, wrap_angle_rad};
 

@@ -63,46 +63,10 @@ pub const OVERRUN_TOLERANCE_S: f32 = 0.0005;
 /// are limited to, so a wheel PID keeps some voltage headroom.
 pub const WHEEL_SPEED_HEADROOM: f32 = 0.9;
 
-/// Position and heading of the robot's axle midpoint in the world frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Pose {
-    /// Abscissa, metres.
-    pub x_m: f32,
-    /// Ordinate, metres.
-    pub y_m: f32,
-    /// Heading, radians counter-clockwise from +x, in `(-π, π]`.
-    pub heading_rad: f32,
-}
-
-impl Pose {
-    /// A pose; the heading is wrapped to `(-π, π]`.
-    pub fn new(x_m: f32, y_m: f32, heading_rad: f32) -> Self {
-        Self {
-            x_m,
-            y_m,
-            heading_rad: wrap_angle_rad(heading_rad),
-        }
-    }
-
-    /// The position as a point.
-    pub fn position(&self) -> PointM {
-        PointM::new(self.x_m, self.y_m)
-    }
-
-    /// The point `distance_m` ahead along the heading (the control point, the sonar).
-    pub fn point_ahead(&self, distance_m: f32) -> PointM {
-        PointM::new(
-            self.x_m + distance_m * cos(self.heading_rad),
-            self.y_m + distance_m * sin(self.heading_rad),
-        )
-    }
-
-    /// `true` when all three numbers are finite.
-    pub fn is_finite(&self) -> bool {
-        self.x_m.is_finite() && self.y_m.is_finite() && self.heading_rad.is_finite()
-    }
-}
+// Pose lives in `geom` (sonar and robot use it without depending on the controller: issue 27
+// removed the file cycle control -> robot -> sonar -> control); re-exported for the callers
+// that know it here.
+pub use crate::geom::Pose;
 
 /// Dead reckoning from wheel encoder count deltas (seed `dr()`).
 #[derive(Clone, Debug, PartialEq)]

@@ -27,8 +27,11 @@
 //! - a line with **no edge at all** is [`EchoOutcome::Silent`]: the module did not answer
 //!   (unplugged, unpowered, a broken echo wire). The body turns repeated silence into a sensor
 //!   fault rather than "no obstacle" ([`super::body`]).
+//!
+//! The sonar's window ([`SonarWindow`]) and the µs ↔ tick conversions are here too: the decoder
+//! sizes its listen time from them, and the ranger (`sonar_ranger.rs`) re-exports them.
 
-use super::sonar_ranger::{us_to_ticks, SonarWindow};
+use crate::robot::RobotConfig;
 
 /// Pulses (and dips inside a pulse) narrower than this are noise, µs.
 pub const MIN_ECHO_PULSE_US: u32 = 100;
@@ -42,6 +45,57 @@ pub const LISTEN_MARGIN_US: u32 = 10_000;
 
 /// Least time from one trigger to the next, µs (HC-SR04 data sheet: a cycle of at least 60 ms).
 pub const MIN_CYCLE_US: u32 = 60_000;
+
+/// Longest echo time-out accepted, µs (1 s: far beyond any sonar's range; keeps tick arithmetic
+/// in range and a bad config from stalling the reader for long).
+pub const MAX_ECHO_TIMEOUT_US: u32 = 1_000_000;
+
+/// The validity window and time-out of one sonar, from a [`RobotConfig`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SonarWindow {
+    /// Nearer echoes are no echo, metres.
+    pub min_range_m: f32,
+    /// Farther echoes are no echo, metres.
+    pub max_range_m: f32,
+    /// Time allowed for the echo (and the least time between two triggers), µs.
+    pub timeout_us: u32,
+}
+
+impl SonarWindow {
+    /// The window of `config`: `sonar_min_range_m` … `sonar_range_m`, time-out `echo_wait_s`
+    /// (clamped to 0 … [`MAX_ECHO_TIMEOUT_US`]; NaN gives 0).
+    pub fn from_config(config: &RobotConfig) -> Self {
+        let us = config.echo_wait_s * 1e6;
+        let timeout_us = if us.is_nan() || us <= 0.0 {
+            0
+        } else if us >= MAX_ECHO_TIMEOUT_US as f32 {
+            MAX_ECHO_TIMEOUT_US
+        } else {
+            us as u32
+        };
+        Self {
+            min_range_m: config.sonar_min_range_m,
+            max_range_m: config.sonar_range_m,
+            timeout_us,
+        }
+    }
+}
+
+/// `us` microseconds in ticks of `tick_hz`, saturating at `u32::MAX`.
+pub fn us_to_ticks(us: u32, tick_hz: u32) -> u32 {
+    let ticks = u64::from(us) * u64::from(tick_hz) / 1_000_000;
+    u32::try_from(ticks).unwrap_or(u32::MAX)
+}
+
+/// `ticks` of `tick_hz` in microseconds, rounded down, saturating; 0 Hz gives `u32::MAX`.
+pub fn ticks_to_us(ticks: u32, tick_hz: u32) -> u32 {
+    if tick_hz == 0 {
+        return u32::MAX;
+    }
+    let us = u64::from(ticks) * 1_000_000 / u64::from(tick_hz);
+    u32::try_from(us).unwrap_or(u32::MAX)
+}
 
 /// How long to listen for the echo after arming, µs: the window's time-out or the no-target
 /// pulse, whichever is longer, plus [`LISTEN_MARGIN_US`].

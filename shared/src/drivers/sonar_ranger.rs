@@ -30,20 +30,22 @@
 //! An async firmware task does the same with the pure parts: arm, pulse, feed the decoder with
 //! the capture's edges and `Mono::delay_until` its [`deadline_ticks`](super::echo::EchoDecoder::deadline_ticks),
 //! convert with [`range_from_echo_ticks`], sleep the rest of [`cycle_us`](super::echo::cycle_us).
+//!
+//! [`RobotConfig::sonar_min_range_m`]: crate::robot::RobotConfig::sonar_min_range_m
+//! [`RobotConfig::sonar_range_m`]: crate::robot::RobotConfig::sonar_range_m
+//! [`RobotConfig::echo_wait_s`]: crate::robot::RobotConfig::echo_wait_s
 
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::OutputPin;
 
 use super::echo::{cycle_us, EchoDecoder, EchoEdge, EchoOutcome};
-use crate::robot::RobotConfig;
+// The window and the tick conversions live in `echo.rs`, which needs them (so that echo.rs
+// does not import this file: issue 27, no cycle between files); here for their callers.
+pub use super::echo::{ticks_to_us, us_to_ticks, SonarWindow, MAX_ECHO_TIMEOUT_US};
 use crate::sonar::{time_of_flight_to_range_m, valid_range_m};
 
 /// Width of the trigger pulse, µs (HC-SR04-style rangers need at least 10 µs).
 pub const TRIGGER_PULSE_US: u32 = 10;
-
-/// Longest echo time-out accepted, µs (1 s: far beyond any sonar's range; keeps tick arithmetic
-/// in range and a bad config from stalling the reader for long).
-pub const MAX_ECHO_TIMEOUT_US: u32 = 1_000_000;
 
 /// Watches the echo line. Implemented on the board by a timer in input-capture mode on both
 /// edges (the pin's level read after each capture gives the polarity) or by an edge interrupt
@@ -61,38 +63,6 @@ pub trait EchoCapture {
     fn elapsed_ticks(&mut self) -> u32;
 }
 
-/// The validity window and time-out of one sonar, from a [`RobotConfig`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct SonarWindow {
-    /// Nearer echoes are no echo, metres.
-    pub min_range_m: f32,
-    /// Farther echoes are no echo, metres.
-    pub max_range_m: f32,
-    /// Time allowed for the echo (and the least time between two triggers), µs.
-    pub timeout_us: u32,
-}
-
-impl SonarWindow {
-    /// The window of `config`: `sonar_min_range_m` … `sonar_range_m`, time-out `echo_wait_s`
-    /// (clamped to 0 … [`MAX_ECHO_TIMEOUT_US`]; NaN gives 0).
-    pub fn from_config(config: &RobotConfig) -> Self {
-        let us = config.echo_wait_s * 1e6;
-        let timeout_us = if us.is_nan() || us <= 0.0 {
-            0
-        } else if us >= MAX_ECHO_TIMEOUT_US as f32 {
-            MAX_ECHO_TIMEOUT_US
-        } else {
-            us as u32
-        };
-        Self {
-            min_range_m: config.sonar_min_range_m,
-            max_range_m: config.sonar_range_m,
-            timeout_us,
-        }
-    }
-}
-
 /// What went wrong with a reading (an echo outside the window is not an error: it is `Ok(None)`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -104,21 +74,6 @@ pub enum SonarError {
         /// The reported rate, Hz.
         tick_hz: u32,
     },
-}
-
-/// `us` microseconds in ticks of `tick_hz`, saturating at `u32::MAX`.
-pub fn us_to_ticks(us: u32, tick_hz: u32) -> u32 {
-    let ticks = u64::from(us) * u64::from(tick_hz) / 1_000_000;
-    u32::try_from(ticks).unwrap_or(u32::MAX)
-}
-
-/// `ticks` of `tick_hz` in microseconds, rounded down, saturating; 0 Hz gives `u32::MAX`.
-pub fn ticks_to_us(ticks: u32, tick_hz: u32) -> u32 {
-    if tick_hz == 0 {
-        return u32::MAX;
-    }
-    let us = u64::from(ticks) * 1_000_000 / u64::from(tick_hz);
-    u32::try_from(us).unwrap_or(u32::MAX)
 }
 
 /// The window's time-out in ticks of `tick_hz`.
@@ -300,6 +255,7 @@ mod tests {
     use std::vec::Vec;
 
     use super::*;
+    use crate::robot::RobotConfig;
     use embedded_hal_mock::eh1::delay::{CheckedDelay, NoopDelay, Transaction as DelayTx};
     use embedded_hal_mock::eh1::digital::{
         Mock as PinMock, State as PinState, Transaction as PinTx,

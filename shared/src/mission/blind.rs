@@ -14,7 +14,7 @@
 //! (`worlds/corridor`, 3 m, beam sonar with the filter; `worlds/enclosed`, 1.5 m, continuous).
 //! The cut costs a few centimetres on prefixes that end sideways at the edge of what was read.
 
-use super::prefix::polyline_length_m;
+use crate::geom::polyline_length_m;
 use super::swept::Swept;
 use crate::control::Pose;
 use crate::geom::PointM;

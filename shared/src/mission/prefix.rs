@@ -14,7 +14,7 @@
 use heapless::Vec;
 
 use crate::control::Pose;
-use crate::geom::PointM;
+use crate::geom::{polyline_length_m, PointM};
 use crate::math::hypot;
 use crate::plan::{needs_full_sweep, prune_visible_prefix};
 use crate::sonar::{SweepKind, SweepPlan};
@@ -321,14 +321,6 @@ impl<const W: usize> Mission<W> {
         let r = &self.config.robot;
         (r.sonar_range_m - r.planning_radius_m).max(self.grid.geometry().resolution_m())
     }
-}
-
-/// Length of a polyline, metres.
-pub(super) fn polyline_length_m(points: &[PointM]) -> f32 {
-    points
-        .windows(2)
-        .map(|w| hypot(w[1].x_m - w[0].x_m, w[1].y_m - w[0].y_m))
-        .sum()
 }
 
 /// Replace the first `dropped` points of `path` by `first` (shifting the rest; when `dropped`

@@ -6,7 +6,7 @@ use std::boxed::Box;
 use std::vec::Vec as StdVec;
 
 use super::*;
-use crate::control::Pose;
+use crate::geom::Pose;
 use crate::grid::{words_for_cells, Grid, GridGeometry};
 use crate::link::frame::{encode, FrameDecoder, MAX_FRAME_BYTES};
 use crate::mission::{LocalRunner, Mission300, MissionMode, MissionPlanner300, Pilot};
