@@ -5,10 +5,12 @@
 //!
 //! The device runs as fast as it can in simulated time (50 ms per tick; `sim:N` paces it at N
 //! times real time, to watch the live display or try Ctrl-C): it answers requests
-//! between ticks and sends the telemetry it pulls with [`RobotDevice::next_telemetry`]. The
+//! between ticks and sends the telemetry it pulls with [`RobotLink::next_telemetry`]. The
 //! pipe towards the host is bounded ([`PIPE_CHUNKS`] writes), so a fast device waits for a slow
 //! reader rather than filling memory. It reports [`Build::Host`]. The thread ends when the host
 //! drops its end of the link.
+//!
+//! [`RobotLink::next_telemetry`]: twil_core::link::RobotLink::next_telemetry
 
 use std::collections::VecDeque;
 use std::io::{Read, Write};

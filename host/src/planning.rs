@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::bail;
+use anyhow::{bail, Context};
 use serde::Serialize;
 use twil_core::geom::PointM;
 use twil_core::grid::{Grid400, GridGeometry};
@@ -118,7 +118,7 @@ pub fn geometry_for(size: SizeM, resolution_m: f32) -> anyhow::Result<GridGeomet
         return Err(too_big());
     }
     let g = GridGeometry::from_size_m(size.width_m, size.height_m, resolution_m)
-        .map_err(|e| anyhow::anyhow!("{what}: {e}"))?;
+        .with_context(|| what.clone())?;
     if g.cell_count() > HOST_CELLS || Grid400::new(g).is_err() {
         return Err(too_big());
     }
@@ -149,7 +149,7 @@ pub fn load_world(files: &WorldFiles) -> anyhow::Result<World> {
     let empty = || {
         Grid400::new(geometry)
             .map(Box::new)
-            .map_err(|e| anyhow::anyhow!("{e}"))
+            .map_err(anyhow::Error::from)
     };
     let mut grid = empty()?;
     let mut raw = empty()?;

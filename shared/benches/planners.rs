@@ -7,6 +7,9 @@
 //! (interleaved), the ratios, the costs (which must be identical; the bench exits non-zero otherwise) and the
 //! cells we expanded. Any-angle is timed too (ours only: pathfinding has none).
 
+// A benchmark (a program, not the core) stops at the first surprise.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 

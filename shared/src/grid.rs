@@ -99,6 +99,8 @@ impl core::fmt::Display for GridError {
     }
 }
 
+impl core::error::Error for GridError {}
+
 /// Size and resolution of a grid, and the transforms between world metres and cells.
 ///
 /// The world origin is the lower-left corner of cell (0, 0); cell (x, y) covers

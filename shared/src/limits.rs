@@ -167,6 +167,8 @@ impl core::fmt::Display for LimitError {
     }
 }
 
+impl core::error::Error for LimitError {}
+
 /// Check a cruise speed: above 0 and at most [`RobotConfig::max_safe_speed_m_s`].
 pub fn check_speed_m_s(robot: &RobotConfig, speed_m_s: f32) -> Result<(), LimitError> {
     let max = robot.max_safe_speed_m_s();
@@ -206,8 +208,8 @@ mod tests {
     extern crate std;
 
     use super::*;
-    use crate::geom::Pose;
     use crate::geom::PointM;
+    use crate::geom::Pose;
     use crate::math::{cos, sin};
     use crate::mission::{MissionConfig, Pilot};
     use crate::plant::Plant;

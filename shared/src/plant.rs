@@ -38,8 +38,8 @@
 //! assert!((plant.clearance_m(&walls) - (2.0 - 0.30)).abs() < 1e-4);
 //! ```
 
-use crate::geom::Pose;
 use crate::geom::PointM;
+use crate::geom::Pose;
 use crate::math::{abs, cos, exp, floor, hypot, sin, wrap_angle_rad};
 use crate::robot::{RobotConfig, MAX_CONE_RAYS};
 use crate::sonar::{Reading, SweepBuffer, SweepPlan};

@@ -223,6 +223,8 @@ impl fmt::Display for ConfigError {
     }
 }
 
+impl core::error::Error for ConfigError {}
+
 fn check(
     field: &'static str,
     value: f32,

@@ -60,8 +60,8 @@
 use heapless::Vec;
 use serde::{Deserialize, Serialize};
 
-use crate::geom::Pose;
 use crate::geom::PointM;
+use crate::geom::Pose;
 use crate::grid::Grid;
 use crate::math::{abs, cos, floor, sin};
 use crate::raster::mark_point_m;
@@ -276,6 +276,8 @@ impl core::fmt::Display for SweepFull {
         write!(f, "sweep buffer full ({SWEEP_CAPACITY} readings)")
     }
 }
+
+impl core::error::Error for SweepFull {}
 
 /// The readings of one sweep, in angle order, at most [`SWEEP_CAPACITY`].
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -170,6 +170,25 @@ pub enum TrajectoryError {
     NotFinite,
 }
 
+impl core::fmt::Display for TrajectoryError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            TrajectoryError::Empty => write!(f, "the trajectory has no points"),
+            TrajectoryError::TooLong { points } => write!(
+                f,
+                "the trajectory has {points} points, more than {MAX_TRAJECTORY_POINTS}"
+            ),
+            TrajectoryError::NotFinite => write!(
+                f,
+                "a point or a configuration value is not a finite number, or a speed/rate is \
+                 not positive"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for TrajectoryError {}
+
 /// A one-off event of the supplier.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -98,6 +98,8 @@ impl fmt::Display for ParseError {
     }
 }
 
+impl core::error::Error for ParseError {}
+
 /// A whitespace tokenizer that knows the line of each token.
 #[derive(Clone, Debug)]
 pub struct Tokens<'a> {
@@ -339,6 +341,23 @@ pub enum PolygonSetError {
     /// A polygon needs at least one vertex.
     Empty,
 }
+
+impl core::fmt::Display for PolygonSetError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            PolygonSetError::TooManyPolygons { capacity } => {
+                write!(f, "no room for another polygon (capacity {capacity})")
+            }
+            PolygonSetError::TooManyVertices { capacity_left } => write!(
+                f,
+                "no room for the vertices ({capacity_left} vertices left)"
+            ),
+            PolygonSetError::Empty => write!(f, "a polygon needs at least one vertex"),
+        }
+    }
+}
+
+impl core::error::Error for PolygonSetError {}
 
 impl<const V: usize, const P: usize> PolygonSet<V, P> {
     /// An empty set.

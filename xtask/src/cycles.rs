@@ -32,7 +32,10 @@ pub const ALLOWED: &[(&[&str], &str)] = &[
          PlannerArg; one arguments module ends it",
     ),
     (
-        &["host/src/cmd/mission/mod.rs", "host/src/cmd/mission_link.rs"],
+        &[
+            "host/src/cmd/mission/mod.rs",
+            "host/src/cmd/mission_link.rs",
+        ],
         "issue 27 item 1: the mission command and its link loop share Args both ways",
     ),
 ];
@@ -58,7 +61,8 @@ fn rust_files(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
-        for entry in std::fs::read_dir(&d).with_context(|| format!("cannot read {}", d.display()))?
+        for entry in
+            std::fs::read_dir(&d).with_context(|| format!("cannot read {}", d.display()))?
         {
             let path = entry?.path();
             if path.is_dir() {
@@ -100,7 +104,10 @@ fn tokens(src: &str) -> Vec<String> {
                     i += 1;
                 }
             }
-        } else if c == b'r' && matches!(b.get(i + 1), Some(b'"' | b'#')) && raw_string_end(b, i).is_some() {
+        } else if c == b'r'
+            && matches!(b.get(i + 1), Some(b'"' | b'#'))
+            && raw_string_end(b, i).is_some()
+        {
             i = raw_string_end(b, i).unwrap_or(b.len());
         } else if c == b'"' {
             i += 1;
@@ -118,7 +125,11 @@ fn tokens(src: &str) -> Vec<String> {
                 i += 1;
             } else {
                 let len = src[i + 1..].chars().next().map_or(1, char::len_utf8);
-                i += if b.get(i + 1 + len) == Some(&b'\'') { len + 2 } else { 1 };
+                i += if b.get(i + 1 + len) == Some(&b'\'') {
+                    len + 2
+                } else {
+                    1
+                };
             }
         } else if c.is_ascii_alphabetic() || c == b'_' {
             let start = i;
@@ -155,7 +166,13 @@ fn raw_string_end(b: &[u8], i: usize) -> Option<usize> {
     }
     j += 1;
     while j < b.len() {
-        if b[j] == b'"' && b[j + 1..].iter().take(hashes).filter(|&&h| h == b'#').count() == hashes
+        if b[j] == b'"'
+            && b[j + 1..]
+                .iter()
+                .take(hashes)
+                .filter(|&&h| h == b'#')
+                .count()
+                == hashes
         {
             return Some(j + 1 + hashes);
         }
@@ -197,7 +214,7 @@ fn paths(tokens: &[String]) -> Vec<(usize, Vec<String>)> {
                 let end = (i..tokens.len())
                     .find(|&j| tokens[j] == ";")
                     .unwrap_or(tokens.len());
-                expand_use(&tokens[i + 1..end], &mut Vec::new(), &mut |p| {
+                expand_use(&tokens[i + 1..end], &[], &mut |p| {
                     out.push((inline.len(), p))
                 });
                 i = end + 1;
@@ -264,11 +281,13 @@ fn test_modules(tokens: &[String]) -> Vec<String> {
 }
 
 fn is_ident(s: &str) -> bool {
-    s.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+    s.chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
 }
 
 /// Call `f` with each full path of the `use` tree `tree` under `prefix`.
-fn expand_use(tree: &[String], prefix: &mut Vec<String>, f: &mut dyn FnMut(Vec<String>)) {
+fn expand_use(tree: &[String], prefix: &[String], f: &mut dyn FnMut(Vec<String>)) {
     // Split at top-level commas.
     let mut depth = 0;
     let mut start = 0;
@@ -286,14 +305,15 @@ fn expand_use(tree: &[String], prefix: &mut Vec<String>, f: &mut dyn FnMut(Vec<S
     }
     items.push(&tree[start..]);
     for item in items {
-        let mut p = prefix.clone();
+        let mut p = prefix.to_vec();
         let mut k = 0;
         while k < item.len() {
             match item[k].as_str() {
                 "::" => {}
                 "{" => {
-                    let close = item.len() - 1 - item.iter().rev().position(|t| t == "}").unwrap_or(0);
-                    expand_use(&item[k + 1..close], &mut p, f);
+                    let close =
+                        item.len() - 1 - item.iter().rev().position(|t| t == "}").unwrap_or(0);
+                    expand_use(&item[k + 1..close], &p, f);
                     p.clear();
                     break;
                 }
@@ -520,9 +540,12 @@ pub fn check(root: &Path) -> Result<()> {
     let found = find(root)?;
     let mut errors = Vec::new();
     for (component, chain) in &found {
-        let allowed = ALLOWED
-            .iter()
-            .any(|(files, _)| files.iter().copied().eq(component.iter().map(String::as_str)));
+        let allowed = ALLOWED.iter().any(|(files, _)| {
+            files
+                .iter()
+                .copied()
+                .eq(component.iter().map(String::as_str))
+        });
         if allowed {
             eprintln!("xtask cycles: allowed for now: {chain}");
         } else {
@@ -589,7 +612,10 @@ mod tests {
         let facade = graph_of(&[
             ("lib.rs", "mod p;"),
             ("p/mod.rs", "mod k; pub use k::K; pub struct E;"),
-            ("p/k.rs", "use super::E; /* crate::p::k */ const S: &str = \"crate::x\";"),
+            (
+                "p/k.rs",
+                "use super::E; /* crate::p::k */ const S: &str = \"crate::x\";",
+            ),
         ]);
         assert!(cycles(&facade).is_empty(), "{facade:?}");
         // Siblings through `super::`: a cycle.
@@ -612,7 +638,10 @@ mod tests {
                 "pub fn f() {} #[cfg(test)] mod tests { use super::*; use super::super::E; }",
             ),
         ]);
-        assert_eq!(g["src/p/k.rs"], BTreeSet::from(["src/p/mod.rs".to_string()]));
+        assert_eq!(
+            g["src/p/k.rs"],
+            BTreeSet::from(["src/p/mod.rs".to_string()])
+        );
         assert!(g["src/lib.rs"].is_empty());
     }
 
@@ -620,9 +649,15 @@ mod tests {
     fn tests_may_use_anything() {
         let g = graph_of(&[
             ("lib.rs", "mod a; mod b;"),
-            ("a.rs", "use crate::b::B; pub struct A; #[cfg(test)] mod tests;"),
+            (
+                "a.rs",
+                "use crate::b::B; pub struct A; #[cfg(test)] mod tests;",
+            ),
             ("a/tests.rs", "use crate::b::uses_a;"),
-            ("b.rs", "pub struct B; #[cfg(test)] mod tests { use crate::a::A; }"),
+            (
+                "b.rs",
+                "pub struct B; #[cfg(test)] mod tests { use crate::a::A; }",
+            ),
         ]);
         assert!(cycles(&g).is_empty(), "{g:?}");
         assert_eq!(g["src/a.rs"], BTreeSet::from(["src/b.rs".to_string()]));

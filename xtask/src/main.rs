@@ -29,7 +29,7 @@ const ENVIRONMENT: &str = "Environment:
 #[derive(clap::Subcommand, Debug)]
 enum Task {
     /// Install qemu-system-arm if missing, check import cycles, build the firmware, check fmt +
-    /// clippy, run every test (the CI entry point, `.ci/run`).
+    /// clippy + `cargo doc` (warnings as errors), run every test (the CI entry point, `.ci/run`).
     Test,
     /// Build both firmware ELFs (hardware, and QEMU: twil-firmware-qemu) and print their sizes.
     Firmware,
@@ -509,11 +509,22 @@ fn test() -> Result<()> {
     // The firmware's own tests, on the (emulated) chip.
     run_on_target(&build_on_target()?)?;
     lint()?;
+    doc()?;
     // The 5 M instruction budget per 300 x 300 plan is a test too (about a minute of QEMU).
     run_mcu_bench()?;
     // Last, so that the run ends with cargo test's own summary.
     let mut c = cargo();
     c.args(["test", "--release"]).args(HOST_PACKAGES);
+    run(c)
+}
+
+/// The API documentation of the host crates with warnings as errors: a broken or private
+/// intra-doc link fails the run (issue 27, item 5).
+fn doc() -> Result<()> {
+    let mut c = cargo();
+    c.args(["doc", "--no-deps"])
+        .args(HOST_PACKAGES)
+        .env("RUSTDOCFLAGS", "-D warnings");
     run(c)
 }
 

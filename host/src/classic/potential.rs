@@ -6,6 +6,7 @@
 //! Memory: the distance transform (site 4 bytes, distance 2 bytes a cell) and the path buffer
 //! (4 bytes a cell); the field itself is never stored.
 
+use anyhow::Context;
 use twil_core::classic::potential::{self, DescentStatus, PlanStatusCode, PotentialParams};
 
 use super::voronoi::cells_to_path;
@@ -33,7 +34,7 @@ pub fn run(world: &World) -> anyhow::Result<Run> {
         &mut dist,
         &mut path,
     )
-    .map_err(|e| anyhow::anyhow!("planner potential: {e:?}"))?;
+    .context("planner potential")?;
     let status = match report.status {
         DescentStatus::Reached => Status::Found,
         DescentStatus::LocalMinimum => Status::LocalMinimum,

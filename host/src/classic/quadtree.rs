@@ -9,6 +9,7 @@
 //! every cell, a cost and a parent per leaf, the heap) is `scratch_bytes`. Measured on the
 //! bundled worlds: see `docs/classic.md`.
 
+use anyhow::Context;
 use twil_core::classic::quadtree::{self, Leaf, LeafKind, QuadBuffers};
 use twil_core::geom::PointM;
 
@@ -44,7 +45,7 @@ pub fn run(world: &World) -> anyhow::Result<Run> {
             path: &mut path,
         },
     )
-    .map_err(|e| anyhow::anyhow!("planner quadtree: {e:?}"))?;
+    .context("planner quadtree")?;
     let leaves = &leaves[..report.leaves];
     let res = g.resolution_m();
     let half_m = res / 2.0;

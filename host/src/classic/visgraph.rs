@@ -12,7 +12,7 @@
 
 use std::time::Instant;
 
-use anyhow::anyhow;
+use anyhow::Context;
 use twil_core::classic::grown::{scratch_len, Grown};
 use twil_core::classic::visgraph::{VisGraph, MAX_NODES};
 use twil_core::geom::PointM;
@@ -48,7 +48,7 @@ pub fn grow(world: &World) -> anyhow::Result<Box<HostGrown>> {
         &mut scratch,
     )
     .map(Box::new)
-    .map_err(|e| anyhow!("growing the obstacles by the robot radius: {e:?}"))
+    .context("growing the obstacles by the robot radius")
 }
 
 /// The status of a core [`twil_core::plan::PlanStatus`] as a classic [`Status`].
@@ -71,7 +71,7 @@ pub fn run(world: &World) -> anyhow::Result<Run> {
     let mut path = Box::new(heapless::Vec::<PointM, MAX_NODES>::new());
     let report = graph
         .plan(&grown, world.params.start, world.params.goal, &mut path)
-        .map_err(|e| anyhow!("visibility graph: {e:?}"))?;
+        .context("visibility graph")?;
     let elapsed_us = t0.elapsed().as_micros() as u64;
 
     let mut overlay = Overlay::default();

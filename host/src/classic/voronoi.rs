@@ -8,6 +8,7 @@
 //! entry per [`HEAP_ENTRIES_PER_CELL`]-th cell. Measured on the bundled worlds: see
 //! `docs/classic.md`.
 
+use anyhow::Context;
 use twil_core::classic::distance::DIST_PER_CELL;
 use twil_core::classic::voronoi::{self, VoronoiBuffers, CONNECTOR, RIDGE};
 use twil_core::geom::PointM;
@@ -92,7 +93,7 @@ pub fn run(world: &World) -> anyhow::Result<Run> {
             path: &mut path,
         },
     )
-    .map_err(|e| anyhow::anyhow!("planner voronoi: {e:?}"))?;
+    .context("planner voronoi")?;
     let mut run = Run::empty(Method::Voronoi, status_of(report.status), "cells");
     if report.status == twil_core::plan::PlanStatus::Found {
         run.path = cells_to_path(world, &path[..report.path_cells]);

@@ -5,7 +5,7 @@
 //!
 //! - `Finished` (the final report): when the device has been quiet for [`POLL_AFTER`], the
 //!   host asks `MissionStatus`; a report with state `Ended` is the final report
-//!   ([`recover_final_report`]). The mission's result (status, stops, distance by odometry,
+//!   (`recover_final_report`). The mission's result (status, stops, distance by odometry,
 //!   plans…) is the device's own report, whole, whatever telemetry was lost.
 //! - `Pose`, `SweepHits`, `Prefix`, `Path`: what the host draws and writes (trajectory,
 //!   pictures, the map rebuilt from the hits) misses the lost chunks. The host does not pretend

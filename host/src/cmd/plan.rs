@@ -4,7 +4,8 @@
 //!
 //! 1. [`load`] reads the files and builds the map: the `.da` polygons grown by the `.par` robot
 //!    radius (`GridGeometry::expansion_cells` + `raster::mark_polygon`, seed `marca_linha`), and/or
-//!    a saved map (already grown, see [`crate::world_io`]), on a [`Grid400`].
+//!    a saved map (already grown, see [`crate::world_io`]), on a
+//!    [`Grid400`](twil_core::grid::Grid400).
 //! 2. [`plan`] runs one planner of `twil_core::plan` and times it.
 //! 3. [`plan_json`] builds the JSON object; [`render_png`] draws the picture.
 //!

@@ -101,8 +101,8 @@ fn grid_of(grid: &Grid) -> Result<Box<Grid400>> {
     }
     let height = grid.data.len() / stride;
     let geometry = GridGeometry::new(width as u32, height as u32, resolution_m)
-        .map_err(|e| anyhow!("/map: {width}x{height} cells of {resolution_m} m: {e}"))?;
-    let mut map = Box::new(Grid400::new(geometry).map_err(|e| anyhow!("/map: {e}"))?);
+        .with_context(|| format!("/map: {width}x{height} cells of {resolution_m} m"))?;
+    let mut map = Box::new(Grid400::new(geometry).context("/map")?);
     for y in 0..height {
         for x in 0..width {
             if grid.data.get(y * stride + x) == Some(&OCCUPIED_VALUE) {

@@ -295,7 +295,7 @@ impl Remote {
         let seq = self.seq;
         let mut out = [0u8; MAX_FRAME_BYTES];
         let bytes = frame::encode(&RequestFrame { seq, request }, &mut out)
-            .map_err(|e| anyhow!("request does not fit a frame: {e:?}"))?;
+            .context("request does not fit a frame")?;
         // A leading 0x00 ends whatever partial frame the device may hold.
         let mut wire = Vec::with_capacity(bytes.len() + 1);
         wire.push(0);
@@ -763,7 +763,7 @@ pub fn plan_like_the_mcu(
                 let started = Instant::now();
                 let report = planner
                     .plan(kind, grid, start, goal, &mut path)
-                    .map_err(|e| anyhow!("the firmware's planner on the host: {e:?}"))?;
+                    .context("the firmware's planner on the host")?;
                 Ok(crate::planning::Outcome {
                     kind,
                     report,

@@ -34,7 +34,7 @@ pub mod start;
 
 use std::ops::ControlFlow;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use twil_core::control::Pose;
 use twil_core::geom::PointM;
 use twil_core::grid::{Grid400, GridGeometry};
@@ -362,9 +362,7 @@ fn run_on_this_thread(
 ) -> Result<SimResult> {
     let config = mission_config(setup);
     let robot = config.robot;
-    let mut mission = Box::new(
-        Mission400::new(config, setup.geometry).map_err(|e| anyhow::anyhow!("mission: {e}"))?,
-    );
+    let mut mission = Box::new(Mission400::new(config, setup.geometry).context("mission")?);
     if let Some(known) = &setup.known {
         for polygon in known.iter() {
             mission.add_known_polygon(polygon);

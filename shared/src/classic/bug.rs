@@ -43,8 +43,8 @@
 //!
 //! Measured (`twil plan --planner bug`, sonar 3 m, step 0.02 m): see `docs/classic.md`.
 
-use crate::geom::Pose;
 use crate::geom::PointM;
+use crate::geom::Pose;
 use crate::math::{abs, atan2, cos, hypot, sin, wrap_angle_rad};
 
 /// Sonar bearings read every step, degrees relative to the heading (the neck turns ±180°).

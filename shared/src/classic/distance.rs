@@ -46,6 +46,22 @@ pub enum DistanceError {
     TooManyComponents,
 }
 
+impl core::fmt::Display for DistanceError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            DistanceError::BufferTooSmall { needed, given } => write!(
+                f,
+                "a per-cell buffer holds {given} entries, the grid needs {needed}"
+            ),
+            DistanceError::TooManyComponents => {
+                write!(f, "more obstacle components than a u16 label can name")
+            }
+        }
+    }
+}
+
+impl core::error::Error for DistanceError {}
+
 /// Check that a per-cell buffer of `given` entries fits `geometry`.
 pub fn check_len(geometry: &GridGeometry, given: usize) -> Result<(), DistanceError> {
     let needed = geometry.cell_count();

@@ -122,6 +122,24 @@ pub enum GrowError {
     NotFinite,
 }
 
+impl core::fmt::Display for GrowError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            GrowError::ScratchTooSmall { needed, given } => write!(
+                f,
+                "the scratch buffer holds {given} points, the largest polygon needs {needed}"
+            ),
+            GrowError::Capacity(e) => write!(f, "the grown polygons: {e}"),
+            GrowError::NotFinite => write!(
+                f,
+                "the radius is negative or not a number, or a coordinate is not finite"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for GrowError {}
+
 /// Scratch points [`Grown::build`] needs for polygons of up to `n` vertices.
 pub const fn scratch_len(n: usize) -> usize {
     12 * n + 2

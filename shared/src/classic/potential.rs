@@ -84,6 +84,22 @@ pub enum PotentialError {
     PathTooLong,
 }
 
+impl core::fmt::Display for PotentialError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            PotentialError::Distance(e) => write!(f, "{e}"),
+            PotentialError::GeometryMismatch => {
+                write!(f, "the grid and the raw map have different geometries")
+            }
+            PotentialError::PathTooLong => {
+                write!(f, "the descent has more steps than the path buffer holds")
+            }
+        }
+    }
+}
+
+impl core::error::Error for PotentialError {}
+
 impl From<DistanceError> for PotentialError {
     fn from(e: DistanceError) -> Self {
         PotentialError::Distance(e)

@@ -85,6 +85,30 @@ pub enum QuadError {
     PathTooLong,
 }
 
+impl core::fmt::Display for QuadError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            QuadError::LeavesFull { capacity } => {
+                write!(f, "the leaf pool is full ({capacity} leaves)")
+            }
+            QuadError::HeapFull { capacity } => {
+                write!(
+                    f,
+                    "the search's priority queue is full ({capacity} entries)"
+                )
+            }
+            QuadError::BufferTooShort => write!(
+                f,
+                "the owner buffer is not one entry per map cell, or the cost/parent buffers are \
+                 shorter than the leaves"
+            ),
+            QuadError::PathTooLong => write!(f, "the path does not fit the path buffer"),
+        }
+    }
+}
+
+impl core::error::Error for QuadError {}
+
 /// The caller's buffers.
 #[derive(Debug)]
 pub struct QuadBuffers<'a> {

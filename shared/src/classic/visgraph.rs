@@ -46,6 +46,18 @@ pub enum VisError {
     },
 }
 
+impl core::fmt::Display for VisError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            VisError::TooManyNodes { capacity } => {
+                write!(f, "more free vertices than the graph's {capacity} nodes")
+            }
+        }
+    }
+}
+
+impl core::error::Error for VisError {}
+
 /// What a search did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VisReport {

@@ -73,6 +73,23 @@ pub enum VoronoiError {
     GeometryMismatch,
 }
 
+impl core::fmt::Display for VoronoiError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            VoronoiError::Distance(e) => write!(f, "{e}"),
+            VoronoiError::HeapFull { capacity } => {
+                write!(f, "the priority queue is full ({capacity} entries)")
+            }
+            VoronoiError::PathTooLong => write!(f, "the path does not fit the path buffer"),
+            VoronoiError::GeometryMismatch => {
+                write!(f, "the grid and the raw map have different geometries")
+            }
+        }
+    }
+}
+
+impl core::error::Error for VoronoiError {}
+
 impl From<DistanceError> for VoronoiError {
     fn from(e: DistanceError) -> Self {
         VoronoiError::Distance(e)

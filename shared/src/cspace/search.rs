@@ -120,6 +120,8 @@ impl core::fmt::Display for SearchError {
     }
 }
 
+impl core::error::Error for SearchError {}
+
 /// The result of a search.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SearchReport {

@@ -90,6 +90,8 @@ impl fmt::Display for FileError {
     }
 }
 
+impl core::error::Error for FileError {}
+
 /// A value quoted from a file, written so that it cannot act on a terminal: control and other
 /// non-printable characters (ESC, C1 controls, bidi overrides, ...) appear as `\u{1b}`-style
 /// escapes, as [`char::escape_debug`] writes them. Quotes and backslashes stay as they are (a

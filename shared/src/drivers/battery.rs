@@ -11,6 +11,14 @@
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BatteryReadError;
 
+impl core::fmt::Display for BatteryReadError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "the battery voltage could not be read")
+    }
+}
+
+impl core::error::Error for BatteryReadError {}
+
 /// Reads the battery's voltage (an ADC channel behind a divider on the board).
 pub trait BatterySensor {
     /// The battery's voltage now, volts.

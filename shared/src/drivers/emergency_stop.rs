@@ -52,6 +52,19 @@ pub enum EstopError {
     StillPressed,
 }
 
+impl core::fmt::Display for EstopError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            EstopError::StillPressed => write!(
+                f,
+                "the emergency stop button is still pressed (or its pin cannot be read)"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for EstopError {}
+
 /// Polls in a row that must read the button released before the motors get duty (3 control
 /// periods: 150 ms, far longer than a contact's bounce of a few milliseconds).
 pub const RELEASED_POLLS_TO_RUN: u32 = 3;

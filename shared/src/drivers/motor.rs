@@ -56,6 +56,24 @@ pub enum MotorError {
     DirectionPin,
 }
 
+impl core::fmt::Display for MotorError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            MotorError::BatteryLow {
+                battery_v,
+                min_battery_v,
+            } => write!(
+                f,
+                "battery at {battery_v} V, below the motors' minimum {min_battery_v} V"
+            ),
+            MotorError::Pwm => write!(f, "the motor's PWM channel refused the duty"),
+            MotorError::DirectionPin => write!(f, "the motor's direction pin failed"),
+        }
+    }
+}
+
+impl core::error::Error for MotorError {}
+
 /// The command actually applied: clamped to ±`max_voltage_v`, 0 for NaN or ±∞ (and for a
 /// `max_voltage_v` that is not a finite positive number).
 pub fn clamp_command_v(command_v: f32, max_voltage_v: f32) -> f32 {

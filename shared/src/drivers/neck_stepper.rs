@@ -258,6 +258,35 @@ pub enum NeckError {
     },
 }
 
+impl core::fmt::Display for NeckError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            NeckError::AngleOutOfRange {
+                angle_deg,
+                limit_deg,
+            } => write!(f, "neck angle {angle_deg} deg is beyond ±{limit_deg} deg"),
+            NeckError::BadStep { step_deg } => write!(
+                f,
+                "neck step {step_deg} deg is not a finite positive number"
+            ),
+            NeckError::BadLimit { limit_deg } => write!(
+                f,
+                "neck limit {limit_deg} deg is not a finite number ≥ 0, or too many steps"
+            ),
+            NeckError::HomeNotFound { steps } => {
+                write!(
+                    f,
+                    "the neck's home switch did not close within {steps} steps"
+                )
+            }
+            NeckError::NotHomed => write!(f, "the neck's position is unknown: home it first"),
+            NeckError::Pin { pin } => write!(f, "the neck's {pin} pin failed"),
+        }
+    }
+}
+
+impl core::error::Error for NeckError {}
+
 /// The nearest step to `angle_deg` within ±`limit_deg`, or an error naming the angle.
 ///
 /// ```

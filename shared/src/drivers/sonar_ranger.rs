@@ -8,7 +8,7 @@
 //! 1. an [`EchoCapture`] (a timer's input capture on the board) is armed, then the trigger pin
 //!    goes high for [`TRIGGER_PULSE_US`] µs (HC-SR04: at least 10 µs);
 //! 2. the capture hands over the echo line's edges with their polarity, and an
-//!    [`EchoDecoder`](super::echo::EchoDecoder) turns them into a pulse width or the reason
+//!    [`EchoDecoder`] turns them into a pulse width or the reason
 //!    there is none (`echo.rs`: polarity and order, the glitch filter, the 38 ms no-target
 //!    pulse, the listen time);
 //! 3. [`range_from_echo_ticks`] converts the width → seconds → metres with
@@ -17,7 +17,7 @@
 //!    [`RobotConfig::sonar_range_m`] 1.5 m, and the time-out [`RobotConfig::echo_wait_s`]):
 //!    outside it is `None` = no echo;
 //! 4. the blocking [`SonarRanger::read`] then waits out the rest of the cycle
-//!    ([`cycle_us`](super::echo::cycle_us), at least the HC-SR04's 60 ms), so a late echo of
+//!    ([`cycle_us`], at least the HC-SR04's 60 ms), so a late echo of
 //!    one ping is not heard by the next.
 //!
 //! **Departure from the seed and from the mission's model**: the seed waited one fixed window
@@ -29,7 +29,7 @@
 //!
 //! An async firmware task does the same with the pure parts: arm, pulse, feed the decoder with
 //! the capture's edges and `Mono::delay_until` its [`deadline_ticks`](super::echo::EchoDecoder::deadline_ticks),
-//! convert with [`range_from_echo_ticks`], sleep the rest of [`cycle_us`](super::echo::cycle_us).
+//! convert with [`range_from_echo_ticks`], sleep the rest of [`cycle_us`].
 //!
 //! [`RobotConfig::sonar_min_range_m`]: crate::robot::RobotConfig::sonar_min_range_m
 //! [`RobotConfig::sonar_range_m`]: crate::robot::RobotConfig::sonar_range_m
@@ -75,6 +75,20 @@ pub enum SonarError {
         tick_hz: u32,
     },
 }
+
+impl core::fmt::Display for SonarError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            SonarError::TriggerPin => write!(f, "the sonar's trigger pin could not be driven"),
+            SonarError::TickRate { tick_hz } => write!(
+                f,
+                "the echo capture reports a tick rate of {tick_hz} Hz: no time can be measured"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for SonarError {}
 
 /// The window's time-out in ticks of `tick_hz`.
 pub fn timeout_ticks(window: &SonarWindow, tick_hz: u32) -> u32 {
@@ -130,7 +144,7 @@ pub fn range_from_echo_ticks(
     )
 }
 
-/// Time left of the cycle ([`cycle_us`](super::echo::cycle_us)) after `elapsed_us` since the
+/// Time left of the cycle ([`cycle_us`]) after `elapsed_us` since the
 /// capture was armed, µs: waited after each reading so that the next trigger is at least one
 /// cycle after this one.
 pub fn settle_delay_us(window: &SonarWindow, elapsed_us: u32) -> u32 {
@@ -220,7 +234,7 @@ impl<TRIG: OutputPin, ECHO: EchoCapture, D: DelayNs> SonarRanger<TRIG, ECHO, D> 
         SonarReading { range_m, outcome }
     }
 
-    /// Take one reading, blocking for one cycle ([`cycle_us`](super::echo::cycle_us)):
+    /// Take one reading, blocking for one cycle ([`cycle_us`]):
     /// `Ok(reading)` whose `range_m` is `None` for no echo (no pulse, too near, too far, the
     /// no-target pulse). Errors: the trigger pin, a capture without a clock.
     pub fn read(&mut self) -> Result<SonarReading, SonarError> {

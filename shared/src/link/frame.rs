@@ -41,6 +41,18 @@ pub enum EncodeError {
     TooLong,
 }
 
+impl core::fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            EncodeError::TooLong => {
+                write!(f, "the encoded frame exceeds {MAX_FRAME_BYTES} bytes")
+            }
+        }
+    }
+}
+
+impl core::error::Error for EncodeError {}
+
 /// Why a received frame was dropped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -6,17 +6,17 @@
 //!
 //! [`RobotDevice`] is sans-IO like the rest of the core. The firmware's lowest-priority task
 //! owns one (in a `static`) with the planner; the simulator and the tests drive one on the host.
-//! The shell calls
+//! The shell borrows it with its [`Mission`] as a [`RobotLink`] and calls
 //!
-//! - [`RobotDevice::receive`] with the bytes of the link (replies go to `send`);
-//! - [`RobotDevice::tick`] with each [`PilotReport`] of the control task;
-//! - [`RobotDevice::reading`] with each sonar reading;
-//! - [`RobotDevice::run_planner`] when [`RobotDevice::plan_pending`] says a plan is asked for;
+//! - [`RobotLink::receive`] with the bytes of the link (replies go to `send`);
+//! - [`RobotLink::tick`] with each [`PilotReport`] of the control task;
+//! - [`RobotLink::reading`] with each sonar reading;
+//! - [`RobotLink::run_planner`] when [`RobotDevice::plan_pending`] says a plan is asked for;
 //!
 //! and takes from it what the other tasks must do: [`RobotDevice::take_pilot_command`] (with
-//! [`RobotDevice::prefix`] for `Follow`), [`RobotDevice::take_sonar_request`],
-//! [`RobotDevice::take_started`] (a mission started: reset the pilot, and a simulated robot, to
-//! its start) and [`RobotDevice::next_telemetry`] (pull, so a slow link delays telemetry, never
+//! [`RobotLink::prefix`] for `Follow`), [`RobotDevice::take_sonar_request`],
+//! [`RobotLink::take_started`] (a mission started: reset the pilot, and a simulated robot, to
+//! its start) and [`RobotLink::next_telemetry`] (pull, so a slow link delays telemetry, never
 //! the mission).
 //!
 //! ## Telemetry
@@ -32,7 +32,7 @@
 //! The handler's grid is the known map (obstacles uploaded with `ObstacleChunk`); at the start
 //! the mission's map is set to it. The real world of the simulated builds is not here: the
 //! shell keeps it where its simulated sonar can read it and routes `WorldChunk` / `ClearWorld`
-//! to [`RobotDevice::handle_world`].
+//! to [`RobotLink::handle_world`].
 
 use heapless::Vec;
 
@@ -79,7 +79,7 @@ impl Default for WorldUpload {
     }
 }
 
-/// Where the shell keeps the real world: [`RobotDevice::receive`] reaches it only for
+/// Where the shell keeps the real world: [`RobotLink::receive`] reaches it only for
 /// `WorldChunk` and `ClearWorld` (the firmware locks it just for that).
 pub trait WorldAccess {
     /// Call `f` with the world, if this build has one.
@@ -397,7 +397,7 @@ impl<const W: usize> RobotLink<'_, W> {
     }
 
     /// Answer one request (the real world's are refused: the shell routes them to
-    /// [`RobotDevice::handle_world`]).
+    /// [`RobotLink::handle_world`]).
     pub fn handle<const S: usize, const Q: usize>(
         &mut self,
         request: &Request,

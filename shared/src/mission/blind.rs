@@ -14,9 +14,9 @@
 //! (`worlds/corridor`, 3 m, beam sonar with the filter; `worlds/enclosed`, 1.5 m, continuous).
 //! The cut costs a few centimetres on prefixes that end sideways at the edge of what was read.
 
-use crate::geom::polyline_length_m;
 use super::swept::Swept;
 use crate::control::Pose;
+use crate::geom::polyline_length_m;
 use crate::geom::PointM;
 use crate::grid::Grid;
 use crate::math::hypot;

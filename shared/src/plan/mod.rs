@@ -215,6 +215,8 @@ impl core::fmt::Display for PlanError {
     }
 }
 
+impl core::error::Error for PlanError {}
+
 /// What a planning request produced (the path itself goes to the caller's [`PathM`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
