@@ -579,7 +579,10 @@ mod tests {
     use super::*;
 
     fn graph_of(files: &[(&str, &str)]) -> BTreeMap<String, BTreeSet<String>> {
-        let dir = std::env::temp_dir().join(format!("twil-cycles-{}", std::process::id()));
+        // One directory per call: the tests run in parallel.
+        static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        let dir = std::env::temp_dir().join(format!("twil-cycles-{}-{call}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         for (name, text) in files {
             let path = dir.join("src").join(name);
@@ -635,7 +638,7 @@ mod tests {
             ("p/mod.rs", "mod k; pub struct E;"),
             (
                 "p/k.rs",
-                "pub fn f() {} #[cfg(test)] mod tests { use super::*; use super::super::E; }",
+                "pub fn f() {} mod inner { use super::*; use super::super::E; }",
             ),
         ]);
         assert_eq!(
