@@ -367,48 +367,49 @@ pub(super) fn astar_loop<
                 }
             }};
         }
-        match code {
-            E => {
+        match Dir::from_code(code) {
+            Some(Dir::E) => {
                 visit!(Z_E, E);
                 forced!(O_NW, Z_N, N, Z_NE, NE, O_N, O_E);
                 forced!(O_SW, Z_S, S, Z_SE, SE, O_S, O_E);
             }
-            W => {
+            Some(Dir::W) => {
                 visit!(Z_W, W);
                 forced!(O_NE, Z_N, N, Z_NW, NW, O_N, O_W);
                 forced!(O_SE, Z_S, S, Z_SW, SW, O_S, O_W);
             }
-            N => {
+            Some(Dir::N) => {
                 visit!(Z_N, N);
                 forced!(O_SE, Z_E, E, Z_NE, NE, O_E, O_N);
                 forced!(O_SW, Z_W, W, Z_NW, NW, O_W, O_N);
             }
-            S => {
+            Some(Dir::S) => {
                 visit!(Z_S, S);
                 forced!(O_NE, Z_E, E, Z_SE, SE, O_E, O_S);
                 forced!(O_NW, Z_W, W, Z_SW, SW, O_W, O_S);
             }
-            NE => {
+            Some(Dir::NE) => {
                 visit!(Z_E, E);
                 visit!(Z_N, N);
                 diagonal!(Z_NE, NE, O_N, O_E);
             }
-            NW => {
+            Some(Dir::NW) => {
                 visit!(Z_W, W);
                 visit!(Z_N, N);
                 diagonal!(Z_NW, NW, O_N, O_W);
             }
-            SW => {
+            Some(Dir::SW) => {
                 visit!(Z_W, W);
                 visit!(Z_S, S);
                 diagonal!(Z_SW, SW, O_S, O_W);
             }
-            SE => {
+            Some(Dir::SE) => {
                 visit!(Z_E, E);
                 visit!(Z_S, S);
                 diagonal!(Z_SE, SE, O_S, O_E);
             }
-            _ => {
+            // The start (code 9): all eight neighbours.
+            None => {
                 visit!(Z_E, E);
                 visit!(Z_N, N);
                 visit!(Z_W, W);

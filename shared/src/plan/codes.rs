@@ -51,14 +51,57 @@ pub(super) const STEPS: [(i32, i32); 8] = [
     (-1, -1),
     (1, -1),
 ];
-pub(super) const E: u32 = 1;
-pub(super) const N: u32 = 2;
-pub(super) const W: u32 = 3;
-pub(super) const S: u32 = 4;
-pub(super) const NE: u32 = 5;
-pub(super) const NW: u32 = 6;
-pub(super) const SW: u32 = 7;
-pub(super) const SE: u32 = 8;
+
+/// The eight moves, each with its nibble code (1 ..= 8, the index of [`STEPS`] plus one). A
+/// `match` on a `Dir` is checked by the compiler: every move has its arm, and an arm names a
+/// move by its path (`Dir::E`), which cannot silently become a catch-all binding the way a
+/// glob-imported `u32` constant can when its import goes missing (issue 27, item 4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub(super) enum Dir {
+    E = 1,
+    N = 2,
+    W = 3,
+    S = 4,
+    NE = 5,
+    NW = 6,
+    SW = 7,
+    SE = 8,
+}
+
+impl Dir {
+    /// The move's nibble code.
+    #[inline(always)]
+    pub(super) const fn code(self) -> u32 {
+        self as u32
+    }
+
+    /// The move of a nibble code; `None` for 0 (not reached), [`CODE_START`] and [`BLOCKED`].
+    #[inline(always)]
+    pub(super) const fn from_code(code: u32) -> Option<Dir> {
+        match code {
+            1 => Some(Dir::E),
+            2 => Some(Dir::N),
+            3 => Some(Dir::W),
+            4 => Some(Dir::S),
+            5 => Some(Dir::NE),
+            6 => Some(Dir::NW),
+            7 => Some(Dir::SW),
+            8 => Some(Dir::SE),
+            _ => None,
+        }
+    }
+}
+
+// The codes as numbers, for the arithmetic on them (step tables, comparisons, entries).
+pub(super) const E: u32 = Dir::E.code();
+pub(super) const N: u32 = Dir::N.code();
+pub(super) const W: u32 = Dir::W.code();
+pub(super) const S: u32 = Dir::S.code();
+pub(super) const NE: u32 = Dir::NE.code();
+pub(super) const NW: u32 = Dir::NW.code();
+pub(super) const SW: u32 = Dir::SW.code();
+pub(super) const SE: u32 = Dir::SE.code();
 
 #[inline(always)]
 pub(super) fn nibble(scratch: &[u32], index: usize) -> u32 {
