@@ -649,6 +649,36 @@ mod tests {
     }
 
     #[test]
+    fn the_plants_readings_carry_the_ranger_faults() {
+        // A wall at 1.2 m from the sonar, read 2 000 times with 10 % dropouts and 10 %
+        // spurious echoes: both show, within binomial bounds, and a spurious echo is shorter.
+        let c = RobotConfig {
+            sonar_dropout_probability: 0.1,
+            sonar_spurious_probability: 0.1,
+            ..RobotConfig::default()
+        };
+        let walls = wall_at_x(2.2);
+        let mut plant = Plant::new(&c, Pose::new(0.8, 0.0, 0.0));
+        let (mut missed, mut short) = (0, 0);
+        for _ in 0..2000 {
+            match plant.sonar_range_m(&walls, 0.0, 1.5) {
+                None => missed += 1,
+                Some(r) if r < 1.2 - 1e-4 => {
+                    assert!(r >= c.sonar_min_range_m, "{r}");
+                    short += 1;
+                }
+                Some(r) => assert!((r - 1.2).abs() < 1e-4, "{r}"),
+            }
+        }
+        // Expected 2000 × 0.1 × 0.9 = 180 missed, 200 short; sd ≈ 13.4.
+        assert!((120..=240).contains(&missed), "{missed}");
+        assert!((140..=260).contains(&short), "{short}");
+        // Without faults the same plant reads the wall every time.
+        let mut exact = Plant::new(&RobotConfig::default(), Pose::new(0.8, 0.0, 0.0));
+        assert!((0..100).all(|_| exact.sonar_range_m(&walls, 0.0, 1.5).is_some()));
+    }
+
+    #[test]
     fn noise_is_deterministic_per_seed() {
         let c = RobotConfig {
             sonar_noise_std_m: 0.02,

@@ -632,6 +632,7 @@ pub fn run_with(args: Args, passed: &[String]) -> Result<crate::exit::Ending> {
                 "name": format!("world-{i:02}"),
                 "reachable": w.reachable,
                 "features": w.features,
+                "attempts": w.attempts,
             })).collect::<Vec<_>>(),
             "faults": {
                 "sonar_noise_m": args.sonar_noise,
@@ -659,10 +660,11 @@ pub fn run_with(args: Args, passed: &[String]) -> Result<crate::exit::Ending> {
         return Ok(crate::exit::Ending::Done);
     }
     println!(
-        "{} worlds (seed {}: {reachable} reachable, {} walled-in goals); faults: noise {} m, dropout {}, spurious {}{}",
+        "{} worlds (seed {}: {reachable} reachable, {} walled-in goal{}); faults: noise {} m, dropout {}, spurious {}{}",
         worlds.len(),
         args.world_seed,
         worlds.len() - reachable,
+        if worlds.len() - reachable == 1 { "" } else { "s" },
         args.sonar_noise,
         args.sonar_dropout,
         args.sonar_spurious,

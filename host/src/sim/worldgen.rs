@@ -42,8 +42,9 @@ pub const DOORWAY_M: (f32, f32) = (0.9, 1.6);
 /// Smallest and largest angle between the robot's way across and the dividing wall's normal,
 /// degrees (issue 23).
 pub const WALL_INCIDENCE_DEG: (f32, f32) = (10.0, 80.0);
-/// Candidates drawn for one world before giving up. Measured: 48 worlds of seed 1 needed 1 to
-/// 6 candidates each (narrow doorways and blocked starts are the ones discarded).
+/// Candidates drawn for one world before giving up. Measured: the 48 worlds of seed 1 needed
+/// 1 or 2 candidates each, 1.17 on average (`twil sonar-grid --quick --worlds 48 --ranges 1.5
+/// --json`, `attempts`); their doorways measure 0.91 to 1.59 m.
 pub const MAX_ATTEMPTS: u32 = 200;
 
 /// One generated world.
