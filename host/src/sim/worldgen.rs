@@ -409,29 +409,17 @@ fn hyp(a: (f32, f32), b: (f32, f32)) -> f32 {
 
 /// Distance from `p` to the segment `a`–`b`.
 fn near_segment(p: (f32, f32), a: (f32, f32), b: (f32, f32)) -> f32 {
-    let (ex, ey) = (b.0 - a.0, b.1 - a.1);
-    let len2 = ex * ex + ey * ey;
-    let t = if len2 > 0.0 {
-        (((p.0 - a.0) * ex + (p.1 - a.1) * ey) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    hyp(p, (a.0 + t * ex, a.1 + t * ey))
+    let wide = |q: (f32, f32)| (f64::from(q.0), f64::from(q.1));
+    crate::classic::clearance::point_segment_m(wide(p), wide(a), wide(b)) as f32
 }
 
-/// Distance from `p` to the nearest edge of `real`.
+/// Distance from `p` to the nearest edge of `real` (the simulator's own measure: the plant's
+/// clearance plus its body radius).
 fn clearance_m(real: &Obstacles, p: PointM) -> f32 {
-    let mut best = f32::INFINITY;
-    for poly in real.iter() {
-        let n = poly.len();
-        let edges = if n >= 3 { n } else { n.saturating_sub(1) };
-        for i in 0..edges.max(1) {
-            let a = poly[i];
-            let b = poly[(i + 1) % n];
-            best = best.min(near_segment((p.x_m, p.y_m), (a.x_m, a.y_m), (b.x_m, b.y_m)));
-        }
-    }
-    best
+    let robot = twil_core::robot::RobotConfig::default();
+    let plant =
+        twil_core::plant::Plant::new(&robot, twil_core::control::Pose::new(p.x_m, p.y_m, 0.0));
+    plant.clearance_m(real) + robot.physical_radius_m()
 }
 
 #[cfg(test)]
