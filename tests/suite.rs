@@ -26,4 +26,5 @@ mod recording;
 mod safe_params;
 mod sim_scenarios;
 mod sonar_beam;
+mod sonar_grid;
 mod virtual_board;

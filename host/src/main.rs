@@ -24,6 +24,8 @@ enum Command {
     Plan(cmd::plan::Args),
     /// Simulate a whole mission: sonar sweeps, planning, the 50 ms controller, a robot model.
     Simulate(cmd::simulate::Args),
+    /// Missions over a grid of sonar models on generated worlds: how each ends against the truth.
+    SonarGrid(cmd::sonar_grid::Args),
     /// Run a mission on the device (firmware, QEMU or `--remote sim`) and follow its telemetry.
     Mission(cmd::mission::Args),
     /// Run every planning method (grid and classic) on one world and compare them.
@@ -41,6 +43,7 @@ fn main() {
     let result = match cli.command {
         Command::Plan(args) => cmd::plan::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
+        Command::SonarGrid(args) => cmd::sonar_grid::run(args),
         Command::Mission(args) => cmd::mission::run(args),
         Command::Compare(args) => cmd::compare::run(args),
         Command::Cspace(args) => cmd::cspace::run(args),

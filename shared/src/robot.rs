@@ -137,6 +137,12 @@ pub struct RobotConfig {
     /// Beam model: a ray hitting within this distance of a polygon vertex echoes at any angle
     /// (corner reflector, edge diffraction), metres.
     pub sonar_corner_radius_m: f32,
+    /// Simulated ranger: probability that a reading which would echo returns "no echo"
+    /// ([`crate::plant::faults`]; 0: never).
+    pub sonar_dropout_probability: f32,
+    /// Simulated ranger: probability of a spurious echo nearer than the true one (crosstalk,
+    /// multipath; [`crate::plant::faults`]; 0: never).
+    pub sonar_spurious_probability: f32,
     /// Seed of the simulated noise generator.
     pub noise_seed: u64,
     /// Regions of constant depth: largest depth difference between neighbouring readings of
@@ -193,6 +199,8 @@ impl RobotConfig {
         sonar_beam_half_angle_deg: 15.0,
         sonar_incidence_limit_deg: 70.0,
         sonar_corner_radius_m: 0.05,
+        sonar_dropout_probability: 0.0,
+        sonar_spurious_probability: 0.0,
         noise_seed: 1,
         rcd_depth_tolerance_m: 0.01,
         rcd_min_pairs: 4,
@@ -267,7 +275,8 @@ impl RobotConfig {
     /// Rules: lengths, times and gains finite and positive (gains ≥ 0 where 0 makes sense);
     /// `sonar_min_range_m < sonar_range_m ≤ 6 m`; half sweeps in `(0, 180]`; tolerance in
     /// `(0, 1)`; `1 ≤ sonar_cone_rays ≤ 31`; cone in `[0, 90]`°; beam half-angle in `[0, 45]`°,
-    /// incidence limit in `[0, 90]`°, corner radius in `[0, 1]` m; substep ≤ period.
+    /// incidence limit in `[0, 90]`°, corner radius in `[0, 1]` m; dropout and spurious
+    /// probabilities in `[0, 1]`; substep ≤ period.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let c = self;
         check(
@@ -458,6 +467,18 @@ impl RobotConfig {
             c.sonar_incidence_limit_deg,
             c.sonar_incidence_limit_deg >= 0.0 && c.sonar_incidence_limit_deg <= 90.0,
             "0 to 90 degrees",
+        )?;
+        check(
+            "sonar_dropout_probability",
+            c.sonar_dropout_probability,
+            (0.0..=1.0).contains(&c.sonar_dropout_probability),
+            "a probability, 0 to 1",
+        )?;
+        check(
+            "sonar_spurious_probability",
+            c.sonar_spurious_probability,
+            (0.0..=1.0).contains(&c.sonar_spurious_probability),
+            "a probability, 0 to 1",
         )?;
         check(
             "sonar_corner_radius_m",

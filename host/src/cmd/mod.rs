@@ -9,4 +9,5 @@ pub mod plan;
 pub mod preset;
 pub mod robot_options;
 pub mod simulate;
+pub mod sonar_grid;
 pub mod view;

@@ -21,6 +21,8 @@ pub fn message(e: &ConfigError, robot: &RobotConfig) -> String {
             robot.sonar_min_range_m
         ),
         "sonar_noise_std_m" => format!("--sonar-noise {v}: 0 to 1 m"),
+        "sonar_dropout_probability" => format!("--sonar-dropout {v}: a probability, 0 to 1"),
+        "sonar_spurious_probability" => format!("--sonar-spurious {v}: a probability, 0 to 1"),
         "sonar_beam_half_angle_deg" => format!("--beam-half-angle {v}: 0 to 45 degrees"),
         "sonar_incidence_limit_deg" => format!("--incidence-limit {v}: 0 to 90 degrees"),
         _ => format!("robot config: {e}"),
@@ -62,6 +64,22 @@ mod tests {
             ..d
         };
         assert_eq!(refused(incidence), "--incidence-limit 91: 0 to 90 degrees");
+        let dropout = RobotConfig {
+            sonar_dropout_probability: 1.5,
+            ..d
+        };
+        assert_eq!(
+            refused(dropout),
+            "--sonar-dropout 1.5: a probability, 0 to 1"
+        );
+        let spurious = RobotConfig {
+            sonar_spurious_probability: -0.1,
+            ..d
+        };
+        assert_eq!(
+            refused(spurious),
+            "--sonar-spurious -0.1: a probability, 0 to 1"
+        );
     }
 
     #[test]

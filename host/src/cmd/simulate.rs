@@ -120,15 +120,22 @@ pub struct Args {
     /// Print exactly one JSON object on stdout and nothing else.
     #[arg(long)]
     pub json: bool,
-    /// Seed of the simulated sonar noise.
+    /// Seed of the simulated sonar noise and faults.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Sonar range, metres (0.26 < range ≤ 6; the seed's 1.5 by default).
     #[arg(long, default_value_t = 1.5)]
     pub sonar_range: f32,
-    /// Standard deviation of the simulated sonar noise, metres.
+    /// Standard deviation of the simulated sonar noise, metres (a measured HC-SR04: about
+    /// 0.005; docs/robot-model.md).
     #[arg(long, default_value_t = 0.0)]
     pub sonar_noise: f32,
+    /// Probability that a reading which would echo returns no echo (missed echo), 0 to 1.
+    #[arg(long, default_value_t = 0.0, value_name = "P")]
+    pub sonar_dropout: f32,
+    /// Probability of a spurious echo nearer than the true one (crosstalk, multipath), 0 to 1.
+    #[arg(long, default_value_t = 0.0, value_name = "P")]
+    pub sonar_spurious: f32,
     #[command(flatten)]
     pub sonar_model: SonarArgs,
     /// Mission time limit, seconds of simulated time [default: the preset's: 900; seed: 1800, its
@@ -210,6 +217,8 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         .apply(RobotConfig {
             sonar_range_m: args.sonar_range,
             sonar_noise_std_m: args.sonar_noise,
+            sonar_dropout_probability: args.sonar_dropout,
+            sonar_spurious_probability: args.sonar_spurious,
             noise_seed: args.seed,
             sweep_layout: choices.sweep_layout,
             ..RobotConfig::default()

@@ -31,6 +31,7 @@ pub mod output;
 pub mod pictures;
 pub mod reason;
 pub mod start;
+pub mod worldgen;
 
 use std::ops::ControlFlow;
 

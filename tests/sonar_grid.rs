@@ -1,0 +1,102 @@
+//! `twil sonar-grid --quick` (issue 23, part 5): 40 missions on generated worlds. The single
+//! ray is the yardstick: it never collides and never reports a reachable goal unreachable, and
+//! reports every walled-in goal unreachable. A failing mission kept with `--out` reruns with
+//! the printed `twil simulate` command to the same status. The ranger's fault options are
+//! refused out of bounds, naming the option, the value and the bound.
+
+use crate::common;
+
+fn json_of(out: &std::process::Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+#[test]
+fn the_quick_grid_keeps_the_ray_safe_and_failures_rerun() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = common::twil()
+        .args(["sonar-grid", "--quick", "--json", "--jobs", "1", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let v = json_of(&out);
+    assert_eq!(v["missions"], 40);
+    let ray = &v["ray"];
+    assert_eq!(ray["missions"], 8);
+    assert_eq!(ray["collision"], 0, "{ray}");
+    assert_eq!(ray["false_unreachable"], 0, "{ray}");
+    // 1 walled-in world of 4, at 2 ranges: both reported unreachable; the rest reached.
+    assert_eq!(ray["true_unreachable"], 2, "{ray}");
+    assert_eq!(ray["reached"], 6, "{ray}");
+    let total = &v["total"];
+    let sum: u64 = [
+        "reached",
+        "collision",
+        "false_unreachable",
+        "true_unreachable",
+        "gave_up",
+        "timeout",
+        "other",
+    ]
+    .iter()
+    .map(|k| total[k].as_u64().unwrap())
+    .sum();
+    assert_eq!(sum, 40);
+
+    // Every failing mission is kept; the first reruns with its command to the same status.
+    let kept = v["kept"].as_array().unwrap();
+    let failing =
+        40 - total["reached"].as_u64().unwrap() - total["true_unreachable"].as_u64().unwrap();
+    assert_eq!(kept.len() as u64, failing);
+    if let Some(first) = kept.first() {
+        let command = first["command"].as_str().unwrap();
+        let words: Vec<&str> = command.split_whitespace().collect();
+        assert_eq!(words[..2], ["twil", "simulate"]);
+        let id = first["id"].as_str().unwrap();
+        assert!(dir.path().join(id).join("summary.json").is_file());
+        let rerun = common::twil()
+            .args(&words[1..])
+            .arg("--json")
+            .output()
+            .unwrap();
+        let r: serde_json::Value = serde_json::from_slice(&rerun.stdout).unwrap_or_else(|e| {
+            panic!(
+                "{command}: {e}: {}{}",
+                String::from_utf8_lossy(&rerun.stdout),
+                String::from_utf8_lossy(&rerun.stderr)
+            )
+        });
+        assert_eq!(r["status"], first["status"], "{command}");
+    }
+}
+
+#[test]
+fn fault_options_out_of_bounds_are_refused_by_name() {
+    let out = common::twil()
+        .args(["sonar-grid", "--quick", "--sonar-dropout", "2"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--sonar-dropout 2: a probability, 0 to 1"),
+        "{err}"
+    );
+    let out = common::twil()
+        .args(["simulate", "--sonar-spurious", "1.5", "--real"])
+        .arg(common::world("office.da"))
+        .arg("--params")
+        .arg(common::world("office.par"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--sonar-spurious 1.5: a probability, 0 to 1"),
+        "{err}"
+    );
+}
