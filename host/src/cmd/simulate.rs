@@ -313,7 +313,8 @@ pub fn summary_json(args: &Args, setup: &SimSetup, result: &SimResult) -> serde_
         "settle": args.choices().settle_name(),
         "settle_time_s": round3(mission_config_settle_s(setup)),
         "reference_feed_forward": setup.reference_feed_forward,
-        "sweep_readings": args.choices().sweep_readings_name(),
+        // The layout used: the preset's, `--sweep-readings`' or the robot file's.
+        "sweep_readings": LoopChoices { sweep_layout: setup.robot.sweep_layout, ..args.choices() }.sweep_readings_name(),
         "turn_in_place": setup.turn_in_place,
         "real": args.real.display().to_string(),
         "known": args.known.as_ref().map(|p| p.display().to_string()),

@@ -98,7 +98,12 @@ pub(super) fn summary_json(args: &Args, inputs: &Inputs, outcome: &Outcome) -> s
         "settle": args.choices().settle_name(),
         "reference_feed_forward": args.choices().reference_feed_forward,
         "turn_in_place": args.choices().turn_in_place,
-        "sweep_readings": args.choices().sweep_readings_name(),
+        // The layout used: the preset's, `--sweep-readings`' or the robot file's.
+        "sweep_readings": crate::cmd::preset::LoopChoices {
+            sweep_layout: inputs.robot.sweep_layout,
+            ..args.choices()
+        }
+        .sweep_readings_name(),
         "real": args.real.as_ref().map(|p| p.display().to_string()),
         "known": args.known.as_ref().map(|p| p.display().to_string()),
         "params": args.params.display().to_string(),
