@@ -212,7 +212,8 @@ fn summary_json_holds_the_files_values_and_an_option_overrides_the_file() {
         s(&out_dir),
         "--json",
     ]);
-    assert!(out.status.success(), "{out:?}");
+    // A 1.2 m beam sonar may or may not find the doorway: either end is an answer here.
+    assert!(matches!(out.status.code(), Some(0 | 3)), "{out:?}");
     let summary: Value =
         serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap())
             .unwrap();

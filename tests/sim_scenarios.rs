@@ -216,6 +216,7 @@ fn json_is_exactly_one_object_with_the_issue_keys() {
     let keys: BTreeSet<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
     let expected: BTreeSet<&str> = [
         "status",
+        "stop_cause",
         "stops",
         "full_sweeps",
         "replans",
@@ -228,6 +229,7 @@ fn json_is_exactly_one_object_with_the_issue_keys() {
     .collect();
     assert_eq!(keys, expected);
     assert_eq!(v["status"], "reached");
+    assert_eq!(v["stop_cause"], "reached");
     for k in ["stops", "full_sweeps", "replans", "controller_overruns"] {
         assert!(v[k].is_u64(), "{k}: {}", v[k]);
     }

@@ -295,10 +295,10 @@ pub fn init_text() -> String {
         let unit = if p.unit.is_empty() {
             String::new()
         } else {
-            format!(", {}", p.unit)
+            format!("Unit: {}. ", p.unit)
         };
         s.push_str(&format!(
-            "\n# {}{unit}; accepted: {}.\n# Default: {}.\n{} = {}\n",
+            "\n# {}.\n# {unit}Accepted: {}.\n# Default: {}.\n{} = {}\n",
             capitalised(p.doc),
             accepted(p),
             p.source,
