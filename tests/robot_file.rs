@@ -51,6 +51,26 @@ fn robot_file(dir: &Path, edits: &[(&str, &str)]) -> PathBuf {
     path
 }
 
+/// `twil simulate` on `da`/`par` with the robot file `robot` and `extra` options.
+fn simulate(da: &Path, par: &Path, robot: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "simulate",
+        "--real",
+        s(da),
+        "--params",
+        s(par),
+        "--robot",
+        s(robot),
+    ];
+    args.extend_from_slice(extra);
+    run(&args)
+}
+
+/// `summary.json` of `dir`.
+fn read_summary(dir: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
 fn stdout_json(out: &Output) -> Value {
     let stdout = String::from_utf8_lossy(&out.stdout);
     serde_json::from_str(stdout.trim()).unwrap_or_else(|e| {
@@ -135,16 +155,7 @@ fn a_larger_planning_radius_closes_a_narrow_doorway() {
     let text = stdout_json(&out).to_string();
     assert!(!text.contains("\"found\""), "{text}");
     // And the simulated mission cannot pass it either.
-    let out = run(&[
-        "simulate",
-        "--real",
-        s(&da),
-        "--params",
-        s(&par),
-        "--robot",
-        s(&wide),
-        "--json",
-    ]);
+    let out = simulate(&da, &par, &wide, &["--json"]);
     let v = stdout_json(&out);
     assert_eq!(v["status"], "unreachable", "{v}");
     assert!(
@@ -169,24 +180,11 @@ fn summary_json_holds_the_files_values_and_an_option_overrides_the_file() {
         ],
     );
     let out_dir = dir.path().join("out");
-    let out = run(&[
-        "simulate",
-        "--real",
-        s(&da),
-        "--params",
-        s(&par),
-        "--robot",
-        s(&path),
-        "--out",
-        s(&out_dir),
-        "--json",
-    ]);
+    let out = simulate(&da, &par, &path, &["--out", s(&out_dir), "--json"]);
     let v = stdout_json(&out);
     assert_eq!(v["status"], "reached", "{v}");
     assert_eq!(v["stop_cause"], "reached");
-    let summary: Value =
-        serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap())
-            .unwrap();
+    let summary = read_summary(&out_dir);
     let file: toml::Table = std::fs::read_to_string(&path).unwrap().parse().unwrap();
     let robot = summary["robot"].as_object().unwrap();
     assert_eq!(robot.len(), file.len());
@@ -196,27 +194,23 @@ fn summary_json_holds_the_files_values_and_an_option_overrides_the_file() {
     }
     assert_eq!(summary["stop_cause"], "reached");
     // An explicit option wins over the file, and summary.json says what the run used.
-    let out = run(&[
-        "simulate",
-        "--real",
-        s(&da),
-        "--params",
-        s(&par),
-        "--robot",
-        s(&path),
-        "--sonar-range",
-        "1.2",
-        "--sonar",
-        "beam",
-        "--out",
-        s(&out_dir),
-        "--json",
-    ]);
+    let out = simulate(
+        &da,
+        &par,
+        &path,
+        &[
+            "--sonar-range",
+            "1.2",
+            "--sonar",
+            "beam",
+            "--out",
+            s(&out_dir),
+            "--json",
+        ],
+    );
     // A 1.2 m beam sonar may or may not find the doorway: either end is an answer here.
     assert!(matches!(out.status.code(), Some(0 | 3)), "{out:?}");
-    let summary: Value =
-        serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap())
-            .unwrap();
+    let summary = read_summary(&out_dir);
     assert_eq!(summary["robot"]["sonar_range_m"], 1.2);
     assert_eq!(summary["robot"]["sonar_beam"], true);
     assert_eq!(summary["robot"]["wheel_radius_m"], 0.08);
@@ -277,8 +271,16 @@ fn mission_refuses_a_constant_it_cannot_send_and_says_why_it_ended() {
     let path = robot_file(dir.path(), &[("wheel_radius_m", "0.08")]);
     let args = |robot: &Path| {
         [
-            "mission", "--remote", "sim", "--real", s(&da), "--params", s(&par), "--robot",
-            s(robot), "--json",
+            "mission",
+            "--remote",
+            "sim",
+            "--real",
+            s(&da),
+            "--params",
+            s(&par),
+            "--robot",
+            s(robot),
+            "--json",
         ]
         .map(str::to_owned)
     };

@@ -151,7 +151,11 @@ pub struct WorldFiles {
 pub fn load_world(files: &WorldFiles) -> anyhow::Result<World> {
     let geometry = geometry_for(files.size, files.resolution_m)?;
     let mut params = world_io::read_par(&files.params)?;
-    let file = files.robot.as_deref().map(crate::robot_file::read).transpose()?;
+    let file = files
+        .robot
+        .as_deref()
+        .map(crate::robot_file::read)
+        .transpose()?;
     let base = RobotConfig::DEFAULT.with_planning_radius_m(params.robot_radius_m);
     let robot = crate::robot_file::resolve(base, file.as_ref(), &[])?;
     params.robot_radius_m = robot.planning_radius_m;

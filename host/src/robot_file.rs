@@ -146,7 +146,9 @@ pub fn parse(path: &Path, text: &str) -> Result<RobotFile, String> {
                 None => "; `twil robot init` lists every key".to_string(),
             };
             let key = printable(&key);
-            return Err(format!("{file}:{line}: unknown key `{key}` = {shown}{hint}"));
+            return Err(format!(
+                "{file}:{line}: unknown key `{key}` = {shown}{hint}"
+            ));
         };
         let value = values
             .get(&key)
@@ -371,14 +373,20 @@ mod tests {
             "robot.toml:2: unknown key `wheel_radius` = 0.08; did you mean `wheel_radius_m`?"
         );
         let e = parsed("\n\nhalf_axle_m = \"wide\"\n").unwrap_err();
-        assert_eq!(e, "robot.toml:3: `half_axle_m` = \"wide\": expected a number (m)");
+        assert_eq!(
+            e,
+            "robot.toml:3: `half_axle_m` = \"wide\": expected a number (m)"
+        );
         let e = parsed("encoder_pulses_per_rev = 2000.5\n").unwrap_err();
         assert_eq!(
             e,
             "robot.toml:1: `encoder_pulses_per_rev` = 2000.5: expected a whole number"
         );
         let e = parsed("sweep_layout = \"spiral\"\n").unwrap_err();
-        assert!(e.ends_with("expected one of \"symmetric\", \"seed\""), "{e}");
+        assert!(
+            e.ends_with("expected one of \"symmetric\", \"seed\""),
+            "{e}"
+        );
         let e = parsed("a = 1\nb = = 2\n").unwrap_err();
         assert!(e.starts_with("robot.toml:2: "), "{e}");
         assert!(!e.contains('\n'), "{e}");
@@ -408,7 +416,11 @@ mod tests {
         // A value the file depends on but leaves at the command's value.
         let file = parsed("sonar_min_range_m = 2.0\n").unwrap();
         let e = resolve(RobotConfig::DEFAULT, Some(&file), &[]).unwrap_err();
-        assert!(e.to_string().starts_with("robot.toml: `sonar_range_m` = 1.5 (not set"), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("robot.toml: `sonar_range_m` = 1.5 (not set"),
+            "{e}"
+        );
     }
 
     #[test]

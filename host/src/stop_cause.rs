@@ -65,7 +65,10 @@ mod tests {
             ),
             "unreachable"
         );
-        assert_eq!(name("aborted", None, StopCause::LinkLost, false), "link_lost");
+        assert_eq!(
+            name("aborted", None, StopCause::LinkLost, false),
+            "link_lost"
+        );
         assert_eq!(name("aborted", None, StopCause::Host, true), "interrupted");
         assert_eq!(name("collision", None, StopCause::None, false), "collision");
         assert_eq!(name("timeout", None, StopCause::None, false), "timeout");

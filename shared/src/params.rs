@@ -369,10 +369,17 @@ mod tests {
             assert_eq!(p.get(&c), p.default_value());
             let v = other(p);
             assert_ne!(v, p.default_value(), "{}", p.name);
-            p.set(&mut c, v).unwrap_or_else(|e| panic!("{}: {e}", p.name));
+            p.set(&mut c, v)
+                .unwrap_or_else(|e| panic!("{}: {e}", p.name));
             assert_eq!(p.get(&c), v, "{}", p.name);
             for q in PARAMS.iter().filter(|q| q.name != p.name) {
-                assert_eq!(q.get(&c), q.default_value(), "{} changed {}", p.name, q.name);
+                assert_eq!(
+                    q.get(&c),
+                    q.default_value(),
+                    "{} changed {}",
+                    p.name,
+                    q.name
+                );
             }
             assert_eq!(find(p.name).map(|q| q.name), Some(p.name));
         }
@@ -445,14 +452,20 @@ mod tests {
         assert_eq!(e.expected, BOOL);
         let pairs = find("rcd_min_pairs").unwrap();
         assert_eq!(pairs.set(&mut c, 4.5).unwrap_err().expected, WHOLE);
-        assert_eq!(pairs.set(&mut c, 256.0).unwrap_err().expected, "0 to 255 pairs");
+        assert_eq!(
+            pairs.set(&mut c, 256.0).unwrap_err().expected,
+            "0 to 255 pairs"
+        );
         pairs.set(&mut c, 255.0).unwrap();
         assert_eq!(c.rcd_min_pairs, 255);
     }
 
     #[test]
     fn values_that_depend_on_each_other_change_together() {
-        let (min, range) = (find("sonar_min_range_m").unwrap(), find("sonar_range_m").unwrap());
+        let (min, range) = (
+            find("sonar_min_range_m").unwrap(),
+            find("sonar_range_m").unwrap(),
+        );
         let mut c = RobotConfig::DEFAULT;
         // Alone, a shortest range of 2 m is above the 1.5 m range.
         assert_eq!(min.set(&mut c, 2.0).unwrap_err().field, "sonar_range_m");

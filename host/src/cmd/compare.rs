@@ -212,13 +212,20 @@ pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
         robot: args.robot.clone(),
     })?;
     // The file's sonar range, if it sets one (load_world has checked it).
-    let file = args.robot.as_deref().map(crate::robot_file::read).transpose()?;
+    let file = args
+        .robot
+        .as_deref()
+        .map(crate::robot_file::read)
+        .transpose()?;
     let file_range = file
         .as_ref()
         .and_then(|f| f.get("sonar_range_m"))
         .map(|_| world.robot.sonar_range_m);
     let options = Options {
-        sonar_range_m: args.sonar_range.or(file_range).unwrap_or(DEFAULT_BUG_SONAR_RANGE_M),
+        sonar_range_m: args
+            .sonar_range
+            .or(file_range)
+            .unwrap_or(DEFAULT_BUG_SONAR_RANGE_M),
     };
     let count = if args.planners.is_empty() {
         Method::ALL.len()

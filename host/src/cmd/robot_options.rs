@@ -71,10 +71,12 @@ pub fn resolve(options: &RobotOptions, params: &mut Params) -> Result<RobotConfi
     given("sonar_incidence_limit_deg", options.sonar.incidence_limit);
     given(
         "sweep_layout",
-        options.sweep_layout_explicit.then_some(match options.sweep_layout {
-            SweepLayout::Symmetric => 0.0,
-            SweepLayout::Seed => 1.0,
-        }),
+        options
+            .sweep_layout_explicit
+            .then_some(match options.sweep_layout {
+                SweepLayout::Symmetric => 0.0,
+                SweepLayout::Seed => 1.0,
+            }),
     );
     let robot = robot_file::resolve(base, file.as_ref(), &explicit)?;
     // The speed and the radius against what this robot (its sonar range) can be trusted
