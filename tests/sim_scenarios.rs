@@ -427,6 +427,9 @@ fn a_start_over_an_obstacle_gets_one_answer_from_plan_simulate_and_mission() {
         let json: serde_json::Value =
             serde_json::from_str(stdout.lines().last().unwrap_or("")).expect("one JSON line");
         assert_eq!(json["status"], "start_blocked", "{argv:?}: {stdout}");
+        if argv[0] != "plan" {
+            assert_eq!(json["stop_cause"], "start_blocked", "{argv:?}: {stdout}");
+        }
         assert_eq!(out.status.code(), Some(3), "{argv:?}: {stdout}");
     }
     // The human line says why and that nothing ran.
