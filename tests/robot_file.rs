@@ -51,6 +51,19 @@ fn robot_file(dir: &Path, edits: &[(&str, &str)]) -> PathBuf {
     path
 }
 
+/// `twil plan` on `da`/`par` with the robot file `robot`.
+fn plan_argv<'a>(da: &'a Path, par: &'a Path, robot: &'a Path) -> Vec<&'a str> {
+    vec![
+        "plan",
+        "--world",
+        s(da),
+        "--params",
+        s(par),
+        "--robot",
+        s(robot),
+    ]
+}
+
 /// `twil simulate` on `da`/`par` with the robot file `robot` and `extra` options.
 fn simulate(da: &Path, par: &Path, robot: &Path, extra: &[&str]) -> Output {
     let mut args = vec![
@@ -123,16 +136,9 @@ fn a_larger_planning_radius_closes_a_narrow_doorway() {
     let dir = tempfile::tempdir().unwrap();
     let (da, par) = doorway(dir.path());
     let plan = |robot: &Path| {
-        let out = run(&[
-            "plan",
-            "--world",
-            s(&da),
-            "--params",
-            s(&par),
-            "--robot",
-            s(robot),
-            "--json",
-        ]);
+        let mut argv = plan_argv(&da, &par, robot);
+        argv.push("--json");
+        let out = run(&argv);
         (out.status.code(), stdout_json(&out)["status"].clone())
     };
     let same = robot_file(dir.path(), &[]);
@@ -223,15 +229,7 @@ fn each_mistake_is_one_line_naming_file_line_key_and_value() {
     let path = dir.path().join("robot.toml");
     let plan = |text: &str| {
         std::fs::write(&path, text).unwrap();
-        error_line(&[
-            "plan",
-            "--world",
-            s(&da),
-            "--params",
-            s(&par),
-            "--robot",
-            s(&path),
-        ])
+        error_line(&plan_argv(&da, &par, &path))
     };
     let p = path.display();
     assert_eq!(
