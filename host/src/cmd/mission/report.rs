@@ -198,3 +198,49 @@ pub(super) fn write_outputs(
     .with_context(|| format!("{}: cannot write", path.display()))?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use twil_core::link::RunState;
+
+    fn outcome(status: MissionStatus, cause: StopCause, min_clearance_m: Option<f32>) -> Outcome {
+        Outcome {
+            report: MissionReport {
+                state: RunState::Ended,
+                status,
+                phase: MissionPhase::Done,
+                stats: Default::default(),
+                max_control_instructions: 0,
+                max_plan_instructions: 0,
+                stack_high_water_bytes: 0,
+                stop_ticks: 0,
+                stop_latency_us: 0,
+                stop_cause: cause,
+                emergency_stop: false,
+            },
+            info: DeviceInfo::for_build(Build::Host),
+            distance_m: 1.0,
+            min_clearance_m,
+            poses: 3,
+            interrupted: false,
+            link: Default::default(),
+        }
+    }
+
+    #[test]
+    fn the_json_says_why_on_every_end_and_a_failsafe_abort_names_its_cause() {
+        let lost = outcome(MissionStatus::Aborted, StopCause::LinkLost, Some(0.2));
+        let v = result_json(&lost);
+        assert_eq!(
+            (&v["status"], &v["stop_cause"]),
+            (&json!("aborted"), &json!("link_lost"))
+        );
+        let reached = outcome(MissionStatus::Reached, StopCause::None, Some(0.2));
+        assert_eq!(result_json(&reached)["stop_cause"], "reached");
+        let hit = outcome(MissionStatus::Reached, StopCause::None, Some(-0.01));
+        assert_eq!(result_json(&hit)["stop_cause"], "collision");
+        let overrun = outcome(MissionStatus::Aborted, StopCause::ControllerOverrun, None);
+        assert_eq!(stop_cause(&overrun), "controller_overrun");
+    }
+}
