@@ -20,6 +20,7 @@ fn world(name: &str, size: &str) -> twil_host::cmd::plan::World {
         record: None,
         scale: None,
         remote: None,
+        robot: None,
     })
     .unwrap()
 }

@@ -106,6 +106,14 @@ fn every_file_option(file: &Path) -> Vec<(&'static str, Vec<String>)> {
             "simulate --known",
             sim(&["--real", &own(&da), "--params", &own(&par), "--known", &f]),
         ),
+        (
+            "plan --robot",
+            plan(&["--world", &own(&da), "--params", &own(&par), "--robot", &f]),
+        ),
+        (
+            "simulate --robot",
+            sim(&["--real", &own(&da), "--params", &own(&par), "--robot", &f]),
+        ),
         ("cspace --rob", cs("--rob", &f)),
         (
             "cspace --from-map",
@@ -214,6 +222,20 @@ fn escape_sequences_in_files_are_shown_escaped() {
         err.contains("esc.da: line 4") && err.contains("\\u{1b}[0m"),
         "{err}"
     );
+    // And the robot file's, whether the TOML parser or the key check refuses it.
+    for text in ["wheel_radius_m = \u{1b}[2J\n", "\"\u{9b}6n\" = 1\n"] {
+        let robot = write("esc.toml", text);
+        let err = fails(&[
+            "plan",
+            "--world",
+            s(&world("office.da")),
+            "--params",
+            s(&world("office.par")),
+            "--robot",
+            s(&robot),
+        ]);
+        assert!(err.contains("esc.toml:1: "), "{err}");
+    }
 }
 
 #[test]

@@ -51,6 +51,7 @@ fn plan_args(world: &str, kind: twil_host::classic::Method) -> host_plan::Args {
         record: None,
         scale: None,
         remote: None,
+        robot: None,
     }
 }
 

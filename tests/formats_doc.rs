@@ -74,11 +74,17 @@ fn every_example_file_in_formats_md_reads_back() {
             "TRA" => {
                 load_tra(&p).unwrap_or_else(|e| panic!("{e}"));
             }
+            "toml" => {
+                let file = twil_host::robot_file::read(&p).unwrap_or_else(|e| panic!("{e}"));
+                let default = twil_core::robot::RobotConfig::DEFAULT;
+                twil_host::robot_file::resolve(default, Some(&file), &[])
+                    .unwrap_or_else(|e| panic!("{e}"));
+            }
             other => panic!("{name}: no reader for .{other}"),
         }
         read.push(ext.to_string());
     }
-    for ext in ["da", "par", "ROB", "MAP", "TRA"] {
+    for ext in ["da", "par", "ROB", "MAP", "TRA", "toml"] {
         assert!(
             read.iter().any(|r| r == ext),
             "docs/formats.md has no .{ext} example"

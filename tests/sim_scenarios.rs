@@ -216,6 +216,7 @@ fn json_is_exactly_one_object_with_the_issue_keys() {
     let keys: BTreeSet<&str> = v.as_object().unwrap().keys().map(|k| k.as_str()).collect();
     let expected: BTreeSet<&str> = [
         "status",
+        "stop_cause",
         "stops",
         "full_sweeps",
         "replans",
@@ -228,6 +229,7 @@ fn json_is_exactly_one_object_with_the_issue_keys() {
     .collect();
     assert_eq!(keys, expected);
     assert_eq!(v["status"], "reached");
+    assert_eq!(v["stop_cause"], "reached");
     for k in ["stops", "full_sweeps", "replans", "controller_overruns"] {
         assert!(v[k].is_u64(), "{k}: {}", v[k]);
     }
@@ -425,6 +427,9 @@ fn a_start_over_an_obstacle_gets_one_answer_from_plan_simulate_and_mission() {
         let json: serde_json::Value =
             serde_json::from_str(stdout.lines().last().unwrap_or("")).expect("one JSON line");
         assert_eq!(json["status"], "start_blocked", "{argv:?}: {stdout}");
+        if argv[0] != "plan" {
+            assert_eq!(json["stop_cause"], "start_blocked", "{argv:?}: {stdout}");
+        }
         assert_eq!(out.status.code(), Some(3), "{argv:?}: {stdout}");
     }
     // The human line says why and that nothing ran.

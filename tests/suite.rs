@@ -23,6 +23,7 @@ mod plan_scenarios;
 mod preset;
 mod protocol_client;
 mod recording;
+mod robot_file;
 mod safe_params;
 mod sim_scenarios;
 mod sonar_beam;

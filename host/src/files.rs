@@ -15,6 +15,7 @@
 //! | `.ROB` | 1 MiB | 80 polygons of 16 vertices (2 560 numbers) |
 //! | `.MAP` | 4 MiB | 131 072 cells (each up to 4 UTF-8 bytes) in up to 4 096 rows |
 //! | `.TRA` | 1 MiB | 512 points |
+//! | robot file (`.toml`) | 256 KiB | 37 keys with comments (about 7 KiB) |
 //! | saved map | `width × height` bytes | one byte per cell |
 //!
 //! A [`FileError`] reads `path: line N: ...` (or `path: ...` when the problem is the whole
@@ -67,6 +68,13 @@ pub const TRA: Format = Format {
     name: "a .TRA file",
     max_bytes: MIB,
     doc: "docs/formats.md#tra",
+};
+
+/// Robot file (`--robot`, `twil robot init`): about 7 KiB when generated.
+pub const ROBOT: Format = Format {
+    name: "a robot file",
+    max_bytes: 256 * 1024,
+    doc: "docs/formats.md#robot-file",
 };
 
 /// Where the saved map (`twil plan --map`) is described.

@@ -12,5 +12,7 @@ pub mod planning;
 pub mod qemu_cmd;
 pub mod record;
 pub mod remote;
+pub mod robot_file;
 pub mod sim;
+pub mod stop_cause;
 pub mod world_io;

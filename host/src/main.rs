@@ -36,6 +36,8 @@ enum Command {
     View(cmd::view::Args),
     /// Check the link to the firmware (QEMU, TCP or a serial port).
     Ping(cmd::ping::Args),
+    /// Write a robot file (`init FILE.toml`) or show the robot constants in use (`show`).
+    Robot(cmd::robot::Args),
 }
 
 fn main() {
@@ -49,6 +51,7 @@ fn main() {
         Command::Cspace(args) => cmd::cspace::run(args),
         Command::Ping(args) => cmd::ping::run(args),
         Command::View(args) => cmd::view::run(args),
+        Command::Robot(args) => cmd::robot::run(args),
     };
     match result {
         Ok(ending) => std::process::exit(ending.code()),

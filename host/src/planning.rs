@@ -13,6 +13,7 @@ use twil_core::geom::PointM;
 use twil_core::grid::{Grid400, GridGeometry};
 use twil_core::plan::{PathM, PlanReport, PlanStatus, Planner, PlannerKind};
 use twil_core::raster::mark_polygon;
+use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
 use crate::world_io;
@@ -90,6 +91,8 @@ pub struct World {
     pub world_path: Option<PathBuf>,
     /// The `--map` file, if any.
     pub map_path: Option<PathBuf>,
+    /// The robot: the defaults with the `.par` radius, or a `--robot` file's constants.
+    pub robot: RobotConfig,
 }
 
 /// The geometry for a size and resolution, refused with a clear message when it does not fit
@@ -138,6 +141,8 @@ pub struct WorldFiles {
     pub size: SizeM,
     /// Cell side, metres.
     pub resolution_m: f32,
+    /// A robot file (`--robot`): its `planning_radius_m`, if set, replaces the `.par` radius.
+    pub robot: Option<PathBuf>,
 }
 
 /// Read `files` and build the map: the `.da` polygons grown by the `.par` robot radius
@@ -145,7 +150,15 @@ pub struct WorldFiles {
 /// saved map (already grown, see [`crate::world_io`]), on a [`Grid400`].
 pub fn load_world(files: &WorldFiles) -> anyhow::Result<World> {
     let geometry = geometry_for(files.size, files.resolution_m)?;
-    let params = world_io::read_par(&files.params)?;
+    let mut params = world_io::read_par(&files.params)?;
+    let file = files
+        .robot
+        .as_deref()
+        .map(crate::robot_file::read)
+        .transpose()?;
+    let base = RobotConfig::DEFAULT.with_planning_radius_m(params.robot_radius_m);
+    let robot = crate::robot_file::resolve(base, file.as_ref(), &[])?;
+    params.robot_radius_m = robot.planning_radius_m;
     let empty = || {
         Grid400::new(geometry)
             .map(Box::new)
@@ -182,6 +195,7 @@ pub fn load_world(files: &WorldFiles) -> anyhow::Result<World> {
         marking_work,
         world_path: files.world.clone(),
         map_path: files.map.clone(),
+        robot,
     })
 }
 

@@ -14,6 +14,7 @@
 //! - [`plan`]: BFS, A* and any-angle planners with static queues and 4-bit scratch cells, and the
 //!   pruning of a path to what the sonar has just seen.
 //! - [`robot`]: the robot's physical constants, in one validated, serializable struct.
+//! - [`params`]: the same constants as a table of named parameters (robot file, docs, device).
 //! - [`sonar`], [`plant`], [`control`], [`trajectory`], [`mission`]: the navigation loop and
 //!   the simulated robot it can drive.
 //! - [`link`]: the host <-> firmware protocol.
@@ -39,6 +40,7 @@ pub mod limits;
 pub mod link;
 pub mod math;
 pub mod mission;
+pub mod params;
 pub mod plan;
 pub mod plant;
 pub mod raster;

@@ -37,5 +37,6 @@ pub fn plan_args(world: Option<PathBuf>, params: PathBuf) -> twil_host::cmd::pla
         record: None,
         scale: None,
         remote: None,
+        robot: None,
     }
 }

@@ -41,9 +41,13 @@ pub struct Args {
     /// Methods to run, comma-separated (default: all).
     #[arg(long, value_enum, value_delimiter = ',', value_name = "M,M,…")]
     pub planners: Vec<Method>,
-    /// Sonar range of the Bug robot, metres.
-    #[arg(long, default_value_t = 3.0, value_name = "M")]
-    pub sonar_range: f32,
+    /// Sonar range of the Bug robot, metres [default: 3, or the --robot file's `sonar_range_m`].
+    #[arg(long, value_name = "M")]
+    pub sonar_range: Option<f32>,
+    /// Robot file (`twil robot init`): its `planning_radius_m`, if set, replaces the `.par`
+    /// radius, and its `sonar_range_m` is the Bug robot's unless --sonar-range is given.
+    #[arg(long, value_name = "FILE.toml")]
+    pub robot: Option<PathBuf>,
     /// Write compare.png, compare.json and compare.md to this folder.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -194,6 +198,9 @@ pub fn figure(world: &World, rows: &[Row]) -> anyhow::Result<Figure> {
     Ok(fig)
 }
 
+/// The Bug robot's sonar range without --sonar-range or a robot file's, metres.
+const DEFAULT_BUG_SONAR_RANGE_M: f32 = 3.0;
+
 /// Run `twil compare`.
 pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
     let world = planning::load_world(&WorldFiles {
@@ -202,9 +209,23 @@ pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
         map: None,
         size: args.size,
         resolution_m: args.resolution,
+        robot: args.robot.clone(),
     })?;
+    // The file's sonar range, if it sets one (load_world has checked it).
+    let file = args
+        .robot
+        .as_deref()
+        .map(crate::robot_file::read)
+        .transpose()?;
+    let file_range = file
+        .as_ref()
+        .and_then(|f| f.get("sonar_range_m"))
+        .map(|_| world.robot.sonar_range_m);
     let options = Options {
-        sonar_range_m: args.sonar_range,
+        sonar_range_m: args
+            .sonar_range
+            .or(file_range)
+            .unwrap_or(DEFAULT_BUG_SONAR_RANGE_M),
     };
     let count = if args.planners.is_empty() {
         Method::ALL.len()

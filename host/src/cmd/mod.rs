@@ -7,6 +7,7 @@ pub mod mission_link;
 pub mod ping;
 pub mod plan;
 pub mod preset;
+pub mod robot;
 pub mod robot_options;
 pub mod simulate;
 pub mod sonar_grid;

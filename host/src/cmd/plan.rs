@@ -69,6 +69,10 @@ pub struct Args {
     /// plan, and the JSON adds `mcu_instructions`, `static_ram_bytes` and `matches_host`.
     #[arg(long, value_name = "DEVICE")]
     pub remote: Option<crate::remote::RemoteSpec>,
+    /// Robot file (`twil robot init`): its `planning_radius_m`, if set, replaces the `.par`
+    /// radius; every value is checked against the robot model.
+    #[arg(long, value_name = "FILE.toml")]
+    pub robot: Option<PathBuf>,
 }
 
 /// Read the files named by `args` and build the map ([`crate::planning::load_world`]).
@@ -79,6 +83,7 @@ pub fn load(args: &Args) -> anyhow::Result<World> {
         map: args.map.clone(),
         size: args.size,
         resolution_m: args.resolution,
+        robot: args.robot.clone(),
     })
 }
 

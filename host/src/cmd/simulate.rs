@@ -44,24 +44,31 @@ pub enum SonarArg {
 pub struct SonarArgs {
     /// Simulated sonar: `ray` one exact ray; `beam` an ultrasonic beam (cone, first echo,
     /// smooth walls echo only near face-on, corners at any angle; docs/robot-model.md).
-    #[arg(long, value_enum, default_value_t = SonarArg::Beam)]
-    pub sonar: SonarArg,
-    /// Half-angle of the beam's cone, degrees (0 to 45; the HC-SR04 data sheet's 15°).
-    #[arg(long, default_value_t = RobotConfig::DEFAULT.sonar_beam_half_angle_deg, value_name = "DEG")]
-    pub beam_half_angle: f32,
+    /// [default: beam, or the --robot file's `sonar_beam`]
+    #[arg(long, value_enum)]
+    pub sonar: Option<SonarArg>,
+    /// Half-angle of the beam's cone, degrees (0 to 45; the HC-SR04 data sheet's 15°)
+    /// [default: 15, or the --robot file's `sonar_beam_half_angle_deg`].
+    #[arg(long, value_name = "DEG")]
+    pub beam_half_angle: Option<f32>,
     /// Beam: a smooth wall echoes only when the ray is within this angle of
-    /// its normal, degrees (0 to 90).
-    #[arg(long, default_value_t = RobotConfig::DEFAULT.sonar_incidence_limit_deg, value_name = "DEG")]
-    pub incidence_limit: f32,
+    /// its normal, degrees (0 to 90) [default: 70, or the --robot file's
+    /// `sonar_incidence_limit_deg`].
+    #[arg(long, value_name = "DEG")]
+    pub incidence_limit: Option<f32>,
 }
 
 impl SonarArgs {
-    /// `robot` with this sonar model.
+    /// `robot` with this sonar model (an option left out: the command's default).
     pub fn apply(&self, robot: RobotConfig) -> RobotConfig {
         RobotConfig {
-            sonar_beam: self.sonar == SonarArg::Beam,
-            sonar_beam_half_angle_deg: self.beam_half_angle,
-            sonar_incidence_limit_deg: self.incidence_limit,
+            sonar_beam: self.sonar.unwrap_or(SonarArg::Beam) == SonarArg::Beam,
+            sonar_beam_half_angle_deg: self
+                .beam_half_angle
+                .unwrap_or(RobotConfig::DEFAULT.sonar_beam_half_angle_deg),
+            sonar_incidence_limit_deg: self
+                .incidence_limit
+                .unwrap_or(RobotConfig::DEFAULT.sonar_incidence_limit_deg),
             ..robot
         }
     }
@@ -123,21 +130,29 @@ pub struct Args {
     /// Seed of the simulated sonar noise and faults.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Sonar range, metres (0.26 < range ≤ 6; the seed's 1.5 by default).
-    #[arg(long, default_value_t = 1.5)]
-    pub sonar_range: f32,
-    /// Standard deviation of the simulated sonar noise, metres (a measured HC-SR04: about
-    /// 0.005; docs/robot-model.md).
-    #[arg(long, default_value_t = 0.0)]
-    pub sonar_noise: f32,
-    /// Probability that a reading which would echo returns no echo (missed echo), 0 to 1.
-    #[arg(long, default_value_t = 0.0, value_name = "P")]
-    pub sonar_dropout: f32,
-    /// Probability of a spurious echo nearer than the true one (crosstalk, multipath), 0 to 1.
-    #[arg(long, default_value_t = 0.0, value_name = "P")]
-    pub sonar_spurious: f32,
+    /// Sonar range, metres (0.26 < range ≤ 6) [default: the seed's 1.5, or the --robot
+    /// file's `sonar_range_m`].
+    #[arg(long)]
+    pub sonar_range: Option<f32>,
+    /// Standard deviation of the simulated sonar noise, metres [default: 0, or the --robot
+    /// file's `sonar_noise_std_m`].
+    #[arg(long)]
+    pub sonar_noise: Option<f32>,
+    /// Probability that a reading which would echo returns no echo (missed echo), 0 to 1
+    /// [default: 0, or the --robot file's `sonar_dropout_probability`].
+    #[arg(long, value_name = "P")]
+    pub sonar_dropout: Option<f32>,
+    /// Probability of a spurious echo nearer than the true one (crosstalk, multipath), 0 to 1
+    /// [default: 0, or the --robot file's `sonar_spurious_probability`].
+    #[arg(long, value_name = "P")]
+    pub sonar_spurious: Option<f32>,
     #[command(flatten)]
     pub sonar_model: SonarArgs,
+    /// Robot file (`twil robot init`): the robot's constants; keys left out keep their
+    /// defaults, an explicit option overrides the file, and its `planning_radius_m`, if set,
+    /// replaces the `.par` radius.
+    #[arg(long, value_name = "FILE.toml")]
+    pub robot: Option<PathBuf>,
     /// Mission time limit, seconds of simulated time [default: the preset's: 900; seed: 1800, its
     /// 18.85 s settles].
     #[arg(long)]
@@ -212,24 +227,22 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         );
     }
     let choices = args.choices();
-    let robot = args
-        .sonar_model
-        .apply(RobotConfig {
+    let mut params = params;
+    let robot = crate::cmd::robot_options::resolve(
+        &crate::cmd::robot_options::RobotOptions {
+            file: args.robot.as_deref(),
             sonar_range_m: args.sonar_range,
             sonar_noise_std_m: args.sonar_noise,
             sonar_dropout_probability: args.sonar_dropout,
             sonar_spurious_probability: args.sonar_spurious,
+            sonar: &args.sonar_model,
             noise_seed: args.seed,
             sweep_layout: choices.sweep_layout,
-            ..RobotConfig::default()
-        })
-        .with_planning_radius_m(params.robot_radius_m);
-    if let Err(e) = robot.validate() {
-        bail!("{}", crate::cmd::robot_options::message(&e, &robot));
-    }
-    // The speed and the radius against what this robot (its sonar range) can be trusted
-    // with, naming the .par's line.
-    crate::world_io::read_par_for(&args.params, &robot)?;
+            sweep_layout_explicit: args.follow.sweep_readings.is_some(),
+            params_path: &args.params,
+        },
+        &mut params,
+    )?;
     if !(args.plan_latency_ms.is_finite() && (0.0..=60_000.0).contains(&args.plan_latency_ms)) {
         bail!(
             "--plan-latency-ms: must be between 0 and 60000, got {}",
@@ -284,10 +297,11 @@ impl Args {
     }
 }
 
-/// The `--json` object: exactly the keys of the issue.
+/// The `--json` object: exactly the keys of the issue, and why the mission ended.
 pub fn result_json(result: &SimResult) -> serde_json::Value {
     json!({
         "status": result.status.name(),
+        "stop_cause": stop_cause(result),
         "stops": result.stats.stops,
         "full_sweeps": result.stats.full_sweeps,
         "replans": result.stats.replans,
@@ -309,13 +323,15 @@ pub fn summary_json(args: &Args, setup: &SimSetup, result: &SimResult) -> serde_
         "settle": args.choices().settle_name(),
         "settle_time_s": round3(mission_config_settle_s(setup)),
         "reference_feed_forward": setup.reference_feed_forward,
-        "sweep_readings": args.choices().sweep_readings_name(),
+        // The layout used: the preset's, `--sweep-readings`' or the robot file's.
+        "sweep_readings": LoopChoices { sweep_layout: setup.robot.sweep_layout, ..args.choices() }.sweep_readings_name(),
         "turn_in_place": setup.turn_in_place,
         "real": args.real.display().to_string(),
         "known": args.known.as_ref().map(|p| p.display().to_string()),
         "params": args.params.display().to_string(),
         "seed": args.seed,
-        "sonar_range_m": args.sonar_range,
+        "sonar_range_m": setup.robot.sonar_range_m,
+        "robot": crate::robot_file::robot_json(&setup.robot),
         "moving_sweeps": stats.moving_sweeps,
         "sweeps": result.sweeps,
         "plans": stats.plans,
@@ -341,6 +357,16 @@ pub fn summary_json(args: &Args, setup: &SimSetup, result: &SimResult) -> serde_
         }
     }
     v
+}
+
+/// Why the simulated mission ended ([`crate::stop_cause`]).
+pub fn stop_cause(result: &SimResult) -> &'static str {
+    crate::stop_cause::name(
+        result.status.name(),
+        result.stats.unreachable_reason,
+        twil_core::failsafe::StopCause::None,
+        result.status == sim::SimStatus::Aborted,
+    )
 }
 
 fn mission_config_settle_s(setup: &SimSetup) -> f32 {
@@ -417,7 +443,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     } else {
         let s = &result.stats;
         println!(
-            "{}: {:.2} m travelled in {:.1} s simulated; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {:.3} m",
+            "{}: {:.2} m travelled in {:.1} s simulated; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {:.3} m; stop cause: {}",
             result.status.name(),
             result.distance_m,
             result.sim_time_s,
@@ -425,7 +451,8 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
             s.full_sweeps,
             s.moving_sweeps,
             s.plans,
-            result.min_clearance_m
+            result.min_clearance_m,
+            stop_cause(&result)
         );
         if let Some(len) = result.known_map_plan_length_m {
             println!("known-map plan length: {len:.2} m");

@@ -57,6 +57,8 @@ impl StartBlocked {
     pub fn json(&self) -> serde_json::Value {
         json!({
             "status": "start_blocked",
+            // Every end says why (crate::stop_cause); here nothing ran.
+            "stop_cause": "start_blocked",
             "distance_m": 0.0,
             "min_clearance_m": ((self.clearance_m as f64) * 1000.0).round() / 1000.0,
         })

@@ -20,7 +20,7 @@ pub struct Inputs {
 /// Read and check the files and numbers of `args` (errors name the file and line, or the
 /// option).
 pub fn read_inputs(args: &Args) -> Result<Inputs> {
-    let params = read_par(&args.params)?;
+    let mut params = read_par(&args.params)?;
     let known = args.known.as_deref().map(read_da).transpose()?;
     let real = args.real.as_deref().map(read_da).transpose()?;
     let (w, h) = parse_size(&args.size)?;
@@ -34,21 +34,27 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
             geometry.height()
         );
     }
-    let robot = args
-        .sonar_model
-        .apply(RobotConfig {
+    let choices = args.choices();
+    let robot = crate::cmd::robot_options::resolve(
+        &crate::cmd::robot_options::RobotOptions {
+            file: args.robot.as_deref(),
             sonar_range_m: args.sonar_range,
             sonar_noise_std_m: args.sonar_noise,
+            // The simulated ranger's faults are `twil simulate`'s options (the robot file
+            // can still set them for `--remote sim`).
+            sonar_dropout_probability: None,
+            sonar_spurious_probability: None,
+            sonar: &args.sonar_model,
             noise_seed: args.seed,
-            ..RobotConfig::default()
-        })
-        .with_planning_radius_m(params.robot_radius_m);
-    if let Err(e) = robot.validate() {
-        bail!("{}", crate::cmd::robot_options::message(&e, &robot));
+            sweep_layout: choices.sweep_layout,
+            sweep_layout_explicit: args.follow.sweep_readings.is_some(),
+            params_path: &args.params,
+        },
+        &mut params,
+    )?;
+    if let Some(path) = &args.robot {
+        refuse_unsent(path, &robot)?;
     }
-    // The speed and the radius against what this robot (its sonar range) can be trusted
-    // with, naming the .par's line.
-    crate::world_io::read_par_for(&args.params, &robot)?;
     let time_limit_s = args.time_limit_s();
     if !(time_limit_s.is_finite() && time_limit_s > 0.0) {
         bail!("--time-limit: must be a positive number of seconds, got {time_limit_s}");
@@ -101,7 +107,44 @@ impl Args {
     }
 }
 
-pub fn mission_setup(args: &Args, params: &Params) -> MissionSetup {
+/// The constants `SetParams` and `SetMission` carry to the device; the device keeps its own
+/// defaults for every other (until it takes parameters: issue 25).
+pub const SENT_TO_DEVICE: [&str; 7] = [
+    "planning_radius_m",
+    "sonar_range_m",
+    "sonar_noise_std_m",
+    "sonar_beam",
+    "sonar_beam_half_angle_deg",
+    "sonar_incidence_limit_deg",
+    "sweep_layout",
+];
+
+/// Refuse a robot file that sets a constant the device cannot be sent to a value other than
+/// its default: the mission would run with another robot than the file says.
+fn refuse_unsent(path: &std::path::Path, robot: &RobotConfig) -> Result<()> {
+    let file = crate::robot_file::read(path)?;
+    for entry in &file.entries {
+        let p = entry.param;
+        if !SENT_TO_DEVICE.contains(&p.name) && p.get(robot) != p.default_value() {
+            bail!(
+                "{}:{}: `{}` = {}: twil mission cannot send this constant to the device yet \
+                 (it keeps its default, {}); only {} are sent",
+                path.display(),
+                entry.line,
+                p.name,
+                crate::robot_file::toml_text(p, entry.value),
+                crate::robot_file::toml_text(p, p.default_value()),
+                SENT_TO_DEVICE.join(", ")
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The `SetMission` of `args` and `inputs` (the robot's sonar constants, resolved from the
+/// options and the robot file).
+pub fn mission_setup(args: &Args, inputs: &Inputs) -> MissionSetup {
+    let (params, robot) = (&inputs.params, &inputs.robot);
     MissionSetup {
         mode: mission_mode(args.mode),
         planner: args.choices().planner_kind(),
@@ -109,20 +152,20 @@ pub fn mission_setup(args: &Args, params: &Params) -> MissionSetup {
         initial_heading_rad: params.initial_heading_deg.to_radians(),
         goal: params.goal,
         speed_m_s: params.speed_m_s,
-        sonar_range_m: args.sonar_range,
+        sonar_range_m: robot.sonar_range_m,
         time_limit_s: args.time_limit_s(),
         constant_depth_filter: args.choices().rcd,
         trust_seen_space: !args.choices().seed_prune,
         noise_seed: args.seed,
-        sonar_noise_std_m: args.sonar_noise,
+        sonar_noise_std_m: robot.sonar_noise_std_m,
         link_loss: args.link_loss(),
-        sonar_beam: args.sonar_model.sonar == SonarArg::Beam,
-        beam_half_angle_deg: args.sonar_model.beam_half_angle,
-        incidence_limit_deg: args.sonar_model.incidence_limit,
+        sonar_beam: robot.sonar_beam,
+        beam_half_angle_deg: robot.sonar_beam_half_angle_deg,
+        incidence_limit_deg: robot.sonar_incidence_limit_deg,
         settle: args.choices().settle,
         reference_feed_forward: args.choices().reference_feed_forward,
         turn_in_place: args.choices().turn_in_place,
-        sweep_layout: args.choices().sweep_layout,
+        sweep_layout: robot.sweep_layout,
     }
 }
 
@@ -134,7 +177,7 @@ pub(super) fn mission_mode(mode: Mode) -> MissionMode {
 }
 
 /// What the device says about a refused `SetMission`, naming the field and where it came from.
-pub(super) fn explain_bad_mission(args: &Args, error: &ErrorReply) -> String {
+pub(super) fn explain_bad_mission(args: &Args, robot: &RobotConfig, error: &ErrorReply) -> String {
     if error.code != ErrorCode::BadMission {
         return format!("the device refused the mission: {error}");
     }
@@ -162,16 +205,16 @@ pub(super) fn explain_bad_mission(args: &Args, error: &ErrorReply) -> String {
             error.limit as f32 / 1000.0
         ),
         5 => format!("speed ({par})"),
-        6 => format!("sonar range (--sonar-range {})", args.sonar_range),
+        6 => format!("sonar range (--sonar-range {})", robot.sonar_range_m),
         7 => format!("time limit (--time-limit {})", args.time_limit_s()),
-        11 => format!("sonar noise (--sonar-noise {})", args.sonar_noise),
+        11 => format!("sonar noise (--sonar-noise {})", robot.sonar_noise_std_m),
         14 => format!(
             "beam half-angle (--beam-half-angle {})",
-            args.sonar_model.beam_half_angle
+            robot.sonar_beam_half_angle_deg
         ),
         15 => format!(
             "incidence limit (--incidence-limit {})",
-            args.sonar_model.incidence_limit
+            robot.sonar_incidence_limit_deg
         ),
         12 => format!("link timeout (--link-timeout-ms {})", args.link_timeout_ms),
         100 => format!(

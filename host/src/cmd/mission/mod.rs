@@ -40,7 +40,7 @@ use twil_core::plant::Plant;
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
-use super::simulate::{parse_size, read_da, read_par, Mode, SonarArg, SonarArgs};
+use super::simulate::{parse_size, read_da, read_par, Mode, SonarArgs};
 use crate::cmd::preset::{FollowArgs, LoopArgs};
 use crate::record::telemetry::TelemetryRecorder;
 use crate::record::{RecordArgs, Recorder};
@@ -94,12 +94,20 @@ pub struct Args {
     /// Seed of the simulated sonar noise (simulated devices).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Sonar range, metres (0.26 < range ≤ 6).
-    #[arg(long, default_value_t = 1.5)]
-    pub sonar_range: f32,
-    /// Standard deviation of the simulated sonar noise, metres (simulated devices).
-    #[arg(long, default_value_t = 0.0)]
-    pub sonar_noise: f32,
+    /// Sonar range, metres (0.26 < range ≤ 6) [default: 1.5, or the --robot file's
+    /// `sonar_range_m`].
+    #[arg(long)]
+    pub sonar_range: Option<f32>,
+    /// Standard deviation of the simulated sonar noise, metres (simulated devices) [default: 0,
+    /// or the --robot file's `sonar_noise_std_m`].
+    #[arg(long)]
+    pub sonar_noise: Option<f32>,
+    /// Robot file (`twil robot init`): keys left out keep their defaults, an explicit option
+    /// overrides the file. Until the device takes parameters, only the constants the mission
+    /// set-up carries may differ from the device's defaults (`planning_radius_m`, the sonar's
+    /// range, noise and beam, `sweep_layout`); any other is refused, naming its line.
+    #[arg(long, value_name = "FILE.toml")]
+    pub robot: Option<PathBuf>,
     /// The simulated sonar (simulated devices).
     #[command(flatten)]
     pub sonar_model: SonarArgs,
@@ -321,7 +329,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     } else {
         let s = &report.stats;
         println!(
-            "{}: {:.2} m travelled in {:.1} s of mission time; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {}",
+            "{}: {:.2} m travelled in {:.1} s of mission time; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {}; stop cause: {}",
             report::status_word(&outcome),
             outcome.distance_m,
             s.time_s,
@@ -331,7 +339,8 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
             s.plans,
             outcome
                 .min_clearance_m
-                .map_or("unknown (no --real)".to_string(), |c| format!("{c:.3} m"))
+                .map_or("unknown (no --real)".to_string(), |c| format!("{c:.3} m")),
+            report::stop_cause(&outcome)
         );
         // The in-process device (`--remote sim`) measures nothing: no line of zeros.
         if report::measured(&outcome) {
@@ -408,9 +417,9 @@ fn upload(args: &Args, inputs: &Inputs, remote: &mut Remote, build: Build) -> Re
             })?;
         }
     }
-    match remote.request(Request::SetMission(mission_setup(args, &inputs.params)))? {
+    match remote.request(Request::SetMission(mission_setup(args, inputs)))? {
         Reply::Ack => Ok(()),
-        Reply::Error(e) => bail!("{}", explain_bad_mission(args, &e)),
+        Reply::Error(e) => bail!("{}", explain_bad_mission(args, &inputs.robot, &e)),
         other => bail!("unexpected reply to SetMission: {other:?}"),
     }
 }
@@ -573,14 +582,14 @@ mod tests {
     fn refused_mission_fields_are_named() {
         let a = args(&[]);
         let speed = ErrorReply::new(ErrorCode::BadMission, 5, 0);
-        assert!(explain_bad_mission(&a, &speed).contains("speed ("));
+        assert!(explain_bad_mission(&a, &RobotConfig::DEFAULT, &speed).contains("speed ("));
         let off = ErrorReply {
             code: ErrorCode::BadMission,
             value: 4,
             limit: 0,
             detail: 1,
         };
-        assert!(explain_bad_mission(&a, &off).contains("the goal of"));
-        assert!(explain_bad_mission(&a, &off).contains("lies off its map"));
+        assert!(explain_bad_mission(&a, &RobotConfig::DEFAULT, &off).contains("the goal of"));
+        assert!(explain_bad_mission(&a, &RobotConfig::DEFAULT, &off).contains("lies off its map"));
     }
 }

@@ -3,18 +3,6 @@
 
 use super::*;
 
-/// The JSON name of a stop cause.
-pub fn stop_cause_name(cause: StopCause) -> Option<&'static str> {
-    match cause {
-        StopCause::None => None,
-        StopCause::Host => Some("host"),
-        StopCause::EmergencyStop => Some("emergency_stop"),
-        StopCause::LinkLost => Some("link_lost"),
-        StopCause::ControllerOverrun => Some("controller_overrun"),
-        StopCause::SensorFault(_) => Some("sensor_fault"),
-    }
-}
-
 pub(super) fn round3(x: f32) -> f64 {
     ((x as f64) * 1000.0).round() / 1000.0
 }
@@ -43,6 +31,7 @@ pub fn result_json(outcome: &Outcome) -> serde_json::Value {
     let s = &outcome.report.stats;
     json!({
         "status": status_word(outcome),
+        "stop_cause": stop_cause(outcome),
         "stops": s.stops,
         "full_sweeps": s.full_sweeps,
         "replans": s.replans,
@@ -52,6 +41,16 @@ pub fn result_json(outcome: &Outcome) -> serde_json::Value {
         "controller_overruns": s.controller_overruns,
         "mcu": mcu_json(outcome),
     })
+}
+
+/// Why the mission ended, one word on every end ([`crate::stop_cause`]).
+pub fn stop_cause(outcome: &Outcome) -> &'static str {
+    crate::stop_cause::name(
+        status_word(outcome),
+        outcome.report.stats.unreachable_reason,
+        outcome.report.stop_cause,
+        outcome.interrupted,
+    )
 }
 
 /// The mission's status word: the device's, except that a contact with the real world
@@ -85,7 +84,7 @@ pub(super) fn measured(outcome: &Outcome) -> bool {
 }
 
 /// `summary.json`: the `--json` object plus details.
-pub(super) fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value {
+pub(super) fn summary_json(args: &Args, inputs: &Inputs, outcome: &Outcome) -> serde_json::Value {
     let mut v = result_json(outcome);
     let s = &outcome.report.stats;
     let extra = json!({
@@ -99,12 +98,18 @@ pub(super) fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value 
         "settle": args.choices().settle_name(),
         "reference_feed_forward": args.choices().reference_feed_forward,
         "turn_in_place": args.choices().turn_in_place,
-        "sweep_readings": args.choices().sweep_readings_name(),
+        // The layout used: the preset's, `--sweep-readings`' or the robot file's.
+        "sweep_readings": crate::cmd::preset::LoopChoices {
+            sweep_layout: inputs.robot.sweep_layout,
+            ..args.choices()
+        }
+        .sweep_readings_name(),
         "real": args.real.as_ref().map(|p| p.display().to_string()),
         "known": args.known.as_ref().map(|p| p.display().to_string()),
         "params": args.params.display().to_string(),
         "seed": args.seed,
-        "sonar_range_m": args.sonar_range,
+        "sonar_range_m": inputs.robot.sonar_range_m,
+        "robot": crate::robot_file::robot_json(&inputs.robot),
         "moving_sweeps": s.moving_sweeps,
         "plans": s.plans,
         "blocked_replans": s.blocked_replans,
@@ -117,7 +122,6 @@ pub(super) fn summary_json(args: &Args, outcome: &Outcome) -> serde_json::Value 
         "unreachable_reason": s.unreachable_reason.map(|r| format!("{r:?}")),
         "plan_errors": s.plan_errors,
         "poses_reported": outcome.poses,
-        "stop_cause": stop_cause_name(outcome.report.stop_cause),
         "stop_latency_us": measured(outcome).then_some(outcome.report.stop_latency_us),
         "interrupted": outcome.interrupted,
         "link": outcome.link.json(),
@@ -189,8 +193,54 @@ pub(super) fn write_outputs(
     let path = dir.join("summary.json");
     std::fs::write(
         &path,
-        serde_json::to_string_pretty(&summary_json(args, outcome))? + "\n",
+        serde_json::to_string_pretty(&summary_json(args, inputs, outcome))? + "\n",
     )
     .with_context(|| format!("{}: cannot write", path.display()))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use twil_core::link::RunState;
+
+    fn outcome(status: MissionStatus, cause: StopCause, min_clearance_m: Option<f32>) -> Outcome {
+        Outcome {
+            report: MissionReport {
+                state: RunState::Ended,
+                status,
+                phase: MissionPhase::Done,
+                stats: Default::default(),
+                max_control_instructions: 0,
+                max_plan_instructions: 0,
+                stack_high_water_bytes: 0,
+                stop_ticks: 0,
+                stop_latency_us: 0,
+                stop_cause: cause,
+                emergency_stop: false,
+            },
+            info: DeviceInfo::for_build(Build::Host),
+            distance_m: 1.0,
+            min_clearance_m,
+            poses: 3,
+            interrupted: false,
+            link: Default::default(),
+        }
+    }
+
+    #[test]
+    fn the_json_says_why_on_every_end_and_a_failsafe_abort_names_its_cause() {
+        let lost = outcome(MissionStatus::Aborted, StopCause::LinkLost, Some(0.2));
+        let v = result_json(&lost);
+        assert_eq!(
+            (&v["status"], &v["stop_cause"]),
+            (&json!("aborted"), &json!("link_lost"))
+        );
+        let reached = outcome(MissionStatus::Reached, StopCause::None, Some(0.2));
+        assert_eq!(result_json(&reached)["stop_cause"], "reached");
+        let hit = outcome(MissionStatus::Reached, StopCause::None, Some(-0.01));
+        assert_eq!(result_json(&hit)["stop_cause"], "collision");
+        let overrun = outcome(MissionStatus::Aborted, StopCause::ControllerOverrun, None);
+        assert_eq!(stop_cause(&overrun), "controller_overrun");
+    }
 }
