@@ -2,10 +2,11 @@
 //! the values to the robot's config through the core's validation, say what was found.
 //!
 //! - Board: the STM32F405's flash sectors 10 and 11 (128 KiB each, 0x080C_0000..0x0810_0000,
-//!   RM0090 §3.3 table 5), taken from the program by `memory.x` (FLASH 768K). `stm32f4xx-hal`'s
-//!   `LockedFlash` reads them; each write or erase unlocks the flash for its own duration
-//!   (`UnlockedFlash`, locked again when dropped). Programming is byte-wide (PSIZE x8, what the
-//!   HAL sets): 16 µs a byte typical (DS8626 table 43), so a record of 16 bytes takes about
+//!   RM0090, "Embedded Flash memory", its sector table), taken from the program by `memory.x`
+//!   (FLASH 768K). `stm32f4xx-hal`'s `LockedFlash` reads them; each write or erase unlocks the
+//!   flash for its own duration (`UnlockedFlash`, locked again when dropped). Programming is
+//!   byte-wide (PSIZE x8, what the HAL sets): 16 µs a byte typical (DS8626, table "Flash
+//!   memory programming"), so a record of 16 bytes takes about
 //!   0.3 ms. Erasing a 128 KiB sector at x8 takes 2 s typical, 4 s at most, and the core stalls
 //!   the whole time (it fetches its code from the same bank): no interrupt runs and the
 //!   watchdog cannot be fed. The store erases only when a page is full (after about 8 190

@@ -299,7 +299,8 @@ impl<F: NorFlash> ParamStore<F> {
     /// Read every record: `values[i]` becomes the newest stored value of `ids[i]` (`None`: not
     /// stored). Anything but [`StoreStatus::Ok`] leaves every value `None` (defaults). Ids not
     /// in `ids` are skipped; `values` shorter than `ids` drops the values past its end. Work:
-    /// one pass over the records (at most a page's worth per page), `ids.len()` compares each.
+    /// one pass over the records (`ids.len()` compares each), a second after a repair; a
+    /// repair may erase a page (on the chip: seconds, see docs/firmware.md).
     pub fn load(&mut self, ids: &[ParamId], values: &mut [Option<f32>]) -> LoadReport {
         let (mut scanned, mut report) = self.scan(ids, values);
         if scanned == Err(StoreError::Corrupt) {
