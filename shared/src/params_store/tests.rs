@@ -354,13 +354,14 @@ fn series(count: usize) -> Vec<(usize, f32)> {
 
 /// Cut the power at every operation of every save of the series; after each cut the store
 /// must hold, for every parameter, the value before the save or (the one saved) the new one,
-/// load as `Ok` once anything was ever saved, and take the next save. Returns the number of
-/// cuts.
-fn cut_every_operation(saves: &[(usize, f32)]) -> u32 {
+/// load as `Ok` once anything was ever saved, and take the next save; a second cut during the
+/// repair that the first one may call for must keep the same values. Returns the numbers of
+/// cuts and of second cuts.
+fn cut_every_operation(saves: &[(usize, f32)]) -> (u32, u32) {
     let ids = [id("p0"), id("p1"), id("p2"), id("p3")];
     let mut flash = CutFlash::new();
     let mut committed = [None; 4];
-    let mut cuts = 0;
+    let (mut cuts, mut repair_cuts) = (0, 0);
     for (step, &(which, value)) in saves.iter().enumerate() {
         // The operations this save takes (load at boot, then the save), uncut.
         let mut s = ParamStore::new(flash.clone().power_back(), RANGE).unwrap();
@@ -377,8 +378,29 @@ fn cut_every_operation(saves: &[(usize, f32)]) -> u32 {
                 s.save(ids[which], value).is_err(),
                 "step {step} cut {cut_at}"
             );
-            // Power back: a reset loads the store.
-            let mut s = ParamStore::new(s.into_flash().power_back(), RANGE).unwrap();
+            // Power back: a reset loads the store. When that load repairs (writes or erases),
+            // the power goes again at each of the repair's operations first.
+            let after_cut = s.into_flash().power_back();
+            let mut probe = ParamStore::new(after_cut.clone(), RANGE).unwrap();
+            probe.load(&ids, &mut [None; 4]);
+            for second in 0..probe.into_flash().ops {
+                let mut again = after_cut.clone();
+                again.cut_at = Some(second);
+                let mut s = ParamStore::new(again, RANGE).unwrap();
+                s.load(&ids, &mut [None; 4]);
+                let mut s = ParamStore::new(s.into_flash().power_back(), RANGE).unwrap();
+                let mut values = [None; 4];
+                s.load(&ids, &mut values);
+                for k in 0..4 {
+                    let ok = values[k] == committed[k] || (k == which && values[k] == Some(value));
+                    assert!(
+                        ok,
+                        "step {step}, cuts at {cut_at} and repair's {second}: p{k}"
+                    );
+                }
+                repair_cuts += 1;
+            }
+            let mut s = ParamStore::new(after_cut, RANGE).unwrap();
             let mut values = [None; 4];
             let report = s.load(&ids, &mut values);
             let context = || format!("step {step}, cut at operation {cut_at} of {operations}");
@@ -416,14 +438,18 @@ fn cut_every_operation(saves: &[(usize, f32)]) -> u32 {
         flash = done;
         committed[which] = Some(value);
     }
-    cuts
+    (cuts, repair_cuts)
 }
 
 #[test]
 fn power_loss_at_every_byte_and_erase_keeps_the_old_or_the_new_value() {
     // 700 saves: the first formats the store (two erases), then about every 60th fills a
     // page, so the crate copies the live records and erases a page under the cuts too.
-    let cuts = cut_every_operation(&series(700));
-    println!("power loss: {cuts} cuts over 700 saves, every one loaded old or new");
+    let (cuts, repair_cuts) = cut_every_operation(&series(700));
+    println!(
+        "power loss: {cuts} cuts over 700 saves and {repair_cuts} more during the repairs, \
+         every one loaded old or new"
+    );
     assert!(cuts > 11_000, "{cuts} cuts");
+    assert!(repair_cuts > 0, "no cut called for a repair");
 }
