@@ -65,6 +65,7 @@ use panic_semihosting as _;
 #[cfg(feature = "hardware")]
 mod board;
 mod body;
+mod params;
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
@@ -316,6 +317,8 @@ mod app {
         device_memory: TwilDevice = TwilDevice::new(DeviceInfo::for_build(Build::Hardware)),
         pilot_memory: Pilot = Pilot::IDLE,
         irq_queue: heapless::spsc::Queue<u8, IRQ_QUEUE_BYTES> = heapless::spsc::Queue::new(),
+        #[cfg(feature = "qemu")]
+        param_ram: params::StoreFlash = params::StoreFlash::ERASED,
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         #[cfg_attr(feature = "qemu", allow(unused_mut))]
@@ -406,12 +409,28 @@ mod app {
             },
             &mut |bytes: &[u8]| queue_frame(&mut tx_producer, bytes),
         );
+        // The stored parameters, before the watchdog starts: a repair of a cut erase may erase
+        // a sector, which stalls the core for up to 4 s (params.rs).
+        #[cfg(feature = "hardware")]
+        let (robot_config, stored) = params::boot(params::StoreFlash::new(cx.device.FLASH));
+        #[cfg(feature = "qemu")]
+        let (robot_config, stored) = params::boot(cx.local.param_ram);
         log!(
-            "twil firmware up: static RAM {} bytes, stack {} bytes, reset cause {}",
+            "twil firmware up: static RAM {} bytes, stack {} bytes, reset cause {}, parameters {} ({} applied, {} refused)",
             memory::static_ram_bytes(),
             memory::stack_bytes(),
-            reset_cause
+            reset_cause,
+            stored.load.status,
+            stored.applied,
+            stored.refused
         );
+        if let Some(e) = stored.first_refused {
+            defmt::warn!(
+                "parameters: {} stored values refused, kept at their defaults; first: {}",
+                stored.refused,
+                e
+            );
+        }
         // (Board only: under QEMU the line after the first is the calibration's, which
         // xtask's log test reads.)
         #[cfg(feature = "hardware")]
@@ -419,8 +438,9 @@ mod app {
         let (producer, consumer) = ccm.rx_queue.split();
         let (irq_producer, irq_consumer) = cx.local.irq_queue.split();
 
+        // The simulated body runs on the defaults (the QEMU store boots empty: params.rs).
         #[cfg(feature = "qemu")]
-        let (body, head, world) = (body::Body::new(), body::Head, ccm.world);
+        let (body, head, world, _) = (body::Body::new(), body::Head, ccm.world, robot_config);
         #[cfg(feature = "hardware")]
         let (body, head, world) = {
             let gpioc = cx.device.GPIOC.split(&mut rcc);
@@ -446,7 +466,7 @@ mod app {
                 pc9: gpioc.pc9,
                 pc10: gpioc.pc10,
             };
-            let board = board::take(parts, &mut rcc, &twil_core::robot::RobotConfig::DEFAULT);
+            let board = board::take(parts, &mut rcc, &robot_config);
             let (body, head) = body::split(board);
             (body, head, ())
         };

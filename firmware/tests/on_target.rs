@@ -146,4 +146,36 @@ mod tests {
         memory::paint_stack();
         assert!(memory::stack_high_water_bytes() < after);
     }
+
+    /// The parameter store (`twil_core::params_store`) on the Cortex-M4, over the QEMU build's
+    /// RAM flash: values round trip, and the stack a save takes (its `sequential-storage`
+    /// futures are polled once, on the caller's stack) is printed and stays under 3 KiB.
+    #[test]
+    fn the_parameter_store_round_trips_on_the_chip() {
+        use twil_core::params_store::ram_flash::RamFlash;
+        use twil_core::params_store::{ParamId, ParamStore, StoreStatus};
+        let mut flash = RamFlash::<2048, 1024>::ERASED;
+        let (a, b) = (
+            ParamId::of_name("wheel_radius_m"),
+            ParamId::of_name("half_axle_m"),
+        );
+        memory::paint_stack();
+        let before = memory::stack_high_water_bytes();
+        let mut store = ParamStore::new(&mut flash, 0..2048).unwrap();
+        let mut values = [None; 2];
+        assert_eq!(store.load(&[a, b], &mut values).status, StoreStatus::Empty);
+        store.save(a, 0.05).unwrap();
+        store.save(b, 0.2).unwrap();
+        store.save(a, 0.06).unwrap();
+        let grown = memory::stack_high_water_bytes().saturating_sub(before);
+        defmt::println!(
+            "parameter store: load and 3 saves took {} B of stack",
+            grown
+        );
+        assert!(grown < 3072, "{}", grown);
+        let mut store = ParamStore::new(store.into_flash(), 0..2048).unwrap();
+        let report = store.load(&[a, b], &mut values);
+        assert_eq!(report.status, StoreStatus::Ok);
+        assert!(values == [Some(0.06), Some(0.2)]);
+    }
 }

@@ -19,6 +19,8 @@
 //!   the simulated robot it can drive.
 //! - [`link`]: the host <-> firmware protocol.
 //! - [`cspace`]: the two-link manipulator planner of seed 000.
+//! - [`params_store`]: parameter values kept in flash (id → `f32`), power-fail safe, over any
+//!   `embedded-storage` NOR flash.
 //! - [`failsafe`]: the robot's failsafes (watchdog gate, reset cause, link loss, overrun) as
 //!   pure step functions the firmware wires.
 //! - [`drivers`]: the logic of the drivers for Twil's boards (sonar, neck, motors, encoders,
@@ -41,6 +43,7 @@ pub mod link;
 pub mod math;
 pub mod mission;
 pub mod params;
+pub mod params_store;
 pub mod plan;
 pub mod plant;
 pub mod raster;

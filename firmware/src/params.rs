@@ -1,0 +1,115 @@
+//! Where the parameter store lives (`twil_core::params_store`), and its boot: load it, apply
+//! the values to the robot's config through the core's validation, say what was found.
+//!
+//! - Board: the STM32F405's flash sectors 10 and 11 (128 KiB each, 0x080C_0000..0x0810_0000,
+//!   RM0090, "Embedded Flash memory", its sector table), taken from the program by `memory.x`
+//!   (FLASH 768K). `stm32f4xx-hal`'s `LockedFlash` reads them; each write or erase unlocks the
+//!   flash for its own duration (`UnlockedFlash`, locked again when dropped). Programming is
+//!   byte-wide (PSIZE x8, what the HAL sets): 16 µs a byte typical (DS8626, table "Flash
+//!   memory programming"), so a record of 16 bytes takes about
+//!   0.3 ms. Erasing a 128 KiB sector at x8 takes 2 s typical, 4 s at most, and the core stalls
+//!   the whole time (it fetches its code from the same bank): no interrupt runs and the
+//!   watchdog cannot be fed. The store erases only when a page is full (after about 8 190
+//!   saves), on `ParamStore::erase`, on the first save over a store that is not `Ok`, or when
+//!   it repairs an erase cut by a power loss. The boot's load runs in `init`, before the
+//!   independent watchdog starts; a later save must happen while the robot is idle (no
+//!   mission: motors off) with the watchdog's timeout stretched past 4 s.
+//! - QEMU: QEMU 7.2's `netduinoplus2` does not emulate flash programming or erasing, so the
+//!   QEMU build keeps the store in a 2 KiB [`RamFlash`] in SRAM (two 1 KiB pages: 63 records
+//!   each), erased at every reset: it always boots `Empty`, on the defaults. Above the flash,
+//!   the code is the same.
+
+use twil_core::params_store::robot::{load_robot_config, BootParams};
+use twil_core::params_store::{ParamStore, StoreStatus};
+use twil_core::robot::RobotConfig;
+
+#[cfg(feature = "qemu")]
+use twil_core::params_store::ram_flash::RamFlash;
+
+/// The QEMU build's store: two pages of 1 KiB in SRAM.
+#[cfg(feature = "qemu")]
+pub type StoreFlash = RamFlash<2048, 1024>;
+
+/// The QEMU build's store range: the whole RAM flash.
+#[cfg(feature = "qemu")]
+pub const STORE_RANGE: core::ops::Range<u32> = 0..2048;
+
+/// The board's store: the chip's flash.
+#[cfg(feature = "hardware")]
+pub use board_flash::BoardFlash as StoreFlash;
+
+/// The board's store range, offsets from the flash's start (0x0800_0000): sectors 10 and 11.
+#[cfg(feature = "hardware")]
+pub const STORE_RANGE: core::ops::Range<u32> = 0x000C_0000..0x0010_0000;
+
+#[cfg(feature = "hardware")]
+mod board_flash {
+    use embedded_storage::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
+    use stm32f4xx_hal::flash::{Error, FlashExt, LockedFlash};
+    use stm32f4xx_hal::pac::FLASH;
+
+    /// The chip's flash, locked except during each write or erase.
+    pub struct BoardFlash(LockedFlash);
+
+    impl BoardFlash {
+        /// The flash peripheral (`rcc` sets its wait states through the register block, so
+        /// taking the peripheral here changes nothing there).
+        pub fn new(flash: FLASH) -> Self {
+            Self(LockedFlash::new(flash))
+        }
+    }
+
+    impl ErrorType for BoardFlash {
+        type Error = Error;
+    }
+
+    impl ReadNorFlash for BoardFlash {
+        const READ_SIZE: usize = 1;
+
+        fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Error> {
+            ReadNorFlash::read(&mut self.0, offset, bytes)
+        }
+
+        fn capacity(&self) -> usize {
+            ReadNorFlash::capacity(&self.0)
+        }
+    }
+
+    impl NorFlash for BoardFlash {
+        const WRITE_SIZE: usize = 1;
+        // The HAL's erase unit: 128 KiB, the size of sectors 5 to 11.
+        const ERASE_SIZE: usize = 128 * 1024;
+
+        fn erase(&mut self, from: u32, to: u32) -> Result<(), Error> {
+            NorFlash::erase(&mut self.0.unlocked(), from, to)
+        }
+
+        fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Error> {
+            NorFlash::write(&mut self.0.unlocked(), offset, bytes)
+        }
+    }
+}
+
+/// Load the store in `flash` and apply it to the defaults: the config to run and what was
+/// found. A store that cannot even be opened (a wrong range: a defect) gives the defaults and
+/// `Corrupt`.
+pub fn boot<F: embedded_storage::nor_flash::NorFlash>(flash: F) -> (RobotConfig, BootParams) {
+    match ParamStore::new(flash, STORE_RANGE) {
+        Ok(mut store) => load_robot_config(&mut store, &RobotConfig::DEFAULT),
+        Err(_) => (
+            RobotConfig::DEFAULT,
+            BootParams {
+                load: twil_core::params_store::LoadReport {
+                    status: StoreStatus::Corrupt,
+                    found: 0,
+                    unknown: 0,
+                    records: 0,
+                    format_word: None,
+                },
+                applied: 0,
+                refused: 0,
+                first_refused: None,
+            },
+        ),
+    }
+}
