@@ -200,10 +200,16 @@ struct PendingPlan {
 }
 
 /// The mission: see the module documentation.
-pub struct Mission<const W: usize> {
+pub struct Mission<const W: usize, const E: usize = W> {
     config: MissionConfig,
     grid: Grid<W>,
-    seen: Grid<W>,
+    /// Free evidence (the "seen" grid) and, with [`MissionConfig::evidence_map`], occupied
+    /// evidence (`evidence.rs`).
+    evidence: EvidenceMap<W, E>,
+    /// Evidence map: cells whose tentative mark a ray took back since the last marking.
+    taken_back: evidence_marking::TakeBacks,
+    /// Marks known a priori are in the grid (not in the evidence map: never redrawn).
+    known_a_priori: bool,
     path: MissionPath,
     prefix: MissionPath,
     frame: FrameTransform,
@@ -235,6 +241,8 @@ pub struct Mission<const W: usize> {
 mod blind;
 mod config;
 mod corridor;
+mod evidence;
+mod evidence_marking;
 mod local;
 mod machine;
 mod messages;
@@ -250,6 +258,7 @@ mod tests;
 mod trust;
 
 pub use config::{MissionConfig, MissionError, MissionMode};
+pub use evidence::{CellEvidence, Change, EvidenceMap};
 pub use local::{LocalRunner, TickOutcome, MAX_EVENTS_PER_TICK, MAX_READINGS_PER_TICK};
 pub use messages::{
     MissionEvent, MissionInput, MissionOutput, MissionPhase, MissionStatus, PlanRequest,

@@ -1,0 +1,207 @@
+//! How the mission writes the evidence map ([`MissionConfig::evidence_map`]): rays, reflectors,
+//! taken-back marks and suspects, and the grown 1-bit grid the planners read, derived from the
+//! occupied evidence.
+//!
+//! Why each rule (see `docs/mapping.md` for the argument and its sources):
+//!
+//! - **A ray that echoed** is free evidence along its axis, a cell short of the echo (Moravec &
+//!   Elfes 1985's empty region, cut to the axis: a smooth wall the cone grazed obliquely is
+//!   silent, so the cone's sides prove nothing). It takes back a tentative mark it crosses.
+//! - **Silence** marks nothing: a smooth wall met at more than the incidence limit is silent
+//!   (Kuc & Siegel 1987), so silence is never proof that a cell is free for the body.
+//! - **A run of constant depth** (Leonard & Durrant-Whyte 1991) has one reflector: the point at
+//!   the run's middle bearing and mean depth (for a plane, the foot of the perpendicular; for a
+//!   corner, the corner), not the whole arc: a doorway's jambs are not painted across it.
+//! - **Suspects**: after a full standing sweep, unknown cells that no reading vouched for in a
+//!   ring just outside the planning radius are tentative occupied, so the planner does not
+//!   route the body through silent space beside it.
+//!
+//! Bounded work: a ray is at most the range in cells; a sweep's reflectors at most its
+//! readings; a take-back redraws a `(4e + 1)²` window (e: the expansion in cells), at most
+//! [`TAKE_BACK_CAPACITY`] per sweep; suspects read a `(2e + 7)²` square.
+
+use heapless::Vec;
+
+use crate::control::Pose;
+use crate::geom::PointM;
+use crate::math::{abs, cos, hypot, sin};
+use crate::raster::mark_point_m;
+use crate::sonar::hit_to_world;
+
+use super::evidence::{CellEvidence, Change};
+use super::Mission;
+
+/// Take-backs redrawn in the grid per sweep; more are kept marked in the grid (the safe side)
+/// though the evidence map has taken them back.
+pub const TAKE_BACK_CAPACITY: usize = 32;
+
+/// Cells whose tentative mark a ray took back, for the grid to be redrawn around them.
+pub(super) type TakeBacks = Vec<(u16, u16), TAKE_BACK_CAPACITY>;
+
+impl<const W: usize, const E: usize> Mission<W, E> {
+    /// At a (re)start the robot stands on its own disc: that and half a cell more is free.
+    pub(super) fn assume_body_disc_clear(&mut self) {
+        let g = *self.grid.geometry();
+        let c = self.config.start;
+        let reach_m = self.config.robot.physical_radius_m() + 0.5 * g.resolution_m();
+        let Some((cx, cy)) = g.cell_xy_of(c) else {
+            return;
+        };
+        let h = (reach_m / g.resolution_m()) as i32 + 1;
+        for y in cy - h..=cy + h {
+            for x in cx - h..=cx + h {
+                let p = centre(&g, x, y);
+                if hypot(p.x_m - c.x_m, p.y_m - c.y_m) <= reach_m {
+                    self.evidence.observe_free_xy(x, y);
+                }
+            }
+        }
+    }
+
+    /// Free evidence along the axis of a reading that echoed, a cell short of the echo.
+    pub(super) fn mark_evidence_ray(
+        &mut self,
+        pose: Pose,
+        neck_angle_rad: f32,
+        range_m: Option<f32>,
+    ) {
+        let Some(r) = range_m else {
+            return; // Silence marks nothing.
+        };
+        let g = *self.grid.geometry();
+        let length_m = r - g.resolution_m();
+        if length_m.is_nan() || length_m <= 0.0 {
+            return;
+        }
+        let sonar = pose.point_ahead(self.config.robot.sonar_offset_m);
+        let angle = pose.heading_rad + neck_angle_rad;
+        let end = PointM::new(
+            sonar.x_m + length_m * cos(angle),
+            sonar.y_m + length_m * sin(angle),
+        );
+        let taken = &mut self.taken_back;
+        self.evidence.mark_ray_free(sonar, end, |x, y| {
+            // Full: the grid keeps the mark (the safe side).
+            let _ = taken.push((x as u16, y as u16));
+        });
+    }
+
+    /// Redraw the grid around the cells whose tentative marks were taken back (unless marks
+    /// known a priori are in the grid: those are not in the evidence map and would be lost).
+    pub(super) fn apply_take_backs(&mut self) {
+        if self.known_a_priori {
+            self.taken_back.clear();
+            return;
+        }
+        let g = *self.grid.geometry();
+        let e = self.expansion_cells as i32;
+        for &(tx, ty) in self.taken_back.iter() {
+            let (tx, ty) = (tx as i32, ty as i32);
+            for y in ty - e..=ty + e {
+                for x in tx - e..=tx + e {
+                    self.grid.set_xy(x, y, false);
+                }
+            }
+            for y in ty - 2 * e..=ty + 2 * e {
+                for x in tx - 2 * e..=tx + 2 * e {
+                    if self.evidence.is_occupied_xy(x, y) {
+                        mark_point_m(&mut self.grid, centre(&g, x, y), e as u16);
+                    }
+                }
+            }
+        }
+        self.taken_back.clear();
+    }
+
+    /// One reflector per run of constant depth (see the module docs), marked in the evidence
+    /// map and grown into the grid. Returns the reflectors marked.
+    pub(super) fn mark_reflectors(&mut self) -> u16 {
+        self.hits.clear();
+        let g = *self.grid.geometry();
+        let e = self.expansion_cells;
+        let robot = self.config.robot;
+        // Neighbours of one run agree to half a cell (the seed's 1 cm is finer than a cell,
+        // and noise splits runs that one reflector made).
+        let tolerance_m = robot.rcd_depth_tolerance_m.max(0.5 * g.resolution_m());
+        let readings = self.readings.as_slice();
+        let mut start = 0;
+        while start < readings.len() {
+            let Some(first_m) = readings[start].range_m else {
+                start += 1;
+                continue;
+            };
+            let (mut end, mut sum_m, mut previous_m) = (start, first_m, first_m);
+            while let Some(next_m) = readings.get(end + 1).and_then(|r| r.range_m) {
+                if abs(next_m - previous_m) > tolerance_m {
+                    break;
+                }
+                sum_m += next_m;
+                previous_m = next_m;
+                end += 1;
+            }
+            let count = (end - start + 1) as f32;
+            let (a, b) = (&readings[start], &readings[end]);
+            let middle = &readings[(start + end) / 2];
+            let angle_rad = 0.5 * (a.neck_angle_rad + b.neck_angle_rad);
+            let p = hit_to_world(middle.pose, robot.sonar_offset_m, angle_rad, sum_m / count);
+            start = end + 1;
+            if !p.is_finite() {
+                continue;
+            }
+            if let Some((x, y)) = g.cell_xy_on_map(p) {
+                self.evidence.observe_occupied_xy(x, y);
+            }
+            mark_point_m(&mut self.grid, p, e);
+            let _ = self.hits.push(p);
+        }
+        self.stats.hits += self.hits.len() as u32;
+        self.hits.len() as u16
+    }
+
+    /// After a full standing sweep: unknown cells no reading vouched for, in the ring from one
+    /// to three cells outside the planning radius, become suspects (tentative, grown into the
+    /// grid). The ring starts outside the radius so the robot's own cell stays free.
+    pub(super) fn mark_suspects(&mut self) {
+        let g = *self.grid.geometry();
+        let e = self.expansion_cells as i32;
+        let pose = self.pose_world();
+        let Some((cx, cy)) = g.cell_xy_of(pose.position()) else {
+            return;
+        };
+        let (inner, outer) = (e + 1, e + 3);
+        let mut suspects: Vec<(i32, i32), 256> = Vec::new();
+        {
+            let swept = self.swept(pose, core::f32::consts::PI, true);
+            for y in cy - outer..=cy + outer {
+                for x in cx - outer..=cx + outer {
+                    let (dx, dy) = (x - cx, y - cy);
+                    let d2 = dx * dx + dy * dy;
+                    if d2 < inner * inner || d2 > outer * outer || !g.contains_xy(x, y) {
+                        continue;
+                    }
+                    if self.evidence.get_xy(x, y) != CellEvidence::Unknown
+                        || swept.vouches(centre(&g, x, y))
+                    {
+                        continue;
+                    }
+                    // Full: the rest of the ring stays unknown (the corridor rule still keeps
+                    // the body out of it).
+                    let _ = suspects.push((x, y));
+                }
+            }
+        }
+        for &(x, y) in suspects.iter() {
+            if self.evidence.suspect_xy(x, y) == Change::NowOccupied {
+                mark_point_m(&mut self.grid, centre(&g, x, y), e as u16);
+            }
+        }
+    }
+}
+
+/// Centre of the cell at signed indices (on the map or not), metres.
+fn centre(g: &crate::grid::GridGeometry, x: i32, y: i32) -> PointM {
+    PointM::new(
+        (x as f32 + 0.5) * g.resolution_m(),
+        (y as f32 + 0.5) * g.resolution_m(),
+    )
+}
