@@ -313,7 +313,7 @@ mod tests {
         assert_eq!(m.get_xy(27, 0), CellEvidence::Unknown);
         // A reflector on free evidence is tentative again.
         assert_eq!(m.observe_occupied_xy(10, 0), Change::NowOccupied);
-        assert_eq!(m.counts(), (26, 1, 1));
+        assert_eq!(m.counts(), (25, 1, 1));
     }
 
     #[test]

@@ -39,14 +39,34 @@ pub const TAKE_BACK_CAPACITY: usize = 32;
 pub(super) type TakeBacks = Vec<(u16, u16), TAKE_BACK_CAPACITY>;
 
 impl<const W: usize, const E: usize> Mission<W, E> {
-    /// At a (re)start the robot stands on its own disc: that and half a cell more is free.
+    /// At a (re)start the robot stands on its own disc: that and half a cell more is free. So
+    /// is the sonar's blind disc (its minimum range around it): no sweep from here can hear
+    /// it, and every later stop's blind disc is known before the robot stops there (`blind`),
+    /// so this is the one thing the user vouches for by placing the robot.
     pub(super) fn assume_body_disc_clear(&mut self) {
         let g = *self.grid.geometry();
+        let robot = self.config.robot;
         let c = self.config.start;
-        let reach_m = self.config.robot.physical_radius_m() + 0.5 * g.resolution_m();
+        let half_cell_m = 0.5 * g.resolution_m();
+        let body_m = robot.physical_radius_m() + half_cell_m;
+        let heading = self.config.initial_heading_rad;
+        let sonar = PointM::new(
+            c.x_m + robot.sonar_offset_m * cos(heading),
+            c.y_m + robot.sonar_offset_m * sin(heading),
+        );
+        let blind_m = robot.sonar_min_range_m + half_cell_m;
+        self.mark_disc_free(c, body_m);
+        self.mark_disc_free(sonar, blind_m);
+    }
+
+    fn mark_disc_free(&mut self, c: PointM, reach_m: f32) {
+        let g = *self.grid.geometry();
         let Some((cx, cy)) = g.cell_xy_of(c) else {
             return;
         };
+        if !(reach_m.is_finite() && reach_m >= 0.0) {
+            return;
+        }
         let h = (reach_m / g.resolution_m()) as i32 + 1;
         for y in cy - h..=cy + h {
             for x in cx - h..=cx + h {
@@ -156,6 +176,37 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         }
         self.stats.hits += self.hits.len() as u32;
         self.hits.len() as u16
+    }
+
+    /// After a standing sweep: every unknown cell within range that the sweep vouches for (the
+    /// Thales rule, `swept`) is free evidence, so the next stop need not read it again. Cost:
+    /// the cells of the square around the range times the sweep's readings (40 000 × 105 at
+    /// 3 m), host only (the MCU has no room for the evidence map).
+    pub(super) fn mark_vouched_free(&mut self, full: bool) {
+        let g = *self.grid.geometry();
+        let pose = self.pose_world();
+        let robot = self.config.robot;
+        let sonar = pose.point_ahead(robot.sonar_offset_m);
+        let Some((sx, sy)) = g.cell_xy_of(sonar) else {
+            return;
+        };
+        let h = (robot.sonar_range_m / g.resolution_m()) as i32 + 1;
+        let band_rad = if full {
+            core::f32::consts::PI
+        } else {
+            crate::sonar::SweepPlan::new(&robot, crate::sonar::SweepKind::Normal)
+                .covered_half_angle_rad()
+        };
+        for y in (sy - h).max(0)..=(sy + h).min(g.height() as i32 - 1) {
+            for x in (sx - h).max(0)..=(sx + h).min(g.width() as i32 - 1) {
+                if self.evidence.get_xy(x, y) != CellEvidence::Unknown {
+                    continue;
+                }
+                if self.swept(pose, band_rad, true).vouches(centre(&g, x, y)) {
+                    self.evidence.observe_free_xy(x, y);
+                }
+            }
+        }
     }
 
     /// After a full standing sweep: unknown cells no reading vouched for, in the ring from one

@@ -20,6 +20,8 @@ use super::{
     MAX_SWEEP_READINGS,
 };
 
+const SUSPECTS: bool = false;
+
 impl<const W: usize, const E: usize> Mission<W, E> {
     pub(super) fn start_sweep(&mut self, full: bool, moving: bool, out: &mut MissionOutput) {
         let plan = SweepPlan::new(
@@ -201,7 +203,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         let hits = if self.config.evidence_map {
             self.apply_take_backs();
             let hits = self.mark_reflectors();
-            if sweep.full && !sweep.moving {
+            if !sweep.moving {
+                self.mark_vouched_free(sweep.full);
+            }
+            if sweep.full && !sweep.moving && SUSPECTS {
                 self.mark_suspects();
             }
             hits

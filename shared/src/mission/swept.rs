@@ -147,8 +147,12 @@ impl Swept<'_> {
         let half_pi = core::f32::consts::FRAC_PI_2;
         let c = (self.min_range_m / d_m).clamp(0.0, 1.0);
         let window = atan2(sqrt(1.0 - c * c), c); // acos(min range / d)
-        let first = self.readings[0].neck_angle_rad;
-        let last = self.readings[n - 1].neck_angle_rad;
+                                                  // Either direction: only the ends matter (every reading is looked at below).
+        let (a, b) = (
+            self.readings[0].neck_angle_rad,
+            self.readings[n - 1].neck_angle_rad,
+        );
+        let (first, last) = (a.min(b), a.max(b));
         let step = (last - first) / (n - 1) as f32;
         if !(step.is_finite() && step > 0.0) {
             return false;
