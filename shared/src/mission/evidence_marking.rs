@@ -4,9 +4,11 @@
 //!
 //! Why each rule (see `docs/mapping.md` for the argument and its sources):
 //!
-//! - **A ray that echoed** is free evidence along its axis, a cell short of the echo (Moravec &
-//!   Elfes 1985's empty region, cut to the axis: a smooth wall the cone grazed obliquely is
-//!   silent, so the cone's sides prove nothing). It takes back a tentative mark it crosses.
+//! - **Free evidence** comes only from what a whole standing sweep vouches for (the Thales rule,
+//!   `swept`), not from the empty region of each reading (Moravec & Elfes 1985): a smooth wall
+//!   that crosses a ray's axis obliquely is silent while something else in the cone echoes
+//!   beyond it (measured: the office at 6 m, 30°, drove its body onto such a wall when the
+//!   axis of echoing rays was free evidence). A vouched cell takes a tentative mark back.
 //! - **Silence** marks nothing: a smooth wall met at more than the incidence limit is silent
 //!   (Kuc & Siegel 1987), so silence is never proof that a cell is free for the body.
 //! - **A run of constant depth** (Leonard & Durrant-Whyte 1991) has one reflector: the point at
@@ -16,13 +18,12 @@
 //!   ring just outside the planning radius are tentative occupied, so the planner does not
 //!   route the body through silent space beside it.
 //!
-//! Bounded work: a ray is at most the range in cells; a sweep's reflectors at most its
+//! Bounded work: a sweep's reflectors at most its
 //! readings; a take-back redraws a `(4e + 1)²` window (e: the expansion in cells), at most
 //! [`TAKE_BACK_CAPACITY`] per sweep; suspects read a `(2e + 7)²` square.
 
 use heapless::Vec;
 
-use crate::control::Pose;
 use crate::geom::PointM;
 use crate::math::{abs, cos, hypot, sin};
 use crate::raster::mark_point_m;
@@ -76,34 +77,6 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 }
             }
         }
-    }
-
-    /// Free evidence along the axis of a reading that echoed, a cell short of the echo.
-    pub(super) fn mark_evidence_ray(
-        &mut self,
-        pose: Pose,
-        neck_angle_rad: f32,
-        range_m: Option<f32>,
-    ) {
-        let Some(r) = range_m else {
-            return; // Silence marks nothing.
-        };
-        let g = *self.grid.geometry();
-        let length_m = r - g.resolution_m();
-        if length_m.is_nan() || length_m <= 0.0 {
-            return;
-        }
-        let sonar = pose.point_ahead(self.config.robot.sonar_offset_m);
-        let angle = pose.heading_rad + neck_angle_rad;
-        let end = PointM::new(
-            sonar.x_m + length_m * cos(angle),
-            sonar.y_m + length_m * sin(angle),
-        );
-        let taken = &mut self.taken_back;
-        self.evidence.mark_ray_free(sonar, end, |x, y| {
-            // Full: the grid keeps the mark (the safe side).
-            let _ = taken.push((x as u16, y as u16));
-        });
     }
 
     /// Redraw the grid around the cells whose tentative marks were taken back (unless marks
@@ -199,11 +172,17 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         };
         for y in (sy - h).max(0)..=(sy + h).min(g.height() as i32 - 1) {
             for x in (sx - h).max(0)..=(sx + h).min(g.width() as i32 - 1) {
-                if self.evidence.get_xy(x, y) != CellEvidence::Unknown {
+                if !matches!(
+                    self.evidence.get_xy(x, y),
+                    CellEvidence::Unknown | CellEvidence::Tentative
+                ) {
                     continue;
                 }
-                if self.swept(pose, band_rad, true).vouches(centre(&g, x, y)) {
-                    self.evidence.observe_free_xy(x, y);
+                if self.swept(pose, band_rad, true).vouches(centre(&g, x, y))
+                    && self.evidence.observe_free_xy(x, y) == Change::TakenBack
+                {
+                    // Full: the grid keeps the mark (the safe side).
+                    let _ = self.taken_back.push((x as u16, y as u16));
                 }
             }
         }

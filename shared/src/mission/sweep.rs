@@ -135,9 +135,9 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             self.sweep_angle_rad(&sweep, sweep.next - 1)
         };
         let pose = self.pose_world();
-        if self.config.evidence_map {
-            self.mark_evidence_ray(pose, neck_angle_rad, range_m);
-        } else {
+        // The evidence map takes free evidence only from what a whole standing sweep vouches
+        // for (`evidence_marking`): a ray's axis proves nothing in a specular world.
+        if !self.config.evidence_map {
             self.mark_seen(pose, neck_angle_rad, range_m);
         }
         // Capacity is the largest sweep: cannot fail.
@@ -201,11 +201,11 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     pub(super) fn end_of_sweep(&mut self, sweep: SweepState, out: &mut MissionOutput) {
         // Mark.
         let hits = if self.config.evidence_map {
-            self.apply_take_backs();
             let hits = self.mark_reflectors();
             if !sweep.moving {
                 self.mark_vouched_free(sweep.full);
             }
+            self.apply_take_backs();
             if sweep.full && !sweep.moving && SUSPECTS {
                 self.mark_suspects();
             }
