@@ -176,3 +176,59 @@ fn grid() {
         println!("{row}");
     }
 }
+
+/// A thin smooth wall met at a glancing angle: the straight line from the start to the goal
+/// crosses it 77° off its normal, so with a 15° incidence limit only its foot (never on the
+/// robot's bearing) and its ends echo. Written to a temporary directory.
+fn glancing_wall() -> (String, String) {
+    let dir = std::env::temp_dir().join(format!("twil-evidence-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temporary directory");
+    let da = dir.join("glancing.da");
+    let par = dir.join("glancing.par");
+    std::fs::write(
+        &da,
+        "1\n4\n2.500 1.900\n9.000 3.900\n9.000 4.050\n2.500 2.050\n",
+    )
+    .expect("write glancing.da");
+    // Radius 0.4 m, 0.2 m/s, facing the goal (29.7°), start (1, 1), goal (8, 5).
+    std::fs::write(&par, "0.4\n0.2\n29.7\n1.0 1.0\n8.0 5.0\n").expect("write glancing.par");
+    (da.display().to_string(), par.display().to_string())
+}
+
+#[test]
+fn a_silent_wall_met_at_a_glancing_angle_is_hit_without_the_map_and_avoided_with_it() {
+    let (da, par) = glancing_wall();
+    for range in ["1.5", "3"] {
+        let base = [
+            "--incidence-limit",
+            "15",
+            "--sonar-range",
+            range,
+            "--mode",
+            "stop",
+        ];
+        let without = simulate(&da, &par, &base);
+        assert_eq!(
+            outcome(&without),
+            Outcome::Collision,
+            "{range} m without the map: silence read as free space ({:?}, clearance {})",
+            without.status,
+            without.min_clearance_m
+        );
+        let mut with_map = base.to_vec();
+        with_map.push("--evidence-map");
+        let with = simulate(&da, &par, &with_map);
+        assert_eq!(
+            with.status,
+            SimStatus::Reached,
+            "{range} m with the map: {:?} after {} stops",
+            with.status,
+            with.stats.stops
+        );
+        assert!(
+            with.min_clearance_m > 0.1,
+            "{range} m with the map: clearance {} m",
+            with.min_clearance_m
+        );
+    }
+}

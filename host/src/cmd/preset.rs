@@ -243,6 +243,13 @@ mod tests {
         assert_eq!(seed.settle, SettleRule::SeedCode);
         assert_eq!(seed.sweep_layout, SweepLayout::Seed);
         assert!(!seed.turn_in_place);
+        // The evidence map is no preset's choice: only `--evidence-map` turns it on.
+        assert!(!seed.evidence_map && !Preset::Ours.choices().evidence_map);
+        let flagged = LoopArgs {
+            evidence_map: true,
+            ..LoopArgs::default()
+        };
+        assert!(flagged.resolve(None).evidence_map);
         // Every choice differs from ours: the preset is not a partial one.
         let ours = Preset::Ours.choices();
         assert_ne!(seed.planner, ours.planner);
