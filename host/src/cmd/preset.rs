@@ -282,6 +282,7 @@ mod tests {
             planner: Some(PlannerArg::Astar),
             rcd: Some(false),
             seed_prune: None,
+            evidence_map: false,
         }
         .resolve(Some(&FollowArgs {
             settle: Some(SettleArg::Model),
