@@ -157,9 +157,14 @@ pub const MISSION_PATH_POINTS: usize = crate::trajectory::MAX_TRAJECTORY_POINTS;
 pub type MissionPath = Vec<PointM, MISSION_PATH_POINTS>;
 
 /// A mission on a grid of at most 300 × 300 cells (15 m × 15 m at 0.05 m): the MCU size.
-pub type Mission300 = Mission<{ words_for_cells(300 * 300) }>;
+///
+/// Its evidence map has no occupied plane (one word: the CCM has no room for a second
+/// 11 250 B plane, see `docs/mapping.md`), so it refuses [`MissionConfig::evidence_map`].
+pub type Mission300 = Mission<{ words_for_cells(300 * 300) }, 1>;
 
 /// A mission on a grid of at most 400 × 400 cells (20 m × 20 m at 0.05 m): the host size.
+///
+/// With the evidence map's occupied plane (another 20 000 B).
 pub type Mission400 = Mission<{ words_for_cells(400 * 400) }>;
 
 /// A planner for the plan requests of a [`Mission300`].
