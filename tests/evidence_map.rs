@@ -232,3 +232,21 @@ fn a_silent_wall_met_at_a_glancing_angle_is_hit_without_the_map_and_avoided_with
         );
     }
 }
+
+#[test]
+fn twil_mission_refuses_the_flag_and_says_why() {
+    let o = common::twil()
+        .args(["mission", "--params"])
+        .arg(common::world("office.par"))
+        .args(["--remote", "sim", "--real"])
+        .arg(common::world("office.da"))
+        .arg("--evidence-map")
+        .output()
+        .expect("twil mission");
+    assert_eq!(o.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("--evidence-map") && stderr.contains("twil simulate --evidence-map"),
+        "{stderr}"
+    );
+}
