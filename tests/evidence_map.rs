@@ -9,16 +9,8 @@
 
 use crate::common;
 
-use clap::Parser;
 use twil_core::mission::UnreachableReason;
-use twil_host::cmd::simulate::{setup_from_args, Args};
-use twil_host::sim::{self, NoProgress, SimResult, SimStatus};
-
-#[derive(Parser)]
-struct Cli {
-    #[command(flatten)]
-    args: Args,
-}
+use twil_host::sim::{SimResult, SimStatus};
 
 /// The bundled worlds with their `--size` (every goal is reachable).
 const WORLDS: [(&str, &str); 6] = [
@@ -31,13 +23,9 @@ const WORLDS: [(&str, &str); 6] = [
 ];
 
 fn simulate(da: &str, par: &str, extra: &[&str]) -> SimResult {
-    let mut argv: Vec<String> = ["twil", "--real", da, "--params", par]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-    argv.extend(extra.iter().map(|s| s.to_string()));
-    let setup = setup_from_args(&Cli::parse_from(argv).args).expect("setup");
-    sim::run(&setup, &mut NoProgress).expect("simulation")
+    let mut argv = vec!["--real", da, "--params", par];
+    argv.extend_from_slice(extra);
+    common::simulate(&argv)
 }
 
 fn bundled(name: &str, extra: &[&str]) -> SimResult {
