@@ -40,3 +40,17 @@ pub fn plan_args(world: Option<PathBuf>, params: PathBuf) -> twil_host::cmd::pla
         robot: None,
     }
 }
+
+/// Run `twil simulate` in process with the command line `argv` (without the program name) and
+/// hand back the whole result.
+pub fn simulate(argv: &[&str]) -> twil_host::sim::SimResult {
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: twil_host::cmd::simulate::Args,
+    }
+    let cli =
+        <Cli as clap::Parser>::parse_from(std::iter::once("twil").chain(argv.iter().copied()));
+    let setup = twil_host::cmd::simulate::setup_from_args(&cli.args).expect("setup");
+    twil_host::sim::run(&setup, &mut twil_host::sim::NoProgress).expect("simulation")
+}

@@ -53,6 +53,7 @@ impl Preset {
                 reference_feed_forward: false,
                 sweep_layout: SweepLayout::Seed,
                 turn_in_place: false,
+                evidence_map: false,
             },
             Self::Ours => LoopChoices {
                 planner: PlannerArg::Anyangle,
@@ -62,6 +63,7 @@ impl Preset {
                 reference_feed_forward: true,
                 sweep_layout: SweepLayout::Symmetric,
                 turn_in_place: true,
+                evidence_map: false,
             },
         }
     }
@@ -104,6 +106,12 @@ pub struct LoopArgs {
     /// [default: the preset's: off; seed: on].
     #[arg(long, value_name = "BOOL", num_args = 0..=1, require_equals = true, default_missing_value = "true")]
     pub seed_prune: Option<bool>,
+    /// Map with the evidence map (docs/mapping.md): one reflector per run of constant depth,
+    /// silence marks nothing, the body only enters space a standing sweep vouches for by the
+    /// Thales rule. Off by default, in both presets; `twil simulate` only (the link's
+    /// `SetMission` does not carry it: the MCU has no room for its second bit plane).
+    #[arg(long)]
+    pub evidence_map: bool,
 }
 
 /// Following options of `twil simulate` and `twil mission` (`SetMission` fields 16-19).
@@ -143,6 +151,8 @@ pub struct LoopChoices {
     pub sweep_layout: SweepLayout,
     /// Turns in place at the start and at sharp vertices.
     pub turn_in_place: bool,
+    /// The evidence map (`--evidence-map`; no preset turns it on).
+    pub evidence_map: bool,
 }
 
 impl LoopArgs {
@@ -159,6 +169,7 @@ impl LoopArgs {
         if let Some(on) = self.seed_prune {
             c.seed_prune = on;
         }
+        c.evidence_map = self.evidence_map;
         if let Some(f) = follow {
             if let Some(s) = f.settle {
                 c.settle = match s {
@@ -232,6 +243,13 @@ mod tests {
         assert_eq!(seed.settle, SettleRule::SeedCode);
         assert_eq!(seed.sweep_layout, SweepLayout::Seed);
         assert!(!seed.turn_in_place);
+        // The evidence map is no preset's choice: only `--evidence-map` turns it on.
+        assert!(!seed.evidence_map && !Preset::Ours.choices().evidence_map);
+        let flagged = LoopArgs {
+            evidence_map: true,
+            ..LoopArgs::default()
+        };
+        assert!(flagged.resolve(None).evidence_map);
         // Every choice differs from ours: the preset is not a partial one.
         let ours = Preset::Ours.choices();
         assert_ne!(seed.planner, ours.planner);
@@ -264,6 +282,7 @@ mod tests {
             planner: Some(PlannerArg::Astar),
             rcd: Some(false),
             seed_prune: None,
+            evidence_map: false,
         }
         .resolve(Some(&FollowArgs {
             settle: Some(SettleArg::Model),

@@ -73,6 +73,8 @@ pub struct SimSetup {
     pub constant_depth_filter: bool,
     /// Let the prefix go on through space seen free by earlier sweeps.
     pub trust_seen_space: bool,
+    /// Map with the evidence map ([`MissionConfig::evidence_map`]).
+    pub evidence_map: bool,
     /// Continuous mode: half-width of moving sweeps, degrees.
     pub moving_half_sweep_deg: f32,
     /// Take a picture snapshot every this many seconds of simulated time (0: none).
@@ -319,6 +321,7 @@ pub fn mission_config(setup: &SimSetup) -> MissionConfig {
     config.time_limit_s = setup.time_limit_s;
     config.constant_depth_filter = setup.constant_depth_filter;
     config.trust_seen_space = setup.trust_seen_space;
+    config.evidence_map = setup.evidence_map;
     config.moving_half_sweep_deg = setup.moving_half_sweep_deg;
     config.settle = setup.settle;
     config.reference_feed_forward = setup.reference_feed_forward;

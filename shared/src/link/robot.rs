@@ -255,7 +255,10 @@ impl<const W: usize> RobotDevice<W> {
 
     /// This device with `mission` (kept apart so the firmware can place it in its own memory
     /// region): what every call about the link or the mission goes through.
-    pub fn link<'a>(&'a mut self, mission: &'a mut Mission<W>) -> RobotLink<'a, W> {
+    pub fn link<'a, const E: usize>(
+        &'a mut self,
+        mission: &'a mut Mission<W, E>,
+    ) -> RobotLink<'a, W, E> {
         RobotLink { d: self, mission }
     }
 
@@ -310,14 +313,14 @@ impl<const W: usize> RobotDevice<W> {
 }
 
 /// A [`RobotDevice`] with its mission: see the module documentation.
-pub struct RobotLink<'a, const W: usize> {
+pub struct RobotLink<'a, const W: usize, const E: usize = W> {
     d: &'a mut RobotDevice<W>,
-    mission: &'a mut Mission<W>,
+    mission: &'a mut Mission<W, E>,
 }
 
-impl<const W: usize> RobotLink<'_, W> {
+impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
     /// The mission (its map, paths, stats).
-    pub fn mission(&self) -> &Mission<W> {
+    pub fn mission(&self) -> &Mission<W, E> {
         self.mission
     }
 

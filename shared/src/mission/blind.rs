@@ -192,6 +192,7 @@ mod tests {
                 range_m: 1.5,
                 cell_m: 0.05,
                 echo_limited: true,
+                thales_beam_rad: -1.0,
             },
         }
     }

@@ -74,6 +74,12 @@ pub struct MissionConfig {
     /// Add `τ × velocity` to the controller's reference so the first-order reference model
     /// does not lag the path (ours); `false` feeds the path point alone, as the seed did.
     pub reference_feed_forward: bool,
+    /// Map with the evidence map (`evidence.rs`, `docs/mapping.md`): one reflector per run of
+    /// constant depth, free evidence only along rays that echoed, silence marks nothing, a
+    /// point is vouched for by the Thales rule, suspects beside the robot after a full sweep;
+    /// `false` (the default) keeps the 1-bit seen grid and its rules.
+    #[serde(default)]
+    pub evidence_map: bool,
 }
 
 impl MissionConfig {
@@ -100,6 +106,7 @@ impl MissionConfig {
         moving_half_sweep_deg: 95.0,
         settle: SettleRule::ReferenceModel,
         reference_feed_forward: true,
+        evidence_map: false,
     };
 
     /// A configuration from a `.par` file's parameters and a robot config (whose planning

@@ -41,6 +41,11 @@ pub(super) struct Corridor<'a, const W: usize> {
     /// Only occupied cells no ray saw are unknown (after a full sweep, which saw all it
     /// could: the gaps between its rays are not worth another).
     pub occupied_only: bool,
+    /// The evidence map's rule: only free evidence (a ray crossed it before its echo), what
+    /// the sweep vouches for and the body's own disc (and half a cell) are known; not "not
+    /// occupied on the map". The centre line is checked from the path itself, and the stop is
+    /// the least over the samples.
+    pub evidence: bool,
 }
 
 impl<const W: usize> Corridor<'_, W> {
@@ -55,6 +60,9 @@ impl<const W: usize> Corridor<'_, W> {
         let r = self.radius_m;
         let mut along_m = 0.0;
         let mut samples = 0;
+        // Evidence map: the least stop over the samples (a later sample can stop the centre
+        // earlier, by up to the radius); without it, the first.
+        let mut best: Option<f32> = None;
         let segments = prefix.len().saturating_sub(1);
         for (i, w) in prefix.windows(2).enumerate() {
             let (a, b) = (w[0], w[1]);
@@ -73,24 +81,31 @@ impl<const W: usize> Corridor<'_, W> {
             while s_m <= end_m {
                 samples += 1;
                 if samples > MAX_SAMPLES {
-                    return None;
+                    return best;
+                }
+                if best.is_some_and(|b| along_m + s_m - r > b) {
+                    return best;
                 }
                 let p = PointM::new(a.x_m + s_m * ux, a.y_m + s_m * uy);
                 if s_m <= len_m && hypot(p.x_m - centre.x_m, p.y_m - centre.y_m) > range_m {
-                    return None;
+                    return best;
                 }
                 let beyond_m = (s_m - len_m).max(0.0);
                 let half_width_m = sqrt((r * r - beyond_m * beyond_m).max(0.0));
                 if let Some(ahead_m) = self.first_unknown_beside(p, nx, ny, step_m, half_width_m) {
                     // The body reaches `ahead_m` ahead of its centre at that lateral offset:
                     // stop its centre that much short of the sample.
-                    return Some((along_m + s_m - ahead_m).max(0.0));
+                    let stop_m = (along_m + s_m - ahead_m).max(0.0);
+                    if !self.evidence {
+                        return Some(stop_m);
+                    }
+                    best = Some(best.map_or(stop_m, |b: f32| b.min(stop_m)));
                 }
                 s_m += step_m;
             }
             along_m += len_m;
         }
-        None
+        best
     }
 
     /// The points beside `p` along the unit normal `(nx, ny)`, every `step_m` out to
@@ -109,7 +124,11 @@ impl<const W: usize> Corridor<'_, W> {
         let full = half_width_m >= r - 1.0e-4;
         // On the prefix the centre line is the path's (checked by the pruning); past its end
         // it is the body's.
-        let mut d = if full { step_m.min(r) } else { 0.0 };
+        let mut d = if full && !self.evidence {
+            step_m.min(r)
+        } else {
+            0.0
+        };
         loop {
             for side in [1.0, -1.0] {
                 let q = PointM::new(p.x_m + side * d * nx, p.y_m + side * d * ny);
@@ -143,6 +162,9 @@ impl<const W: usize> Corridor<'_, W> {
         let Some((x, y)) = g.cell_xy_on_map(q) else {
             return true;
         };
+        if self.evidence {
+            return self.seen.is_occupied_xy(x, y) || self.in_band(q) || self.under_body(q);
+        }
         !self.grid.is_occupied_xy(x, y)
             || self.seen.is_occupied_xy(x, y)
             || self.in_band(q)
@@ -155,7 +177,13 @@ impl<const W: usize> Corridor<'_, W> {
 
     fn under_body(&self, q: PointM) -> bool {
         let c = self.pose.position();
-        hypot(q.x_m - c.x_m, q.y_m - c.y_m) <= self.body_radius_m + 1.0e-3
+        // The evidence map assumes half a cell more (the robot stands there: see `blind`).
+        let margin_m = if self.evidence {
+            0.5 * self.grid.geometry().resolution_m()
+        } else {
+            1.0e-3
+        };
+        hypot(q.x_m - c.x_m, q.y_m - c.y_m) <= self.body_radius_m + margin_m
     }
 
     fn known(&self, q: PointM) -> bool {

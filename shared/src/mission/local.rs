@@ -53,8 +53,8 @@ struct DuePlan {
 }
 
 /// The single-threaded shell: see the module documentation.
-pub struct LocalRunner<'a, const W: usize, const S: usize, const Q: usize> {
-    mission: &'a mut Mission<W>,
+pub struct LocalRunner<'a, const W: usize, const S: usize, const Q: usize, const E: usize = W> {
+    mission: &'a mut Mission<W, E>,
     planner: &'a mut Planner<S, Q>,
     pilot: Pilot,
     latency_ticks: u64,
@@ -62,11 +62,13 @@ pub struct LocalRunner<'a, const W: usize, const S: usize, const Q: usize> {
     due: Option<DuePlan>,
 }
 
-impl<'a, const W: usize, const S: usize, const Q: usize> LocalRunner<'a, W, S, Q> {
+impl<'a, const W: usize, const S: usize, const Q: usize, const E: usize>
+    LocalRunner<'a, W, S, Q, E>
+{
     /// A runner for `mission` (not started yet), its plans run by `planner` and handed back
     /// `latency_ticks` control periods after their request.
     pub fn new(
-        mission: &'a mut Mission<W>,
+        mission: &'a mut Mission<W, E>,
         planner: &'a mut Planner<S, Q>,
         latency_ticks: u64,
     ) -> Self {
@@ -82,7 +84,7 @@ impl<'a, const W: usize, const S: usize, const Q: usize> LocalRunner<'a, W, S, Q
     }
 
     /// The mission.
-    pub fn mission(&self) -> &Mission<W> {
+    pub fn mission(&self) -> &Mission<W, E> {
         self.mission
     }
 

@@ -16,6 +16,8 @@ use crate::raster::mark_polygon;
 use crate::sonar::{HitBuffer, SweepBuffer};
 use crate::trajectory::{FrameTransform, SupplyEvent};
 
+use super::evidence::EvidenceMap;
+
 use super::messages::push;
 use super::{
     pilot, Mission, MissionConfig, MissionError, MissionEvent, MissionInput, MissionMode,
@@ -23,7 +25,7 @@ use super::{
     PilotReport,
 };
 
-impl<const W: usize> Mission<W> {
+impl<const W: usize, const E: usize> Mission<W, E> {
     /// Size of this mission type in bytes (it is meant to live in a `static` on the MCU).
     pub const SIZE_BYTES: usize = core::mem::size_of::<Self>();
 
@@ -42,14 +44,16 @@ impl<const W: usize> Mission<W> {
             Ok(g) => g,
             Err(_) => panic!("the grid holds one cell"),
         };
-        let seen = match Grid::<W>::new_const(geometry) {
-            Ok(g) => g,
+        let evidence = match EvidenceMap::<W, E>::new_const(geometry) {
+            Ok(m) => m,
             Err(_) => panic!("the grid holds one cell"),
         };
         Self {
             config: MissionConfig::IDLE,
             grid,
-            seen,
+            evidence,
+            taken_back: Vec::new(),
+            known_a_priori: false,
             path: Vec::new(),
             prefix: Vec::new(),
             frame: FrameTransform::identity(),
@@ -102,6 +106,16 @@ impl<const W: usize> Mission<W> {
                 capacity: Grid::<W>::CAPACITY_CELLS as u32,
             }));
         }
+        // The evidence map needs its occupied plane: a build without room for it (the MCU's,
+        // see `docs/mapping.md`) refuses the option rather than run without it.
+        if config.evidence_map
+            && geometry.cell_count() > EvidenceMap::<W, E>::OCCUPIED_CAPACITY_CELLS
+        {
+            return Err(MissionError::Grid(GridError::CapacityExceeded {
+                cells: geometry.cell_count() as u32,
+                capacity: EvidenceMap::<W, E>::OCCUPIED_CAPACITY_CELLS as u32,
+            }));
+        }
         if geometry.cell_of(config.start).is_err() {
             return Err(MissionError::OffMap { which: "start" });
         }
@@ -122,7 +136,9 @@ impl<const W: usize> Mission<W> {
     ) -> Result<(), MissionError> {
         Self::check(&config, geometry)?;
         self.grid.reset(geometry).map_err(MissionError::Grid)?;
-        self.seen.reset(geometry).map_err(MissionError::Grid)?;
+        self.evidence.reset(geometry).map_err(MissionError::Grid)?;
+        self.taken_back.clear();
+        self.known_a_priori = false;
         self.expansion_cells = geometry.expansion_cells(config.robot.planning_radius_m);
         self.frame = FrameTransform::new(config.start, config.initial_heading_rad);
         self.config = config;
@@ -147,6 +163,9 @@ impl<const W: usize> Mission<W> {
         self.pending_plan = None;
         self.deferred_sweep_end = None;
         self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
+        if config.evidence_map {
+            self.assume_body_disc_clear();
+        }
         Ok(())
     }
 
@@ -172,6 +191,7 @@ impl<const W: usize> Mission<W> {
     /// same radius: what the robot knows a priori). Errors, changing nothing, when the
     /// geometries differ.
     pub fn add_known_map<const V: usize>(&mut self, known: &Grid<V>) -> Result<(), GridError> {
+        self.known_a_priori = true;
         self.grid.merge_from(known)
     }
 
@@ -179,6 +199,7 @@ impl<const W: usize> Mission<W> {
     /// planning radius. Call before the first step; later calls are allowed (the map only
     /// gains obstacles).
     pub fn add_known_polygon(&mut self, vertices: &[PointM]) {
+        self.known_a_priori = true;
         mark_polygon(&mut self.grid, vertices, self.expansion_cells);
     }
 
@@ -200,7 +221,13 @@ impl<const W: usize> Mission<W> {
     /// whose whole neighbourhood within the planning radius has been seen or is occupied, so
     /// no unseen obstacle can lie within reach of the path.
     pub fn seen(&self) -> &Grid<W> {
-        &self.seen
+        self.evidence.free_plane()
+    }
+
+    /// The evidence map (its occupied plane is empty without
+    /// [`MissionConfig::evidence_map`]).
+    pub fn evidence(&self) -> &EvidenceMap<W, E> {
+        &self.evidence
     }
 
     /// The latest full plan, world metres (empty before the first plan).

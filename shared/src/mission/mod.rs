@@ -157,9 +157,14 @@ pub const MISSION_PATH_POINTS: usize = crate::trajectory::MAX_TRAJECTORY_POINTS;
 pub type MissionPath = Vec<PointM, MISSION_PATH_POINTS>;
 
 /// A mission on a grid of at most 300 × 300 cells (15 m × 15 m at 0.05 m): the MCU size.
-pub type Mission300 = Mission<{ words_for_cells(300 * 300) }>;
+///
+/// Its evidence map has no occupied plane (one word: the CCM has no room for a second
+/// 11 250 B plane, see `docs/mapping.md`), so it refuses [`MissionConfig::evidence_map`].
+pub type Mission300 = Mission<{ words_for_cells(300 * 300) }, 1>;
 
 /// A mission on a grid of at most 400 × 400 cells (20 m × 20 m at 0.05 m): the host size.
+///
+/// With the evidence map's occupied plane (another 20 000 B).
 pub type Mission400 = Mission<{ words_for_cells(400 * 400) }>;
 
 /// A planner for the plan requests of a [`Mission300`].
@@ -200,10 +205,16 @@ struct PendingPlan {
 }
 
 /// The mission: see the module documentation.
-pub struct Mission<const W: usize> {
+pub struct Mission<const W: usize, const E: usize = W> {
     config: MissionConfig,
     grid: Grid<W>,
-    seen: Grid<W>,
+    /// Free evidence (the "seen" grid) and, with [`MissionConfig::evidence_map`], occupied
+    /// evidence (`evidence.rs`).
+    evidence: EvidenceMap<W, E>,
+    /// Evidence map: cells whose tentative mark a ray took back since the last marking.
+    taken_back: evidence_marking::TakeBacks,
+    /// Marks known a priori are in the grid (not in the evidence map: never redrawn).
+    known_a_priori: bool,
     path: MissionPath,
     prefix: MissionPath,
     frame: FrameTransform,
@@ -235,6 +246,8 @@ pub struct Mission<const W: usize> {
 mod blind;
 mod config;
 mod corridor;
+mod evidence;
+mod evidence_marking;
 mod local;
 mod machine;
 mod messages;
@@ -250,6 +263,7 @@ mod tests;
 mod trust;
 
 pub use config::{MissionConfig, MissionError, MissionMode};
+pub use evidence::{CellEvidence, Change, EvidenceMap};
 pub use local::{LocalRunner, TickOutcome, MAX_EVENTS_PER_TICK, MAX_READINGS_PER_TICK};
 pub use messages::{
     MissionEvent, MissionInput, MissionOutput, MissionPhase, MissionStatus, PlanRequest,

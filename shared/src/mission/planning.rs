@@ -18,7 +18,7 @@ use super::{
     PlanRequest, UnreachableReason,
 };
 
-impl<const W: usize> Mission<W> {
+impl<const W: usize, const E: usize> Mission<W, E> {
     /// Continuous mode: does an occupied cell lie on what remains of the path?
     pub(super) fn remaining_path_blocked(&self) -> bool {
         let from = (self.supply_segment as usize).min(self.path.len());

@@ -26,7 +26,7 @@ use super::swept::Swept;
 use super::trust::SeenSpace;
 use super::{Mission, MissionEvent, MissionMode, MissionOutput, PendingPlan, MISSION_PATH_POINTS};
 
-impl<const W: usize> Mission<W> {
+impl<const W: usize, const E: usize> Mission<W, E> {
     /// Keep what the sonar has just seen of the new path (the seed's prune, or the seen-space
     /// rule when it keeps more), starting at `origin`.
     pub(super) fn keep_prefix(&mut self, pending: &PendingPlan, origin: PointM) {
@@ -65,7 +65,7 @@ impl<const W: usize> Mission<W> {
             if self.config.trust_seen_space {
                 let seen = SeenSpace {
                     grid: &self.grid,
-                    seen: &self.seen,
+                    seen: self.evidence.free_plane(),
                     expansion_cells: self.expansion_cells as i32,
                 };
                 let length_m = seen.prune_through_seen::<MISSION_PATH_POINTS>(rest, cap_m, None);
@@ -135,12 +135,13 @@ impl<const W: usize> Mission<W> {
             // follow only up to where the body would meet it, when that is a move at all.
             let beside_known = Corridor {
                 grid: &self.grid,
-                seen: &self.seen,
+                seen: self.evidence.free_plane(),
                 pose,
                 swept: Swept::NOTHING,
                 radius_m: self.config.robot.planning_radius_m,
                 body_radius_m: self.config.robot.physical_radius_m(),
                 occupied_only: true,
+                evidence: self.config.evidence_map,
             }
             .first_unknown_m(&self.prefix, range_m);
             if let Some(m) = beside_known.filter(|m| *m > 2.0 * g.resolution_m()) {
@@ -187,12 +188,16 @@ impl<const W: usize> Mission<W> {
         // blind zone) is no business of a full sweep: follow only up to where the body would
         // reach it, when that is a move at all, and look again from there (see `swept`).
         if !self.last_sweep_full {
-            let hidden_at_m = self
-                .first_unknown_beside_prefix_m(pose, trusted_band_rad, true)
-                .filter(|m| *m > 2.0 * res_m);
-            if let Some(m) = hidden_at_m {
+            let hidden_at_m = self.first_unknown_beside_prefix_m(pose, trusted_band_rad, true);
+            if let Some(m) = hidden_at_m.filter(|m| *m > 2.0 * res_m) {
                 self.truncate_prefix_m(m);
                 self.stats.band_cuts += 1;
+            } else if hidden_at_m.is_some() && self.config.evidence_map {
+                // Evidence map: a cut of two cells or less would stall; a full standing sweep
+                // reads every bearing of the Thales window (see `swept`).
+                push(out, MissionEvent::FullSweepRequested);
+                self.begin_standing_sweep(true, out);
+                return false;
             }
         }
 
@@ -205,7 +210,7 @@ impl<const W: usize> Mission<W> {
         };
         let blind = BlindZone {
             grid: &self.grid,
-            seen: &self.seen,
+            seen: self.evidence.free_plane(),
             pose,
             sonar_offset_m: self.config.robot.sonar_offset_m,
             blind_radius_m: self.config.robot.sonar_min_range_m,
@@ -236,12 +241,13 @@ impl<const W: usize> Mission<W> {
     ) -> Option<f32> {
         Corridor {
             grid: &self.grid,
-            seen: &self.seen,
+            seen: self.evidence.free_plane(),
             pose,
             swept: self.swept(pose, band_rad, echo_limited),
             radius_m: self.config.robot.planning_radius_m,
             body_radius_m: self.config.robot.physical_radius_m(),
             occupied_only: false,
+            evidence: self.config.evidence_map,
         }
         .first_unknown_m(&self.prefix, self.config.robot.sonar_range_m)
     }
@@ -298,8 +304,13 @@ impl<const W: usize> Mission<W> {
     }
     /// The last sweep as seen from `pose`, vouching within `half_band_rad` of the heading
     /// (see `swept`).
-    fn swept(&self, pose: Pose, half_band_rad: f32, echo_limited: bool) -> Swept<'_> {
+    pub(super) fn swept(&self, pose: Pose, half_band_rad: f32, echo_limited: bool) -> Swept<'_> {
         let robot = &self.config.robot;
+        let thales_beam_rad = if self.config.evidence_map {
+            robot.sonar_beam_half_angle_deg.max(0.0) * (core::f32::consts::PI / 180.0)
+        } else {
+            -1.0
+        };
         Swept {
             readings: self.readings.as_slice(),
             pose,
@@ -309,6 +320,7 @@ impl<const W: usize> Mission<W> {
             range_m: robot.sonar_range_m,
             cell_m: self.grid.geometry().resolution_m(),
             echo_limited,
+            thales_beam_rad,
         }
     }
     /// How far along the path the seed's rule may keep: the sonar range minus the planning

@@ -20,7 +20,9 @@ use super::{
     MAX_SWEEP_READINGS,
 };
 
-impl<const W: usize> Mission<W> {
+const SUSPECTS: bool = false;
+
+impl<const W: usize, const E: usize> Mission<W, E> {
     pub(super) fn start_sweep(&mut self, full: bool, moving: bool, out: &mut MissionOutput) {
         let plan = SweepPlan::new(
             &self.sweep_robot(moving),
@@ -133,7 +135,11 @@ impl<const W: usize> Mission<W> {
             self.sweep_angle_rad(&sweep, sweep.next - 1)
         };
         let pose = self.pose_world();
-        self.mark_seen(pose, neck_angle_rad, range_m);
+        // The evidence map takes free evidence only from what a whole standing sweep vouches
+        // for (`evidence_marking`): a ray's axis proves nothing in a specular world.
+        if !self.config.evidence_map {
+            self.mark_seen(pose, neck_angle_rad, range_m);
+        }
         // Capacity is the largest sweep: cannot fail.
         let _ = self.readings.push(Reading {
             neck_angle_rad,
@@ -173,7 +179,9 @@ impl<const W: usize> Mission<W> {
             sonar.y_m + length_m * sin(angle),
         );
         if let Some(centre) = g.cell_xy_of(pose.position()) {
-            self.seen.set_xy(centre.0, centre.1, true);
+            self.evidence
+                .free_plane_mut()
+                .set_xy(centre.0, centre.1, true);
         }
         if length_m.is_nan() || length_m <= 0.0 {
             return;
@@ -185,14 +193,26 @@ impl<const W: usize> Mission<W> {
                 return;
             }
             for (x, y) in BresenhamLine::new(a, b) {
-                self.seen.set_xy(x, y, true);
+                self.evidence.free_plane_mut().set_xy(x, y, true);
             }
         }
     }
 
     pub(super) fn end_of_sweep(&mut self, sweep: SweepState, out: &mut MissionOutput) {
         // Mark.
-        let hits = self.mark_readings();
+        let hits = if self.config.evidence_map {
+            let hits = self.mark_reflectors();
+            if !sweep.moving {
+                self.mark_vouched_free(sweep.full);
+            }
+            self.apply_take_backs();
+            if sweep.full && !sweep.moving && SUSPECTS {
+                self.mark_suspects();
+            }
+            hits
+        } else {
+            self.mark_readings()
+        };
         push(out, MissionEvent::SweepDone { hits });
         self.last_sweep_full = sweep.full;
         if sweep.moving {

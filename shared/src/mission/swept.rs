@@ -17,7 +17,7 @@
 
 use crate::control::Pose;
 use crate::geom::PointM;
-use crate::math::{abs, atan2, hypot, wrap_angle_rad};
+use crate::math::{abs, atan2, cos, hypot, sqrt, wrap_angle_rad};
 use crate::sonar::Reading;
 
 /// A standing sweep, read from where it was taken.
@@ -40,6 +40,9 @@ pub(super) struct Swept<'a> {
     /// Limit each bearing by its readings' echoes, the range and the blind zone (`false`:
     /// ask only "was this bearing read?", the question a full sweep can answer).
     pub echo_limited: bool,
+    /// The evidence map's rule (see [`Swept::vouches_thales`]) with this beam half-angle,
+    /// radians; negative: the rule above (an echo limits only its own bearing).
+    pub thales_beam_rad: f32,
 }
 
 impl Swept<'_> {
@@ -57,6 +60,7 @@ impl Swept<'_> {
         range_m: 0.0,
         cell_m: 0.0,
         echo_limited: true,
+        thales_beam_rad: -1.0,
     };
 
     /// Does the sweep prove `q` free (see the module docs)?
@@ -75,6 +79,9 @@ impl Swept<'_> {
             return true;
         }
         let d_m = hypot(q.x_m - sonar.x_m, q.y_m - sonar.y_m);
+        if self.thales_beam_rad >= 0.0 {
+            return self.vouches_thales(rel, d_m);
+        }
         if d_m.is_nan() || d_m < self.min_range_m {
             return false;
         }
@@ -107,6 +114,73 @@ impl Swept<'_> {
     }
 }
 
+impl Swept<'_> {
+    /// The evidence map's rule: does the sweep prove free the point at `rel` radians off the
+    /// heading and `d_m` from the sonar?
+    ///
+    /// Thales: the nearest point to the sonar of any wall through the point lies on the circle
+    /// whose diameter joins them, so at some bearing `φ` within 90° of `rel`, at
+    /// `d·cos(φ − rel)` or nearer; and that nearest point echoes whatever the incidence limit:
+    /// it is the perpendicular foot (met face-on) or the wall's end (which echoes at any
+    /// angle). A reading at `φᵢ` hears anything in its cone (± the beam half-angle), so the
+    /// point is vouched for when
+    ///
+    /// - it is outside the blind zone and a cell short of the range;
+    /// - the sweep read every bearing where such a foot could be heard: `±acos(min range / d)`
+    ///   around `rel` (nearer feet lie in the blind zone, next to the robot's own disc), within
+    ///   the readings' bearings widened by the beam;
+    /// - no echo contradicts it: no reading `i` heard something at `d·cos(max(0, |φᵢ − rel| −
+    ///   beam)) + one cell` or nearer (the foot could be anywhere in its cone).
+    ///
+    /// Silence alone never vouches: a silent bearing counts only with every other bearing of the
+    /// window read. A dropped echo on a wall face leaves the face's other readings (a face
+    /// echoes over the beam's width plus the incidence limit, about 17 readings at 15°), and any
+    /// one of them contradicts.
+    ///
+    /// Cost: one pass over the readings (at most 201).
+    pub fn vouches_thales(&self, rel: f32, d_m: f32) -> bool {
+        let n = self.readings.len();
+        if n < 2 || !(d_m >= self.min_range_m && d_m <= self.range_m - self.cell_m) {
+            return false;
+        }
+        let beam = self.thales_beam_rad;
+        let half_pi = core::f32::consts::FRAC_PI_2;
+        let c = (self.min_range_m / d_m).clamp(0.0, 1.0);
+        let window = atan2(sqrt(1.0 - c * c), c); // acos(min range / d)
+                                                  // Either direction: only the ends matter (every reading is looked at below).
+        let (a, b) = (
+            self.readings[0].neck_angle_rad,
+            self.readings[n - 1].neck_angle_rad,
+        );
+        let (first, last) = (a.min(b), a.max(b));
+        let step = (last - first) / (n - 1) as f32;
+        if !(step.is_finite() && step > 0.0) {
+            return false;
+        }
+        // A sweep all round (its two ends a step apart or overlapping) reads every bearing.
+        let all_round = last - first + 1.01 * step >= 2.0 * core::f32::consts::PI;
+        let read = all_round
+            || (rel - window >= first - beam - 1.0e-4 && rel + window <= last + beam + 1.0e-4);
+        if !read {
+            return false;
+        }
+        for r in self.readings {
+            let Some(range_m) = r.range_m else {
+                continue;
+            };
+            let off = abs(wrap_angle_rad(r.neck_angle_rad - rel));
+            let nearest = (off - beam).max(0.0);
+            if nearest.is_nan() || nearest >= half_pi {
+                continue;
+            }
+            if range_m <= d_m * cos(nearest) + self.cell_m {
+                return false;
+            }
+        }
+        true
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -136,7 +210,64 @@ mod tests {
             range_m: 1.5,
             cell_m: 0.05,
             echo_limited: true,
+            thales_beam_rad: -1.0,
         }
+    }
+
+    fn thales(readings: &[Reading]) -> Swept<'_> {
+        Swept {
+            thales_beam_rad: 15.0f32.to_radians(),
+            ..swept(readings)
+        }
+    }
+
+    #[test]
+    fn thales_silence_vouches_only_with_the_whole_window_read() {
+        let r = sweep(|_| None);
+        let s = thales(&r);
+        // Straight ahead, 1 m from the sonar: the window ±75° lies inside ±93.6° + 15°.
+        assert!(s.vouches(PointM::new(0.2 + 1.0, 0.0)));
+        // 60° off the heading: the window reaches 135°, beyond what was read.
+        let a = 60.0f32.to_radians();
+        assert!(!s.vouches(PointM::new(0.2 + cos_(a), sin_(a))));
+        assert!(
+            !s.vouches(PointM::new(0.2 + 1.46, 0.0)),
+            "a cell short of the range"
+        );
+        assert!(!s.vouches(PointM::new(0.2 + 0.2, 0.0)), "blind zone");
+    }
+
+    #[test]
+    fn thales_an_oblique_silent_wall_is_caught_by_its_foot() {
+        // A smooth wall through (1.2, 0) from the sonar, its normal 50° off the heading: its foot
+        // is at 1.2·cos 50° = 0.77 m on bearing 50°; with a 15° incidence limit only readings
+        // within 15° + 15° of 50° hear it. Straight ahead is silent.
+        let foot = 50.0f32.to_radians();
+        let r = sweep(|i| {
+            let phi = i as f32 * STEP;
+            let off = abs(phi - foot);
+            (off <= 30.0f32.to_radians()).then(|| 1.2 * cos_(foot) / cos_(off.min(0.26)))
+        });
+        let s = thales(&r);
+        assert!(!s.vouches(PointM::new(0.2 + 1.25, 0.0)), "behind the wall");
+        assert!(!s.vouches(PointM::new(0.2 + 1.1, 0.0)), "just before it");
+        assert!(s.vouches(PointM::new(0.2 + 0.5, 0.0)), "well short of it");
+        // The per-bearing rule trusts the silent bearing straight ahead out to the range.
+        assert!(swept(&r).vouches(PointM::new(0.2 + 1.25, 0.0)));
+    }
+
+    #[test]
+    fn thales_a_few_dropouts_on_a_face_vouch_nothing_through_it() {
+        // A wall face-on at 1.0 m ahead, echoing within ±30° of its normal, two readings of
+        // which dropped out (one of them straight ahead).
+        let r = sweep(|i| {
+            let phi = i as f32 * STEP;
+            let echoes = abs(phi) <= 30.0f32.to_radians() && i != 0 && i != 3;
+            echoes.then(|| 1.0 / cos_(phi))
+        });
+        let s = thales(&r);
+        assert!(!s.vouches(PointM::new(0.2 + 1.1, 0.0)));
+        assert!(s.vouches(PointM::new(0.2 + 0.85, 0.0)));
     }
 
     #[test]

@@ -716,3 +716,34 @@ fn the_band_check_trusts_only_the_bearings_the_sweep_read() {
         (MissionPhase::Sweep { full: true }, true)
     );
 }
+
+#[test]
+fn the_mcu_sized_mission_refuses_the_evidence_map_and_the_host_sized_one_keeps_it() {
+    let c = MissionConfig {
+        evidence_map: true,
+        ..config(
+            PointM::new(1.0, 1.0),
+            PointM::new(5.0, 5.0),
+            MissionMode::Stop,
+        )
+    };
+    // No room for the occupied plane: the option is refused, naming the capacity.
+    match Mission300::new(c, geometry()) {
+        Err(MissionError::Grid(crate::grid::GridError::CapacityExceeded { cells, capacity })) => {
+            assert_eq!((cells, capacity), (160 * 160, 32));
+        }
+        other => panic!("expected a capacity error, got {:?}", other.map(|_| ())),
+    }
+    let plain = MissionConfig {
+        evidence_map: false,
+        ..c
+    };
+    assert!(Mission300::new(plain, geometry()).is_ok());
+    let host = Box::new(Mission400::new(c, geometry()).unwrap());
+    assert!(host.evidence().has_occupied_plane());
+    // At the start the body's disc is free evidence, nothing is occupied.
+    let g = geometry();
+    let (x, y) = g.cell_xy_of(PointM::new(1.0, 1.0)).unwrap();
+    assert_eq!(host.evidence().get_xy(x, y), CellEvidence::Free);
+    assert_eq!(host.evidence().counts().1 + host.evidence().counts().2, 0);
+}

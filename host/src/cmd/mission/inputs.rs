@@ -20,6 +20,13 @@ pub struct Inputs {
 /// Read and check the files and numbers of `args` (errors name the file and line, or the
 /// option).
 pub fn read_inputs(args: &Args) -> Result<Inputs> {
+    if args.loop_args.evidence_map {
+        bail!(
+            "--evidence-map: twil mission cannot carry it (SetMission has no field for it, and \
+             the MCU has no room for the map's second bit plane: see docs/mapping.md); use twil \
+             simulate --evidence-map"
+        );
+    }
     let mut params = read_par(&args.params)?;
     let known = args.known.as_deref().map(read_da).transpose()?;
     let real = args.real.as_deref().map(read_da).transpose()?;

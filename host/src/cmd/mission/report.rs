@@ -155,6 +155,7 @@ pub(super) fn write_outputs(
         time_limit_s: args.time_limit_s(),
         constant_depth_filter: args.choices().rcd,
         trust_seen_space: !args.choices().seed_prune,
+        evidence_map: false,
         moving_half_sweep_deg: 95.0,
         snapshot_period_s: FRAME_PERIOD_S,
         plan_latency_s: 0.0,

@@ -1,0 +1,237 @@
+//! How the mission writes the evidence map ([`MissionConfig::evidence_map`]): rays, reflectors,
+//! taken-back marks and suspects, and the grown 1-bit grid the planners read, derived from the
+//! occupied evidence.
+//!
+//! Why each rule (see `docs/mapping.md` for the argument and its sources):
+//!
+//! - **Free evidence** comes only from what a whole standing sweep vouches for (the Thales rule,
+//!   `swept`), not from the empty region of each reading (Moravec & Elfes 1985): a smooth wall
+//!   that crosses a ray's axis obliquely is silent while something else in the cone echoes
+//!   beyond it (measured: the office at 6 m, 30°, drove its body onto such a wall when the
+//!   axis of echoing rays was free evidence). A vouched cell takes a tentative mark back.
+//! - **Silence** marks nothing: a smooth wall met at more than the incidence limit is silent
+//!   (Kuc & Siegel 1987), so silence is never proof that a cell is free for the body.
+//! - **A run of constant depth** (Leonard & Durrant-Whyte 1991) has one reflector: the point at
+//!   the run's middle bearing and mean depth (for a plane, the foot of the perpendicular; for a
+//!   corner, the corner), not the whole arc: a doorway's jambs are not painted across it.
+//! - **Suspects**: after a full standing sweep, unknown cells that no reading vouched for in a
+//!   ring just outside the planning radius are tentative occupied, so the planner does not
+//!   route the body through silent space beside it.
+//!
+//! Bounded work: a sweep's reflectors at most its
+//! readings; a take-back redraws a `(4e + 1)²` window (e: the expansion in cells), at most
+//! [`TAKE_BACK_CAPACITY`] per sweep; suspects read a `(2e + 7)²` square.
+
+use heapless::Vec;
+
+use crate::geom::PointM;
+use crate::math::{abs, cos, hypot, sin};
+use crate::raster::mark_point_m;
+use crate::sonar::hit_to_world;
+
+use super::evidence::{CellEvidence, Change};
+use super::Mission;
+
+/// Take-backs redrawn in the grid per sweep; more are kept marked in the grid (the safe side)
+/// though the evidence map has taken them back.
+pub const TAKE_BACK_CAPACITY: usize = 32;
+
+/// Cells whose tentative mark a ray took back, for the grid to be redrawn around them.
+pub(super) type TakeBacks = Vec<(u16, u16), TAKE_BACK_CAPACITY>;
+
+impl<const W: usize, const E: usize> Mission<W, E> {
+    /// At a (re)start the robot stands on its own disc: that and half a cell more is free. So
+    /// is the sonar's blind disc (its minimum range around it): no sweep from here can hear
+    /// it, and every later stop's blind disc is known before the robot stops there (`blind`),
+    /// so this is the one thing the user vouches for by placing the robot.
+    pub(super) fn assume_body_disc_clear(&mut self) {
+        let g = *self.grid.geometry();
+        let robot = self.config.robot;
+        let c = self.config.start;
+        let half_cell_m = 0.5 * g.resolution_m();
+        let body_m = robot.physical_radius_m() + half_cell_m;
+        let heading = self.config.initial_heading_rad;
+        let sonar = PointM::new(
+            c.x_m + robot.sonar_offset_m * cos(heading),
+            c.y_m + robot.sonar_offset_m * sin(heading),
+        );
+        let blind_m = robot.sonar_min_range_m + half_cell_m;
+        self.mark_disc_free(c, body_m);
+        self.mark_disc_free(sonar, blind_m);
+    }
+
+    fn mark_disc_free(&mut self, c: PointM, reach_m: f32) {
+        let g = *self.grid.geometry();
+        let Some((cx, cy)) = g.cell_xy_of(c) else {
+            return;
+        };
+        if !(reach_m.is_finite() && reach_m >= 0.0) {
+            return;
+        }
+        let h = (reach_m / g.resolution_m()) as i32 + 1;
+        for y in cy - h..=cy + h {
+            for x in cx - h..=cx + h {
+                let p = centre(&g, x, y);
+                if hypot(p.x_m - c.x_m, p.y_m - c.y_m) <= reach_m {
+                    self.evidence.observe_free_xy(x, y);
+                }
+            }
+        }
+    }
+
+    /// Redraw the grid around the cells whose tentative marks were taken back (unless marks
+    /// known a priori are in the grid: those are not in the evidence map and would be lost).
+    pub(super) fn apply_take_backs(&mut self) {
+        if self.known_a_priori {
+            self.taken_back.clear();
+            return;
+        }
+        let g = *self.grid.geometry();
+        let e = self.expansion_cells as i32;
+        for &(tx, ty) in self.taken_back.iter() {
+            let (tx, ty) = (tx as i32, ty as i32);
+            for y in ty - e..=ty + e {
+                for x in tx - e..=tx + e {
+                    self.grid.set_xy(x, y, false);
+                }
+            }
+            for y in ty - 2 * e..=ty + 2 * e {
+                for x in tx - 2 * e..=tx + 2 * e {
+                    if self.evidence.is_occupied_xy(x, y) {
+                        mark_point_m(&mut self.grid, centre(&g, x, y), e as u16);
+                    }
+                }
+            }
+        }
+        self.taken_back.clear();
+    }
+
+    /// One reflector per run of constant depth (see the module docs), marked in the evidence
+    /// map and grown into the grid. Returns the reflectors marked.
+    pub(super) fn mark_reflectors(&mut self) -> u16 {
+        self.hits.clear();
+        let g = *self.grid.geometry();
+        let e = self.expansion_cells;
+        let robot = self.config.robot;
+        // Neighbours of one run agree to half a cell (the seed's 1 cm is finer than a cell,
+        // and noise splits runs that one reflector made).
+        let tolerance_m = robot.rcd_depth_tolerance_m.max(0.5 * g.resolution_m());
+        let readings = self.readings.as_slice();
+        let mut start = 0;
+        while start < readings.len() {
+            let Some(first_m) = readings[start].range_m else {
+                start += 1;
+                continue;
+            };
+            let (mut end, mut sum_m, mut previous_m) = (start, first_m, first_m);
+            while let Some(next_m) = readings.get(end + 1).and_then(|r| r.range_m) {
+                if abs(next_m - previous_m) > tolerance_m {
+                    break;
+                }
+                sum_m += next_m;
+                previous_m = next_m;
+                end += 1;
+            }
+            let count = (end - start + 1) as f32;
+            let (a, b) = (&readings[start], &readings[end]);
+            let middle = &readings[(start + end) / 2];
+            let angle_rad = 0.5 * (a.neck_angle_rad + b.neck_angle_rad);
+            let p = hit_to_world(middle.pose, robot.sonar_offset_m, angle_rad, sum_m / count);
+            start = end + 1;
+            if !p.is_finite() {
+                continue;
+            }
+            if let Some((x, y)) = g.cell_xy_on_map(p) {
+                self.evidence.observe_occupied_xy(x, y);
+            }
+            mark_point_m(&mut self.grid, p, e);
+            let _ = self.hits.push(p);
+        }
+        self.stats.hits += self.hits.len() as u32;
+        self.hits.len() as u16
+    }
+
+    /// After a standing sweep: every unknown cell within range that the sweep vouches for (the
+    /// Thales rule, `swept`) is free evidence, so the next stop need not read it again. Cost:
+    /// the cells of the square around the range times the sweep's readings (40 000 × 105 at
+    /// 3 m), host only (the MCU has no room for the evidence map).
+    pub(super) fn mark_vouched_free(&mut self, full: bool) {
+        let g = *self.grid.geometry();
+        let pose = self.pose_world();
+        let robot = self.config.robot;
+        let sonar = pose.point_ahead(robot.sonar_offset_m);
+        let Some((sx, sy)) = g.cell_xy_of(sonar) else {
+            return;
+        };
+        let h = (robot.sonar_range_m / g.resolution_m()) as i32 + 1;
+        let band_rad = if full {
+            core::f32::consts::PI
+        } else {
+            crate::sonar::SweepPlan::new(&robot, crate::sonar::SweepKind::Normal)
+                .covered_half_angle_rad()
+        };
+        for y in (sy - h).max(0)..=(sy + h).min(g.height() as i32 - 1) {
+            for x in (sx - h).max(0)..=(sx + h).min(g.width() as i32 - 1) {
+                if !matches!(
+                    self.evidence.get_xy(x, y),
+                    CellEvidence::Unknown | CellEvidence::Tentative
+                ) {
+                    continue;
+                }
+                if self.swept(pose, band_rad, true).vouches(centre(&g, x, y))
+                    && self.evidence.observe_free_xy(x, y) == Change::TakenBack
+                {
+                    // Full: the grid keeps the mark (the safe side).
+                    let _ = self.taken_back.push((x as u16, y as u16));
+                }
+            }
+        }
+    }
+
+    /// After a full standing sweep: unknown cells no reading vouched for, in the ring from one
+    /// to three cells outside the planning radius, become suspects (tentative, grown into the
+    /// grid). The ring starts outside the radius so the robot's own cell stays free.
+    pub(super) fn mark_suspects(&mut self) {
+        let g = *self.grid.geometry();
+        let e = self.expansion_cells as i32;
+        let pose = self.pose_world();
+        let Some((cx, cy)) = g.cell_xy_of(pose.position()) else {
+            return;
+        };
+        let (inner, outer) = (e + 1, e + 3);
+        let mut suspects: Vec<(i32, i32), 256> = Vec::new();
+        {
+            let swept = self.swept(pose, core::f32::consts::PI, true);
+            for y in cy - outer..=cy + outer {
+                for x in cx - outer..=cx + outer {
+                    let (dx, dy) = (x - cx, y - cy);
+                    let d2 = dx * dx + dy * dy;
+                    if d2 < inner * inner || d2 > outer * outer || !g.contains_xy(x, y) {
+                        continue;
+                    }
+                    if self.evidence.get_xy(x, y) != CellEvidence::Unknown
+                        || swept.vouches(centre(&g, x, y))
+                    {
+                        continue;
+                    }
+                    // Full: the rest of the ring stays unknown (the corridor rule still keeps
+                    // the body out of it).
+                    let _ = suspects.push((x, y));
+                }
+            }
+        }
+        for &(x, y) in suspects.iter() {
+            if self.evidence.suspect_xy(x, y) == Change::NowOccupied {
+                mark_point_m(&mut self.grid, centre(&g, x, y), e as u16);
+            }
+        }
+    }
+}
+
+/// Centre of the cell at signed indices (on the map or not), metres.
+fn centre(g: &crate::grid::GridGeometry, x: i32, y: i32) -> PointM {
+    PointM::new(
+        (x as f32 + 0.5) * g.resolution_m(),
+        (y as f32 + 0.5) * g.resolution_m(),
+    )
+}
