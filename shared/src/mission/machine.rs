@@ -73,6 +73,7 @@ impl<const W: usize> Mission<W> {
             supply_segment: 0,
             last_plan_origin: None,
             stalled_plans: 0,
+            stall_sweep_at: None,
             last_stop_position: None,
             pending_plan: None,
             deferred_sweep_end: None,
@@ -143,6 +144,7 @@ impl<const W: usize> Mission<W> {
         self.supply_segment = 0;
         self.last_plan_origin = None;
         self.stalled_plans = 0;
+        self.stall_sweep_at = None;
         self.last_stop_position = None;
         self.pending_plan = None;
         self.deferred_sweep_end = None;
