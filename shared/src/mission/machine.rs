@@ -77,6 +77,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             supply_segment: 0,
             last_plan_origin: None,
             stalled_plans: 0,
+            stall_sweep_at: None,
             last_stop_position: None,
             pending_plan: None,
             deferred_sweep_end: None,
@@ -159,6 +160,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.supply_segment = 0;
         self.last_plan_origin = None;
         self.stalled_plans = 0;
+        self.stall_sweep_at = None;
         self.last_stop_position = None;
         self.pending_plan = None;
         self.deferred_sweep_end = None;

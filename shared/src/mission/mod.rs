@@ -98,8 +98,11 @@
 //!
 //! - The map only ever gains obstacles, so when the planner says the goal is unreachable (or the
 //!   goal cell is occupied) on the current map, it stays so: [`MissionStatus::Unreachable`].
-//! - [`MissionConfig::max_stalled_plans`] plans in a row from (almost) the same place also end
-//!   in [`MissionStatus::Unreachable`] ([`UnreachableReason::NoProgress`]).
+//! - [`MissionConfig::max_stalled_plans`] plans in a row from (almost) the same place first
+//!   stop the robot for a full standing sweep (plans made from moving or half sweeps can
+//!   alternate between two ways round an obstacle, each sweep seeing the side the other hid);
+//!   the same again from there ends in [`MissionStatus::Unreachable`]
+//!   ([`UnreachableReason::NoProgress`]).
 //! - [`MissionConfig::time_limit_s`] of mission time: [`MissionStatus::Timeout`].
 //!
 //! ## Memory
@@ -236,6 +239,9 @@ pub struct Mission<const W: usize, const E: usize = W> {
     supply_segment: u16,
     last_plan_origin: Option<PointM>,
     stalled_plans: u16,
+    /// Where a stall was last answered by a full standing sweep (world frame): a second stall
+    /// there ends the mission.
+    stall_sweep_at: Option<PointM>,
     /// Where the last standing sweep was taken (world frame).
     last_stop_position: Option<PointM>,
     pending_plan: Option<PendingPlan>,

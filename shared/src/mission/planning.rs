@@ -12,10 +12,10 @@ use crate::math::hypot;
 use crate::plan::{PlanError, PlanReport, PlanStatus};
 use crate::raster::BresenhamLine;
 
-use super::messages::push_planned;
+use super::messages::{push, push_planned};
 use super::{
-    Mission, MissionMode, MissionOutput, MissionPhase, MissionStatus, PendingPlan, PilotCommand,
-    PlanRequest, UnreachableReason,
+    Mission, MissionEvent, MissionMode, MissionOutput, MissionPhase, MissionStatus, PendingPlan,
+    PilotCommand, PlanRequest, UnreachableReason,
 };
 
 impl<const W: usize, const E: usize> Mission<W, E> {
@@ -56,6 +56,20 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         }
         self.last_plan_origin = Some(origin);
         if self.stalled_plans >= self.config.max_stalled_plans {
+            // Plans from moving or half sweeps can alternate between two ways round an
+            // obstacle (each sweep sees the side the other hid): look all round, standing,
+            // once per place before giving up.
+            let looked_here = self.stall_sweep_at.is_some_and(|p| {
+                hypot(origin.x_m - p.x_m, origin.y_m - p.y_m) < self.config.stall_distance_m
+            });
+            if !looked_here {
+                self.stall_sweep_at = Some(origin);
+                self.stalled_plans = 0;
+                self.last_plan_origin = None;
+                push(out, MissionEvent::FullSweepRequested);
+                self.begin_standing_sweep(true, out);
+                return;
+            }
             self.stats.unreachable_reason = Some(UnreachableReason::NoProgress);
             self.finish(MissionStatus::Unreachable, out);
             return;
