@@ -493,9 +493,8 @@ fn start_device_mission_with(
     link_loss: twil_core::failsafe::LinkLossPolicy,
 ) -> Remote {
     use twil_core::link::MissionSetup;
-    let real = twil_host::cmd::simulate::read_da(&common::world(&format!("{world}.da"))).unwrap();
-    let params =
-        twil_host::cmd::simulate::read_par(&common::world(&format!("{world}.par"))).unwrap();
+    let real = twil_host::cmd::args::read_da(&common::world(&format!("{world}.da"))).unwrap();
+    let params = twil_host::cmd::args::read_par(&common::world(&format!("{world}.par"))).unwrap();
     let mut remote = Remote::open_paced(&RemoteSpec::Qemu, 3).expect("QEMU");
     remote.hello().expect("hello");
     let map = MapParams {
@@ -688,9 +687,8 @@ fn simulated_mission(
     use twil_core::control::Pose;
     use twil_core::mission::{LocalRunner, Mission300, MissionConfig, MissionPlanner300};
     use twil_core::robot::RobotConfig;
-    let real = twil_host::cmd::simulate::read_da(&common::world(&format!("{world}.da"))).unwrap();
-    let params =
-        twil_host::cmd::simulate::read_par(&common::world(&format!("{world}.par"))).unwrap();
+    let real = twil_host::cmd::args::read_da(&common::world(&format!("{world}.da"))).unwrap();
+    let params = twil_host::cmd::args::read_par(&common::world(&format!("{world}.par"))).unwrap();
     let mut config = MissionConfig::from_params(&params, RobotConfig::default());
     config.mode = mode;
     config.planner = PlannerKind::AStar;

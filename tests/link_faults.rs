@@ -27,8 +27,8 @@ const DAMAGE: f64 = 0.01;
 
 /// Upload the office world and plan across it; the path.
 fn office_plan(remote: &mut Remote) -> anyhow::Result<Vec<twil_core::geom::PointM>> {
-    let real = twil_host::cmd::simulate::read_da(&common::world("office.da"))?;
-    let params = twil_host::cmd::simulate::read_par(&common::world("office.par"))?;
+    let real = twil_host::cmd::args::read_da(&common::world("office.da"))?;
+    let params = twil_host::cmd::args::read_par(&common::world("office.par"))?;
     let map = MapParams {
         robot_radius_m: params.robot_radius_m,
         ..MapParams::default()

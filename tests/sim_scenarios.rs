@@ -39,7 +39,7 @@ fn distance_to_goal(result: &SimResult, goal: (f32, f32)) -> f32 {
 }
 
 fn goal_of(par: &str) -> (f32, f32) {
-    let params = twil_host::cmd::simulate::read_par(Path::new(&world(par))).unwrap();
+    let params = twil_host::cmd::args::read_par(Path::new(&world(par))).unwrap();
     (params.goal.x_m, params.goal.y_m)
 }
 
@@ -76,7 +76,7 @@ fn the_lab_world_is_reached_without_collision_in_both_modes_on_its_18_by_10_map(
     // The seed's chapter V lab: 18 × 10 m, start to goal about 13 m.
     let (da, par) = (world("lab.da"), world("lab.par"));
     let (start, goal) = {
-        let p = twil_host::cmd::simulate::read_par(Path::new(&par)).unwrap();
+        let p = twil_host::cmd::args::read_par(Path::new(&par)).unwrap();
         ((p.start.x_m, p.start.y_m), (p.goal.x_m, p.goal.y_m))
     };
     let start_to_goal_m = ((goal.0 - start.0).powi(2) + (goal.1 - start.1).powi(2)).sqrt();

@@ -180,7 +180,7 @@ pub struct Explicit {
 
 /// The robot of a run: `base` (the defaults with the command's own defaults and the `.par`
 /// radius), then the file's keys, then the explicit options, validated once. A refused value
-/// is named where it came from: the option (`robot_options` wording), or the file's line.
+/// is named where it came from: the option (`args::option_error` wording), or the file's line.
 pub fn resolve(
     base: RobotConfig,
     file: Option<&RobotFile>,
@@ -229,7 +229,7 @@ fn refused(
             e.expected
         ),
         _ if explicit.iter().any(|x| x.name == e.field) || file.is_none() => {
-            crate::cmd::robot_options::message(e, robot)
+            crate::cmd::args::option_error(e, robot)
         }
         _ => format!(
             "{}: `{}` = {} (not set in the file, so the command's value): {}; set it in the file",

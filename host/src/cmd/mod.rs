@@ -1,5 +1,6 @@
 //! One module per `twil` subcommand.
 
+pub mod args;
 pub mod compare;
 pub mod cspace;
 pub mod mission;

@@ -9,11 +9,11 @@
 use std::path::Path;
 
 use anyhow::Result;
-use twil_core::robot::{ConfigError, RobotConfig, SONAR_MAX_RANGE_LIMIT_M};
+use twil_core::robot::RobotConfig;
 use twil_core::sonar::SweepLayout;
 use twil_core::world::Params;
 
-use crate::cmd::simulate::{SonarArg, SonarArgs};
+use crate::cmd::args::{SonarArg, SonarArgs};
 use crate::robot_file::{self, Explicit};
 
 /// The options of `twil simulate` and `twil mission` that set robot constants.
@@ -116,30 +116,10 @@ pub fn resolve(options: &RobotOptions, params: &mut Params) -> Result<RobotConfi
 /// `--sonar-range` left out and no robot file: the seed's `ALCANCE_SONAR`.
 const DEFAULT_SONAR_RANGE_M: f32 = RobotConfig::DEFAULT.sonar_range_m;
 
-/// The message for `e`, a validation error of `robot`.
-pub fn message(e: &ConfigError, robot: &RobotConfig) -> String {
-    let v = e.value;
-    match e.field {
-        "sonar_range_m" if v > SONAR_MAX_RANGE_LIMIT_M => {
-            format!("--sonar-range {v}: at most {SONAR_MAX_RANGE_LIMIT_M} m")
-        }
-        "sonar_range_m" => format!(
-            "--sonar-range {v}: above {} m, the sonar's shortest range, and at most \
-             {SONAR_MAX_RANGE_LIMIT_M} m",
-            robot.sonar_min_range_m
-        ),
-        "sonar_noise_std_m" => format!("--sonar-noise {v}: 0 to 1 m"),
-        "sonar_dropout_probability" => format!("--sonar-dropout {v}: a probability, 0 to 1"),
-        "sonar_spurious_probability" => format!("--sonar-spurious {v}: a probability, 0 to 1"),
-        "sonar_beam_half_angle_deg" => format!("--beam-half-angle {v}: 0 to 45 degrees"),
-        "sonar_incidence_limit_deg" => format!("--incidence-limit {v}: 0 to 90 degrees"),
-        _ => format!("robot config: {e}"),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cmd::args::option_error as message;
 
     fn refused(robot: RobotConfig) -> String {
         message(&robot.validate().unwrap_err(), &robot)

@@ -9,7 +9,7 @@
 //! obstacles. See `docs/simulate.md`.
 
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{bail, Context, Result};
@@ -17,82 +17,15 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 use twil_core::grid::GridGeometry;
 use twil_core::mission::{MissionMode, MissionStats};
-use twil_core::robot::RobotConfig;
-use twil_core::world::{Obstacles, Params};
 
 use crate::record::sim::{Pace, SimRecorder};
 use crate::record::topics::StatusMessage;
 use crate::record::{RecordArgs, Recorder};
-use crate::world_io;
 
+use super::args::{parse_size, read_da, read_par, Mode, SonarArgs};
 use super::preset::{FollowArgs, LoopArgs, LoopChoices};
 
 use crate::sim::{self, output, SimResult, SimSetup};
-
-/// The simulated sonar model.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SonarArg {
-    /// One exact ray along the neck's direction (the earlier model).
-    Ray,
-    /// An ultrasonic beam: cone, first echo, incidence limit, corners (the default).
-    Beam,
-}
-
-/// The simulated sonar's options, shared by `twil simulate` and `twil mission` (whose
-/// simulated devices use them).
-#[derive(clap::Args, Debug, Clone, Copy)]
-pub struct SonarArgs {
-    /// Simulated sonar: `ray` one exact ray; `beam` an ultrasonic beam (cone, first echo,
-    /// smooth walls echo only near face-on, corners at any angle; docs/robot-model.md).
-    /// [default: beam, or the --robot file's `sonar_beam`]
-    #[arg(long, value_enum)]
-    pub sonar: Option<SonarArg>,
-    /// Half-angle of the beam's cone, degrees (0 to 45; the HC-SR04 data sheet's 15°)
-    /// [default: 15, or the --robot file's `sonar_beam_half_angle_deg`].
-    #[arg(long, value_name = "DEG")]
-    pub beam_half_angle: Option<f32>,
-    /// Beam: a smooth wall echoes only when the ray is within this angle of
-    /// its normal, degrees (0 to 90) [default: 70, or the --robot file's
-    /// `sonar_incidence_limit_deg`].
-    #[arg(long, value_name = "DEG")]
-    pub incidence_limit: Option<f32>,
-}
-
-impl SonarArgs {
-    /// `robot` with this sonar model (an option left out: the command's default).
-    pub fn apply(&self, robot: RobotConfig) -> RobotConfig {
-        RobotConfig {
-            sonar_beam: self.sonar.unwrap_or(SonarArg::Beam) == SonarArg::Beam,
-            sonar_beam_half_angle_deg: self
-                .beam_half_angle
-                .unwrap_or(RobotConfig::DEFAULT.sonar_beam_half_angle_deg),
-            sonar_incidence_limit_deg: self
-                .incidence_limit
-                .unwrap_or(RobotConfig::DEFAULT.sonar_incidence_limit_deg),
-            ..robot
-        }
-    }
-}
-
-/// Sonar use.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Mode {
-    /// Stop, sweep, plan, follow the visible prefix, settle, repeat (the seed's way).
-    Stop,
-    /// Sweep while moving; replan on the fly.
-    Continuous,
-}
-
-/// Planner choice.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PlannerArg {
-    /// Breadth-first search (the seed's).
-    Bfs,
-    /// A* with octile costs.
-    Astar,
-    /// A* plus line-of-sight shortcuts.
-    Anyangle,
-}
 
 /// Arguments of `twil simulate`.
 #[derive(clap::Args, Debug, Clone)]
@@ -176,35 +109,6 @@ pub struct Args {
     /// With `--live`: run mission time this many times faster than the wall clock.
     #[arg(long, default_value_t = 1.0, value_name = "X", requires = "live")]
     pub speed: f64,
-}
-
-/// Read a `.da` file; errors name the file and the line (see [`crate::world_io`]).
-pub fn read_da(path: &Path) -> Result<Obstacles> {
-    Ok(world_io::read_da(path)?)
-}
-
-/// Read a `.par` file; errors name the file and the line.
-pub fn read_par(path: &Path) -> Result<Params> {
-    Ok(world_io::read_par(path)?)
-}
-
-/// Parse `WxH` in metres.
-pub fn parse_size(text: &str) -> Result<(f32, f32)> {
-    let (w, h) = text
-        .split_once(['x', 'X'])
-        .with_context(|| format!("--size: expected WIDTHxHEIGHT in metres, got `{text}`"))?;
-    let w: f32 = w
-        .trim()
-        .parse()
-        .with_context(|| format!("--size: bad width `{w}`"))?;
-    let h: f32 = h
-        .trim()
-        .parse()
-        .with_context(|| format!("--size: bad height `{h}`"))?;
-    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
-        bail!("--size: width and height must be positive, got `{text}`");
-    }
-    Ok((w, h))
 }
 
 /// Turn the arguments into a simulation setup (reads and checks every file).

@@ -40,7 +40,7 @@ use twil_core::plant::Plant;
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
-use super::simulate::{parse_size, read_da, read_par, Mode, SonarArgs};
+use super::args::{parse_size, read_da, read_par, Mode, SonarArgs};
 use crate::cmd::preset::{FollowArgs, LoopArgs};
 use crate::record::telemetry::TelemetryRecorder;
 use crate::record::{RecordArgs, Recorder};
