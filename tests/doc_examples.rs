@@ -35,17 +35,7 @@ const SKIPPED: &[(&str, &str, &str)] = &[
     (
         "README.md",
         "cargo run --release -p twil-host -- simulate --real worlds/office.da --params worlds/office.par --out out/office",
-        "the quick start: the same command runs as `twil simulate … --out out/office` in the README's Simulate section",
-    ),
-    (
-        "README.md",
-        "--live --speed 5",
-        "paces a 482 s mission to the wall clock (about 96 s) and serves WebSocket clients",
-    ),
-    (
-        "README.md",
-        "twil mission --remote qemu",
-        "QEMU runs the firmware for minutes (tests/mission_remote.rs covers it under cargo xtask test)",
+        "the quick start: the same mission runs as `twil simulate … --out out/office --record …` in the README's tour",
     ),
     (
         "CONTRIBUTING.md",
@@ -53,7 +43,7 @@ const SKIPPED: &[(&str, &str, &str)] = &[
         "the convention's own illustration (its output is abbreviated with …)",
     ),
     (
-        "README.md",
+        "docs/firmware.md",
         "TWIL_QEMU_LOG=q.log twil ping",
         "a recipe with cargo xtask defmt-log (the log's timestamps vary)",
     ),
@@ -62,7 +52,11 @@ const SKIPPED: &[(&str, &str, &str)] = &[
         "twil ping --remote tcp:127.0.0.1:PORT",
         "needs a QEMU started by cargo xtask qemu PORT",
     ),
-    ("docs/firmware.md", "twil ping --remote qemu", "needs QEMU and the firmware ELF"),
+    (
+        "docs/firmware.md",
+        "twil ping --remote qemu       # or let twil",
+        "needs QEMU and the firmware ELF (the console example beside it runs it)",
+    ),
     (
         "docs/mission.md",
         "twil mission --remote qemu",
