@@ -97,6 +97,45 @@ fn bundled_worlds_reach_the_goal_and_agree_with_the_simulator_in_both_modes() {
     }
 }
 
+/// Issue 26: with the default planner and no planning latency (the in-process device plans
+/// at once), plans made from moving sweeps alternated between the two ways round a pillar and
+/// the stall counter ended the mission `unreachable` after 3 m. A stall now first buys one
+/// full standing sweep at that place.
+#[test]
+fn plans_that_alternate_round_a_pillar_are_settled_by_a_standing_sweep() {
+    let (da, par) = (world("pillars.da"), world("pillars.par"));
+    for seed in ["1", "2", "3"] {
+        let device = json_of(&[
+            "mission",
+            "--remote",
+            "sim",
+            "--real",
+            &da,
+            "--params",
+            &par,
+            "--mode",
+            "continuous",
+            "--seed",
+            seed,
+            "--json",
+        ]);
+        assert_eq!(device["status"], "reached", "seed {seed}: {device}");
+    }
+    let host = json_of(&[
+        "simulate",
+        "--real",
+        &da,
+        "--params",
+        &par,
+        "--mode",
+        "continuous",
+        "--plan-latency-ms",
+        "0",
+        "--json",
+    ]);
+    assert_eq!(host["status"], "reached", "{host}");
+}
+
 #[test]
 fn json_has_exactly_the_simulator_keys_plus_mcu() {
     let device = mission("pillars", "continuous", &[]);
