@@ -6,11 +6,16 @@
 //! Measured effect (`cargo xtask mcu-bench`): the 300 × 300 maze 7.8 M → 4.1 M instructions
 //! with the inner-corner rule; the open grid 4.2 M (first cell-by-cell version) → 0.5 M.
 
-use super::*;
+use super::codes::{S, STEPS};
+use super::los::line_of_sight;
+use super::path::PathOut;
+use super::planner::Planner;
+use crate::geom::Cell;
+use crate::grid::Grid;
 
 /// Euclidean length of the segment between two cells, in cells.
 #[inline]
-pub(super) fn cells_distance(a: Cell, b: Cell) -> f32 {
+fn cells_distance(a: Cell, b: Cell) -> f32 {
     let dx = a.x as f32 - b.x as f32;
     let dy = a.y as f32 - b.y as f32;
     crate::math::hypot(dx, dy)

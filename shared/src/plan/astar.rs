@@ -11,27 +11,40 @@
 //! corridor cells counted as expanded); the steps that got there: docs/planners.md,
 //! "Cell-by-cell A\*: the expansion loop" and the sections before it.
 
-use super::*;
+use super::class_queue::{ClassQueue, QueueState};
+use super::codes::{Dir, CODE_START, E, N, NE, NW, S, SE, STEPS, SW, W};
+use super::corridor::{corridor_index, walk_corridor, CORRIDOR_SIDES, WALK_GIVE_UP_CREDIT};
+use super::goal::{
+    axis_region, goal_axis_entry, goal_region, AT_GOAL, CLASS_COSTS, GOAL_AXIS_CELLS,
+    GOAL_TABLE_WORDS, STEP_CLASSES,
+};
+use super::layout::{CellMap, Flat, Framed, Interior, FRAMED_WORDS, NIBBLE_WINDOWS};
+use super::open_list::{OpenEntry, OpenList, NIL};
+use super::planner::{Layout, Planner, Search};
+use super::ring_queue::RingQueue;
+use super::{scratch_words_for_cells, PlanError, DIAGONAL_COST, STRAIGHT_COST};
+use crate::geom::Cell;
+use crate::grid::Grid;
 
 // The 18-bit neighbourhood mask of the cell-by-cell A*: three rows of [`NIBBLE_WINDOWS`]
 // entries (below, same, above; 6 bits each). `Z_*`: the neighbour's nibble is 0 (a possible
 // target); `O_*`: the neighbour is not blocked (a side cell a diagonal step may pass).
-pub(super) const Z_SW: u32 = 0;
-pub(super) const Z_S: u32 = 1;
-pub(super) const Z_SE: u32 = 2;
-pub(super) const Z_W: u32 = 6;
-pub(super) const Z_E: u32 = 8;
-pub(super) const Z_NW: u32 = 12;
-pub(super) const Z_N: u32 = 13;
-pub(super) const Z_NE: u32 = 14;
-pub(super) const O_SW: u32 = 3;
-pub(super) const O_S: u32 = 4;
-pub(super) const O_SE: u32 = 5;
-pub(super) const O_W: u32 = 9;
-pub(super) const O_E: u32 = 11;
-pub(super) const O_NW: u32 = 15;
-pub(super) const O_N: u32 = 16;
-pub(super) const O_NE: u32 = 17;
+const Z_SW: u32 = 0;
+const Z_S: u32 = 1;
+const Z_SE: u32 = 2;
+const Z_W: u32 = 6;
+const Z_E: u32 = 8;
+const Z_NW: u32 = 12;
+const Z_N: u32 = 13;
+const Z_NE: u32 = 14;
+const O_SW: u32 = 3;
+const O_S: u32 = 4;
+const O_SE: u32 = 5;
+const O_W: u32 = 9;
+const O_E: u32 = 11;
+const O_NW: u32 = 15;
+const O_N: u32 = 16;
+const O_NE: u32 = 17;
 
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEUE> {
     /// Cell-by-cell A* (see [`astar_search`]) on a copy of the map: in the [`Framed`] layout

@@ -7,7 +7,8 @@
 //! instructions against the former 512-bucket queue; see docs/planners.md, "Cell-by-cell A\*:
 //! queue by reduced-cost class".
 
-use super::*;
+use super::goal::{CLASSES, CLASS_COSTS};
+use super::open_list::{OpenEntry, OpenList, NIL};
 
 /// The scalar state of a [`ClassQueue`], kept apart from its arrays so that the search loop
 /// holds it in registers (it is passed by value to the queue's out-of-line parts).
@@ -47,13 +48,13 @@ pub(super) struct ClassQueue<'a> {
     pub(super) pool: &'a mut [OpenEntry],
     /// First and last entry of each FIFO class `1 ..= 5` (`NIL` when empty; index 0 and the
     /// two past the classes are unused, so that a 3-bit class indexes them).
-    pub(super) heads: [u32; 8],
-    pub(super) tails: [u32; 8],
+    heads: [u32; 8],
+    tails: [u32; 8],
     /// The key of each FIFO's head entry (`u32::MAX` when empty).
-    pub(super) head_keys: [u32; 8],
+    head_keys: [u32; 8],
     /// Head of the far list (sorted by key, `NIL` when empty) and its key (`u32::MAX`).
     pub(super) far: u32,
-    pub(super) far_key: u32,
+    far_key: u32,
 }
 
 impl<'a> ClassQueue<'a> {
@@ -79,7 +80,7 @@ impl<'a> ClassQueue<'a> {
 
     /// A free slot of the pool, taken off the free list or the unused end; `None` when full.
     #[inline(always)]
-    pub(super) fn alloc(&mut self, s: &mut QueueState) -> Option<u32> {
+    fn alloc(&mut self, s: &mut QueueState) -> Option<u32> {
         if s.free != NIL {
             let slot = s.free;
             s.free = self.pool.get(slot as usize)?.next;
@@ -241,7 +242,7 @@ impl<'a> ClassQueue<'a> {
 
     /// Remove the head of the far list and return its node (`NIL` when it is empty).
     #[inline(always)]
-    pub(super) fn pop_far(&mut self, s: &mut QueueState) -> u32 {
+    fn pop_far(&mut self, s: &mut QueueState) -> u32 {
         let slot = self.far;
         let Some(e) = self.pool.get_mut(slot as usize) else {
             return NIL;
@@ -272,7 +273,7 @@ impl<'a> ClassQueue<'a> {
 
     /// Drop the entries for which `stale(node)` holds from the list starting at `head`,
     /// keeping the others in order. Returns the new head, the new tail and the slots freed.
-    pub(super) fn filter_list(
+    fn filter_list(
         &mut self,
         s: &mut QueueState,
         head: u32,

@@ -6,7 +6,7 @@
 //! in 8 cells per word from a 1 KB table built at compile time ([`BLOCKED_NIBBLES`]). See
 //! docs/planners.md, "Memory layout".
 
-use super::*;
+use super::{DIAGONAL_COST, STRAIGHT_COST};
 
 /// Nibble code of the start cell.
 pub(super) const CODE_START: u32 = 9;

@@ -8,7 +8,8 @@
 //! Cortex-M4 instructions per expanded cell for the region, was about 28; see
 //! docs/planners.md, "Cell-by-cell A\*: goal regions from a per-axis table".
 
-use super::*;
+use super::codes::{octile, STEPS};
+use super::{DIAGONAL_COST, STRAIGHT_COST};
 
 /// The reduced costs `r = cost + h(child) − h(parent)` of an octile step under the octile
 /// heuristic, in increasing order: 0, `2S − D`, `2D − 2S`, `D`, `2S`, `2D` (S =
@@ -36,7 +37,7 @@ pub(super) const CLASS_COSTS: [u32; 8] = {
 };
 /// The class of a reduced cost `r` by `r >> 10` (`r < 16 384`), `NO_CLASS` for none; the six
 /// reduced costs fall into six different slots (0, 3, 4, 7, 11, 15).
-pub(super) const CLASS_BY_KILO: [u8; 16] = {
+const CLASS_BY_KILO: [u8; 16] = {
     let mut table = [NO_CLASS; 16];
     let mut c = 0;
     while c < CLASSES {
@@ -45,7 +46,7 @@ pub(super) const CLASS_BY_KILO: [u8; 16] = {
     }
     table
 };
-pub(super) const NO_CLASS: u8 = 0xFF;
+const NO_CLASS: u8 = 0xFF;
 
 /// The class of reduced cost `r` (`key − last popped key`), `None` when `r` is not an octile
 /// step's reduced cost.
@@ -56,7 +57,7 @@ pub(super) fn reduced_cost_class(r: u32) -> Option<usize> {
 }
 
 /// Regions of [`goal_region`].
-pub(super) const REGIONS: usize = 128;
+const REGIONS: usize = 128;
 
 /// The *region* of a cell relative to the goal, `(dx, dy)` = cell − goal, as `0 .. 128`: the
 /// *sign code* `3 (sgn dx + 1) + (sgn dy + 1)` (`0 ..= 8`) in bits 0..4 and `|dx| − |dy|`
@@ -81,7 +82,7 @@ pub(super) const GOAL_AXIS_CELLS: usize = 512;
 
 /// Sign code of `i − g`: 0 below, 1 equal, 2 above.
 #[inline(always)]
-pub(super) const fn axis_sign_code(i: u32, g: u32) -> u32 {
+const fn axis_sign_code(i: u32, g: u32) -> u32 {
     (i > g) as u32 + (i >= g) as u32
 }
 

@@ -3,11 +3,11 @@
 //! counts). Jump steps break the six reduced costs the cell-by-cell queue relies on, and the
 //! heap holds few entries (3–40 on the benchmark maps and bundled worlds, `queue_peak`).
 
-use super::*;
+use super::open_list::OpenEntry;
 
 /// Binary min-heap over a fixed slice of entries, ordered by `f`.
 #[inline(always)]
-pub(super) fn heap_before(a: &OpenEntry, b: &OpenEntry) -> bool {
+fn heap_before(a: &OpenEntry, b: &OpenEntry) -> bool {
     a.f < b.f
 }
 

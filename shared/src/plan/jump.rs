@@ -10,24 +10,32 @@
 //! instructions for 9–22 jump points (A*), 0.76–1.76 M for 8–15 (BFS); see docs/planners.md,
 //! "A\*: jump point search" and "BFS by jump points (branch `bfs-jps`)".
 
-use super::*;
+use super::codes::{
+    nibble, octile, set_nibble, step_code, Dir, CODE_START, E, N, NE, NW, S, SE, STEPS, SW, W,
+};
+use super::heap::{heap_sift_down, heap_sift_up};
+use super::open_list::{OpenEntry, NIL};
+use super::planner::{Planner, Search};
+use super::{DIAGONAL_COST, STRAIGHT_COST};
+use crate::geom::Cell;
+use crate::grid::{Grid, GridGeometry};
 
 /// The jump scans of [`Planner::jps`], on the grid's packed occupancy bits (1 = occupied):
 /// side scans along a row test 32 cells per step with a few word operations; scans along a
 /// column read 3 bits per row. Cells off the map count as occupied.
-pub(super) struct JumpScan<'a> {
+struct JumpScan<'a> {
     pub(super) words: &'a [u32],
     pub(super) width: i32,
     pub(super) height: i32,
-    pub(super) goal_x: i32,
-    pub(super) goal_y: i32,
+    goal_x: i32,
+    goal_y: i32,
 }
 
 impl JumpScan<'_> {
     /// Occupancy of the 32 cells `c0 .. c0 + 32` of row `y` (bit k = column `c0 + k`), cells off
     /// the map set.
     #[inline(always)]
-    pub(super) fn row_bits(&self, y: i32, c0: i32) -> u32 {
+    fn row_bits(&self, y: i32, c0: i32) -> u32 {
         if (y as u32) >= self.height as u32 || c0 >= self.width || c0 <= -32 {
             return u32::MAX;
         }
@@ -67,7 +75,7 @@ impl JumpScan<'_> {
         }
     }
 
-    pub(super) fn along_row(&self, x: i32, y: i32, dx: i32) -> Option<(i32, i32, u32)> {
+    fn along_row(&self, x: i32, y: i32, dx: i32) -> Option<(i32, i32, u32)> {
         let goal_in_row = self.goal_y == y;
         // The cells behind each side cell (one column back) come from shifting the side rows'
         // words, with the bit carried over from the previous word.
@@ -130,14 +138,14 @@ impl JumpScan<'_> {
     /// Occupancy of cells `j - 1`, `j`, `j + 1` (bits 0, 1, 2) of the row-major bit array.
     /// `j ≥ 1`; words past the end read as occupied.
     #[inline(always)]
-    pub(super) fn three_bits(&self, j: usize) -> u32 {
+    fn three_bits(&self, j: usize) -> u32 {
         let i = j - 1;
         let lo = self.words.get(i >> 5).copied().unwrap_or(u32::MAX) as u64;
         let hi = self.words.get((i >> 5) + 1).copied().unwrap_or(u32::MAX) as u64;
         (((lo | (hi << 32)) >> (i & 31)) as u32) & 7
     }
 
-    pub(super) fn along_column(&self, x: i32, mut y: i32, dy: i32) -> Option<(i32, i32, u32)> {
+    fn along_column(&self, x: i32, mut y: i32, dy: i32) -> Option<(i32, i32, u32)> {
         // Bits 0, 1, 2 = columns x - 1, x, x + 1; columns off the map read as occupied.
         let width = self.width as usize;
         let edge = u32::from(x == 0) | (u32::from(x == self.width - 1) << 2);
@@ -203,14 +211,7 @@ impl JumpScan<'_> {
     /// The smallest step `i` in `1..=last` of the diagonal from `(x, y)` whose column scan
     /// (from `(x + dx·i, y + dy·i)` along `dy`) finds a jump point; all diagonal cells up to
     /// `last` are free.
-    pub(super) fn diagonal_columns(
-        &self,
-        x: i32,
-        y: i32,
-        dx: i32,
-        dy: i32,
-        last: u32,
-    ) -> Option<u32> {
+    fn diagonal_columns(&self, x: i32, y: i32, dx: i32, dy: i32, last: u32) -> Option<u32> {
         // Up to 512 columns (the 300 and 400 cell grids); wider grids scan column by column.
         const MAX_WORDS: usize = 16;
         if last == 0 {
@@ -341,11 +342,11 @@ impl JumpScan<'_> {
 /// Jump point search gives up (and A* runs cell by cell) when more than one cell in this many
 /// (at least 256 cells) became a jump point: on cluttered maps such as 20 % random obstacles
 /// nearly every free cell is one, and scanning costs more than the cell-by-cell search ...
-pub(super) const JPS_MAX_EXPANSIONS_PER_CELLS: usize = 256;
+const JPS_MAX_EXPANSIONS_PER_CELLS: usize = 256;
 /// ... but only while the open list holds more than one entry per this many jump points
 /// expanded (a wide frontier: 269 open entries after 1 024 jump points on 20 % random
 /// obstacles, 2 in a maze of 1-cell corridors, where jump point search stays 3x ahead).
-pub(super) const JPS_WIDE_FRONTIER: usize = 16;
+const JPS_WIDE_FRONTIER: usize = 16;
 
 /// Unit-cost jump point search (BFS) gives up, and the layered BFS runs, past this many jump
 /// points (with the wide-frontier test of [`JPS_WIDE_FRONTIER`]): the bundled worlds need 8–15,
@@ -357,11 +358,11 @@ pub(super) const JPS_STEPS_MAX_EXPANSIONS: u32 = 32;
 /// goal (plus [`CLUTTER_MARGIN_ROWS`] on each side) hold more than one obstacle run per this
 /// many cells: 20 % random obstacles have about 1 in 6, a maze of 1-cell corridors 1 in 4, the
 /// bundled room worlds fewer than 1 in 100.
-pub(super) const CLUTTER_CELLS_PER_RUN: usize = 32;
+const CLUTTER_CELLS_PER_RUN: usize = 32;
 /// [`cluttered`] reads one word in this many (of 32 cells each).
-pub(super) const CLUTTER_SAMPLE_STRIDE: usize = 16;
+const CLUTTER_SAMPLE_STRIDE: usize = 16;
 /// Rows beyond the start and goal rows that [`cluttered`] also counts.
-pub(super) const CLUTTER_MARGIN_ROWS: u32 = 16;
+const CLUTTER_MARGIN_ROWS: u32 = 16;
 
 /// `true` when the map around start and goal is cluttered (see [`CLUTTER_CELLS_PER_RUN`]): it
 /// counts the runs of occupied cells (a set bit after a clear one) in a sample of the grid's
@@ -402,11 +403,11 @@ pub(super) fn cluttered(words: &[u32], geometry: &GridGeometry, start: Cell, goa
 
 /// Unit-cost jump point search ([`Planner::jps_steps`]): the heap key is
 /// `f << UNIT_KEY_SHIFT | h`.
-pub(super) const UNIT_KEY_SHIFT: u32 = 12;
+const UNIT_KEY_SHIFT: u32 = 12;
 /// The heuristic's bits in a unit-cost key (at most 4 095 on grids of at most 4 096 a side).
-pub(super) const UNIT_H_MASK: u32 = (1 << UNIT_KEY_SHIFT) - 1;
+const UNIT_H_MASK: u32 = (1 << UNIT_KEY_SHIFT) - 1;
 /// The largest `f` a unit-cost key holds.
-pub(super) const UNIT_MAX_F: u32 = u32::MAX >> UNIT_KEY_SHIFT;
+const UNIT_MAX_F: u32 = u32::MAX >> UNIT_KEY_SHIFT;
 
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEUE> {
     /// A* by Jump Point Search (no corner cutting) with the octile heuristic and a
@@ -565,8 +566,8 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             // 8; after a diagonal step its two sides and itself; after a side step itself and,
             // for each forced side cell, that side and the forward diagonal next to it.
             let mut dirs = [0u32; 8];
-            let n = match code {
-                E | N | W | S => {
+            let n = match Dir::from_code(code) {
+                Some(Dir::E | Dir::N | Dir::W | Dir::S) => {
                     let (dx, dy) = STEPS[(code - 1) as usize];
                     dirs[0] = code;
                     let mut n = 1;
@@ -580,12 +581,13 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                     }
                     n
                 }
-                NE | NW | SW | SE => {
+                Some(Dir::NE | Dir::NW | Dir::SW | Dir::SE) => {
                     let (dx, dy) = STEPS[(code - 1) as usize];
                     dirs[..3].copy_from_slice(&[code, step_code(dx, 0), step_code(0, dy)]);
                     3
                 }
-                _ => {
+                // The start (code 9): all eight.
+                None => {
                     dirs = [E, N, W, S, NE, NW, SW, SE];
                     8
                 }
@@ -656,7 +658,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     /// goal's), so that the path can be rebuilt cell by cell from the goal. Each segment between
     /// two jump points is a straight or 45° scan, so every cell strictly between them gets the
     /// segment's step code (the path is a shortest one, so it crosses no cell twice).
-    pub(super) fn write_jump_chain(&mut self, width: i32, mut record: usize) {
+    fn write_jump_chain(&mut self, width: i32, mut record: usize) {
         let capacity = self.queue.len();
         // Each record's parent was closed before it, so indices fall; the bound is a guard.
         for _ in 0..capacity {

@@ -8,7 +8,8 @@
 //! Measured effect of the frame (branch `astar-mem`, `cargo xtask mcu-bench`): see
 //! docs/planners.md, "Cell-by-cell A\*: framed layout".
 
-use super::*;
+use super::codes::{nibble, nibble_window, BLOCKED, BLOCKED_NIBBLES};
+use crate::grid::{Grid, GridGeometry};
 
 /// The map's interior for the nibble searches (scalar BFS, cell-by-cell A*): cells whose 3 × 3
 /// neighbourhood lies on the map, i.e. `x` in `1 .. width - 1` and `index` in
@@ -18,8 +19,8 @@ use super::*;
 pub(super) struct Interior {
     pub(super) width: usize,
     pub(super) height: usize,
-    pub(super) inner_x: usize,
-    pub(super) inner_span: usize,
+    inner_x: usize,
+    inner_span: usize,
 }
 
 impl Interior {
@@ -182,7 +183,7 @@ pub(super) struct Framed<'a, const WORDS: usize> {
 
 impl<'a, const WORDS: usize> Framed<'a, WORDS> {
     /// Word indices are masked with this (`WORDS − 2`: `WORDS − 1` is a power of two).
-    pub(super) const MASK: usize = {
+    const MASK: usize = {
         assert!(WORDS > 2 && (WORDS - 1).is_power_of_two());
         WORDS - 2
     };
@@ -190,7 +191,7 @@ impl<'a, const WORDS: usize> Framed<'a, WORDS> {
     /// Scratch words the layout needs for `geometry`: the rows, the frame rows and one more
     /// blocked word (the north-east neighbour of the last cell when `width + 1` is a multiple
     /// of 8 lies just past the upper frame row).
-    pub(super) const fn words_for(geometry: &GridGeometry) -> usize {
+    const fn words_for(geometry: &GridGeometry) -> usize {
         Self::row_words(geometry) * (geometry.height() as usize + 2) + 1
     }
 
@@ -296,7 +297,7 @@ impl<'a, const WORDS: usize> Framed<'a, WORDS> {
 
     /// Nibbles `j ..= j + 2` in bits 0..12 (higher bits: garbage), `j` not past the map.
     #[inline(always)]
-    pub(super) fn window_at(&self, w: usize, shift: u32) -> u32 {
+    fn window_at(&self, w: usize, shift: u32) -> u32 {
         let w = w & Self::MASK;
         let (lo, hi) = (self.words[w], self.words[w + 1]);
         (lo >> shift) | ((hi << 1) << (31 - shift))

@@ -71,23 +71,9 @@ pub use los::{line_of_sight, line_of_sight_m};
 pub use planner::Planner;
 pub use prune::{needs_full_sweep, prune_visible_prefix, PruneEnd, Pruned, NORMAL_HALF_BAND_RAD};
 
-// The pieces see each other through these (each file does `use super::*`).
-use class_queue::*;
-use codes::*;
-use corridor::*;
-use goal::*;
-use heap::*;
-use jump::*;
-use layout::*;
-use open_list::*;
-use path::*;
-use planner::*;
-use ring_queue::*;
-
 use heapless::Vec;
 
 use crate::geom::{Cell, PointM};
-use crate::grid::{Grid, GridGeometry};
 
 /// Cost of a side step in A* (integer octile costs: `DIAGONAL_COST / STRAIGHT_COST` ≈ √2).
 pub const STRAIGHT_COST: u32 = 5741;

@@ -4,7 +4,8 @@
 //! search runs again on a `ClassQueue`). The search loop is generic over the trait: two
 //! instances, the same pops in the same order (tested against each other on random grids).
 
-use super::*;
+use super::class_queue::QueueState;
+use super::goal::reduced_cost_class;
 
 /// One open-list / queue entry: 12 bytes.
 #[derive(Clone, Copy, Debug)]

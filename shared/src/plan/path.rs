@@ -3,7 +3,11 @@
 //! and one vertex per turn. [`PathOut`] writes the vertices or only counts them (to learn
 //! whether a path fits before the last one is overwritten).
 
-use super::*;
+use super::codes::{nibble, NE, STEPS};
+use super::planner::Planner;
+use super::{PathCells, MAX_PATH_POINTS};
+use crate::geom::Cell;
+use crate::grid::GridGeometry;
 
 impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEUE> {
     /// The parent of `cell` by its nibble, or `None` at the start (or on a corrupt code).

@@ -5,7 +5,17 @@
 //! The searches themselves live in `jump.rs`, `astar.rs` and `bfs/`, the rebuilds in `path.rs`
 //! and `any_angle.rs`.
 
-use super::*;
+use super::codes::{set_nibble, spread_bits_to_nibbles, BLOCKED, BLOCKED_NIBBLES, CODE_START};
+use super::goal::GOAL_TABLE_WORDS;
+use super::jump::{cluttered, JPS_STEPS_MAX_EXPANSIONS};
+use super::open_list::OpenEntry;
+use super::{
+    scratch_words_for_cells, PathCells, PlanError, PlanReport, PlanStatus, PlannerKind,
+    MAX_PATH_POINTS, STRAIGHT_COST,
+};
+use crate::geom::{Cell, PointM};
+use crate::grid::{Grid, GridGeometry};
+use heapless::Vec;
 
 /// Outcome of the search phase, before the path is rebuilt.
 pub(super) struct Search {
@@ -341,7 +351,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
 
     /// Copy the last path into the queue (3 cells an entry); `false` when it does not fit.
     /// Only after a search: the queue is free until the next one.
-    pub(super) fn stash_path(&mut self) -> bool {
+    fn stash_path(&mut self) -> bool {
         if self.cells.len().div_ceil(3) > QUEUE {
             return false;
         }
@@ -355,7 +365,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     }
 
     /// Put back the `n` cells of the path [`Planner::stash_path`] copied.
-    pub(super) fn unstash_path(&mut self, n: usize) {
+    fn unstash_path(&mut self, n: usize) {
         self.cells.clear();
         for entry in self.queue.iter().take(n.div_ceil(3)) {
             for word in [entry.f, entry.node, entry.next] {
@@ -381,7 +391,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         self.queue_peak
     }
 
-    pub(super) fn check_scratch(&self, geometry: &GridGeometry) -> Result<(), PlanError> {
+    fn check_scratch(&self, geometry: &GridGeometry) -> Result<(), PlanError> {
         if geometry.cell_count() > Self::CAPACITY_CELLS {
             return Err(PlanError::ScratchTooSmall {
                 cells: geometry.cell_count() as u32,
@@ -416,7 +426,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
 
 /// How a plan that may overflow the path keeps the last one.
 #[derive(Clone, Copy, Debug)]
-pub(super) enum Kept {
+enum Kept {
     /// No last path, or the new one surely fits.
     Nothing,
     /// Copied into the queue: this many cells.

@@ -7,21 +7,23 @@
 //! random obstacles 5.39 M → 4.99 M instructions; see docs/planners.md, "Cell-by-cell A\*:
 //! open list on rings".
 
-use super::*;
+use super::class_queue::QueueState;
+use super::goal::{reduced_cost_class, CLASSES, CLASS_COSTS};
+use super::open_list::{OpenEntry, OpenList, NIL};
 
 /// Share of the pool per FIFO class `2 ..= 5` of a [`RingQueue`], in 256ths of what the far
 /// list leaves (the rest goes to class 1). Most entries at once on 20 % random obstacles
 /// (300 × 300, four seeds): class 1 304–371, class 2 13–16, class 3 62–97, class 4 310–359,
 /// class 5 4–5; with a pool of 1 024 the rings hold 426, 30, 115, 402 and 14 entries.
-pub(super) const RING_SHARES: [u32; CLASSES] = [0, 0, 8, 30, 104, 4];
+const RING_SHARES: [u32; CLASSES] = [0, 0, 8, 30, 104, 4];
 /// Entries of the far list of a [`RingQueue`], in 64ths of the pool (at least one entry).
-pub(super) const RING_FAR_SHARE: u32 = 2;
+const RING_FAR_SHARE: u32 = 2;
 
 /// One ring of a [`RingQueue`]: next slot to pop (`head`), next slot to write (`tail`;
 /// `head == tail`: empty, and one slot stays unused so that a full ring is told apart), the
 /// end of its slots and its reduced cost (a pushed key is the last popped key plus `cost`).
 #[derive(Clone, Copy)]
-pub(super) struct Ring {
+struct Ring {
     pub(super) head: u32,
     pub(super) tail: u32,
     pub(super) end: u32,
@@ -41,22 +43,22 @@ pub(super) struct Ring {
 pub(super) struct RingQueue<'a> {
     pub(super) pool: &'a mut [OpenEntry],
     /// The hot state of ring `c` in one place (one base address for the loop).
-    pub(super) rings: [Ring; 8],
+    rings: [Ring; 8],
     /// Ring `c`'s slots are `starts[c] .. rings[c].end`.
-    pub(super) starts: [u32; 8],
+    starts: [u32; 8],
     /// Entries of the far list: slots `0 .. far_len`, sorted by key, the smallest (and of
     /// equal keys the last pushed) last; `far_cap` slots.
     pub(super) far_len: u32,
     pub(super) far_cap: u32,
     /// Bit `c`: ring `c` has wrapped around (for the peak); bit 0: the stack was used.
-    pub(super) wrapped: u32,
-    pub(super) far_peak: u32,
+    wrapped: u32,
+    far_peak: u32,
 }
 
 impl RingQueue<'_> {
     /// The key at the head of ring `c` (`u32::MAX` when empty).
     #[inline(always)]
-    pub(super) fn head_key(&self, c: usize) -> u32 {
+    fn head_key(&self, c: usize) -> u32 {
         let c = c & 7;
         let h = self.rings[c].head;
         if h == self.rings[c].tail {
@@ -111,7 +113,7 @@ impl RingQueue<'_> {
 
     /// Keep the entries of ring `c` for which `stale(node)` is false, in order; returns how
     /// many were dropped.
-    pub(super) fn filter_ring(&mut self, c: usize, stale: &impl Fn(u32) -> bool) -> usize {
+    fn filter_ring(&mut self, c: usize, stale: &impl Fn(u32) -> bool) -> usize {
         let c = c & 7;
         let (start, end) = (self.starts[c], self.rings[c].end);
         let (mut read, mut write, tail) =
@@ -202,7 +204,7 @@ impl RingQueue<'_> {
 /// its tail's successor is its head, so it is always full and never written. Out of line:
 /// computed in `new`, the empty-ring fix changed the search loop's registers (+0.05..0.19 M).
 #[inline(never)]
-pub(super) fn ring_layout(len: u32, far_cap: u32) -> ([u32; 8], [u32; 8]) {
+fn ring_layout(len: u32, far_cap: u32) -> ([u32; 8], [u32; 8]) {
     let rest = len - far_cap;
     let (mut starts, mut ends) = ([far_cap; 8], [far_cap; 8]);
     let mut at = far_cap;

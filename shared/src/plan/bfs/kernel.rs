@@ -5,7 +5,8 @@
 //! `bfs-colmajor`, `cargo xtask mcu-bench`): about 45 Cortex-M4 instructions per row, were 95;
 //! see docs/planners.md, "BFS kernel on the MCU".
 
-use super::*;
+use super::layers::{layer_masks, side_masks, Layers, APART, GOAL_SIDE};
+use super::FreeBits;
 
 impl Layers<'_> {
     /// The edge bits of word `w`: bit 0 when a word lies before it, bit 31 when one follows.
@@ -262,7 +263,7 @@ impl Layers<'_> {
     /// One side of [`Layers::edge_before`] or [`Layers::edge_after`]: from bit `src_bit` of word `w` in row `y` to bit
     /// `dst_bit` of word `dst_w` in rows `y - 1 ..= y + 1`.
     #[inline(always)]
-    pub(super) fn edge_side<const ODD: bool, const SIDE: u8>(
+    fn edge_side<const ODD: bool, const SIDE: u8>(
         &mut self,
         free: &impl FreeBits,
         y: usize,
@@ -301,7 +302,7 @@ impl Layers<'_> {
     /// A legal move across a word edge reaches bit `bit` of word `w` of row `t` (plane index
     /// `i`): mark it when not reached, note a meeting when the other side reached it.
     #[inline(always)]
-    pub(super) fn edge_target<const ODD: bool, const SIDE: u8>(
+    fn edge_target<const ODD: bool, const SIDE: u8>(
         &mut self,
         t: usize,
         w: usize,
@@ -346,7 +347,7 @@ impl Layers<'_> {
 
     /// Put row `t` into column `w`'s row set for the next layer, and its word into the summary.
     #[inline(always)]
-    pub(super) fn note_row<const ODD: bool, const SIDE: u8>(&mut self, w: usize, t: usize) {
+    fn note_row<const ODD: bool, const SIDE: u8>(&mut self, w: usize, t: usize) {
         let layout = &self.layout;
         let at = (w << layout.set_shift) + (t >> 5);
         let sets = usize::from(!ODD) * layout.layer_set_words() + at;

@@ -5,7 +5,10 @@
 //! (branch `bfs-bidir`, `cargo bench -p twil-core --bench planners`): on the 300 × 300 open
 //! floor each side floods 146 layers, 46 345 cells instead of 88 803.
 
-use super::*;
+use super::{BfsLayout, FreeBits, NARROW_CHECK_LAYER, NARROW_PAIRS_PER_LAYER, RUN_JOIN_GAP};
+use crate::geom::Cell;
+use crate::plan::path::PathOut;
+use crate::plan::PathCells;
 
 /// Where the two sides of a layered search met: rows `rows.0 ..= rows.1` of word `word` hold
 /// a cell of the other side that is a legal move away from a cell of the side that was
@@ -66,22 +69,22 @@ impl PathBuilder<'_> {
 /// A rectangle of blocks (word column `w0 ..= w1`, 32-row block `k0 ..= k1`) that holds all
 /// cells of one side; empty when `w0 > w1`.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Blocks {
+struct Blocks {
     pub(super) w0: usize,
     pub(super) w1: usize,
-    pub(super) k0: usize,
-    pub(super) k1: usize,
+    k0: usize,
+    k1: usize,
 }
 
 impl Blocks {
-    pub(super) const EMPTY: Self = Self {
+    const EMPTY: Self = Self {
         w0: usize::MAX,
         w1: 0,
         k0: usize::MAX,
         k1: 0,
     };
 
-    pub(super) fn add(&mut self, w: usize, k: usize) {
+    fn add(&mut self, w: usize, k: usize) {
         self.w0 = self.w0.min(w);
         self.w1 = self.w1.max(w);
         self.k0 = self.k0.min(k);
@@ -90,7 +93,7 @@ impl Blocks {
 
     /// Whether a layer of one side can touch a word of the other: their rectangles, one grown
     /// by a block each way (a move goes one row or one word further), meet.
-    pub(super) fn near(&self, other: &Self) -> bool {
+    fn near(&self, other: &Self) -> bool {
         self.w0 <= self.w1
             && other.w0 <= other.w1
             && self.w0 <= other.w1.saturating_add(1)
@@ -180,7 +183,7 @@ impl Layers<'_> {
     }
 
     /// Add the blocks of the side's row sets of `parity` (from their summary) to `blocks`.
-    pub(super) fn grow_blocks(&self, parity: usize, blocks: &mut Blocks) {
+    fn grow_blocks(&self, parity: usize, blocks: &mut Blocks) {
         let layout = self.layout;
         let at = parity * layout.summary_words;
         let words = self
@@ -204,7 +207,7 @@ impl Layers<'_> {
     }
 
     /// Set `SIDE` to the reached cells of `blocks` (the goal side's, apart from the start's).
-    pub(super) fn mark_goal_side(&mut self, blocks: &Blocks) {
+    fn mark_goal_side(&mut self, blocks: &Blocks) {
         let layout = self.layout;
         for k in blocks.k0..=blocks.k1 {
             for y in 32 * k..(32 * k + 32).min(layout.height) {
@@ -221,7 +224,7 @@ impl Layers<'_> {
     }
 
     /// Switch to the other side.
-    pub(super) fn switch(&mut self) {
+    fn switch(&mut self) {
         core::mem::swap(&mut self.sets, &mut self.other_sets);
         core::mem::swap(&mut self.summary, &mut self.other_summary);
         core::mem::swap(&mut self.layer, &mut self.other_layer);
@@ -336,10 +339,7 @@ impl Layers<'_> {
 
     /// Expand every frontier (row, word) of the layer, column by column, in runs of consecutive
     /// rows; returns how many (row, word) pairs.
-    pub(super) fn expand_layer<const ODD: bool, const SIDE: u8>(
-        &mut self,
-        free: &impl FreeBits,
-    ) -> usize {
+    fn expand_layer<const ODD: bool, const SIDE: u8>(&mut self, free: &impl FreeBits) -> usize {
         let layout = self.layout;
         let set_words = layout.set_words;
         let sets = usize::from(ODD) * layout.layer_set_words();
@@ -437,7 +437,7 @@ impl Layers<'_> {
 
 /// The 32-bit mask of bits `0 .. n` (all bits for `n >= 32`).
 #[inline(always)]
-pub(super) fn mask_below(n: usize) -> u32 {
+fn mask_below(n: usize) -> u32 {
     if n >= 32 {
         u32::MAX
     } else {
@@ -447,7 +447,7 @@ pub(super) fn mask_below(n: usize) -> u32 {
 
 /// The side expanded (`SIDE` parameter of the expansion): the start's, the goal's, or either
 /// while no word can hold cells of both ([`APART`]: `SIDE` is neither read nor written).
-pub(super) const START_SIDE: u8 = 0;
+const START_SIDE: u8 = 0;
 /// See [`START_SIDE`].
 pub(super) const GOAL_SIDE: u8 = 1;
 /// See [`START_SIDE`].

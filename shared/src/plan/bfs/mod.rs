@@ -37,17 +37,18 @@
 //! the scalar BFS it falls back to in narrow maps ([`NARROW_CHECK_LAYER`]) uses the nibble
 //! layout of `codes.rs` and the queue.
 
-use super::{
-    scratch_words_for_cells, set_nibble, PathCells, PathOut, PlanError, Planner, Search,
-    CODE_START, E, N, NE, NIBBLE_WINDOWS, NW, S, SE, STEPS, SW, W,
-};
+use super::codes::{set_nibble, CODE_START, E, N, NE, NW, S, SE, STEPS, SW, W};
+use super::layout::{Interior, NIBBLE_WINDOWS};
+use super::path::PathOut;
+use super::planner::{Planner, Search};
+use super::{scratch_words_for_cells, PlanError};
 use crate::geom::Cell;
 use crate::grid::{Grid, GridGeometry};
 
 mod kernel;
 mod layers;
 
-use layers::*;
+use layers::{count_reached, Layers, Meet, Outcome, PathBuilder};
 
 /// Where the BFS planes and row sets live in the scratch.
 #[derive(Clone, Copy, Debug)]
@@ -362,7 +363,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
         let (mut pushed, mut popped) = (0usize, 0usize);
         let mut peak = 1usize;
 
-        let interior = super::Interior::new(geometry);
+        let interior = Interior::new(geometry);
 
         set_nibble(scratch, start, CODE_START);
         match queue.get_mut(0) {

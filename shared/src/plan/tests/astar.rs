@@ -2,6 +2,15 @@
 //! the per-axis goal table, corridor walks given up midway.
 
 use super::*;
+use crate::plan::class_queue::ClassQueue;
+use crate::plan::codes::{nibble, octile, CODE_START, NE, STEPS};
+use crate::plan::goal::{
+    axis_region, goal_axis_entry, goal_region, reduced_cost_class, AT_GOAL, GOAL_AXIS_CELLS,
+    GOAL_TABLE_WORDS, REDUCED_COSTS, STEP_CLASSES,
+};
+use crate::plan::layout::{CellMap, Framed, FRAMED_WORDS};
+use crate::plan::open_list::{OpenEntry, OpenList, NIL};
+use crate::plan::planner::{Layout, Search};
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(2048))]

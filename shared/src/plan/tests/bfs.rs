@@ -2,6 +2,8 @@
 //! `pathfinding::bfs`.
 
 use super::*;
+use crate::grid::GridGeometry;
+use crate::plan::codes::STEPS;
 
 #[test]
 fn bfs_open_300_floods_two_half_balls() {

@@ -2,6 +2,8 @@
 //! the corridor table.
 
 use super::*;
+use crate::grid::GridGeometry;
+use crate::plan::corridor::CORRIDOR_SIDES;
 
 /// A corridor walked away from the goal ends far above the last popped key (here 18 208 above
 /// it, beyond the buckets' 16 384): its end waits in the far list instead of wrapping around

@@ -2,6 +2,8 @@
 //! search alone against `pathfinding`.
 
 use super::*;
+use crate::grid::GridGeometry;
+use crate::plan::jump::{cluttered, JPS_STEPS_MAX_EXPANSIONS};
 
 #[test]
 fn jump_point_search_needs_few_entries_on_room_maps() {

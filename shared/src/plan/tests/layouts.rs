@@ -1,6 +1,9 @@
 //! The framed layout of the scratch against the flat one (windows, nibbles, whole searches).
 
 use super::*;
+use crate::grid::GridGeometry;
+use crate::plan::layout::{CellMap, Flat, Framed, Interior, NIBBLE_WINDOWS};
+use crate::plan::planner::Layout;
 
 /// The framed copy of the map (rows padded to whole words, a frame of blocked cells): every
 /// cell's nibble is the map's, and every cell's three windows, on the border too, equal the

@@ -10,7 +10,9 @@ use proptest::prelude::*;
 
 use super::astar::{astar_loop, astar_search};
 use super::*;
+use crate::grid::GridGeometry;
 use crate::grid::{words_for_cells, Grid};
+use crate::plan::codes::octile;
 
 mod astar;
 mod bfs;

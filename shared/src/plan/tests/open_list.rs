@@ -2,6 +2,13 @@
 //! against the class queue, reclaiming and running out, the ring capacities.
 
 use super::*;
+use crate::grid::GridGeometry;
+use crate::plan::class_queue::ClassQueue;
+use crate::plan::goal::{reduced_cost_class, REDUCED_COSTS};
+use crate::plan::layout::Framed;
+use crate::plan::open_list::{OpenEntry, OpenList, NIL};
+use crate::plan::planner::{Layout, Search};
+use crate::plan::ring_queue::RingQueue;
 
 /// The queue alone against a reference (an ordered set of `(key, node)`): random
 /// interleavings of pushes (keys the last popped key plus 0 or a reduced cost, or any larger

@@ -2,6 +2,8 @@
 //! statuses, errors, path capacity, corner cutting, the bundled worlds, wide and sparse grids.
 
 use super::*;
+use crate::grid::GridGeometry;
+use crate::plan::goal::GOAL_TABLE_WORDS;
 
 const MAZE: &[&str] = &[
     "..........",

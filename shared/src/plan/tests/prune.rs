@@ -1,6 +1,7 @@
 //! Pruning a plan to what the sonar sees, the sweep-band check and the line-of-sight walk.
 
 use super::*;
+use crate::grid::GridGeometry;
 
 fn along_path_length(path: &[PointM]) -> f64 {
     path.windows(2)
