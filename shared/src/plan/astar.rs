@@ -8,7 +8,7 @@
 //! switches, so each instance tests nothing per cell that it could know at compile time.
 //! Measured (`cargo xtask mcu-bench`, 300 × 300, 2026-12-03): 159 Cortex-M4 instructions per
 //! expanded cell on 20 % random obstacles (4.59 M a plan), 158 in the maze (3.13 M, walked
-//! corridor cells counted as expanded); the steps that got there: docs/planners.md,
+//! corridor cells counted as expanded); the steps that got there: docs/planners-history.md,
 //! "Cell-by-cell A\*: the expansion loop" and the sections before it.
 
 use super::class_queue::{ClassQueue, QueueState};
@@ -65,7 +65,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     /// framed search reads the per-axis goal table ([`axis_region`]); the flat one, the
     /// fallback for grids the framed view cannot hold, computes the regions per cell
     /// ([`goal_region`]): one instance of the search less in flash (see "What each
-    /// optimisation earns" in docs/planners.md; the tests run both on the same maps).
+    /// optimisation earns" in docs/planners-history.md; the tests run both on the same maps).
     pub(super) fn astar_in<const GW: usize, const WORDS: usize>(
         &mut self,
         grid: &Grid<GW>,
@@ -203,12 +203,16 @@ pub(super) fn astar_search<'p, M: CellMap, Q: OpenList<'p>, const AXIS_TABLE: bo
 }
 
 /// The expansion loop of [`astar_search`] from the queue `open` / `state`, the immediate
-/// target `next_target` and the count `expanded_cells`: the search's result, or with `WALKS`
-/// `None` when the corridor walks are given up (the state is written back; the search goes on
-/// without them). Without `WALKS` it never returns `None`. The steps of one expansion are the
-/// `#[inline(always)]` functions below it ([`close_next`], [`step_classes`], [`push_targets`],
-/// [`reclaim`]): inlined, they compile to the loop they were written as before (measured with
-/// `cargo xtask mcu-bench`, docs/planners-history.md).
+/// target `next_node` and the count `expanded`: the search's result, or with `WALKS` `None`
+/// when the corridor walks are given up (the state is written back; the search goes on without
+/// them). Without `WALKS` it never returns `None`.
+///
+/// One function of about 230 lines on purpose (issue 27, item 4): it is the hot loop of the
+/// cell-by-cell A\*, and its parts share the queue state, the immediate target and the
+/// neighbourhood mask in registers. Split into `#[inline(always)]` steps (closing the next
+/// cell, the step classes, the pushes), it measured 4 677 476 instructions instead of 4 580 643
+/// on 20 % random obstacles (+2.1 %) and +0.5 % in the maze (`cargo xtask mcu-bench`), over the
+/// 1 % a refactor may cost.
 #[allow(clippy::too_many_arguments)]
 #[inline(never)]
 pub(super) fn astar_loop<
@@ -236,17 +240,61 @@ pub(super) fn astar_loop<
     let full = PlanError::QueueFull {
         capacity: open.capacity(),
     };
+    let (gxi, gyi) = (gx as i32, gy as i32);
     let (mut state, mut next_node, mut expanded) = (*queue_state, *next_target, *expanded_cells);
     // The balance of cells closed by corridor walks minus walks started.
     let mut walk_credit = 0i32;
-    while let Some((node, x, y, index)) = close_next(map, open, &mut state, &mut next_node) {
+    loop {
+        // Close the cell: its nibble gets the arrival step (it was 0).
+        let (node, x, y, index) = if next_node != NIL {
+            // A target of the cell just expanded: not closed (its nibble was 0 then).
+            let node = next_node;
+            next_node = NIL;
+            let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
+            let index = map.index(x, y);
+            map.mark(index, node & 0xF);
+            (node, x, y, index)
+        } else {
+            let mut found = None;
+            loop {
+                let node = open.pop(&mut state);
+                if node == NIL {
+                    break;
+                }
+                let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
+                let index = map.index(x, y);
+                if map.close(index, node & 0xF) {
+                    found = Some((node, x, y, index));
+                    break;
+                }
+                // Otherwise already closed by a cheaper entry.
+            }
+            match found {
+                Some(entry) => entry,
+                None => break,
+            }
+        };
         let code = node & 0xF;
         expanded += 1;
 
         let (above, cur, below) = map.windows(index, x, y);
         let window = |w: u32| u32::from(NIBBLE_WINDOWS[(w & 0xFFF) as usize]);
         let m = window(below) | window(cur) << 6 | window(above) << 12;
-        let classes = step_classes::<AXIS_TABLE>(goal_axis, (x, y), node, (gx, gy));
+        // The targets by arrival step (arrival pruning, see docs/planners.md), each tested
+        // and pushed with constant offsets: straight on, plus the forced side and diagonal
+        // neighbours after a side step; the two sides and the diagonal after a diagonal
+        // step; all eight from the start.
+        let base = node & !0xF;
+        // The class of each step's reduced cost (its key is `state.last` plus the class's
+        // reduced cost), 3 bits per step code.
+        let classes = if AXIS_TABLE {
+            // In range: a region is below 128 by construction (no bounds check emitted).
+            let region = axis_region(goal_axis, x, node);
+            goal_axis[GOAL_AXIS_CELLS + region]
+        } else {
+            let region = goal_region(x as i32 - gxi, y as i32 - gyi);
+            STEP_CLASSES.get(region).copied().unwrap_or(0)
+        };
         // The goal: the only cell of its region, flagged in the class word.
         if classes & AT_GOAL != 0 {
             *peak = open.peak(&state);
@@ -256,6 +304,39 @@ pub(super) fn astar_loop<
                 expanded,
                 cost: state.last,
             }));
+        }
+        // The pool is full: reclaim and push `(key, child)`, or end with QueueFull.
+        macro_rules! reclaim {
+            ($key:expr, $child:expr) => {{
+                let closed = |n: u32| {
+                    map.nibble(map.index(((n >> 4) & 0xFFF) as usize, (n >> 16) as usize)) != 0
+                };
+                match open.reclaim_and_push(state, closed, $key, $child) {
+                    Some(after) => state = after,
+                    None => {
+                        *peak = open.peak(&state);
+                        return Some(Err(full));
+                    }
+                }
+            }};
+        }
+        macro_rules! visit {
+            ($z:expr, $code:expr) => {{
+                if m & (1 << $z) != 0 {
+                    let (dx, dy) = STEPS[$code as usize - 1];
+                    let child = base.wrapping_add(((dy << 16) + (dx << 4)) as u32 + $code);
+                    let class = ((classes >> (3 * ($code - 1))) & 7) as usize;
+                    if class != 0 {
+                        if !open.push_class(&mut state, class, child) {
+                            reclaim!(state.last.wrapping_add(CLASS_COSTS[class]), child);
+                        }
+                    } else if next_node == NIL {
+                        next_node = child;
+                    } else if !open.push_stack(&mut state, child) {
+                        reclaim!(state.last, child);
+                    }
+                }
+            }};
         }
         // Corridor contraction (see "Corridors" in docs/planners.md): a cell with one or
         // two legal neighbours, reached by a side step, has at most one continuation. Walk
@@ -279,11 +360,8 @@ pub(super) fn astar_loop<
                 let key = wg.wrapping_add(h((end >> 4) & 0xFFF, end >> 16));
                 if key == state.last && next_node == NIL {
                     next_node = end;
-                } else if !open.push_far(&mut state, key, end)
-                    && !reclaim(map, open, &mut state, key, end)
-                {
-                    *peak = open.peak(&state);
-                    return Some(Err(full));
+                } else if !open.push_far(&mut state, key, end) {
+                    reclaim!(key, end);
                 }
             }
             // Walks that close (nearly) nothing cost more than the arms' pushes.
@@ -294,14 +372,73 @@ pub(super) fn astar_loop<
             }
             continue;
         }
-        let targets = Targets {
-            m,
-            classes,
-            base: node & !0xF,
-        };
-        if !push_targets(map, open, &mut state, &mut next_node, &targets, code) {
-            *peak = open.peak(&state);
-            return Some(Err(full));
+        macro_rules! diagonal {
+            ($z:expr, $code:expr, $o1:expr, $o2:expr) => {{
+                if m & ((1 << $o1) | (1 << $o2)) == (1 << $o1) | (1 << $o2) {
+                    visit!($z, $code);
+                }
+            }};
+        }
+        macro_rules! forced {
+            ($o_back:expr, $z:expr, $code:expr, $zd:expr, $dcode:expr, $o1:expr, $o2:expr) => {{
+                if m & (1 << $o_back) == 0 {
+                    visit!($z, $code);
+                    diagonal!($zd, $dcode, $o1, $o2);
+                }
+            }};
+        }
+        match Dir::from_code(code) {
+            Some(Dir::E) => {
+                visit!(Z_E, E);
+                forced!(O_NW, Z_N, N, Z_NE, NE, O_N, O_E);
+                forced!(O_SW, Z_S, S, Z_SE, SE, O_S, O_E);
+            }
+            Some(Dir::W) => {
+                visit!(Z_W, W);
+                forced!(O_NE, Z_N, N, Z_NW, NW, O_N, O_W);
+                forced!(O_SE, Z_S, S, Z_SW, SW, O_S, O_W);
+            }
+            Some(Dir::N) => {
+                visit!(Z_N, N);
+                forced!(O_SE, Z_E, E, Z_NE, NE, O_E, O_N);
+                forced!(O_SW, Z_W, W, Z_NW, NW, O_W, O_N);
+            }
+            Some(Dir::S) => {
+                visit!(Z_S, S);
+                forced!(O_NE, Z_E, E, Z_SE, SE, O_E, O_S);
+                forced!(O_NW, Z_W, W, Z_SW, SW, O_W, O_S);
+            }
+            Some(Dir::NE) => {
+                visit!(Z_E, E);
+                visit!(Z_N, N);
+                diagonal!(Z_NE, NE, O_N, O_E);
+            }
+            Some(Dir::NW) => {
+                visit!(Z_W, W);
+                visit!(Z_N, N);
+                diagonal!(Z_NW, NW, O_N, O_W);
+            }
+            Some(Dir::SW) => {
+                visit!(Z_W, W);
+                visit!(Z_S, S);
+                diagonal!(Z_SW, SW, O_S, O_W);
+            }
+            Some(Dir::SE) => {
+                visit!(Z_E, E);
+                visit!(Z_S, S);
+                diagonal!(Z_SE, SE, O_S, O_E);
+            }
+            // The start (code 9): all eight neighbours.
+            None => {
+                visit!(Z_E, E);
+                visit!(Z_N, N);
+                visit!(Z_W, W);
+                visit!(Z_S, S);
+                diagonal!(Z_NE, NE, O_N, O_E);
+                diagonal!(Z_NW, NW, O_N, O_W);
+                diagonal!(Z_SW, SW, O_S, O_W);
+                diagonal!(Z_SE, SE, O_S, O_E);
+            }
         }
     }
     *peak = open.peak(&state);
@@ -310,194 +447,4 @@ pub(super) fn astar_loop<
         expanded,
         cost: 0,
     }))
-}
-
-/// Closes the next cell: the immediate target `next_node` if there is one (its nibble was 0
-/// when it was found), else the first entry off the queue whose cell is not closed yet (lazy
-/// deletion). Its nibble gets the arrival step. `None` when the queue is empty.
-#[inline(always)]
-fn close_next<'p, M: CellMap, Q: OpenList<'p>>(
-    map: &mut M,
-    open: &mut Q,
-    state: &mut QueueState,
-    next_node: &mut u32,
-) -> Option<(u32, usize, usize, usize)> {
-    if *next_node != NIL {
-        let node = *next_node;
-        *next_node = NIL;
-        let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
-        let index = map.index(x, y);
-        map.mark(index, node & 0xF);
-        return Some((node, x, y, index));
-    }
-    loop {
-        let node = open.pop(state);
-        if node == NIL {
-            return None;
-        }
-        let (x, y) = (((node >> 4) & 0xFFF) as usize, (node >> 16) as usize);
-        let index = map.index(x, y);
-        if map.close(index, node & 0xF) {
-            return Some((node, x, y, index));
-        }
-        // Otherwise already closed by a cheaper entry.
-    }
-}
-
-/// The class of each step's reduced cost from cell `(x, y)` (its key is `state.last` plus the
-/// class's reduced cost), 3 bits per step code, and [`AT_GOAL`] at the goal: from the per-axis
-/// table, or computed from the cell's goal region.
-#[inline(always)]
-fn step_classes<const AXIS_TABLE: bool>(
-    goal_axis: &[u32; GOAL_TABLE_WORDS],
-    (x, y): (usize, usize),
-    node: u32,
-    (gx, gy): (u32, u32),
-) -> u32 {
-    if AXIS_TABLE {
-        // In range: a region is below 128 by construction (no bounds check emitted).
-        let region = axis_region(goal_axis, x, node);
-        goal_axis[GOAL_AXIS_CELLS + region]
-    } else {
-        let region = goal_region(x as i32 - gx as i32, y as i32 - gy as i32);
-        STEP_CLASSES.get(region).copied().unwrap_or(0)
-    }
-}
-
-/// What the expanded cell's pushes need: its 18-bit neighbourhood mask (`Z_*`, `O_*`), its
-/// step classes and its entry without the step code.
-struct Targets {
-    m: u32,
-    classes: u32,
-    base: u32,
-}
-
-/// Pushes `(key, child)` after reclaiming the pool's slots of closed cells; `false` when the
-/// pool is full even so (the search ends with `QueueFull`).
-#[inline(always)]
-fn reclaim<'p, M: CellMap, Q: OpenList<'p>>(
-    map: &M,
-    open: &mut Q,
-    state: &mut QueueState,
-    key: u32,
-    child: u32,
-) -> bool {
-    let closed =
-        |n: u32| map.nibble(map.index(((n >> 4) & 0xFFF) as usize, (n >> 16) as usize)) != 0;
-    match open.reclaim_and_push(*state, closed, key, child) {
-        Some(after) => {
-            *state = after;
-            true
-        }
-        None => false,
-    }
-}
-
-/// Pushes the targets of a cell reached by step `code` (arrival pruning, see
-/// docs/planners.md), each tested and pushed with constant offsets: straight on, plus the
-/// forced side and diagonal neighbours after a side step; the two sides and the diagonal after
-/// a diagonal step; all eight from the start. A target of reduced cost 0 becomes the immediate
-/// target when there is none yet. `false` when the queue is full.
-#[inline(always)]
-fn push_targets<'p, M: CellMap, Q: OpenList<'p>>(
-    map: &M,
-    open: &mut Q,
-    state: &mut QueueState,
-    next_node: &mut u32,
-    t: &Targets,
-    code: u32,
-) -> bool {
-    macro_rules! visit {
-        ($z:expr, $code:expr) => {{
-            if t.m & (1 << $z) != 0 {
-                let (dx, dy) = STEPS[$code as usize - 1];
-                let child = t.base.wrapping_add(((dy << 16) + (dx << 4)) as u32 + $code);
-                let class = ((t.classes >> (3 * ($code - 1))) & 7) as usize;
-                if class != 0 {
-                    if !open.push_class(state, class, child) {
-                        let key = state.last.wrapping_add(CLASS_COSTS[class]);
-                        if !reclaim(map, open, state, key, child) {
-                            return false;
-                        }
-                    }
-                } else if *next_node == NIL {
-                    *next_node = child;
-                } else if !open.push_stack(state, child) {
-                    let key = state.last;
-                    if !reclaim(map, open, state, key, child) {
-                        return false;
-                    }
-                }
-            }
-        }};
-    }
-    macro_rules! diagonal {
-        ($z:expr, $code:expr, $o1:expr, $o2:expr) => {{
-            if t.m & ((1 << $o1) | (1 << $o2)) == (1 << $o1) | (1 << $o2) {
-                visit!($z, $code);
-            }
-        }};
-    }
-    macro_rules! forced {
-        ($o_back:expr, $z:expr, $code:expr, $zd:expr, $dcode:expr, $o1:expr, $o2:expr) => {{
-            if t.m & (1 << $o_back) == 0 {
-                visit!($z, $code);
-                diagonal!($zd, $dcode, $o1, $o2);
-            }
-        }};
-    }
-    match Dir::from_code(code) {
-        Some(Dir::E) => {
-            visit!(Z_E, E);
-            forced!(O_NW, Z_N, N, Z_NE, NE, O_N, O_E);
-            forced!(O_SW, Z_S, S, Z_SE, SE, O_S, O_E);
-        }
-        Some(Dir::W) => {
-            visit!(Z_W, W);
-            forced!(O_NE, Z_N, N, Z_NW, NW, O_N, O_W);
-            forced!(O_SE, Z_S, S, Z_SW, SW, O_S, O_W);
-        }
-        Some(Dir::N) => {
-            visit!(Z_N, N);
-            forced!(O_SE, Z_E, E, Z_NE, NE, O_E, O_N);
-            forced!(O_SW, Z_W, W, Z_NW, NW, O_W, O_N);
-        }
-        Some(Dir::S) => {
-            visit!(Z_S, S);
-            forced!(O_NE, Z_E, E, Z_SE, SE, O_E, O_S);
-            forced!(O_NW, Z_W, W, Z_SW, SW, O_W, O_S);
-        }
-        Some(Dir::NE) => {
-            visit!(Z_E, E);
-            visit!(Z_N, N);
-            diagonal!(Z_NE, NE, O_N, O_E);
-        }
-        Some(Dir::NW) => {
-            visit!(Z_W, W);
-            visit!(Z_N, N);
-            diagonal!(Z_NW, NW, O_N, O_W);
-        }
-        Some(Dir::SW) => {
-            visit!(Z_W, W);
-            visit!(Z_S, S);
-            diagonal!(Z_SW, SW, O_S, O_W);
-        }
-        Some(Dir::SE) => {
-            visit!(Z_E, E);
-            visit!(Z_S, S);
-            diagonal!(Z_SE, SE, O_S, O_E);
-        }
-        // The start (code 9): all eight neighbours.
-        None => {
-            visit!(Z_E, E);
-            visit!(Z_N, N);
-            visit!(Z_W, W);
-            visit!(Z_S, S);
-            diagonal!(Z_NE, NE, O_N, O_E);
-            diagonal!(Z_NW, NW, O_N, O_W);
-            diagonal!(Z_SW, SW, O_S, O_W);
-            diagonal!(Z_SE, SE, O_S, O_E);
-        }
-    }
-    true
 }

@@ -4,8 +4,8 @@
 //! walk ends; pushes are O(1), a pop compares at most six heads. Full pool: closed cells'
 //! entries are reclaimed, `QueueFull` only when that frees less than 1/16. Measured effect
 //! (branch `astar-fifo`, `cargo xtask mcu-bench`): 20 % random obstacles 7.55 M → 6.70 M
-//! instructions against the former 512-bucket queue; see docs/planners.md, "Cell-by-cell A\*:
-//! queue by reduced-cost class".
+//! instructions against the former 512-bucket queue; see docs/planners-history.md,
+//! "Cell-by-cell A\*: queue by reduced-cost class".
 
 use super::goal::{CLASSES, CLASS_COSTS};
 use super::open_list::{OpenEntry, OpenList, NIL};
@@ -29,7 +29,7 @@ pub(super) struct QueueState {
 /// The open list of the cell-by-cell A*: lists by *reduced cost* over a fixed pool of entries.
 ///
 /// With the octile heuristic (consistent), a child's key is its parent's plus the reduced cost
-/// `r = cost + h(child) − h(parent)`, which takes only the six values of [`REDUCED_COSTS`]
+/// `r = cost + h(child) − h(parent)`, which takes only the six values of [`REDUCED_COSTS`](crate::plan::goal::REDUCED_COSTS)
 /// (checked for every cell and step around goals in the tests). The parent's key is the last
 /// key popped, and popped keys never decrease, so the children pushed with one `r` arrive with
 /// non-decreasing keys: one FIFO list per non-zero `r` is sorted by construction, its head is

@@ -23,7 +23,7 @@ pub(super) fn spread_bits_to_nibbles(byte: u32) -> u32 {
 }
 
 /// [`BLOCKED`] in the nibble of each set bit of a byte (bit k -> nibble k): one table read
-/// per 8 cells when [`Planner::copy_map`] copies the map. 1 KB of read-only data.
+/// per 8 cells when [`Planner::copy_map`](crate::plan::planner::Planner::copy_map) copies the map. 1 KB of read-only data.
 pub(super) static BLOCKED_NIBBLES: [u32; 256] = {
     let mut table = [0u32; 256];
     let mut b = 0;

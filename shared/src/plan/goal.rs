@@ -6,7 +6,7 @@
 //! ([`goal_axis_entry`]) with one subtraction and one saturation. So neither `h` nor `g` is
 //! computed per cell. Measured effect (branch `astar-region`, `cargo xtask mcu-bench`): about 11
 //! Cortex-M4 instructions per expanded cell for the region, was about 28; see
-//! docs/planners.md, "Cell-by-cell A\*: goal regions from a per-axis table".
+//! docs/planners-history.md, "Cell-by-cell A\*: goal regions from a per-axis table".
 
 use super::codes::{octile, STEPS};
 use super::{DIAGONAL_COST, STRAIGHT_COST};
@@ -14,7 +14,7 @@ use super::{DIAGONAL_COST, STRAIGHT_COST};
 /// The reduced costs `r = cost + h(child) − h(parent)` of an octile step under the octile
 /// heuristic, in increasing order: 0, `2S − D`, `2D − 2S`, `D`, `2S`, `2D` (S =
 /// [`STRAIGHT_COST`], D = [`DIAGONAL_COST`]); the index is the step's *class*. A child's key is
-/// its parent's plus one of these, see [`ClassQueue`].
+/// its parent's plus one of these, see [`ClassQueue`](crate::plan::class_queue::ClassQueue).
 pub(super) const REDUCED_COSTS: [u32; CLASSES] = [
     0,
     2 * STRAIGHT_COST - DIAGONAL_COST,
@@ -77,7 +77,7 @@ pub(super) fn goal_region(dx: i32, dy: i32) -> usize {
 
 /// Grid sides (cells) up to which the cell-by-cell A* takes each cell's [`goal_region`] from
 /// a per-axis table of this many words filled once per search ([`goal_axis_entry`]; 2 KB in
-/// the [`Planner`]); larger grids compute it per cell.
+/// the [`Planner`](crate::plan::planner::Planner)); larger grids compute it per cell.
 pub(super) const GOAL_AXIS_CELLS: usize = 512;
 
 /// Sign code of `i − g`: 0 below, 1 equal, 2 above.
@@ -116,7 +116,7 @@ pub(super) fn axis_region(axis: &[u32; GOAL_TABLE_WORDS], x: usize, node: u32) -
     (((v as u32 >> 16) & 15) | d << 4) as usize
 }
 
-/// Words of the [`Planner`]'s goal table: the per-axis entries, then a copy of
+/// Words of the [`Planner`](crate::plan::planner::Planner)'s goal table: the per-axis entries, then a copy of
 /// [`STEP_CLASSES`] (in RAM next to them, the search addresses both from one base).
 pub(super) const GOAL_TABLE_WORDS: usize = GOAL_AXIS_CELLS + REGIONS;
 

@@ -8,7 +8,7 @@
 //! [`JPS_STEPS_MAX_EXPANSIONS`]). Measured effect (`cargo xtask mcu-bench` and `twil plan
 //! --remote qemu --json` on the bundled worlds): a room-map plan takes 0.9–2.9 M Cortex-M4
 //! instructions for 9–22 jump points (A*), 0.76–1.76 M for 8–15 (BFS); see docs/planners.md,
-//! "A\*: jump point search" and "BFS by jump points (branch `bfs-jps`)".
+//! "A\*: jump point search", and docs/planners-history.md, "BFS by jump points".
 
 use super::codes::{
     nibble, octile, set_nibble, step_code, Dir, CODE_START, E, N, NE, NW, S, SE, STEPS, SW, W,
@@ -210,7 +210,8 @@ impl JumpScan<'_> {
 
     /// The smallest step `i` in `1..=last` of the diagonal from `(x, y)` whose column scan
     /// (from `(x + dx·i, y + dy·i)` along `dy`) finds a jump point; all diagonal cells up to
-    /// `last` are free.
+    /// `last` are free. About 130 lines, not split: one pass over the columns' words whose
+    /// masks stay in registers (a split is not measured).
     fn diagonal_columns(&self, x: i32, y: i32, dx: i32, dy: i32, last: u32) -> Option<u32> {
         // Up to 512 columns (the 300 and 400 cell grids); wider grids scan column by column.
         const MAX_WORDS: usize = 16;
@@ -453,6 +454,11 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     /// equal `f` pops the smallest `h`, i.e. the largest `g`, first (towards the goal); `h` is at
     /// most 4 095 on grids of at most [`crate::grid::MAX_SIDE_CELLS`] a side, and `f` must stay
     /// below 2²⁰ (else the search gives up).
+    ///
+    /// About 200 lines, not split: one loop whose pop, record, goal test, direction rules and
+    /// scans share the heap's length, the record count and the goal in registers, like
+    /// [`astar_loop`](super::astar::astar_loop) (whose split cost 2 %); a split of this one is
+    /// not measured.
     pub(super) fn jump_points<const GW: usize, const UNIT: bool>(
         &mut self,
         grid: &Grid<GW>,

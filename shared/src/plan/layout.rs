@@ -6,7 +6,7 @@
 //! give the same search (tested for widths 1–40 and 63–65 and on 1 024 random grids). Also
 //! [`NIBBLE_WINDOWS`], the 4 KB table that turns a window into "nibble 0" / "not blocked" bits.
 //! Measured effect of the frame (branch `astar-mem`, `cargo xtask mcu-bench`): see
-//! docs/planners.md, "Cell-by-cell A\*: framed layout".
+//! docs/planners-history.md, "Cell-by-cell A\*: framed layout".
 
 use super::codes::{nibble, nibble_window, BLOCKED, BLOCKED_NIBBLES};
 use crate::grid::{Grid, GridGeometry};

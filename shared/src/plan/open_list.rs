@@ -1,6 +1,6 @@
 //! The open list as the cell-by-cell A* sees it: the [`OpenEntry`] (12 bytes) that every queue
-//! shares, and the [`OpenList`] trait with its two implementations, [`ClassQueue`] (linked
-//! lists, exact `QueueFull` semantics) and [`RingQueue`] (rings, faster; it gives up and the
+//! shares, and the [`OpenList`] trait with its two implementations, [`ClassQueue`](crate::plan::class_queue::ClassQueue) (linked
+//! lists, exact `QueueFull` semantics) and [`RingQueue`](crate::plan::ring_queue::RingQueue) (rings, faster; it gives up and the
 //! search runs again on a `ClassQueue`). The search loop is generic over the trait: two
 //! instances, the same pops in the same order (tested against each other on random grids).
 
@@ -29,8 +29,8 @@ impl OpenEntry {
 /// End of a list of the open list.
 pub(super) const NIL: u32 = u32::MAX;
 
-/// The open list as the search loop sees it: [`ClassQueue`] (linked lists over the pool, the
-/// exact `QueueFull` semantics) or [`RingQueue`] (rings carved from the pool, faster; it gives
+/// The open list as the search loop sees it: [`ClassQueue`](crate::plan::class_queue::ClassQueue) (linked lists over the pool, the
+/// exact `QueueFull` semantics) or [`RingQueue`](crate::plan::ring_queue::RingQueue) (rings carved from the pool, faster; it gives
 /// up when a ring stays full and the caller then runs the search again with a `ClassQueue`).
 /// Both pop the same entries in the same order.
 pub(super) trait OpenList<'a>: Sized {

@@ -5,6 +5,7 @@
 //! The searches themselves live in `jump.rs`, `astar.rs` and `bfs/`, the rebuilds in `path.rs`
 //! and `any_angle.rs`.
 
+use super::bfs::Meet;
 use super::codes::{set_nibble, spread_bits_to_nibbles, BLOCKED, BLOCKED_NIBBLES, CODE_START};
 use super::goal::GOAL_TABLE_WORDS;
 use super::jump::{cluttered, JPS_STEPS_MAX_EXPANSIONS};
@@ -35,8 +36,8 @@ pub struct Planner<const SCRATCH_WORDS: usize, const QUEUE: usize> {
     pub(super) scratch: [u32; SCRATCH_WORDS],
     pub(super) queue: [OpenEntry; QUEUE],
     pub(super) cells: PathCells,
-    /// The per-axis goal table of the cell-by-cell A* ([`goal_axis_entry`]), refilled by
-    /// every framed search on a grid of at most [`GOAL_AXIS_CELLS`] a side.
+    /// The per-axis goal table of the cell-by-cell A* ([`goal_axis_entry`](crate::plan::goal::goal_axis_entry)), refilled by
+    /// every framed search on a grid of at most [`GOAL_AXIS_CELLS`](crate::plan::goal::GOAL_AXIS_CELLS) a side.
     pub(super) goal_axis: [u32; GOAL_TABLE_WORDS],
     pub(super) last: Option<PlanReport>,
     pub(super) queue_peak: u32,
@@ -47,9 +48,9 @@ pub struct Planner<const SCRATCH_WORDS: usize, const QUEUE: usize> {
 /// Where the nibble of a cell is in the scratch after a search.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Layout {
-    /// Row-major, `width` nibbles a row (jump points, scalar BFS, [`Flat`] A*).
+    /// Row-major, `width` nibbles a row (jump points, scalar BFS, [`Flat`](crate::plan::layout::Flat) A*).
     Flat,
-    /// [`Framed`] A*: rows of `stride` nibbles, one frame row and column before the map.
+    /// [`Framed`](crate::plan::layout::Framed) A*: rows of `stride` nibbles, one frame row and column before the map.
     Framed { stride: usize },
 }
 
@@ -193,6 +194,34 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
             self.last = Some(report);
             return Ok(report);
         }
+        let (search, bfs_meet) = self.search(kind, grid, start, goal, bfs_jump_points)?;
+        if !search.found {
+            self.cells.clear();
+            let report = PlanReport {
+                status: PlanStatus::Unreachable,
+                expanded: search.expanded,
+                cost: 0,
+                length_m: 0.0,
+            };
+            self.last = Some(report);
+            return Ok(report);
+        }
+        self.write_path(kind, grid, goal, search, bfs_meet)
+    }
+
+    /// The search of a request whose start and goal are free cells of the map: jump points on
+    /// uncluttered maps (octile costs for A\* and any-angle, unit costs for BFS), else, or when
+    /// they give up, the layered BFS or the cell-by-cell A\*; and where the layered BFS met
+    /// (`None` for the other searches, whose path is in the nibbles).
+    fn search<const W: usize>(
+        &mut self,
+        kind: PlannerKind,
+        grid: &Grid<W>,
+        start: Cell,
+        goal: Cell,
+        bfs_jump_points: bool,
+    ) -> Result<(Search, Option<Meet>), PlanError> {
+        let geometry = *grid.geometry();
         // Jump point search (A* and any-angle with octile costs, BFS with unit costs) reads
         // the map's own bits and needs cleared nibbles only (its fallbacks set up their own
         // scratch). On a cluttered map (nearly every free cell would be a jump point) A* runs
@@ -270,17 +299,20 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
                 }
             }
         };
-        if !search.found {
-            self.cells.clear();
-            let report = PlanReport {
-                status: PlanStatus::Unreachable,
-                expanded: search.expanded,
-                cost: 0,
-                length_m: 0.0,
-            };
-            self.last = Some(report);
-            return Ok(report);
-        }
+        Ok((search, bfs_meet))
+    }
+
+    /// Writes the path of a search that found the goal into the cell buffer and reports it;
+    /// `PathFull` keeps the last path.
+    fn write_path<const W: usize>(
+        &mut self,
+        kind: PlannerKind,
+        grid: &Grid<W>,
+        goal: Cell,
+        search: Search,
+        bfs_meet: Option<Meet>,
+    ) -> Result<PlanReport, PlanError> {
+        let geometry = *grid.geometry();
         // `PathFull` must keep the last path. Only long paths may not fit: a path of `steps`
         // moves has at most `steps + 2` vertices (any-angle adds at most one per run of the
         // A* path, and the final one). For those the last path is first put aside in the

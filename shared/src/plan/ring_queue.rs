@@ -1,11 +1,11 @@
-//! [`RingQueue`]: the same classes and order of pops as [`ClassQueue`] on fixed rings carved
+//! [`RingQueue`]: the same classes and order of pops as [`ClassQueue`](crate::plan::class_queue::ClassQueue) on fixed rings carved
 //! from the pool (capacities by [`RING_SHARES`], from measured per-class peaks), the stack in
 //! the entries' `next` fields, the far list a short sorted array: no free list, no links. When
 //! a ring stays full after a reclaim the queue gives up and the search runs again with a
 //! `ClassQueue`, so results never depend on the ring capacities. Used in the framed layout
 //! (the MCU's path). Measured effect (branch `astar-queue`, `cargo xtask mcu-bench`): 20 %
-//! random obstacles 5.39 M → 4.99 M instructions; see docs/planners.md, "Cell-by-cell A\*:
-//! open list on rings".
+//! random obstacles 5.39 M → 4.99 M instructions; see docs/planners-history.md,
+//! "Cell-by-cell A\*: open list on rings".
 
 use super::class_queue::QueueState;
 use super::goal::{reduced_cost_class, CLASSES, CLASS_COSTS};
@@ -30,7 +30,7 @@ struct Ring {
     pub(super) cost: u32,
 }
 
-/// The open list of [`ClassQueue`] (same classes, same order of pops) on fixed *rings* instead
+/// The open list of [`ClassQueue`](crate::plan::class_queue::ClassQueue) (same classes, same order of pops) on fixed *rings* instead
 /// of linked lists: FIFO class `c` is a ring buffer of `(key, node)` in the `f` and `node`
 /// fields of its own range of pool slots (capacities by [`RING_SHARES`]), the stack of class 0
 /// lives in the `next` fields of the pool (up to one entry per slot), the far list is a sorted
@@ -38,7 +38,7 @@ struct Ring {
 /// slot and moves a tail, a pop reads one slot and moves a head. When a ring (or the far
 /// array) is full, the entries of closed cells are dropped from all (each keeps its order); if
 /// the ring is then still more than 7/8 full the queue gives up (`reclaim_and_push` returns
-/// `None`) and the caller runs the search again with a [`ClassQueue`], so results never depend
+/// `None`) and the caller runs the search again with a [`ClassQueue`](crate::plan::class_queue::ClassQueue), so results never depend
 /// on the ring capacities.
 pub(super) struct RingQueue<'a> {
     pub(super) pool: &'a mut [OpenEntry],
@@ -88,7 +88,7 @@ impl RingQueue<'_> {
     }
 
     /// Remove the smallest of the ring heads and the far list's last entry (the stack is
-    /// empty) and return its node (`NIL` when all are empty). Ties as in [`ClassQueue`].
+    /// empty) and return its node (`NIL` when all are empty). Ties as in [`ClassQueue`](crate::plan::class_queue::ClassQueue).
     #[inline(never)]
     pub(super) fn pop_fifo(&mut self, s: &mut QueueState) -> u32 {
         let (mut c, mut key) = (1, self.head_key(1));
@@ -366,7 +366,7 @@ impl<'a> OpenList<'a> for RingQueue<'a> {
     }
 
     /// A ring, the far list or the stack is full: drop the entries of closed cells and push
-    /// `(key, node)`; `None` (give up: the caller runs a [`ClassQueue`]) when the push still
+    /// `(key, node)`; `None` (give up: the caller runs a [`ClassQueue`](crate::plan::class_queue::ClassQueue)) when the push still
     /// fails or leaves its ring more than 7/8 full (no thrashing).
     #[cold]
     #[inline(never)]

@@ -3,7 +3,7 @@
 //! so that rows change roles by name), single rows ([`Layers::single`]) and moves across word
 //! edges, cell by cell and out of line ([`Layers::edge_side`]). Measured effect (branch
 //! `bfs-colmajor`, `cargo xtask mcu-bench`): about 45 Cortex-M4 instructions per row, were 95;
-//! see docs/planners.md, "BFS kernel on the MCU".
+//! see docs/planners-history.md, "BFS kernel on the MCU".
 
 use super::layers::{layer_masks, side_masks, Layers, APART, GOAL_SIDE};
 use super::FreeBits;
@@ -87,7 +87,8 @@ impl Layers<'_> {
     /// to `y1 + 1`, each from the three source rows below, level and above, sliding up the
     /// column (moves out of the word: [`Layers::edge_before`], [`Layers::edge_after`]).
     // Not inlined: in its own function the window keeps more of its state in registers (1-2 %
-    // fewer MCU instructions).
+    // fewer MCU instructions). About 140 lines for the same reason: the window slides up the
+    // column in one loop; a split of it is not measured.
     #[inline(never)]
     #[allow(unused_assignments)] // the window's last shift is not read
     pub(super) fn column<const ODD: bool, const SIDE: u8, const PHASE: u32>(

@@ -48,7 +48,8 @@ use crate::grid::{Grid, GridGeometry};
 mod kernel;
 mod layers;
 
-use layers::{count_reached, Layers, Meet, Outcome, PathBuilder};
+pub(super) use layers::Meet;
+use layers::{count_reached, Layers, Outcome, PathBuilder};
 
 /// Where the BFS planes and row sets live in the scratch.
 #[derive(Clone, Copy, Debug)]
@@ -337,7 +338,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     /// nibbles of a row, from one pair of scratch words), so the side cells read for the side
     /// moves also decide the diagonal moves. [`NIBBLE_WINDOWS`] and a few operations turn the
     /// windows into a mask of the targets (nibble 0, and for a diagonal both side cells not
-    /// [`BLOCKED`]), tested in the fixed order E, N, W, S, NE, NW, SW, SE with constant index
+    /// [`BLOCKED`](crate::plan::codes::BLOCKED)), tested in the fixed order E, N, W, S, NE, NW, SW, SE with constant index
     /// offsets. Cells on the map border take a slower path that reads off-map cells as
     /// `BLOCKED` (and divides for y). Queue entries carry the index and x, so interior cells
     /// never divide; a new cell's nibble is 0, so marking it is a single OR.
