@@ -151,7 +151,7 @@ fn check(
         return Some(format!("`{path}` does not exist"));
     }
     let anchor = anchor?;
-    if !file.extension().is_some_and(|e| e == "md") {
+    if file.extension().is_none_or(|e| e != "md") {
         return None;
     }
     let known = anchors_of.entry(file.clone()).or_insert_with(|| {
