@@ -82,13 +82,14 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
     }
     for (which, p) in [("start", params.start), ("goal", params.goal)] {
         if geometry.cell_of(p).is_err() {
-            bail!(
-                "{}: the {which} ({}, {}) lies off the {} m map",
-                args.params.display(),
-                p.x_m,
-                p.y_m,
-                args.size
-            );
+            // `run` answers `out_of_bounds` (crate::answer).
+            return Err(crate::answer::OffMap {
+                params: args.params.display().to_string(),
+                which,
+                point: p,
+                size: args.size.clone(),
+            }
+            .into());
         }
     }
     Ok(Inputs {
