@@ -96,7 +96,7 @@ impl Situation {
             Situation::OutOfBounds => "the start|goal (X, Y) lies off the W x H m map",
             Situation::Unreachable => "no path leads from (X, Y) to the goal (X, Y) …",
             Situation::GaveUp => "gave up at (X, Y) after N plans from the same place: …",
-            Situation::Collision => "the robot's body touched an obstacle at (X, Y) …",
+            Situation::Collision => "the robot's body touched an obstacle of FILE at (X, Y) …",
             Situation::Timeout => "the time limit of T s ran out at (X, Y), D m from the goal",
             Situation::Aborted => "the mission was aborted at (X, Y): …",
         }
@@ -261,11 +261,9 @@ impl MissionEnd<'_> {
                 at(self.goal)
             ),
             Situation::Collision => format!(
-                "the robot's body touched an obstacle at {here}{} (clearance {:.3} m)",
-                self.real
-                    .as_ref()
-                    .map_or(String::new(), |r| format!(" of {r}")),
-                self.clearance_m
+                "the robot's body touched an obstacle of {} at {here} (overlap up to {:.3} m)",
+                self.real.as_deref().unwrap_or("the real world"),
+                -self.clearance_m
             ),
             Situation::Timeout => format!(
                 "the time limit of {} s ran out at {here}, {to_goal_m:.2} m from the goal",
@@ -277,7 +275,7 @@ impl MissionEnd<'_> {
                 } else {
                     match self.device {
                         StopCause::None => match &self.plan_error {
-                            Some(e) => format!("the device's planner failed ({e})"),
+                            Some(e) => format!("the device: its planner failed ({e})"),
                             None => "the device".to_string(),
                         },
                         StopCause::Host => "a host's AbortMission".to_string(),
@@ -358,7 +356,10 @@ mod tests {
         );
         e.unreachable = Some(UnreachableReason::GoalBlocked);
         assert_eq!(e.word(), "goal_blocked");
-        assert!(e.why().unwrap().starts_with("the goal (6.10, 8.25) lies in an obstacle"));
+        assert!(e
+            .why()
+            .unwrap()
+            .starts_with("the goal (6.10, 8.25) lies in an obstacle"));
         e.unreachable = Some(UnreachableReason::NoPath);
         assert_eq!(e.word(), "unreachable");
         let t = end("timeout");
@@ -369,7 +370,7 @@ mod tests {
         let c = end("collision");
         assert_eq!(
             c.why().unwrap(),
-            "the robot's body touched an obstacle at (3.10, 4.25) of b.da (clearance -0.012 m)"
+            "the robot's body touched an obstacle of b.da at (3.10, 4.25) (overlap up to 0.012 m)"
         );
         let mut a = end("aborted");
         a.device = StopCause::LinkLost;
@@ -401,6 +402,9 @@ mod tests {
             size: "5x5".into(),
         };
         assert_eq!(off.why(), "the goal (7.00, 7.00) lies off the 5 x 5 m map");
-        assert_eq!(off.to_string(), "g.par: the goal (7, 7) lies off the 5x5 m map");
+        assert_eq!(
+            off.to_string(),
+            "g.par: the goal (7, 7) lies off the 5x5 m map"
+        );
     }
 }

@@ -74,7 +74,7 @@ impl StartBlocked {
 /// `out_of_bounds`, exit status 3, nothing ran (as `twil plan` says `out_of_bounds`). Prints
 /// the summary line or the `--json` line and returns the ending.
 pub fn answer_off_map(off: &crate::answer::OffMap, as_json: bool) -> crate::exit::Ending {
-    let why = format!("{}; nothing ran", off.why());
+    let why = format!("{}, as {} gives it; nothing ran", off.why(), off.params);
     if as_json {
         println!(
             "{}",
