@@ -119,6 +119,9 @@ pub fn summary(world: &World, outcome: &Outcome) -> String {
             outcome.report.length_m
         ));
     }
+    if let Some(why) = why(world, outcome.report.status) {
+        s.push_str(&format!(": {why}"));
+    }
     s.push_str(&format!(
         "\n{} {} expanded in {} us",
         outcome.report.expanded,
