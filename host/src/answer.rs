@@ -211,6 +211,8 @@ pub struct MissionEnd<'a> {
     pub time_limit_s: f32,
     /// The device's last planner error, for an abort without a stop cause.
     pub plan_error: Option<String>,
+    /// The last plan found no free cell near the robot to start from (`start_blocked`).
+    pub no_start: bool,
 }
 
 impl MissionEnd<'_> {
@@ -244,6 +246,12 @@ impl MissionEnd<'_> {
         let here = at(self.at);
         let to_goal_m = (self.goal.x_m - self.at.x_m).hypot(self.goal.y_m - self.at.y_m);
         Some(match self.situation()? {
+            Situation::GaveUp if self.no_start => format!(
+                "gave up at {here} after {} plans from the same place: obstacles lie within the \
+                 robot radius ({:.2} m) all round, so no plan could start there, even after a \
+                 full standing sweep",
+                self.plans_here, self.radius_m
+            ),
             Situation::GaveUp => format!(
                 "gave up at {here} after {} plans from the same place: none took the robot more \
                  than {:.2} m away, even after a full standing sweep there",
@@ -318,6 +326,7 @@ mod tests {
             real: Some("b.da".into()),
             time_limit_s: 30.0,
             plan_error: None,
+            no_start: false,
         }
     }
 
@@ -354,6 +363,14 @@ mod tests {
             "gave up at (3.10, 4.25) after 12 plans from the same place: none took the robot \
              more than 0.10 m away, even after a full standing sweep there"
         );
+        e.no_start = true;
+        assert_eq!(
+            e.why().unwrap(),
+            "gave up at (3.10, 4.25) after 12 plans from the same place: obstacles lie within \
+             the robot radius (0.40 m) all round, so no plan could start there, even after a \
+             full standing sweep"
+        );
+        e.no_start = false;
         e.unreachable = Some(UnreachableReason::GoalBlocked);
         assert_eq!(e.word(), "goal_blocked");
         assert!(e

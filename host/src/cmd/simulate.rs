@@ -253,6 +253,8 @@ pub fn mission_end<'a>(args: &Args, setup: &SimSetup, result: &'a SimResult) -> 
         real: Some(crate::answer::file_name(&args.real)),
         time_limit_s: setup.time_limit_s,
         plan_error: None,
+        // A plan that found no start leaves no path (the mission clears it).
+        no_start: result.plans.last().is_some_and(|p| p.path.is_empty()),
     }
 }
 

@@ -338,6 +338,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         radius_m: inputs.params.robot_radius_m,
         time_limit_s: args.time_limit_s(),
         real: args.real.as_deref().map(crate::answer::file_name),
+        last_plan: follower.reasons.status(),
     };
     let outcome = Outcome {
         report,

@@ -45,6 +45,8 @@ pub struct EndPlace {
     pub time_limit_s: f32,
     /// The real world's file name (simulated devices).
     pub real: Option<String>,
+    /// The planner's verdict on the last plan reported.
+    pub last_plan: Option<twil_core::plan::PlanStatus>,
 }
 
 /// The `--json` object: the keys of `twil simulate --json` plus `mcu`.
@@ -93,6 +95,7 @@ pub fn mission_end(outcome: &Outcome) -> crate::answer::MissionEnd<'static> {
         real: p.real.clone(),
         time_limit_s: p.time_limit_s,
         plan_error: s.last_plan_error.map(|e| format!("{e:?}")),
+        no_start: p.last_plan == Some(twil_core::plan::PlanStatus::StartBlocked),
     }
 }
 
