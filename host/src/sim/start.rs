@@ -1,9 +1,9 @@
 //! A mission whose start puts the robot's body inside an obstacle of the real world gets the
 //! same answer from every command: `start_blocked`, exit status 3, as `twil plan` says of a
 //! start inside a grown obstacle (issue 26), with the sentence of crate::answer; a start or
-//! goal off the map likewise gets `out_of_bounds` ([`answer_off_map`]). Nothing runs: before this check `twil simulate`
-//! reported a `collision` after 0.00 m and `twil mission --remote sim` printed `unreachable`
-//! and exited 4.
+//! goal off the map likewise gets `out_of_bounds` ([`answer_off_map`]), where it used to be
+//! an error (exit 1). Nothing runs: before this check `twil simulate` reported a `collision`
+//! after 0.00 m and `twil mission --remote sim` printed `unreachable` and exited 4.
 
 use std::path::Path;
 
