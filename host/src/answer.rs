@@ -132,6 +132,28 @@ pub struct OffMap {
 }
 
 impl OffMap {
+    /// `Err` for the first of `start`, `goal` of `params` (a `.par` file) off `geometry`
+    /// (the map of `--size size`).
+    pub fn check(
+        params: &std::path::Path,
+        size: &str,
+        geometry: &twil_core::grid::GridGeometry,
+        start: PointM,
+        goal: PointM,
+    ) -> Result<(), OffMap> {
+        for (which, point) in [("start", start), ("goal", goal)] {
+            if geometry.cell_of(point).is_err() {
+                return Err(OffMap {
+                    params: params.display().to_string(),
+                    which,
+                    point,
+                    size: size.to_string(),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// The sentence.
     pub fn why(&self) -> String {
         off_map(self.which, self.point, &self.size)

@@ -162,18 +162,14 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
     if !(time_limit_s.is_finite() && time_limit_s > 0.0) {
         bail!("--time-limit: must be a positive number of seconds, got {time_limit_s}");
     }
-    for (which, p) in [("start", params.start), ("goal", params.goal)] {
-        if geometry.cell_of(p).is_err() {
-            // `run` answers `out_of_bounds` (crate::answer); other callers see the error.
-            return Err(crate::answer::OffMap {
-                params: args.params.display().to_string(),
-                which,
-                point: p,
-                size: args.size.clone(),
-            }
-            .into());
-        }
-    }
+    // `run` answers `out_of_bounds` (crate::answer); other callers see the error.
+    crate::answer::OffMap::check(
+        &args.params,
+        &args.size,
+        &geometry,
+        params.start,
+        params.goal,
+    )?;
     Ok(SimSetup {
         real,
         known,

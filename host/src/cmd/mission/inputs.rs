@@ -80,18 +80,14 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
             args.link_timeout_ms
         );
     }
-    for (which, p) in [("start", params.start), ("goal", params.goal)] {
-        if geometry.cell_of(p).is_err() {
-            // `run` answers `out_of_bounds` (crate::answer).
-            return Err(crate::answer::OffMap {
-                params: args.params.display().to_string(),
-                which,
-                point: p,
-                size: args.size.clone(),
-            }
-            .into());
-        }
-    }
+    // `run` answers `out_of_bounds` (crate::answer).
+    crate::answer::OffMap::check(
+        &args.params,
+        &args.size,
+        &geometry,
+        params.start,
+        params.goal,
+    )?;
     Ok(Inputs {
         params,
         known,
