@@ -65,6 +65,8 @@ impl Worlds {
 enum Command {
     Plan,
     PlanQemu,
+    /// A classic method (its first line ends with the status).
+    PlanBug,
     Simulate,
     MissionSim,
     MissionQemu,
@@ -80,6 +82,7 @@ fn argv(command: Command, world: &str, params: &str, extra: &[&str]) -> Vec<Stri
     let mut v: Vec<&str> = match command {
         Command::Plan => vec!["plan", "--world"],
         Command::PlanQemu => vec!["plan", "--remote", "qemu", "--world"],
+        Command::PlanBug => vec!["plan", "--planner", "bug", "--world"],
         Command::Simulate => vec!["simulate", "--real"],
         Command::MissionSim => vec!["mission", "--remote", "sim", "--real"],
         Command::MissionQemu => vec!["mission", "--remote", "qemu", "--real"],
@@ -122,7 +125,10 @@ fn check(w: &Worlds, command: Command, world: &str, params: &str, extra: &[&str]
         .unwrap_or_else(|| panic!("{args:?}: no why: {json}"));
     assert!(why.starts_with(e.opens), "{args:?}: {why}");
     assert!(why.contains(e.contains), "{args:?}: {why}");
-    if !matches!(command, Command::Plan | Command::PlanQemu) {
+    if !matches!(
+        command,
+        Command::Plan | Command::PlanQemu | Command::PlanBug
+    ) {
         // Every mission end names a cause; for these the cause is the word itself.
         assert_eq!(json["stop_cause"], word, "{args:?}: {json}");
     }
@@ -138,6 +144,7 @@ fn check(w: &Worlds, command: Command, world: &str, params: &str, extra: &[&str]
         Command::Plan | Command::PlanQemu => {
             text.lines().nth(1).is_some_and(|l| l.ends_with(&line))
         }
+        Command::PlanBug => text.lines().next().is_some_and(|l| l.ends_with(&line)),
         _ => text.lines().next().is_some_and(|l| l.starts_with(&line)),
     };
     assert!(said, "{args:?}: `{line}` not on the summary line:\n{text}");
@@ -211,6 +218,7 @@ fn a_start_or_goal_off_the_map_is_out_of_bounds_everywhere() {
     ] {
         for command in [
             Command::Plan,
+            Command::PlanBug,
             Command::Simulate,
             Command::MissionSim,
             Command::MissionQemu,
@@ -218,7 +226,7 @@ fn a_start_or_goal_off_the_map_is_out_of_bounds_everywhere() {
             let e = Expect {
                 situation: Situation::OutOfBounds,
                 opens,
-                contains: if command == Command::Plan {
+                contains: if matches!(command, Command::Plan | Command::PlanBug) {
                     ""
                 } else {
                     "gives it; nothing ran"

@@ -336,13 +336,27 @@ fn run_classic(args: &Args, world: &World) -> anyhow::Result<crate::exit::Ending
     if let Some(out) = &args.png {
         crate::classic::picture::figure(world, &run, args.scale)?.save_png(out)?;
     }
+    // A start or goal off the map says why in the grid planners' words (crate::answer). The
+    // methods' other ends rest on each method's model of the free space (a blocked start
+    // includes one near the border, `unreachable` may be the model's), described in
+    // docs/classic.md: no sentence of the grid planners' would be true of them all.
+    let why = match run.status {
+        crate::classic::Status::OutOfBounds => why(world, PlanStatus::OutOfBounds),
+        _ => None,
+    };
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string(&crate::classic::json(world, &run))?
-        );
+        let mut json = crate::classic::json(world, &run);
+        if let Some(why) = &why {
+            json.extra.insert("why".into(), why.as_str().into());
+        }
+        println!("{}", serde_json::to_string(&json)?);
     } else {
-        println!("{}", crate::classic::summary(world, &run));
+        let text = crate::classic::summary(world, &run);
+        match (&why, text.split_once('\n')) {
+            // The status ends the first line: the sentence follows it.
+            (Some(why), Some((first, rest))) => println!("{first}: {why}\n{rest}"),
+            _ => println!("{text}"),
+        }
         if let Some(out) = &args.png {
             println!("picture: {}", out.display());
         }
