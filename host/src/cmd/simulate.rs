@@ -454,11 +454,12 @@ fn run_recorded(
     let run = sim::run_observed(setup, progress, &mut observer);
     let mut recorder = observer.into_recorder();
     if let Ok(result) = &run {
-        // The end as the run saw it (a collision is no mission status).
+        // The end as the run saw it (a collision is no mission status), in the word of the
+        // summary line (crate::answer: `gave_up`, `goal_blocked`, …).
         recorder.status(StatusMessage {
             t_s: result.sim_time_s,
             phase: "done".into(),
-            status: result.status.name().into(),
+            status: mission_end(args, setup, result).word().into(),
             event: "end of run".into(),
             plans: result.stats.plans,
             stops: result.stats.stops,
