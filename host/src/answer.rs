@@ -132,16 +132,15 @@ pub struct OffMap {
 }
 
 impl OffMap {
-    /// `Err` for the first of `start`, `goal` of `params` (a `.par` file) off `geometry`
-    /// (the map of `--size size`).
+    /// `Err` for the first of the start and goal of `par` (read from the file `params`) off
+    /// `geometry` (the map of `--size size`).
     pub fn check(
         params: &std::path::Path,
         size: &str,
         geometry: &twil_core::grid::GridGeometry,
-        start: PointM,
-        goal: PointM,
+        par: &twil_core::world::Params,
     ) -> Result<(), OffMap> {
-        for (which, point) in [("start", start), ("goal", goal)] {
+        for (which, point) in [("start", par.start), ("goal", par.goal)] {
             if geometry.cell_of(point).is_err() {
                 return Err(OffMap {
                     params: params.display().to_string(),

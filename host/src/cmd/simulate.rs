@@ -163,13 +163,7 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         bail!("--time-limit: must be a positive number of seconds, got {time_limit_s}");
     }
     // `run` answers `out_of_bounds` (crate::answer); other callers see the error.
-    crate::answer::OffMap::check(
-        &args.params,
-        &args.size,
-        &geometry,
-        params.start,
-        params.goal,
-    )?;
+    crate::answer::OffMap::check(&args.params, &args.size, &geometry, &params)?;
     Ok(SimSetup {
         real,
         known,

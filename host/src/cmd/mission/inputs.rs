@@ -81,13 +81,7 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
         );
     }
     // `run` answers `out_of_bounds` (crate::answer).
-    crate::answer::OffMap::check(
-        &args.params,
-        &args.size,
-        &geometry,
-        params.start,
-        params.goal,
-    )?;
+    crate::answer::OffMap::check(&args.params, &args.size, &geometry, &params)?;
     Ok(Inputs {
         params,
         known,
