@@ -340,8 +340,21 @@ fn bad_inputs_exit_1_naming_the_file_and_line() {
     let err = simulate_fails(&office, &["--sonar-range", "9"]);
     assert!(err.contains("--sonar-range 9: at most 6 m"), "{err}");
 
-    let err = simulate_fails(&office, &["--size", "5x5"]);
-    assert!(err.contains("goal") && err.contains("off"), "{err}");
+    // A goal off the map is an answer, not an error (tests/answers.rs).
+    let out = common::twil()
+        .args(["simulate", "--real"])
+        .arg(&office)
+        .arg("--params")
+        .arg(common::world("office.par"))
+        .args(["--size", "5x5"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.starts_with("out_of_bounds: the goal (13.50, 13.00) lies off the 5 x 5 m map"),
+        "{text}"
+    );
 
     let err = simulate_fails(&office, &["--plan-latency-ms", "100000"]);
     assert!(
@@ -439,7 +452,7 @@ fn a_start_over_an_obstacle_gets_one_answer_from_plan_simulate_and_mission() {
         .expect("run twil");
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
-        text.contains("start_blocked: the robot's body at the start (0.80, 1.50) overlaps an obstacle of b.da (clearance -0.100 m); nothing ran"),
+        text.contains("start_blocked: the start (0.80, 1.50) lies in an obstacle of b.da: the robot's body overlaps it by 0.100 m; nothing ran"),
         "{text}"
     );
     std::fs::remove_dir_all(&dir).ok();

@@ -178,7 +178,14 @@ fn missions_on_the_in_process_device_touch_nothing() {
                 let clearance = v["min_clearance_m"].as_f64().expect("min_clearance_m");
                 assert!(clearance > 0.0, "{name} {mode} {range} m: {v}");
                 if name == "enclosed" {
-                    assert_eq!(v["status"], "unreachable", "{name} {mode} {range} m: {v}");
+                    // No path, in one of its words (issue 26: walled in, blocked, a stall).
+                    assert!(
+                        matches!(
+                            v["status"].as_str(),
+                            Some("unreachable" | "goal_blocked" | "gave_up")
+                        ),
+                        "{name} {mode} {range} m: {v}"
+                    );
                 }
             }
         }

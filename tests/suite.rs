@@ -7,6 +7,7 @@
 
 mod common;
 
+mod answers;
 mod bounded_marking;
 mod classic_bug;
 mod classic_fields;

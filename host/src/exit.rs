@@ -70,12 +70,15 @@ impl Ending {
         }
     }
 
-    /// The ending of a mission status as the JSON names it (`reached`, `unreachable`,
-    /// `collision`, `timeout`, `aborted`).
+    /// The ending of a mission status as the JSON names it (`reached`, `start_blocked`,
+    /// `goal_blocked`, `out_of_bounds`, `unreachable`, `gave_up`, `collision`, `timeout`,
+    /// `aborted`: crate::answer).
     pub fn of_mission_status(status: &str) -> Self {
         match status {
             "reached" => Ending::Done,
-            "unreachable" => Ending::NoPath,
+            "unreachable" | "start_blocked" | "goal_blocked" | "out_of_bounds" | "gave_up" => {
+                Ending::NoPath
+            }
             "collision" => Ending::Collision,
             "timeout" => Ending::Timeout,
             _ => Ending::Aborted,
@@ -110,6 +113,8 @@ mod tests {
             );
         }
         assert_eq!(Ending::of_mission_status("timeout"), Ending::Timeout);
+        assert_eq!(Ending::of_mission_status("gave_up"), Ending::NoPath);
+        assert_eq!(Ending::of_mission_status("goal_blocked"), Ending::NoPath);
         assert_eq!(Ending::of_plan_status("local_minimum"), Ending::NoPath);
     }
 }

@@ -1,6 +1,7 @@
 //! The `twil` host tool as a library: each subcommand's logic, so that the binary, the tests and
 //! other tools share it.
 
+pub mod answer;
 pub mod classic;
 pub mod cmd;
 pub mod cspace;

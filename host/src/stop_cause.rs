@@ -5,7 +5,9 @@
 //!
 //! A stop from outside the mission's own logic (the device's failsafes, the host's abort,
 //! Ctrl-C) names that cause; otherwise the end is the mission's status, with an
-//! `unreachable` that came from too many plans without progress said as `gave_up`.
+//! `unreachable` that came from too many plans without progress said as `gave_up`, and one
+//! whose goal the sonar found inside an obstacle as `goal_blocked` (the status words of
+//! crate::answer).
 
 use twil_core::failsafe::StopCause;
 use twil_core::mission::UnreachableReason;
@@ -35,6 +37,7 @@ pub fn name(
         "collision" => "collision",
         "timeout" => "timeout",
         "unreachable" if unreachable == Some(UnreachableReason::NoProgress) => "gave_up",
+        "unreachable" if unreachable == Some(UnreachableReason::GoalBlocked) => "goal_blocked",
         "unreachable" => "unreachable",
         _ => "aborted",
     }

@@ -19,6 +19,16 @@ pub fn twil() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_twil"))
 }
 
+/// Send Ctrl-C (SIGINT) to a child process, as a terminal does.
+#[cfg(unix)]
+pub fn ctrl_c(child: &std::process::Child) {
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("run kill");
+    assert!(kill.success(), "kill -INT {}", child.id());
+}
+
 /// `twil plan`'s options for `world` (`None`: no obstacles) and `params` as the command line
 /// gives them by default (15 × 15 m, 0.05 m cells, A*), with `--json`.
 pub fn plan_args(world: Option<PathBuf>, params: PathBuf) -> twil_host::cmd::plan::Args {

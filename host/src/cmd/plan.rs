@@ -119,6 +119,9 @@ pub fn summary(world: &World, outcome: &Outcome) -> String {
             outcome.report.length_m
         ));
     }
+    if let Some(why) = why(world, outcome.report.status) {
+        s.push_str(&format!(": {why}"));
+    }
     s.push_str(&format!(
         "\n{} {} expanded in {} us",
         outcome.report.expanded,
@@ -126,6 +129,43 @@ pub fn summary(world: &World, outcome: &Outcome) -> String {
         outcome.elapsed_us
     ));
     s
+}
+
+/// The sentence that says why no path was found (crate::answer), `None` for a found one.
+pub fn why(world: &World, status: PlanStatus) -> Option<String> {
+    let p = &world.params;
+    let source = [&world.world_path, &world.map_path]
+        .into_iter()
+        .flatten()
+        .map(|path| crate::answer::file_name(path))
+        .collect::<Vec<_>>()
+        .join(" + ");
+    let source = if source.is_empty() {
+        "the empty map".to_string()
+    } else {
+        source
+    };
+    Some(match status {
+        PlanStatus::Found => return None,
+        PlanStatus::StartBlocked => {
+            crate::answer::start_blocked_on_map(p.start, &source, p.robot_radius_m)
+        }
+        PlanStatus::GoalBlocked => {
+            crate::answer::goal_blocked_on_map(p.goal, &source, p.robot_radius_m)
+        }
+        PlanStatus::Unreachable => crate::answer::walled_in_on_map(p.start, p.goal, &source),
+        PlanStatus::OutOfBounds => {
+            let g = world.grid.geometry();
+            let (which, point) = if g.cell_of(p.start).is_err() {
+                ("start", p.start)
+            } else {
+                ("goal", p.goal)
+            };
+            let metres = |cells: u16| (cells as f32 * g.resolution_m() * 1000.0).round() / 1000.0;
+            let size = format!("{}x{}", metres(g.width()), metres(g.height()));
+            crate::answer::off_map(which, point, &size)
+        }
+    })
 }
 
 /// Draw `world` and `outcome` to a PNG (see [`plan_figure`]). Missing parent folders of `out`
@@ -258,6 +298,9 @@ pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
     if args.json {
         let mut json = plan_json(&outcome);
         json.extra = extra;
+        if let Some(why) = why(&world, outcome.report.status) {
+            json.extra.insert("why".into(), why.into());
+        }
         println!("{}", serde_json::to_string(&json)?);
     } else {
         println!("{}", summary(&world, &outcome));
@@ -293,13 +336,27 @@ fn run_classic(args: &Args, world: &World) -> anyhow::Result<crate::exit::Ending
     if let Some(out) = &args.png {
         crate::classic::picture::figure(world, &run, args.scale)?.save_png(out)?;
     }
+    // A start or goal off the map says why in the grid planners' words (crate::answer). The
+    // methods' other ends rest on each method's model of the free space (a blocked start
+    // includes one near the border, `unreachable` may be the model's), described in
+    // docs/classic.md: no sentence of the grid planners' would be true of them all.
+    let why = match run.status {
+        crate::classic::Status::OutOfBounds => why(world, PlanStatus::OutOfBounds),
+        _ => None,
+    };
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string(&crate::classic::json(world, &run))?
-        );
+        let mut json = crate::classic::json(world, &run);
+        if let Some(why) = &why {
+            json.extra.insert("why".into(), why.as_str().into());
+        }
+        println!("{}", serde_json::to_string(&json)?);
     } else {
-        println!("{}", crate::classic::summary(world, &run));
+        let text = crate::classic::summary(world, &run);
+        match (&why, text.split_once('\n')) {
+            // The status ends the first line: the sentence follows it.
+            (Some(why), Some((first, rest))) => println!("{first}: {why}\n{rest}"),
+            _ => println!("{text}"),
+        }
         if let Some(out) = &args.png {
             println!("picture: {}", out.display());
         }

@@ -15,9 +15,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
+use twil_core::control::Pose;
+use twil_core::geom::PointM;
 use twil_core::grid::GridGeometry;
 use twil_core::mission::{MissionMode, MissionStats};
 
+use crate::answer::MissionEnd;
 use crate::record::sim::{Pace, SimRecorder};
 use crate::record::topics::StatusMessage;
 use crate::record::{RecordArgs, Recorder};
@@ -159,17 +162,8 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
     if !(time_limit_s.is_finite() && time_limit_s > 0.0) {
         bail!("--time-limit: must be a positive number of seconds, got {time_limit_s}");
     }
-    for (which, p) in [("start", params.start), ("goal", params.goal)] {
-        if geometry.cell_of(p).is_err() {
-            bail!(
-                "{}: the {which} ({}, {}) lies off the {} m map",
-                args.params.display(),
-                p.x_m,
-                p.y_m,
-                args.size
-            );
-        }
-    }
+    // `run` answers `out_of_bounds` (crate::answer); other callers see the error.
+    crate::answer::OffMap::check(&args.params, &args.size, &geometry, &params)?;
     Ok(SimSetup {
         real,
         known,
@@ -202,10 +196,11 @@ impl Args {
     }
 }
 
-/// The `--json` object: exactly the keys of the issue, and why the mission ended.
-pub fn result_json(result: &SimResult) -> serde_json::Value {
-    json!({
-        "status": result.status.name(),
+/// The `--json` object: exactly the keys of the issue, and why the mission ended (`why` only
+/// when it did not reach the goal: crate::answer).
+pub fn result_json(result: &SimResult, end: &MissionEnd) -> serde_json::Value {
+    let mut v = json!({
+        "status": end.word(),
         "stop_cause": stop_cause(result),
         "stops": result.stats.stops,
         "full_sweeps": result.stats.full_sweeps,
@@ -214,12 +209,48 @@ pub fn result_json(result: &SimResult) -> serde_json::Value {
         "sim_time_s": round3(result.sim_time_s),
         "min_clearance_m": round3(result.min_clearance_m),
         "controller_overruns": result.stats.controller_overruns,
-    })
+    });
+    if let (Some(why), Some(obj)) = (end.why(), v.as_object_mut()) {
+        obj.insert("why".into(), why.into());
+    }
+    v
+}
+
+/// How the simulated mission ended, for its word and sentence (crate::answer).
+pub fn mission_end<'a>(args: &Args, setup: &SimSetup, result: &'a SimResult) -> MissionEnd<'a> {
+    let pose = result.trajectory.last().map_or(
+        Pose::new(setup.params.start.x_m, setup.params.start.y_m, 0.0),
+        |r| r.pose,
+    );
+    let at = PointM::new(pose.x_m, pose.y_m);
+    let config = sim::mission_config(setup);
+    let plan_positions: Vec<PointM> = result
+        .plans
+        .iter()
+        .map(|s| PointM::new(s.pose.x_m, s.pose.y_m))
+        .collect();
+    MissionEnd {
+        status: result.status.name(),
+        unreachable: result.stats.unreachable_reason,
+        device: twil_core::failsafe::StopCause::None,
+        interrupted: result.status == sim::SimStatus::Aborted,
+        at,
+        goal: setup.params.goal,
+        radius_m: setup.params.robot_radius_m,
+        plans_here: crate::answer::plans_here(&plan_positions, at, config.stall_distance_m),
+        stall_distance_m: config.stall_distance_m,
+        clearance_m: result.min_clearance_m,
+        real: Some(crate::answer::file_name(&args.real)),
+        time_limit_s: setup.time_limit_s,
+        plan_error: None,
+        // A plan that found no start leaves no path (the mission clears it).
+        no_start: result.plans.last().is_some_and(|p| p.path.is_empty()),
+    }
 }
 
 /// `summary.json`: the `--json` object plus details.
 pub fn summary_json(args: &Args, setup: &SimSetup, result: &SimResult) -> serde_json::Value {
-    let mut v = result_json(result);
+    let mut v = result_json(result, &mission_end(args, setup, result));
     let stats: &MissionStats = &result.stats;
     let extra = json!({
         "mode": match setup.mode { MissionMode::Stop => "stop", MissionMode::Continuous => "continuous" },
@@ -299,11 +330,17 @@ impl sim::Progress for Bar {
 
 /// Run `twil simulate`.
 pub fn run(args: Args) -> Result<crate::exit::Ending> {
-    let setup = setup_from_args(&args)?;
+    let setup = match setup_from_args(&args) {
+        Ok(setup) => setup,
+        Err(e) => match e.downcast_ref::<crate::answer::OffMap>() {
+            Some(off) => return Ok(sim::start::answer_off_map(off, args.json)),
+            None => return Err(e),
+        },
+    };
     let robot = sim::mission_config(&setup).robot;
     if let Some(blocked) = sim::start::start_blocked(&robot, setup.params.start, &setup.real) {
         if args.json {
-            println!("{}", blocked.json());
+            println!("{}", blocked.json(&args.real));
         } else {
             println!("{}", blocked.words(&args.real));
         }
@@ -344,13 +381,15 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
+    let end = mission_end(&args, &setup, &result);
     if args.json {
-        println!("{}", result_json(&result));
+        println!("{}", result_json(&result, &end));
     } else {
         let s = &result.stats;
         println!(
-            "{}: {:.2} m travelled in {:.1} s simulated; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {:.3} m; stop cause: {}",
-            result.status.name(),
+            "{}: {}{:.2} m travelled in {:.1} s simulated; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {:.3} m; stop cause: {}",
+            end.word(),
+            end.why().map_or(String::new(), |why| format!("{why}; ")),
             result.distance_m,
             result.sim_time_s,
             s.stops,
@@ -374,7 +413,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         eprintln!("twil: interrupted (Ctrl-C): the simulation was stopped");
         return Ok(crate::exit::Ending::Interrupted);
     }
-    Ok(crate::exit::Ending::of_mission_status(result.status.name()))
+    Ok(crate::exit::Ending::of_mission_status(end.word()))
 }
 
 /// Set by Ctrl-C while a recorded or live simulation runs: the mission stops at the next tick
@@ -409,11 +448,12 @@ fn run_recorded(
     let run = sim::run_observed(setup, progress, &mut observer);
     let mut recorder = observer.into_recorder();
     if let Ok(result) = &run {
-        // The end as the run saw it (a collision is no mission status).
+        // The end as the run saw it (a collision is no mission status), in the word of the
+        // summary line (crate::answer: `gave_up`, `goal_blocked`, …).
         recorder.status(StatusMessage {
             t_s: result.sim_time_s,
             phase: "done".into(),
-            status: result.status.name().into(),
+            status: mission_end(args, setup, result).word().into(),
             event: "end of run".into(),
             plans: result.stats.plans,
             stops: result.stats.stops,

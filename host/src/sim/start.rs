@@ -1,8 +1,9 @@
 //! A mission whose start puts the robot's body inside an obstacle of the real world gets the
 //! same answer from every command: `start_blocked`, exit status 3, as `twil plan` says of a
-//! start inside a grown obstacle (issue 26). Nothing runs: before this check `twil simulate`
-//! reported a `collision` after 0.00 m and `twil mission --remote sim` printed `unreachable`
-//! and exited 4.
+//! start inside a grown obstacle (issue 26), with the sentence of crate::answer; a start or
+//! goal off the map likewise gets `out_of_bounds` ([`answer_off_map`]), where it used to be
+//! an error (exit 1). Nothing runs: before this check `twil simulate` reported a `collision`
+//! after 0.00 m and `twil mission --remote sim` printed `unreachable` and exited 4.
 
 use std::path::Path;
 
@@ -40,29 +41,54 @@ pub fn start_blocked(robot: &RobotConfig, start: PointM, real: &Obstacles) -> Op
 }
 
 impl StartBlocked {
-    /// The summary line: the status word first, as every mission's line.
-    pub fn words(&self, real: &Path) -> String {
-        let name = real
-            .file_name()
-            .unwrap_or(real.as_os_str())
-            .to_string_lossy();
+    /// The sentence that says why (crate::answer: `the start (X, Y) lies in an obstacle …`).
+    pub fn why(&self, real: &Path) -> String {
         format!(
-            "start_blocked: the robot's body at the start ({:.2}, {:.2}) overlaps an obstacle of \
-             {name} (clearance {:.3} m); nothing ran",
-            self.start.x_m, self.start.y_m, self.clearance_m
+            "the start {} lies in an obstacle of {}: the robot's body overlaps it by {:.3} m; \
+             nothing ran",
+            crate::answer::at(self.start),
+            crate::answer::file_name(real),
+            -self.clearance_m
         )
     }
 
+    /// The summary line: the status word first, as every mission's line.
+    pub fn words(&self, real: &Path) -> String {
+        format!("start_blocked: {}", self.why(real))
+    }
+
     /// The `--json` line.
-    pub fn json(&self) -> serde_json::Value {
+    pub fn json(&self, real: &Path) -> serde_json::Value {
         json!({
             "status": "start_blocked",
             // Every end says why (crate::stop_cause); here nothing ran.
             "stop_cause": "start_blocked",
             "distance_m": 0.0,
             "min_clearance_m": ((self.clearance_m as f64) * 1000.0).round() / 1000.0,
+            "why": self.why(real),
         })
     }
+}
+
+/// A start or goal off the map, the answer of `twil simulate` and `twil mission`:
+/// `out_of_bounds`, exit status 3, nothing ran (as `twil plan` says `out_of_bounds`). Prints
+/// the summary line or the `--json` line and returns the ending.
+pub fn answer_off_map(off: &crate::answer::OffMap, as_json: bool) -> crate::exit::Ending {
+    let why = format!("{}, as {} gives it; nothing ran", off.why(), off.params);
+    if as_json {
+        println!(
+            "{}",
+            json!({
+                "status": "out_of_bounds",
+                "stop_cause": "out_of_bounds",
+                "distance_m": 0.0,
+                "why": why,
+            })
+        );
+    } else {
+        println!("out_of_bounds: {why}");
+    }
+    crate::exit::Ending::NoPath
 }
 
 #[cfg(test)]
@@ -89,13 +115,15 @@ mod tests {
         assert_eq!(start_blocked(&robot, PointM::new(1.5, 1.5), &block), None);
         let over = start_blocked(&robot, PointM::new(0.8, 1.5), &block).unwrap();
         assert!((over.clearance_m + 0.1).abs() < 1e-4, "{over:?}");
+        let b = Path::new("worlds/b.da");
         assert_eq!(
-            over.words(Path::new("worlds/b.da")),
-            "start_blocked: the robot's body at the start (0.80, 1.50) overlaps an obstacle of \
-             b.da (clearance -0.100 m); nothing ran"
+            over.words(b),
+            "start_blocked: the start (0.80, 1.50) lies in an obstacle of b.da: the robot's \
+             body overlaps it by 0.100 m; nothing ran"
         );
-        assert_eq!(over.json()["status"], "start_blocked");
-        assert_eq!(over.json()["min_clearance_m"], -0.1);
+        assert_eq!(over.json(b)["status"], "start_blocked");
+        assert_eq!(over.json(b)["min_clearance_m"], -0.1);
+        assert_eq!(over.json(b)["why"], over.why(b));
         assert_eq!(start_blocked(&robot, PointM::new(0.5, 1.5), &block), None);
     }
 }

@@ -37,11 +37,14 @@ pub(crate) struct Follower {
     start: PointM,
     /// Within this of the last standing sweep a sweep is the same stop (the device's
     /// `MissionConfig::stall_distance_m`).
-    same_stop_m: f32,
+    pub(super) same_stop_m: f32,
     pub(super) sweep: u32,
     pub(super) hits: Vec<PointM>,
     pub(super) plan: Option<PlanRecord>,
     pub(super) plans: u32,
+    /// Where the robot was when each plan's report arrived (a stall's sentence counts the
+    /// plans from the place where the mission gave up: `crate::answer`).
+    pub(super) plan_positions: Vec<PointM>,
     pub(super) plan_snapshots: Vec<Snapshot>,
     pub(super) frames: Vec<Snapshot>,
     pub(super) next_frame_s: f32,
@@ -94,6 +97,7 @@ impl Follower {
             hits: Vec::new(),
             plan: None,
             plans: 0,
+            plan_positions: Vec::new(),
             plan_snapshots: Vec::new(),
             frames: Vec::new(),
             next_frame_s: 0.0,
@@ -309,6 +313,8 @@ impl Follower {
                 self.picture_plan(true);
                 self.explain_plan(t_ms, status);
                 self.plans = self.plans.max(plan);
+                let here = self.pose();
+                self.plan_positions.push(PointM::new(here.x_m, here.y_m));
                 self.plan = Some(PlanRecord {
                     number: plan,
                     t_ms,

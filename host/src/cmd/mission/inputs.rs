@@ -80,17 +80,8 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
             args.link_timeout_ms
         );
     }
-    for (which, p) in [("start", params.start), ("goal", params.goal)] {
-        if geometry.cell_of(p).is_err() {
-            bail!(
-                "{}: the {which} ({}, {}) lies off the {} m map",
-                args.params.display(),
-                p.x_m,
-                p.y_m,
-                args.size
-            );
-        }
-    }
+    // `run` answers `out_of_bounds` (crate::answer).
+    crate::answer::OffMap::check(&args.params, &args.size, &geometry, &params)?;
     Ok(Inputs {
         params,
         known,

@@ -209,12 +209,18 @@ fn check_real(args: &Args, build: Build) -> Result<()> {
 
 /// Run `twil mission`.
 pub fn run(args: Args) -> Result<crate::exit::Ending> {
-    let inputs = read_inputs(&args)?;
+    let inputs = match read_inputs(&args) {
+        Ok(inputs) => inputs,
+        Err(e) => match e.downcast_ref::<crate::answer::OffMap>() {
+            Some(off) => return Ok(crate::sim::start::answer_off_map(off, args.json)),
+            None => return Err(e),
+        },
+    };
     if let (Some(real), Some(path)) = (&inputs.real, &args.real) {
         let start = inputs.params.start;
         if let Some(blocked) = crate::sim::start::start_blocked(&inputs.robot, start, real) {
             if args.json {
-                println!("{}", blocked.json());
+                println!("{}", blocked.json(path));
             } else {
                 println!("{}", blocked.words(path));
             }
@@ -305,13 +311,35 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         .finished
         .ok_or_else(|| anyhow!("the mission ended without a report"))?;
 
-    let min_clearance_m = inputs.real.as_ref().map(|real| {
-        follower
+    let clearances: Vec<f32> = match &inputs.real {
+        Some(real) => follower
             .trajectory
             .iter()
             .map(|row| Plant::new(&inputs.robot, row.pose).clearance_m(real))
-            .fold(f32::INFINITY, f32::min)
-    });
+            .collect(),
+        None => Vec::new(),
+    };
+    let min_clearance_m = inputs
+        .real
+        .as_ref()
+        .map(|_| clearances.iter().copied().fold(f32::INFINITY, f32::min));
+    // Where the mission ended: at the first contact for a collision, else the last pose.
+    let end_pose = clearances
+        .iter()
+        .position(|c| *c < 0.0)
+        .and_then(|i| follower.trajectory.get(i))
+        .map_or(follower.pose(), |row| row.pose);
+    let at = PointM::new(end_pose.x_m, end_pose.y_m);
+    let place = EndPlace {
+        at,
+        plans_here: crate::answer::plans_here(&follower.plan_positions, at, follower.same_stop_m),
+        stall_distance_m: follower.same_stop_m,
+        goal: inputs.params.goal,
+        radius_m: inputs.params.robot_radius_m,
+        time_limit_s: args.time_limit_s(),
+        real: args.real.as_deref().map(crate::answer::file_name),
+        last_plan: follower.reasons.status(),
+    };
     let outcome = Outcome {
         report,
         info,
@@ -320,6 +348,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         poses: follower.poses.len(),
         interrupted,
         link,
+        place,
     };
     if let Some(dir) = &args.out {
         write_outputs(dir, &args, &inputs, &outcome, follower)?;
@@ -329,8 +358,11 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     } else {
         let s = &report.stats;
         println!(
-            "{}: {:.2} m travelled in {:.1} s of mission time; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {}; stop cause: {}",
+            "{}: {}{:.2} m travelled in {:.1} s of mission time; {} stops ({} full sweeps, {} moving sweeps), {} plans, min clearance {}; stop cause: {}",
             report::status_word(&outcome),
+            report::mission_end(&outcome)
+                .why()
+                .map_or(String::new(), |why| format!("{why}; ")),
             outcome.distance_m,
             s.time_s,
             s.stops,

@@ -24,12 +24,35 @@ pub struct Outcome {
     pub interrupted: bool,
     /// What the link lost and repaired (`summary.json`).
     pub link: crate::cmd::mission_link::LinkReport,
+    /// Where and how the mission ended, for the sentence that says why (crate::answer).
+    pub place: EndPlace,
+}
+
+/// Where the mission ended and what its sentence needs (crate::answer::MissionEnd).
+#[derive(Clone, Debug, Default)]
+pub struct EndPlace {
+    /// The last pose reported, or the first in contact with the real world.
+    pub at: PointM,
+    /// Plans in a row whose reports arrived within `stall_distance_m` of `at`.
+    pub plans_here: u32,
+    /// The device's stall distance, metres.
+    pub stall_distance_m: f32,
+    /// The goal.
+    pub goal: PointM,
+    /// The planning radius, metres.
+    pub radius_m: f32,
+    /// The mission's time limit, seconds.
+    pub time_limit_s: f32,
+    /// The real world's file name (simulated devices).
+    pub real: Option<String>,
+    /// The planner's verdict on the last plan reported.
+    pub last_plan: Option<twil_core::plan::PlanStatus>,
 }
 
 /// The `--json` object: the keys of `twil simulate --json` plus `mcu`.
 pub fn result_json(outcome: &Outcome) -> serde_json::Value {
     let s = &outcome.report.stats;
-    json!({
+    let mut v = json!({
         "status": status_word(outcome),
         "stop_cause": stop_cause(outcome),
         "stops": s.stops,
@@ -40,27 +63,57 @@ pub fn result_json(outcome: &Outcome) -> serde_json::Value {
         "min_clearance_m": outcome.min_clearance_m.map(round3),
         "controller_overruns": s.controller_overruns,
         "mcu": mcu_json(outcome),
-    })
+    });
+    if let (Some(why), Some(obj)) = (mission_end(outcome).why(), v.as_object_mut()) {
+        obj.insert("why".into(), why.into());
+    }
+    v
+}
+
+/// How the mission ended, for its word and sentence (crate::answer).
+pub fn mission_end(outcome: &Outcome) -> crate::answer::MissionEnd<'static> {
+    let p = &outcome.place;
+    let s = &outcome.report.stats;
+    let collided = outcome.min_clearance_m.is_some_and(|c| c < 0.0);
+    crate::answer::MissionEnd {
+        // A contact with the real world is a `collision` whatever the device reports, as the
+        // exit status says (4).
+        status: if collided {
+            "collision"
+        } else {
+            outcome.report.status.as_str()
+        },
+        unreachable: s.unreachable_reason,
+        device: outcome.report.stop_cause,
+        interrupted: outcome.interrupted,
+        at: p.at,
+        goal: p.goal,
+        radius_m: p.radius_m,
+        plans_here: p.plans_here,
+        stall_distance_m: p.stall_distance_m,
+        clearance_m: outcome.min_clearance_m.unwrap_or(0.0),
+        real: p.real.clone(),
+        time_limit_s: p.time_limit_s,
+        plan_error: s.last_plan_error.map(|e| format!("{e:?}")),
+        no_start: p.last_plan == Some(twil_core::plan::PlanStatus::StartBlocked),
+    }
 }
 
 /// Why the mission ended, one word on every end ([`crate::stop_cause`]).
 pub fn stop_cause(outcome: &Outcome) -> &'static str {
     crate::stop_cause::name(
-        status_word(outcome),
+        mission_end(outcome).status,
         outcome.report.stats.unreachable_reason,
         outcome.report.stop_cause,
         outcome.interrupted,
     )
 }
 
-/// The mission's status word: the device's, except that a contact with the real world
-/// (`--real`) is a `collision` whatever the device reports, as the exit status says (4).
+/// The mission's status word (crate::answer): the device's status made precise by its
+/// reason and stop cause (`gave_up`, `goal_blocked`), except that a contact with the real
+/// world (`--real`) is a `collision` whatever the device reports, as the exit status says (4).
 pub fn status_word(outcome: &Outcome) -> &'static str {
-    if outcome.min_clearance_m.is_some_and(|c| c < 0.0) {
-        "collision"
-    } else {
-        outcome.report.status.as_str()
-    }
+    mission_end(outcome).word()
 }
 
 /// The firmware's measurements, or `null` when the device is the in-process one
@@ -226,6 +279,7 @@ mod tests {
             poses: 3,
             interrupted: false,
             link: Default::default(),
+            place: Default::default(),
         }
     }
 
