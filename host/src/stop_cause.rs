@@ -5,7 +5,8 @@
 //!
 //! A stop from outside the mission's own logic (the device's failsafes, the host's abort,
 //! Ctrl-C) names that cause; otherwise the end is the mission's status, with an
-//! `unreachable` that came from too many plans without progress said as `gave_up`.
+//! `unreachable` that came from too many plans without progress, or from gap visits that
+//! settled nothing (`--evidence-map`, docs/mapping.md), said as `gave_up`: neither is a proof.
 
 use twil_core::failsafe::StopCause;
 use twil_core::mission::UnreachableReason;
@@ -34,7 +35,14 @@ pub fn name(
         "reached" => "reached",
         "collision" => "collision",
         "timeout" => "timeout",
-        "unreachable" if unreachable == Some(UnreachableReason::NoProgress) => "gave_up",
+        "unreachable"
+            if matches!(
+                unreachable,
+                Some(UnreachableReason::NoProgress | UnreachableReason::GapsUnsettled)
+            ) =>
+        {
+            "gave_up"
+        }
         "unreachable" => "unreachable",
         _ => "aborted",
     }
@@ -55,6 +63,24 @@ mod tests {
                 false
             ),
             "gave_up"
+        );
+        assert_eq!(
+            name(
+                "unreachable",
+                Some(UnreachableReason::GapsUnsettled),
+                StopCause::None,
+                false
+            ),
+            "gave_up"
+        );
+        assert_eq!(
+            name(
+                "unreachable",
+                Some(UnreachableReason::ConfirmedCut),
+                StopCause::None,
+                false
+            ),
+            "unreachable"
         );
         assert_eq!(
             name(
