@@ -206,6 +206,9 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 self.mark_vouched_free(sweep.full);
             }
             self.apply_take_backs();
+            if sweep.full && !sweep.moving {
+                self.confirm_visited_gap();
+            }
             if sweep.full && !sweep.moving && SUSPECTS {
                 self.mark_suspects();
             }

@@ -20,7 +20,11 @@
 //!    hears the room beyond, the jambs' run of constant depth puts its reflector on the jamb,
 //!    and the Thales rule (`swept`) vouches for the gap's cells, taking their tentative marks
 //!    back (active perception: Leonard & Durrant-Whyte's several viewpoints).
-//! 3. **Bounded.** After [`MAX_GAP_VISITS`] visits the mission ends
+//! 3. **Confirmed by the visit.** What that sweep leaves of the marks within reach of the gap
+//!    (it takes back, by the Thales rule, what it vouches for) is confirmed: looked at again
+//!    from where the beam fits, it stayed. So the next proof plan looks for another gap, and a
+//!    goal behind walls ends, after a few visits, in a proof.
+//! 4. **Bounded.** After [`MAX_GAP_VISITS`] visits the mission ends
 //!    [`UnreachableReason::GapsUnsettled`] (`gave_up` on the host), which is not a proof.
 //!
 //! Cost: a redraw is one pass over the map plus a `(2e + 1)²` square per occupied cell (e:
@@ -37,16 +41,31 @@ use super::messages::push;
 use super::{Mission, MissionEvent, MissionOutput, MissionStatus, UnreachableReason};
 
 /// Gap visits per mission before it gives up ([`UnreachableReason::GapsUnsettled`]).
-pub const MAX_GAP_VISITS: u16 = 6;
+pub const MAX_GAP_VISITS: u16 = 10;
 
-/// A visit under way: where the robot goes to sweep again.
+/// A visit under way: where the robot goes to sweep again, and the gap it looks at.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct GapVisit {
     /// The stand-off point, world metres.
     pub target: PointM,
+    /// The middle of the blocked stretch, world metres.
+    pub gap: PointM,
+    /// Half the blocked stretch's length plus the expansion: the marks that close it lie
+    /// within this of `gap`, metres.
+    pub reach_m: f32,
 }
 
 impl<const W: usize, const E: usize> Mission<W, E> {
+    /// The stand-off point of the gap visit under way, if any (for pictures and logs).
+    pub fn gap_visit_target(&self) -> Option<PointM> {
+        self.visit.map(|v| v.target)
+    }
+
+    /// Gap visits begun so far (at most [`MAX_GAP_VISITS`]).
+    pub fn gap_visits(&self) -> u16 {
+        self.gap_visits
+    }
+
     /// The point plans go to: the stand-off point of a visit under way, else the goal.
     pub(super) fn plan_goal(&self) -> PointM {
         self.visit.map_or(self.config.goal, |v| v.target)
@@ -108,7 +127,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.gap_visits += 1;
         let robot = self.config.robot;
         let res_m = self.grid.geometry().resolution_m();
-        let Some((gap, dir)) = first_blocked_stretch(&self.grid, &self.path) else {
+        let Some((gap, dir, length_m)) = first_blocked_stretch(&self.grid, &self.path) else {
             // The confirmed path is clear on the full map too (marks changed meanwhile):
             // sweep all round here and plan again.
             push(out, MissionEvent::FullSweepRequested);
@@ -129,13 +148,16 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             // No free point on the line: the last free path point before the gap.
             self.position_world()
         });
-        let here = self.position_world();
-        if hypot(here.x_m - target.x_m, here.y_m - target.y_m) <= self.config.goal_tolerance_m {
-            push(out, MissionEvent::FullSweepRequested);
-            self.begin_standing_sweep(true, out);
+        let reach_m = (0.5 * length_m).min(robot.planning_radius_m) + robot.planning_radius_m;
+        self.visit = Some(GapVisit {
+            target,
+            gap,
+            reach_m,
+        });
+        if self.at_visit_target() {
+            self.end_visit(out);
             return;
         }
-        self.visit = Some(GapVisit { target });
         // A new target: plans from here are not stalled ones.
         self.last_plan_origin = None;
         self.plan_and_go(false, out);
@@ -150,9 +172,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         })
     }
 
-    /// The visit is done: sweep all round, standing.
+    /// The visit is done: sweep all round, standing; what that sweep leaves of the gap's
+    /// marks is confirmed ([`Self::confirm_visited_gap`]).
     pub(super) fn end_visit(&mut self, out: &mut MissionOutput) {
-        self.visit = None;
+        self.visited = self.visit.take();
         if let Some(pending) = &mut self.pending_plan {
             pending.cancelled = true;
         }
@@ -161,9 +184,41 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     }
 }
 
-/// The first stretch of `path` whose cells are occupied on `grid`: its middle and the unit
-/// direction of the path across it (world metres), or `None` when the path is clear.
-fn first_blocked_stretch<const W: usize>(grid: &Grid<W>, path: &[PointM]) -> Option<(PointM, PointM)> {
+impl<const W: usize, const E: usize> Mission<W, E> {
+    /// After the full sweep of a visit (marked, and its vouched space taken back): the
+    /// tentative marks still within reach of the gap are confirmed. The robot looked from
+    /// where the beam fits through a gap the robot could use, and they stayed: a second
+    /// viewpoint (Leonard & Durrant-Whyte), and the next proof plan must look elsewhere.
+    pub(super) fn confirm_visited_gap(&mut self) {
+        let Some(visit) = self.visited.take() else {
+            return;
+        };
+        let g = *self.grid.geometry();
+        let Some((cx, cy)) = g.cell_xy_of(visit.gap) else {
+            return;
+        };
+        let res_m = g.resolution_m();
+        let h = (visit.reach_m / res_m) as i32 + 1;
+        for y in cy - h..=cy + h {
+            for x in cx - h..=cx + h {
+                let (dx, dy) = ((x - cx) as f32 * res_m, (y - cy) as f32 * res_m);
+                if hypot(dx, dy) <= visit.reach_m
+                    && self.evidence.get_xy(x, y) == CellEvidence::Tentative
+                {
+                    self.evidence.observe_occupied_xy(x, y);
+                }
+            }
+        }
+    }
+}
+
+/// The first stretch of `path` whose cells are occupied on `grid`: its middle, the unit
+/// direction of the path across it (world metres) and its length (metres), or `None` when the
+/// path is clear.
+fn first_blocked_stretch<const W: usize>(
+    grid: &Grid<W>,
+    path: &[PointM],
+) -> Option<(PointM, PointM, f32)> {
     let g = grid.geometry();
     let mut first: Option<(i32, i32)> = None;
     let mut last: Option<(i32, i32)> = None;
@@ -200,7 +255,11 @@ fn first_blocked_stretch<const W: usize>(grid: &Grid<W>, path: &[PointM]) -> Opt
     } else {
         segment_dir
     };
-    Some((PointM::new(0.5 * (p.x_m + q.x_m), 0.5 * (p.y_m + q.y_m)), dir))
+    Some((
+        PointM::new(0.5 * (p.x_m + q.x_m), 0.5 * (p.y_m + q.y_m)),
+        dir,
+        len_m,
+    ))
 }
 
 /// A free cell's centre on the line from `gap` back along `-dir`, `stand_off_m` away or,
@@ -252,7 +311,8 @@ mod tests {
     fn the_gap_is_the_first_blocked_stretch_and_the_stand_off_faces_it() {
         let g = wall_with_marks_across_a_doorway();
         let path = [PointM::new(2.5, 0.5), PointM::new(2.5, 4.5)];
-        let (gap, dir) = first_blocked_stretch(&g, &path).expect("blocked");
+        let (gap, dir, length_m) = first_blocked_stretch(&g, &path).expect("blocked");
+        assert!((length_m - 0.2).abs() < 0.06, "{length_m}");
         assert!((gap.x_m - 2.525).abs() < 0.03 && (gap.y_m - 2.525).abs() < 0.03, "{gap:?}");
         assert!((dir.y_m - 1.0).abs() < 1.0e-3, "{dir:?}");
         let s = stand_off_point(&g, gap, dir, 1.5).expect("free");
