@@ -20,7 +20,7 @@
 //!    hears the room beyond, the jambs' run of constant depth puts its reflector on the jamb,
 //!    and the Thales rule (`swept`) vouches for the gap's cells, taking their tentative marks
 //!    back (active perception: Leonard & Durrant-Whyte's several viewpoints).
-//! 3. **Confirmed by the visit.** What that sweep leaves of the marks within reach of the gap
+//! 3. **Confirmed by the visit.** What that sweep leaves of the marks that close the stretch
 //!    (it takes back, by the Thales rule, what it vouches for) is confirmed: looked at again
 //!    from where the beam fits, it stayed. So the next proof plan looks for another gap, and a
 //!    goal behind walls ends, after a few visits, in a proof.
@@ -48,11 +48,9 @@ pub const MAX_GAP_VISITS: u16 = 10;
 pub(super) struct GapVisit {
     /// The stand-off point, world metres.
     pub target: PointM,
-    /// The middle of the blocked stretch, world metres.
-    pub gap: PointM,
-    /// Half the blocked stretch's length plus the expansion: the marks that close it lie
-    /// within this of `gap`, metres.
-    pub reach_m: f32,
+    /// The first and the last blocked cell of the stretch the confirmed path crosses
+    /// (`x`, `y`): the marks that close it are those within the expansion of its cells.
+    pub stretch: [(i32, i32); 2],
 }
 
 impl<const W: usize, const E: usize> Mission<W, E> {
@@ -127,7 +125,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.gap_visits += 1;
         let robot = self.config.robot;
         let res_m = self.grid.geometry().resolution_m();
-        let Some((gap, dir, length_m)) = first_blocked_stretch(&self.grid, &self.path) else {
+        let Some((gap, dir, stretch)) = first_blocked_stretch(&self.grid, &self.path) else {
             // The confirmed path is clear on the full map too (marks changed meanwhile):
             // sweep all round here and plan again.
             push(out, MissionEvent::FullSweepRequested);
@@ -148,12 +146,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             // No free point on the line: the last free path point before the gap.
             self.position_world()
         });
-        let reach_m = (0.5 * length_m).min(robot.planning_radius_m) + robot.planning_radius_m;
-        self.visit = Some(GapVisit {
-            target,
-            gap,
-            reach_m,
-        });
+        self.visit = Some(GapVisit { target, stretch });
         if self.at_visit_target() {
             self.end_visit(out);
             return;
@@ -186,26 +179,22 @@ impl<const W: usize, const E: usize> Mission<W, E> {
 
 impl<const W: usize, const E: usize> Mission<W, E> {
     /// After the full sweep of a visit (marked, and its vouched space taken back): the
-    /// tentative marks still within reach of the gap are confirmed. The robot looked from
-    /// where the beam fits through a gap the robot could use, and they stayed: a second
-    /// viewpoint (Leonard & Durrant-Whyte), and the next proof plan must look elsewhere.
+    /// tentative marks that still close the stretch (within the expansion of its cells) are
+    /// confirmed. The robot looked from where the beam fits through a gap the robot could
+    /// use, and they stayed: a second viewpoint (Leonard & Durrant-Whyte), and the next proof
+    /// plan must look elsewhere. Bounded: the stretch's cells times a `(2e + 1)²` square.
     pub(super) fn confirm_visited_gap(&mut self) {
         let Some(visit) = self.visited.take() else {
             return;
         };
-        let g = *self.grid.geometry();
-        let Some((cx, cy)) = g.cell_xy_of(visit.gap) else {
-            return;
-        };
-        let res_m = g.resolution_m();
-        let h = (visit.reach_m / res_m) as i32 + 1;
-        for y in cy - h..=cy + h {
-            for x in cx - h..=cx + h {
-                let (dx, dy) = ((x - cx) as f32 * res_m, (y - cy) as f32 * res_m);
-                if hypot(dx, dy) <= visit.reach_m
-                    && self.evidence.get_xy(x, y) == CellEvidence::Tentative
-                {
-                    self.evidence.observe_occupied_xy(x, y);
+        let e = self.expansion_cells as i32;
+        let [a, b] = visit.stretch;
+        for (sx, sy) in BresenhamLine::new(a, b) {
+            for y in sy - e..=sy + e {
+                for x in sx - e..=sx + e {
+                    if self.evidence.get_xy(x, y) == CellEvidence::Tentative {
+                        self.evidence.observe_occupied_xy(x, y);
+                    }
                 }
             }
         }
@@ -213,12 +202,12 @@ impl<const W: usize, const E: usize> Mission<W, E> {
 }
 
 /// The first stretch of `path` whose cells are occupied on `grid`: its middle, the unit
-/// direction of the path across it (world metres) and its length (metres), or `None` when the
-/// path is clear.
+/// direction of the path across it (world metres) and its first and last cells, or `None`
+/// when the path is clear.
 fn first_blocked_stretch<const W: usize>(
     grid: &Grid<W>,
     path: &[PointM],
-) -> Option<(PointM, PointM, f32)> {
+) -> Option<(PointM, PointM, [(i32, i32); 2])> {
     let g = grid.geometry();
     let mut first: Option<(i32, i32)> = None;
     let mut last: Option<(i32, i32)> = None;
@@ -258,7 +247,7 @@ fn first_blocked_stretch<const W: usize>(
     Some((
         PointM::new(0.5 * (p.x_m + q.x_m), 0.5 * (p.y_m + q.y_m)),
         dir,
-        len_m,
+        [f, l],
     ))
 }
 
@@ -311,8 +300,8 @@ mod tests {
     fn the_gap_is_the_first_blocked_stretch_and_the_stand_off_faces_it() {
         let g = wall_with_marks_across_a_doorway();
         let path = [PointM::new(2.5, 0.5), PointM::new(2.5, 4.5)];
-        let (gap, dir, length_m) = first_blocked_stretch(&g, &path).expect("blocked");
-        assert!((length_m - 0.2).abs() < 0.06, "{length_m}");
+        let (gap, dir, stretch) = first_blocked_stretch(&g, &path).expect("blocked");
+        assert_eq!(stretch, [(50, 48), (50, 52)]);
         assert!((gap.x_m - 2.525).abs() < 0.03 && (gap.y_m - 2.525).abs() < 0.03, "{gap:?}");
         assert!((dir.y_m - 1.0).abs() < 1.0e-3, "{dir:?}");
         let s = stand_off_point(&g, gap, dir, 1.5).expect("free");
