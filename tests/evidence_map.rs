@@ -54,7 +54,9 @@ fn outcome(r: &SimResult) -> Outcome {
     match r.status {
         SimStatus::Reached => Outcome::Reached,
         SimStatus::Unreachable => match r.stats.unreachable_reason {
-            Some(UnreachableReason::NoProgress) => Outcome::GaveUp,
+            Some(UnreachableReason::NoProgress | UnreachableReason::GapsUnsettled) => {
+                Outcome::GaveUp
+            }
             _ => Outcome::Unreachable,
         },
         SimStatus::Timeout => Outcome::GaveUp,
@@ -217,6 +219,86 @@ fn a_silent_wall_met_at_a_glancing_angle_is_hit_without_the_map_and_avoided_with
             with.min_clearance_m > 0.1,
             "{range} m with the map: clearance {} m",
             with.min_clearance_m
+        );
+    }
+}
+
+/// A 15 × 15 m room divided by a wall along y = 5 m with a 1 m doorway (x 6.5 to 7.5 m);
+/// start (5, 2) facing north, goal (8, 8): reachable only through the doorway, whose jambs a
+/// wide beam paints across it. Written to a temporary directory.
+fn doorway() -> (String, String) {
+    let dir = std::env::temp_dir().join(format!("twil-evidence-door-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temporary directory");
+    let da = dir.join("door.da");
+    let par = dir.join("door.par");
+    std::fs::write(
+        &da,
+        "2\n4\n0.0 4.925\n6.5 4.925\n6.5 5.075\n0.0 5.075\n\
+         4\n7.5 4.925\n15.0 4.925\n15.0 5.075\n7.5 5.075\n",
+    )
+    .expect("write door.da");
+    std::fs::write(&par, "0.4\n0.2\n90\n5.0 2.0\n8.0 8.0\n").expect("write door.par");
+    (da.display().to_string(), par.display().to_string())
+}
+
+#[test]
+fn a_doorway_the_map_cannot_settle_is_never_called_unreachable() {
+    // Main's evidence map ended every one of these `unreachable` ("no path on the map",
+    // tentative marks included). Now the verdict needs confirmed marks: the doorway is not
+    // found yet, so the mission gives up (or runs out of time) and says so, never touching a
+    // wall.
+    let (da, par) = doorway();
+    for (limit, range) in [("15", "1.5"), ("30", "3"), ("70", "6")] {
+        let r = simulate(
+            &da,
+            &par,
+            &[
+                "--incidence-limit",
+                limit,
+                "--sonar-range",
+                range,
+                "--evidence-map",
+            ],
+        );
+        let o = outcome(&r);
+        assert!(
+            matches!(o, Outcome::Reached | Outcome::GaveUp),
+            "{limit}° {range} m: {o:?} ({:?})",
+            r.stats.unreachable_reason
+        );
+        assert!(r.min_clearance_m > 0.1, "{limit}° {range} m: clearance {}", r.min_clearance_m);
+        if r.status == SimStatus::Unreachable {
+            assert_eq!(
+                r.stats.unreachable_reason,
+                Some(UnreachableReason::GapsUnsettled),
+                "{limit}° {range} m"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_walled_in_goal_is_not_reached_and_a_proof_names_confirmed_marks() {
+    // The goal (8, 8) inside a closed box: whatever the mission concludes, it never reaches
+    // it nor touches a wall, and an `unreachable` comes with a reason the evidence supports.
+    let dir = std::env::temp_dir().join(format!("twil-evidence-box-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temporary directory");
+    let da = dir.join("box.da");
+    let par = dir.join("box.par");
+    std::fs::write(&da, "1\n4\n6.5 6.5\n9.5 6.5\n9.5 9.5\n6.5 9.5\n").expect("write box.da");
+    std::fs::write(&par, "0.4\n0.2\n90\n5.0 2.0\n8.0 8.0\n").expect("write box.par");
+    let (da, par) = (da.display().to_string(), par.display().to_string());
+    let r = simulate(&da, &par, &["--incidence-limit", "70", "--evidence-map"]);
+    assert_ne!(r.status, SimStatus::Reached);
+    assert!(r.min_clearance_m > 0.0, "clearance {}", r.min_clearance_m);
+    if r.status == SimStatus::Unreachable {
+        assert!(
+            matches!(
+                r.stats.unreachable_reason,
+                Some(UnreachableReason::ConfirmedCut | UnreachableReason::GapsUnsettled)
+            ),
+            "{:?}",
+            r.stats.unreachable_reason
         );
     }
 }

@@ -84,7 +84,6 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             next_plan_id: 1,
             visit: None,
             gap_visits: 0,
-            visited: None,
         }
     };
 
@@ -169,7 +168,6 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.deferred_sweep_end = None;
         self.visit = None;
         self.gap_visits = 0;
-        self.visited = None;
         self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
         if config.evidence_map {
             self.assume_body_disc_clear();

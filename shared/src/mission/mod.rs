@@ -254,9 +254,6 @@ pub struct Mission<const W: usize, const E: usize = W> {
     visit: Option<verdict::GapVisit>,
     /// Evidence map: gap visits begun in this mission.
     gap_visits: u16,
-    /// Evidence map: the visit whose full sweep is under way (its gap's marks are confirmed
-    /// once the sweep is marked).
-    visited: Option<verdict::GapVisit>,
 }
 mod blind;
 mod config;

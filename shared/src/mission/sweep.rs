@@ -21,7 +21,6 @@ use super::{
 };
 
 const SUSPECTS: bool = false;
-const CONFIRM_VISITED_GAPS: bool = false;
 
 impl<const W: usize, const E: usize> Mission<W, E> {
     pub(super) fn start_sweep(&mut self, full: bool, moving: bool, out: &mut MissionOutput) {
@@ -207,9 +206,6 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 self.mark_vouched_free(sweep.full);
             }
             self.apply_take_backs();
-            if sweep.full && !sweep.moving && CONFIRM_VISITED_GAPS {
-                self.confirm_visited_gap();
-            }
             if sweep.full && !sweep.moving && SUSPECTS {
                 self.mark_suspects();
             }
