@@ -266,7 +266,11 @@ fn a_doorway_the_map_cannot_settle_is_never_called_unreachable() {
             "{limit}° {range} m: {o:?} ({:?})",
             r.stats.unreachable_reason
         );
-        assert!(r.min_clearance_m > 0.1, "{limit}° {range} m: clearance {}", r.min_clearance_m);
+        assert!(
+            r.min_clearance_m > 0.1,
+            "{limit}° {range} m: clearance {}",
+            r.min_clearance_m
+        );
         if r.status == SimStatus::Unreachable {
             assert_eq!(
                 r.stats.unreachable_reason,

@@ -160,10 +160,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             // runs along an oblique wall, 1.8° apart, fall in one cell at short range, and
             // used to confirm their own ghost in free space in front of a doorway).
             let cell = g.cell_xy_on_map(p);
-            let seen_this_sweep = self
-                .hits
-                .iter()
-                .any(|q| g.cell_xy_on_map(*q) == cell);
+            let seen_this_sweep = self.hits.iter().any(|q| g.cell_xy_on_map(*q) == cell);
             if let (Some((x, y)), false) = (cell, seen_this_sweep) {
                 if constant_depth {
                     self.evidence.observe_occupied_xy(x, y);

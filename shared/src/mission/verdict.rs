@@ -195,10 +195,8 @@ fn first_blocked_stretch<const W: usize>(
         for (x, y) in BresenhamLine::new(a, b) {
             if grid.is_occupied_xy(x, y) && g.contains_xy(x, y) {
                 if first.is_none() && len_m > 1.0e-6 {
-                    segment_dir = PointM::new(
-                        (w[1].x_m - w[0].x_m) / len_m,
-                        (w[1].y_m - w[0].y_m) / len_m,
-                    );
+                    segment_dir =
+                        PointM::new((w[1].x_m - w[0].x_m) / len_m, (w[1].y_m - w[0].y_m) / len_m);
                 }
                 first.get_or_insert((x, y));
                 last = Some((x, y));
@@ -209,9 +207,8 @@ fn first_blocked_stretch<const W: usize>(
     }
     let (f, l) = (first?, last?);
     let res_m = g.resolution_m();
-    let centre = |(x, y): (i32, i32)| {
-        PointM::new((x as f32 + 0.5) * res_m, (y as f32 + 0.5) * res_m)
-    };
+    let centre =
+        |(x, y): (i32, i32)| PointM::new((x as f32 + 0.5) * res_m, (y as f32 + 0.5) * res_m);
     let (p, q) = (centre(f), centre(l));
     let len_m = hypot(q.x_m - p.x_m, q.y_m - p.y_m);
     let dir = if len_m > 0.5 * res_m {
@@ -277,10 +274,16 @@ mod tests {
         let path = [PointM::new(2.5, 0.5), PointM::new(2.5, 4.5)];
         let (gap, dir, stretch) = first_blocked_stretch(&g, &path).expect("blocked");
         assert_eq!(stretch, [(50, 48), (50, 52)]);
-        assert!((gap.x_m - 2.525).abs() < 0.03 && (gap.y_m - 2.525).abs() < 0.03, "{gap:?}");
+        assert!(
+            (gap.x_m - 2.525).abs() < 0.03 && (gap.y_m - 2.525).abs() < 0.03,
+            "{gap:?}"
+        );
         assert!((dir.y_m - 1.0).abs() < 1.0e-3, "{dir:?}");
         let s = stand_off_point(&g, gap, dir, 1.5).expect("free");
-        assert!((s.y_m - 1.025).abs() < 0.03 && (s.x_m - 2.525).abs() < 0.03, "{s:?}");
+        assert!(
+            (s.y_m - 1.025).abs() < 0.03 && (s.x_m - 2.525).abs() < 0.03,
+            "{s:?}"
+        );
         // A clear path has no gap.
         let clear = [PointM::new(0.5, 0.5), PointM::new(4.5, 0.5)];
         assert!(first_blocked_stretch(&g, &clear).is_none());
@@ -300,6 +303,8 @@ mod tests {
         for y in 0..48 {
             g.set_xy(50, y, true);
         }
-        assert!(stand_off_point(&g, PointM::new(2.525, 2.525), PointM::new(0.0, 1.0), 1.5).is_none());
+        assert!(
+            stand_off_point(&g, PointM::new(2.525, 2.525), PointM::new(0.0, 1.0), 1.5).is_none()
+        );
     }
 }
