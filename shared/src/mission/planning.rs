@@ -186,7 +186,11 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             self.apply_plan(pending, result, out);
         }
         if let Some(sweep) = self.deferred_sweep_end.take() {
-            if self.status == MissionStatus::Running {
+            if self.pending_plan.is_some() {
+                // The result asked for another plan (the evidence map's verdicts): the grid
+                // is the planner's again until that one is back.
+                self.deferred_sweep_end = Some(sweep);
+            } else if self.status == MissionStatus::Running {
                 self.end_of_sweep(sweep, out);
             }
         }
