@@ -55,42 +55,16 @@ mod tests {
     #[test]
     fn every_end_has_a_word_and_an_outside_stop_wins() {
         assert_eq!(name("reached", None, StopCause::None, false), "reached");
-        assert_eq!(
-            name(
-                "unreachable",
-                Some(UnreachableReason::NoProgress),
-                StopCause::None,
-                false
-            ),
-            "gave_up"
-        );
-        assert_eq!(
-            name(
-                "unreachable",
-                Some(UnreachableReason::GapsUnsettled),
-                StopCause::None,
-                false
-            ),
-            "gave_up"
-        );
-        assert_eq!(
-            name(
-                "unreachable",
-                Some(UnreachableReason::ConfirmedCut),
-                StopCause::None,
-                false
-            ),
-            "unreachable"
-        );
-        assert_eq!(
-            name(
-                "unreachable",
-                Some(UnreachableReason::NoPath),
-                StopCause::None,
-                false
-            ),
-            "unreachable"
-        );
+        // An `unreachable` is a proof only when the map says so; the rest is giving up.
+        for (reason, word) in [
+            (UnreachableReason::NoProgress, "gave_up"),
+            (UnreachableReason::GapsUnsettled, "gave_up"),
+            (UnreachableReason::ConfirmedCut, "unreachable"),
+            (UnreachableReason::NoPath, "unreachable"),
+        ] {
+            let got = name("unreachable", Some(reason), StopCause::None, false);
+            assert_eq!(got, word, "{reason:?}");
+        }
         assert_eq!(
             name("aborted", None, StopCause::LinkLost, false),
             "link_lost"
