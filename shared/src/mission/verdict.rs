@@ -176,13 +176,16 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     }
 }
 
+/// The first and the last blocked cell of a stretch of a path (`x`, `y`).
+type Stretch = [(i32, i32); 2];
+
 /// The first stretch of `path` whose cells are occupied on `grid`: its middle, the unit
 /// direction of the path across it (world metres) and its first and last cells, or `None`
 /// when the path is clear.
 fn first_blocked_stretch<const W: usize>(
     grid: &Grid<W>,
     path: &[PointM],
-) -> Option<(PointM, PointM, [(i32, i32); 2])> {
+) -> Option<(PointM, PointM, Stretch)> {
     let g = grid.geometry();
     let mut first: Option<(i32, i32)> = None;
     let mut last: Option<(i32, i32)> = None;
