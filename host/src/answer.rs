@@ -249,7 +249,9 @@ impl MissionEnd<'_> {
             "reached" => None,
             "timeout" => Some(Situation::Timeout),
             "unreachable" => Some(match self.unreachable {
-                Some(UnreachableReason::NoProgress) => Situation::GaveUp,
+                Some(UnreachableReason::NoProgress | UnreachableReason::GapsUnsettled) => {
+                    Situation::GaveUp
+                }
                 Some(UnreachableReason::GoalBlocked) => Situation::GoalBlocked,
                 _ => Situation::Unreachable,
             }),
@@ -267,6 +269,14 @@ impl MissionEnd<'_> {
         let here = at(self.at);
         let to_goal_m = (self.goal.x_m - self.at.x_m).hypot(self.goal.y_m - self.at.y_m);
         Some(match self.situation()? {
+            Situation::GaveUp if self.unreachable == Some(UnreachableReason::GapsUnsettled) => {
+                format!(
+                    "gave up at {here} after {} plans: the gaps that tentative marks close were \
+                     visited and swept without settling whether the way is open \
+                     (--evidence-map; docs/mapping.md)",
+                    self.plans_here
+                )
+            }
             Situation::GaveUp if self.no_start => format!(
                 "gave up at {here} after {} plans from the same place: obstacles lie within the \
                  robot radius ({:.2} m) all round, so no plan could start there, even after a \

@@ -5,7 +5,8 @@
 //!
 //! A stop from outside the mission's own logic (the device's failsafes, the host's abort,
 //! Ctrl-C) names that cause; otherwise the end is the mission's status, with an
-//! `unreachable` that came from too many plans without progress said as `gave_up`, and one
+//! `unreachable` that came from too many plans without progress, or from gap visits that
+//! settled nothing (`--evidence-map`, docs/mapping.md), said as `gave_up` (neither is a proof), and one
 //! whose goal the sonar found inside an obstacle as `goal_blocked` (the status words of
 //! crate::answer).
 
@@ -36,7 +37,14 @@ pub fn name(
         "reached" => "reached",
         "collision" => "collision",
         "timeout" => "timeout",
-        "unreachable" if unreachable == Some(UnreachableReason::NoProgress) => "gave_up",
+        "unreachable"
+            if matches!(
+                unreachable,
+                Some(UnreachableReason::NoProgress | UnreachableReason::GapsUnsettled)
+            ) =>
+        {
+            "gave_up"
+        }
         "unreachable" if unreachable == Some(UnreachableReason::GoalBlocked) => "goal_blocked",
         "unreachable" => "unreachable",
         _ => "aborted",
@@ -50,24 +58,16 @@ mod tests {
     #[test]
     fn every_end_has_a_word_and_an_outside_stop_wins() {
         assert_eq!(name("reached", None, StopCause::None, false), "reached");
-        assert_eq!(
-            name(
-                "unreachable",
-                Some(UnreachableReason::NoProgress),
-                StopCause::None,
-                false
-            ),
-            "gave_up"
-        );
-        assert_eq!(
-            name(
-                "unreachable",
-                Some(UnreachableReason::NoPath),
-                StopCause::None,
-                false
-            ),
-            "unreachable"
-        );
+        // An `unreachable` is a proof only when the map says so; the rest is giving up.
+        for (reason, word) in [
+            (UnreachableReason::NoProgress, "gave_up"),
+            (UnreachableReason::GapsUnsettled, "gave_up"),
+            (UnreachableReason::ConfirmedCut, "unreachable"),
+            (UnreachableReason::NoPath, "unreachable"),
+        ] {
+            let got = name("unreachable", Some(reason), StopCause::None, false);
+            assert_eq!(got, word, "{reason:?}");
+        }
         assert_eq!(
             name("aborted", None, StopCause::LinkLost, false),
             "link_lost"

@@ -257,10 +257,12 @@ fn run_mission(words: &[String], reachable: bool) -> Result<Outcome> {
     let setup = simulate::setup_from_args(&cli.args)?;
     let result = sim::run(&setup, &mut NoProgress)?;
     let status = result.status.name().to_string();
+    // `gave_up` is a stop cause (an `unreachable` without a proof), not a status.
+    let cause = simulate::stop_cause(&result);
     let class = if result.min_clearance_m < 0.0 || status == "collision" {
         Class::Collision
     } else {
-        match (status.as_str(), reachable) {
+        match (cause, reachable) {
             ("reached", true) => Class::Reached,
             ("unreachable", true) => Class::FalseUnreachable,
             ("unreachable", false) => Class::TrueUnreachable,

@@ -19,8 +19,10 @@
 //!
 //! Transitions: a reflector moves unknown/free → tentative → confirmed (saturates); free
 //! evidence moves unknown → free and takes a tentative mark back (tentative → free); a confirmed
-//! mark is never taken back (a specular wall crossed obliquely by a later beam is silent, so
-//! free evidence through it proves nothing about it). A suspect ([`EvidenceMap::suspect_xy`])
+//! mark is never taken back by it (a specular wall crossed obliquely by a later beam is silent,
+//! so a ray's free evidence through it proves nothing about it). A cell a standing sweep
+//! vouches for by the Thales rule ([`EvidenceMap::observe_vouched_xy`]) steps down one state
+//! instead: confirmed → tentative → free (a wall through it would have echoed). A suspect ([`EvidenceMap::suspect_xy`])
 //! only turns unknown into tentative.
 //!
 //! Memory: `2 × W` words, 22 500 B at 300 × 300 (the 1-bit "seen" grid it replaces was half
@@ -191,6 +193,15 @@ impl<const W: usize, const E: usize> EvidenceMap<W, E> {
         change
     }
 
+    /// A reflector that may lie elsewhere on its arc (not a region of constant depth):
+    /// unknown or free → tentative; a mark already there stays as it is (it never confirms).
+    pub fn observe_arc_xy(&mut self, x: i32, y: i32) -> Change {
+        match self.get_xy(x, y) {
+            CellEvidence::Unknown | CellEvidence::Free => self.observe_occupied_xy(x, y),
+            CellEvidence::Tentative | CellEvidence::Confirmed => Change::None,
+        }
+    }
+
     /// A ray crossed (`x`, `y`) before its echo: unknown → free, tentative → free (taken
     /// back); a confirmed mark stays.
     pub fn observe_free_xy(&mut self, x: i32, y: i32) -> Change {
@@ -208,6 +219,17 @@ impl<const W: usize, const E: usize> EvidenceMap<W, E> {
             }
             CellEvidence::Free | CellEvidence::Confirmed => Change::None,
         }
+    }
+
+    /// A standing sweep vouches for (`x`, `y`) by the Thales rule (`swept`): a wall through
+    /// the cell would have echoed, so every mark there is one step less sure (HIMM's −1):
+    /// confirmed → tentative, tentative → free (taken back), unknown → free.
+    pub fn observe_vouched_xy(&mut self, x: i32, y: i32) -> Change {
+        if self.get_xy(x, y) == CellEvidence::Confirmed {
+            self.set(x, y, CellEvidence::Tentative);
+            return Change::Evidence;
+        }
+        self.observe_free_xy(x, y)
     }
 
     /// A cell nobody vouched for beside the robot: unknown → tentative; anything else stays.
@@ -314,6 +336,29 @@ mod tests {
         // A reflector on free evidence is tentative again.
         assert_eq!(m.observe_occupied_xy(10, 0), Change::NowOccupied);
         assert_eq!(m.counts(), (25, 1, 1));
+    }
+
+    #[test]
+    fn an_arc_marks_but_never_confirms() {
+        let mut m = map();
+        assert_eq!(m.observe_arc_xy(7, 7), Change::NowOccupied);
+        assert_eq!(m.observe_arc_xy(7, 7), Change::None);
+        assert_eq!(m.get_xy(7, 7), CellEvidence::Tentative);
+        assert_eq!(m.observe_occupied_xy(7, 7), Change::Evidence);
+        assert_eq!(m.get_xy(7, 7), CellEvidence::Confirmed);
+    }
+
+    #[test]
+    fn vouching_steps_a_confirmed_mark_down_one_state_at_a_time() {
+        let mut m = map();
+        m.observe_occupied_xy(5, 5);
+        m.observe_occupied_xy(5, 5);
+        assert_eq!(m.observe_vouched_xy(5, 5), Change::Evidence);
+        assert_eq!(m.get_xy(5, 5), CellEvidence::Tentative);
+        assert_eq!(m.observe_vouched_xy(5, 5), Change::TakenBack);
+        assert_eq!(m.get_xy(5, 5), CellEvidence::Free);
+        assert_eq!(m.observe_vouched_xy(6, 5), Change::Evidence);
+        assert_eq!(m.get_xy(6, 5), CellEvidence::Free);
     }
 
     #[test]

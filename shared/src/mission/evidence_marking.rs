@@ -11,6 +11,11 @@
 //!   axis of echoing rays was free evidence). A vouched cell takes a tentative mark back.
 //! - **Silence** marks nothing: a smooth wall met at more than the incidence limit is silent
 //!   (Kuc & Siegel 1987), so silence is never proof that a cell is free for the body.
+//! - **One viewpoint, one step**: a sweep's reflectors move a cell at most once, so a mark is
+//!   confirmed only by two sweeps (two viewpoints).
+//! - **Only a region of constant depth confirms**: a run at least the beam's half-angle wide
+//!   and level within a cell. A shorter or sloping run (an oblique wall's arc) marks its
+//!   reflector tentative and never confirms it: its echo came from somewhere on the arc.
 //! - **A run of constant depth** (Leonard & Durrant-Whyte 1991) has one reflector: the point at
 //!   the run's middle bearing and mean depth (for a plane, the foot of the perpendicular; for a
 //!   corner, the corner), not the whole arc: a doorway's jambs are not painted across it.
@@ -117,6 +122,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         // and noise splits runs that one reflector made).
         let tolerance_m = robot.rcd_depth_tolerance_m.max(0.5 * g.resolution_m());
         let readings = self.readings.as_slice();
+        let beam_rad = robot.sonar_beam_half_angle_deg.max(0.0) * (core::f32::consts::PI / 180.0);
         let mut start = 0;
         while start < readings.len() {
             let Some(first_m) = readings[start].range_m else {
@@ -124,25 +130,43 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 continue;
             };
             let (mut end, mut sum_m, mut previous_m) = (start, first_m, first_m);
+            let (mut least_m, mut most_m) = (first_m, first_m);
             while let Some(next_m) = readings.get(end + 1).and_then(|r| r.range_m) {
                 if abs(next_m - previous_m) > tolerance_m {
                     break;
                 }
                 sum_m += next_m;
                 previous_m = next_m;
+                least_m = least_m.min(next_m);
+                most_m = most_m.max(next_m);
                 end += 1;
             }
             let count = (end - start + 1) as f32;
             let (a, b) = (&readings[start], &readings[end]);
             let middle = &readings[(start + end) / 2];
             let angle_rad = 0.5 * (a.neck_angle_rad + b.neck_angle_rad);
+            // A region of constant depth: as wide as the beam's half-angle at least (a plane's,
+            // a corner's or an edge's spans about twice that) and level within a cell. Shorter
+            // or sloping runs are the arcs of a wall met obliquely: their reflector is somewhere
+            // on the arc, not on the axis, so they mark but never confirm.
+            let constant_depth = abs(b.neck_angle_rad - a.neck_angle_rad) + 1.0e-4 >= beam_rad
+                && most_m - least_m <= g.resolution_m();
             let p = hit_to_world(middle.pose, robot.sonar_offset_m, angle_rad, sum_m / count);
             start = end + 1;
             if !p.is_finite() {
                 continue;
             }
-            if let Some((x, y)) = g.cell_xy_on_map(p) {
-                self.evidence.observe_occupied_xy(x, y);
+            // One sweep is one viewpoint: its reflectors move a cell once (neighbouring short
+            // runs along an oblique wall, 1.8° apart, fall in one cell at short range, and
+            // used to confirm their own ghost in free space in front of a doorway).
+            let cell = g.cell_xy_on_map(p);
+            let seen_this_sweep = self.hits.iter().any(|q| g.cell_xy_on_map(*q) == cell);
+            if let (Some((x, y)), false) = (cell, seen_this_sweep) {
+                if constant_depth {
+                    self.evidence.observe_occupied_xy(x, y);
+                } else {
+                    self.evidence.observe_arc_xy(x, y);
+                }
             }
             mark_point_m(&mut self.grid, p, e);
             let _ = self.hits.push(p);
@@ -151,8 +175,12 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.hits.len() as u16
     }
 
-    /// After a standing sweep: every unknown cell within range that the sweep vouches for (the
-    /// Thales rule, `swept`) is free evidence, so the next stop need not read it again. Cost:
+    /// After a standing sweep: every cell within range that the sweep vouches for (the Thales
+    /// rule, `swept`) steps down one state (`EvidenceMap::observe_vouched_xy`): an unknown or
+    /// tentative one becomes free evidence, so the next stop need not read it again, a
+    /// confirmed one tentative (a reflector placed off its wall, e.g. on the axis of a reading
+    /// whose cone met the wall obliquely, confirmed by a second such reading, is not kept for
+    /// ever: it cut a doorway off in `evidence_map::doorway`). Cost:
     /// the cells of the square around the range times the sweep's readings (40 000 × 105 at
     /// 3 m), host only (the MCU has no room for the evidence map).
     pub(super) fn mark_vouched_free(&mut self, full: bool) {
@@ -172,14 +200,11 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         };
         for y in (sy - h).max(0)..=(sy + h).min(g.height() as i32 - 1) {
             for x in (sx - h).max(0)..=(sx + h).min(g.width() as i32 - 1) {
-                if !matches!(
-                    self.evidence.get_xy(x, y),
-                    CellEvidence::Unknown | CellEvidence::Tentative
-                ) {
+                if self.evidence.get_xy(x, y) == CellEvidence::Free {
                     continue;
                 }
                 if self.swept(pose, band_rad, true).vouches(centre(&g, x, y))
-                    && self.evidence.observe_free_xy(x, y) == Change::TakenBack
+                    && self.evidence.observe_vouched_xy(x, y) == Change::TakenBack
                 {
                     // Full: the grid keeps the mark (the safe side).
                     let _ = self.taken_back.push((x as u16, y as u16));

@@ -82,6 +82,8 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             pending_plan: None,
             deferred_sweep_end: None,
             next_plan_id: 1,
+            visit: None,
+            gap_visits: 0,
         }
     };
 
@@ -164,6 +166,8 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.last_stop_position = None;
         self.pending_plan = None;
         self.deferred_sweep_end = None;
+        self.visit = None;
+        self.gap_visits = 0;
         self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
         if config.evidence_map {
             self.assume_body_disc_clear();
@@ -365,6 +369,12 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             self.finish(MissionStatus::Reached, out);
             return;
         }
+        if self.config.mode == MissionMode::Continuous
+            && matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle)
+            && self.at_visit_target()
+        {
+            self.end_visit(out);
+        }
         if self.stats.time_s >= self.config.time_limit_s {
             self.finish(MissionStatus::Timeout, out);
             return;
@@ -409,6 +419,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     fn on_settled(&mut self, out: &mut MissionOutput) {
         if self.at_goal() {
             self.finish(MissionStatus::Reached, out);
+            return;
+        }
+        if self.at_visit_target() {
+            self.end_visit(out);
             return;
         }
         // Stand and sweep again. In continuous mode a moving pass may be under way: it is

@@ -53,6 +53,12 @@ pub enum UnreachableReason {
     GoalBlocked,
     /// Too many plans in a row without moving.
     NoProgress,
+    /// Evidence map: the goal is cut off by confirmed marks alone (a plan on them found no
+    /// way): the proof.
+    ConfirmedCut,
+    /// Evidence map: tentative marks cut the goal off and the bounded visits to the gaps they
+    /// close did not settle them (no proof: the host says `gave_up`).
+    GapsUnsettled,
 }
 
 /// The phase the state machine is in (for displays and logs).

@@ -197,6 +197,8 @@ struct PendingPlan {
     blocked: bool,
     /// Asked while following (continuous mode).
     moving: bool,
+    /// The evidence map's proof: planned on confirmed marks only (`verdict`).
+    proof: bool,
     /// The mission no longer wants the result (a settle ended the moving pass it was for); it
     /// still waits for it before it changes the grid.
     cancelled: bool,
@@ -248,6 +250,10 @@ pub struct Mission<const W: usize, const E: usize = W> {
     /// A sweep that ended while a plan was out: marked when the result is back.
     deferred_sweep_end: Option<SweepState>,
     next_plan_id: u32,
+    /// Evidence map: the gap visit under way (`verdict`).
+    visit: Option<verdict::GapVisit>,
+    /// Evidence map: gap visits begun in this mission.
+    gap_visits: u16,
 }
 mod blind;
 mod config;
@@ -267,6 +273,7 @@ mod swept;
 #[cfg(test)]
 mod tests;
 mod trust;
+mod verdict;
 
 pub use config::{MissionConfig, MissionError, MissionMode};
 pub use evidence::{CellEvidence, Change, EvidenceMap};
@@ -279,3 +286,4 @@ pub use pilot::{Pilot, PilotCommand, PilotReport};
 pub use settle::SettleRule;
 pub use stats::MissionStats;
 pub use trust::SEEN_NEAR_CELLS;
+pub use verdict::MAX_GAP_VISITS;

@@ -75,6 +75,24 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             return;
         }
 
+        self.ask_plan_from(origin, moving, blocked, false, out);
+    }
+
+    /// The evidence map's proof (`verdict`): a standing plan on the grid as it is now (redrawn
+    /// from confirmed marks), outside the stall count.
+    pub(super) fn ask_plan(&mut self, proof: bool, out: &mut MissionOutput) {
+        let origin = self.plan_origin(false);
+        self.ask_plan_from(origin, false, false, proof, out);
+    }
+
+    fn ask_plan_from(
+        &mut self,
+        origin: PointM,
+        moving: bool,
+        blocked: bool,
+        proof: bool,
+        out: &mut MissionOutput,
+    ) {
         // The planner starts from the nearest free cell (the robot may stand in the expansion
         // of an obstacle it has just seen: the body is smaller than the planning radius).
         let g = *self.grid.geometry();
@@ -106,6 +124,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             id,
             blocked,
             moving,
+            proof,
             cancelled: false,
             asked_at,
             pass_spread_m,
@@ -119,7 +138,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             id,
             kind: self.config.planner,
             start: start_point,
-            goal: self.config.goal,
+            goal: self.plan_goal(),
         });
     }
 
@@ -148,11 +167,30 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             return;
         }
         self.pending_plan = None;
-        if !pending.cancelled {
+        if pending.cancelled {
+            if pending.proof {
+                // The grid holds the confirmed marks only: back to the full map.
+                self.redraw_grid(false);
+            }
+        } else if pending.proof {
+            match result {
+                Ok(r) => self.on_proof(r.status == PlanStatus::Found, out),
+                Err(e) => {
+                    self.redraw_grid(false);
+                    self.stats.plan_errors += 1;
+                    self.stats.last_plan_error = Some(e);
+                    self.finish(MissionStatus::Aborted, out);
+                }
+            }
+        } else {
             self.apply_plan(pending, result, out);
         }
         if let Some(sweep) = self.deferred_sweep_end.take() {
-            if self.status == MissionStatus::Running {
+            if self.pending_plan.is_some() {
+                // The result asked for another plan (the evidence map's verdicts): the grid
+                // is the planner's again until that one is back.
+                self.deferred_sweep_end = Some(sweep);
+            } else if self.status == MissionStatus::Running {
                 self.end_of_sweep(sweep, out);
             }
         }
@@ -180,6 +218,12 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         };
         match report.status {
             PlanStatus::Found => {}
+            PlanStatus::Unreachable | PlanStatus::GoalBlocked if self.proves_verdicts() => {
+                // Tentative marks may be what blocks: prove it or visit the gap (`verdict`).
+                push_planned(out, report.status, blocked, 0);
+                self.seek_proof(out);
+                return;
+            }
             PlanStatus::Unreachable => {
                 push_planned(out, report.status, blocked, 0);
                 self.stats.unreachable_reason = Some(UnreachableReason::NoPath);
