@@ -103,8 +103,9 @@ impl ParamId {
     }
 }
 
-/// What [`ParamStore::load`] found (see the module's doc).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// What [`ParamStore::load`] found (see the module's doc). On the link in
+/// [`ParamEntry::store`](crate::link::ParamEntry::store), variant index = the order here.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum StoreStatus {
     /// This format; the stored values were returned.

@@ -25,6 +25,7 @@ use super::message::{
 use crate::failsafe::{LinkLossReaction, ResetCause, Sensor, StopCause};
 use crate::mission::{MissionMode, MissionPhase, MissionStatus, SettleRule, UnreachableReason};
 use crate::plan::{PlanStatus, PlannerKind};
+use crate::params_store::StoreStatus;
 use crate::sonar::SweepLayout;
 
 const PROTOCOL_MD: &str = include_str!("../../../docs/protocol.md");
@@ -64,6 +65,7 @@ fn registry() -> Registry {
         Sensor,
         SettleRule,
         StopCause,
+        StoreStatus,
         SweepLayout,
         UnreachableReason
     );
