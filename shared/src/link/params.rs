@@ -13,6 +13,7 @@
 //! - An accepted value is stored first ([`ParamSave`], the device's [`ParamStore`]) and only
 //!   then applied, so a failed write changes nothing either. A device without a store (a test,
 //!   a shell that attaches none) applies the value in RAM.
+//! - `controller_period_s` stays at its default: the device's control period is built in.
 //! - Refused while a mission runs or is paused: the running mission's config does not change
 //!   under it; the next `StartMission` takes the new config.
 //!
@@ -29,6 +30,14 @@ use crate::params::{Param, PARAMS, PARAM_COUNT};
 use crate::params_store::{ParamId, ParamStore, StoreError, StoreStatus};
 use crate::robot::RobotConfig;
 use embedded_storage::nor_flash::NorFlash;
+
+/// The one row a device cannot change: its control task runs every 50 ms, a period built in
+/// (the firmware's `PERIOD_MS`, `--remote sim`'s tick), so a config with another period
+/// would integrate the wrong time step. The row and its rule.
+const FIXED_PERIOD: (&str, &str) = (
+    "controller_period_s",
+    "0.05 s: the device's control period is built in",
+);
 
 /// Where the device keeps an accepted value: its [`ParamStore`] (flash on a board, RAM under
 /// QEMU and `--remote sim`).
@@ -111,6 +120,13 @@ impl DeviceParams {
         store: Option<&mut dyn ParamSave>,
     ) -> Result<Reply, ErrorReply> {
         let (index, param) = self.lookup(name)?;
+        if param.name == FIXED_PERIOD.0 && value != param.default_value() {
+            return Ok(Reply::ParamRefused(ParamRefusal {
+                name: bounded(param.name),
+                value,
+                rule: bounded(FIXED_PERIOD.1),
+            }));
+        }
         let mut candidate = self.robot;
         if let Err(e) = param.set(&mut candidate, value) {
             return Ok(Reply::ParamRefused(ParamRefusal {
@@ -265,6 +281,10 @@ mod tests {
                 assert_eq!(r.value, -1.0);
                 assert_eq!(r.rule.as_str(), "above 0 and at most 1 m");
             }
+            other => panic!("{other:?}"),
+        }
+        match d.handle(&set("controller_period_s", 0.1), None, Some(&mut store)) {
+            Some(Ok(Reply::ParamRefused(r))) => assert_eq!(r.rule.as_str(), FIXED_PERIOD.1),
             other => panic!("{other:?}"),
         }
         // A value that breaks another field's rule names that field.
