@@ -288,7 +288,10 @@ fn mission_sends_the_files_values_and_says_why_it_ended() {
     let v = stdout_json(&out);
     assert_eq!(v["status"], "reached", "{v}");
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("1 of 39 values set on the device"), "{stderr}");
+    assert!(
+        stderr.contains("1 of 39 values set on the device"),
+        "{stderr}"
+    );
     // Values that depend on each other go in an order the device accepts: a neck step too
     // fine for the full sweep only after the narrower full sweep.
     let path = robot_file(
@@ -298,7 +301,10 @@ fn mission_sends_the_files_values_and_says_why_it_ended() {
     let a = args(&path);
     let out = run(&a.iter().map(String::as_str).collect::<Vec<_>>());
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("2 of 39 values set on the device"), "{stderr}");
+    assert!(
+        stderr.contains("2 of 39 values set on the device"),
+        "{stderr}"
+    );
     assert!(stdout_json(&out)["status"].is_string(), "{out:?}");
     let path = robot_file(dir.path(), &[("planning_radius_m", "0.7")]);
     let a = args(&path);

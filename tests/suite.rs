@@ -12,6 +12,7 @@ mod classic_bug;
 mod classic_fields;
 mod classic_geometric;
 mod cspace_seed000;
+mod device_params;
 mod doc_examples;
 mod evidence_map;
 mod file_errors;

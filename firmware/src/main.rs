@@ -414,8 +414,7 @@ mod app {
         // The stored parameters, before the watchdog starts: a repair of a cut erase may erase
         // a sector, which stalls the core for up to 4 s (params.rs).
         #[cfg(feature = "hardware")]
-        let (robot_config, stored, store) =
-            params::boot(params::StoreFlash::new(cx.device.FLASH));
+        let (robot_config, stored, store) = params::boot(params::StoreFlash::new(cx.device.FLASH));
         #[cfg(feature = "qemu")]
         let (robot_config, stored, store) = params::boot(cx.local.param_ram);
         // The next mission starts from the stored values; `ParamSet` changes them.

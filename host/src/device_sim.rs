@@ -23,12 +23,12 @@ use twil_core::control::Pose;
 use twil_core::grid::words_for_cells;
 use twil_core::link::params::DeviceParams;
 use twil_core::link::{Build, DeviceInfo, RobotDevice, RunState, WorldUpload};
+use twil_core::mission::{Mission300, MissionPlanner300, Pilot};
 use twil_core::params_store::ram_flash::RamFlash;
 use twil_core::params_store::robot::load_robot_config;
 use twil_core::params_store::ParamStore;
-use twil_core::robot::RobotConfig;
-use twil_core::mission::{Mission300, MissionPlanner300, Pilot};
 use twil_core::plant::Plant;
+use twil_core::robot::RobotConfig;
 
 /// The device: the seed's 300 x 300 map for the planning service and the mission.
 pub type SimDevice = RobotDevice<{ words_for_cells(300 * 300) }>;

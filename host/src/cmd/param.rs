@@ -117,11 +117,7 @@ fn list(remote: &mut Remote, json: bool) -> Result<()> {
         );
         return Ok(());
     }
-    println!(
-        "{} parameters; store: {}",
-        rows.len(),
-        store_words(store)
-    );
+    println!("{} parameters; store: {}", rows.len(), store_words(store));
     for e in &rows {
         println!("{}", line(e));
     }
@@ -144,9 +140,7 @@ fn store_words(store: Option<StoreStatus>) -> &'static str {
         Some(StoreStatus::Ok) => "ok",
         Some(StoreStatus::Empty) => "empty (nothing stored: defaults)",
         Some(StoreStatus::Corrupt) => "corrupt at boot (defaults; the next set erases it)",
-        Some(StoreStatus::OldVersion) => {
-            "old version at boot (defaults; the next set erases it)"
-        }
+        Some(StoreStatus::OldVersion) => "old version at boot (defaults; the next set erases it)",
         None => "none (values last until the device resets)",
     }
 }
@@ -263,9 +257,16 @@ mod tests {
         assert_eq!(table_value("sonar_beam", "true").unwrap(), 1.0);
         assert_eq!(table_value("sweep_layout", "seed").unwrap(), 1.0);
         assert_eq!(table_value("sweep_layout", "0").unwrap(), 0.0);
-        let e = table_value("sweep_layout", "spiral").unwrap_err().to_string();
-        assert_eq!(e, "`sweep_layout` = spiral: expected one of symmetric, seed");
-        let e = table_value("wheel_radius_m", "big").unwrap_err().to_string();
+        let e = table_value("sweep_layout", "spiral")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "`sweep_layout` = spiral: expected one of symmetric, seed"
+        );
+        let e = table_value("wheel_radius_m", "big")
+            .unwrap_err()
+            .to_string();
         assert_eq!(e, "`wheel_radius_m` = big: expected a number (m)");
         assert!(table_value("wheel_radius_m", "inf").is_err());
     }

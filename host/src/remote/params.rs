@@ -46,9 +46,9 @@ fn refused(name: &str, reply: Reply) -> anyhow::Error {
         Reply::Error(e) if e.code == ErrorCode::UnknownParam => {
             anyhow!("the device has no parameter `{name}`; {}", hint(name))
         }
-        Reply::Error(e) if e.code == ErrorCode::NotOnThisBuild => anyhow!(
-            "this device answers no parameter requests (a planning-only firmware?)"
-        ),
+        Reply::Error(e) if e.code == ErrorCode::NotOnThisBuild => {
+            anyhow!("this device answers no parameter requests (a planning-only firmware?)")
+        }
         Reply::Error(e) => anyhow!("parameter `{name}`: {e}"),
         other => anyhow!("parameter `{name}`: unexpected reply {other:?}"),
     }

@@ -708,7 +708,10 @@ impl core::fmt::Display for ErrorReply {
                     2 => "the store is damaged",
                     _ => "an internal error",
                 };
-                write!(f, "the device could not store the value ({why}): nothing changed")
+                write!(
+                    f,
+                    "the device could not store the value ({why}): nothing changed"
+                )
             }
         }
     }

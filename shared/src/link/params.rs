@@ -87,10 +87,9 @@ impl DeviceParams {
                     PARAM_COUNT as u32,
                 )),
             },
-            Request::ParamGet { name } => {
-                self.lookup(name)
-                    .map(|(i, p)| Reply::Param(self.entry(i, p)))
-            }
+            Request::ParamGet { name } => self
+                .lookup(name)
+                .map(|(i, p)| Reply::Param(self.entry(i, p))),
             Request::ParamSet { name, value } => {
                 if let Some(state) = running {
                     return Some(Err(ErrorReply::new(ErrorCode::WrongState, state, 0)));
@@ -260,10 +259,8 @@ mod tests {
         assert_eq!(d.store, Some(StoreStatus::Ok));
         assert_eq!(value_of(d.handle(&get("wheel_radius_m"), None, None)), 0.07);
         // What the next boot makes of the store.
-        let (config, boot) = crate::params_store::robot::load_robot_config(
-            &mut store,
-            &RobotConfig::DEFAULT,
-        );
+        let (config, boot) =
+            crate::params_store::robot::load_robot_config(&mut store, &RobotConfig::DEFAULT);
         assert_eq!(boot.load.status, StoreStatus::Ok);
         assert_eq!((config.wheel_radius_m, boot.applied), (0.07, 1));
     }
@@ -302,7 +299,10 @@ mod tests {
     fn unknown_names_and_running_missions_are_refused() {
         let mut d = DeviceParams::DEFAULT;
         let unknown = ErrorReply::new(ErrorCode::UnknownParam, 12, 0);
-        assert_eq!(d.handle(&get("wheel_radius"), None, None), Some(Err(unknown)));
+        assert_eq!(
+            d.handle(&get("wheel_radius"), None, None),
+            Some(Err(unknown))
+        );
         assert_eq!(
             d.handle(&set("wheel_radius", 1.0), None, None),
             Some(Err(unknown))
@@ -313,7 +313,10 @@ mod tests {
         );
         assert_eq!(d, DeviceParams::DEFAULT);
         // Reads are answered while a mission runs.
-        assert_eq!(value_of(d.handle(&get("wheel_radius_m"), Some(2), None)), 0.075);
+        assert_eq!(
+            value_of(d.handle(&get("wheel_radius_m"), Some(2), None)),
+            0.075
+        );
     }
 
     /// A store whose every write fails.

@@ -24,8 +24,8 @@ use super::message::{
 };
 use crate::failsafe::{LinkLossReaction, ResetCause, Sensor, StopCause};
 use crate::mission::{MissionMode, MissionPhase, MissionStatus, SettleRule, UnreachableReason};
-use crate::plan::{PlanStatus, PlannerKind};
 use crate::params_store::StoreStatus;
+use crate::plan::{PlanStatus, PlannerKind};
 use crate::sonar::SweepLayout;
 
 const PROTOCOL_MD: &str = include_str!("../../../docs/protocol.md");
