@@ -74,6 +74,19 @@ impl Remote {
         }
     }
 
+    /// What the device's parameter store held at boot, in words (`ok`, `empty`, `corrupt`,
+    /// `old version`, `none` for a device without one); `None` when the device answers no
+    /// parameter requests (a planning-only firmware).
+    pub fn param_store(&mut self) -> Option<String> {
+        match self.request(Request::ParamList { index: 0 }) {
+            Ok(Reply::Param(entry)) => Some(match entry.store {
+                Some(status) => status.to_string(),
+                None => "none".into(),
+            }),
+            _ => None,
+        }
+    }
+
     /// The row `name`.
     pub fn param_get(&mut self, name: &str) -> Result<ParamEntry> {
         match self.request(Request::ParamGet {
