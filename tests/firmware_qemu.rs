@@ -492,11 +492,24 @@ fn start_device_mission_with(
     mode: twil_core::mission::MissionMode,
     link_loss: twil_core::failsafe::LinkLossPolicy,
 ) -> Remote {
+    let mut remote = Remote::open_paced(&RemoteSpec::Qemu, 3).expect("QEMU");
+    remote.hello().expect("hello");
+    start_mission_on(&mut remote, world, mode, link_loss);
+    remote.set_timeout(Duration::from_secs(30));
+    remote
+}
+
+/// Upload the bundled `world` as the real world of the device behind `remote` (after its
+/// `Hello`), set up a mission on it and start it; the telemetry follows.
+pub(crate) fn start_mission_on(
+    remote: &mut Remote,
+    world: &str,
+    mode: twil_core::mission::MissionMode,
+    link_loss: twil_core::failsafe::LinkLossPolicy,
+) {
     use twil_core::link::MissionSetup;
     let real = twil_host::cmd::args::read_da(&common::world(&format!("{world}.da"))).unwrap();
     let params = twil_host::cmd::args::read_par(&common::world(&format!("{world}.par"))).unwrap();
-    let mut remote = Remote::open_paced(&RemoteSpec::Qemu, 3).expect("QEMU");
-    remote.hello().expect("hello");
     let map = MapParams {
         robot_radius_m: params.robot_radius_m,
         ..MapParams::default()
@@ -539,8 +552,6 @@ fn start_device_mission_with(
     };
     assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
     assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);
-    remote.set_timeout(Duration::from_secs(30));
-    remote
 }
 
 #[test]

@@ -388,6 +388,7 @@ fn ping_json_and_remote_suggestions() {
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["protocol_version"], twil_core::link::PROTOCOL_VERSION);
     assert_eq!(v["build"], "host");
+    assert_eq!(v["param_store"], "empty");
     assert_eq!(v["round_trips_ms"].as_array().unwrap().len(), 3);
     let o = common::twil()
         .args(["ping", "--remote", "qmeu"])

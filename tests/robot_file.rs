@@ -264,10 +264,9 @@ fn each_mistake_is_one_line_naming_file_line_key_and_value() {
 }
 
 #[test]
-fn mission_refuses_a_constant_it_cannot_send_and_says_why_it_ended() {
+fn mission_sends_the_files_values_and_says_why_it_ended() {
     let dir = tempfile::tempdir().unwrap();
     let (da, par) = doorway(dir.path());
-    let path = robot_file(dir.path(), &[("wheel_radius_m", "0.08")]);
     let args = |robot: &Path| {
         [
             "mission",
@@ -283,13 +282,31 @@ fn mission_refuses_a_constant_it_cannot_send_and_says_why_it_ended() {
         ]
         .map(str::to_owned)
     };
+    // A constant SetMission does not carry goes over as a parameter (ParamSet) first.
+    let path = robot_file(dir.path(), &[("wheel_radius_m", "0.08")]);
     let a = args(&path);
-    let e = error_line(&a.iter().map(String::as_str).collect::<Vec<_>>());
-    assert!(e.contains(":3") || e.contains("robot.toml:"), "{e}");
+    let out = run(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let v = stdout_json(&out);
+    assert_eq!(v["status"], "reached", "{v}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        e.contains("`wheel_radius_m` = 0.08: twil mission cannot send"),
-        "{e}"
+        stderr.contains("1 of 39 values set on the device"),
+        "{stderr}"
     );
+    // Values that depend on each other go in an order the device accepts: a neck step too
+    // fine for the full sweep only after the narrower full sweep.
+    let path = robot_file(
+        dir.path(),
+        &[("neck_step_deg", "1.0"), ("full_half_sweep_deg", "90.0")],
+    );
+    let a = args(&path);
+    let out = run(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("2 of 39 values set on the device"),
+        "{stderr}"
+    );
+    assert!(stdout_json(&out)["status"].is_string(), "{out:?}");
     let path = robot_file(dir.path(), &[("planning_radius_m", "0.7")]);
     let a = args(&path);
     let out = run(&a.iter().map(String::as_str).collect::<Vec<_>>());

@@ -13,6 +13,7 @@ mod classic_bug;
 mod classic_fields;
 mod classic_geometric;
 mod cspace_seed000;
+mod device_params;
 mod doc_examples;
 mod doc_links;
 mod evidence_map;

@@ -310,6 +310,8 @@ mod app {
         mission: &'static mut TwilMission,
         head: body::Head,
         watchdog: Watchdog,
+        /// Where `ParamSet` keeps its values (`None`: the store could not be opened).
+        store: Option<params::Store>,
     }
 
     #[init(local = [
@@ -412,9 +414,14 @@ mod app {
         // The stored parameters, before the watchdog starts: a repair of a cut erase may erase
         // a sector, which stalls the core for up to 4 s (params.rs).
         #[cfg(feature = "hardware")]
-        let (robot_config, stored) = params::boot(params::StoreFlash::new(cx.device.FLASH));
+        let (robot_config, stored, store) = params::boot(params::StoreFlash::new(cx.device.FLASH));
         #[cfg(feature = "qemu")]
-        let (robot_config, stored) = params::boot(cx.local.param_ram);
+        let (robot_config, stored, store) = params::boot(cx.local.param_ram);
+        // The next mission starts from the stored values; `ParamSet` changes them.
+        device.set_params(twil_core::link::params::DeviceParams {
+            robot: robot_config,
+            store: store.as_ref().map(|_| stored.load.status),
+        });
         log!(
             "twil firmware up: static RAM {} bytes, stack {} bytes, reset cause {}, parameters {} ({} applied, {} refused)",
             memory::static_ram_bytes(),
@@ -513,6 +520,7 @@ mod app {
                 mission: ccm.mission,
                 head,
                 watchdog,
+                store,
             },
         )
     }
@@ -813,7 +821,7 @@ mod app {
     }
 
     /// The mission task: the link, the mission's steps and the planner, at the lowest priority.
-    #[task(priority = 1, shared = [pilot, body, world], local = [consumer, tx_producer, device, planner, mission])]
+    #[task(priority = 1, shared = [pilot, body, world], local = [consumer, tx_producer, device, planner, mission, store])]
     async fn mission(mut cx: mission::Context) {
         // Calibration of the instruction count: `asm::delay(n)` runs n + 1 times a
         // two-instruction loop, so 500 000 gives 1 000 002 instructions (+ a few for the
@@ -880,7 +888,11 @@ mod app {
                     device.handler.note_rx_dropped(dropped);
                 }
                 let mut world = LockedWorld(&mut cx.shared.world);
-                device.link(mission).receive(
+                let mut link = match cx.local.store.as_mut() {
+                    Some(store) => device.link_with_store(mission, store),
+                    None => device.link(mission),
+                };
+                link.receive(
                     &chunk[..n],
                     planner,
                     &mut instructions,

@@ -12,8 +12,12 @@
 //!   watchdog cannot be fed. The store erases only when a page is full (after about 8 190
 //!   saves), on `ParamStore::erase`, on the first save over a store that is not `Ok`, or when
 //!   it repairs an erase cut by a power loss. The boot's load runs in `init`, before the
-//!   independent watchdog starts; a later save must happen while the robot is idle (no
-//!   mission: motors off) with the watchdog's timeout stretched past 4 s.
+//!   independent watchdog starts, and formats a store that is not `Ok` (see [`boot`]). A
+//!   `ParamSet` (refused while a mission runs) then writes one record. Not done: the erase
+//!   that `sequential-storage` makes when a page fills (after about 8 190 saves) stalls the
+//!   core for seconds, and the 150 ms watchdog resets the chip during it; the next boot
+//!   repairs the cut erase (the power-loss tests cover it) and the value saved last may be
+//!   lost.
 //! - QEMU: QEMU 7.2's `netduinoplus2` does not emulate flash programming or erasing, so the
 //!   QEMU build keeps the store in a 2 KiB [`RamFlash`] in SRAM (two 1 KiB pages: 63 records
 //!   each), erased at every reset: it always boots `Empty`, on the defaults. Above the flash,
@@ -90,12 +94,34 @@ mod board_flash {
     }
 }
 
-/// Load the store in `flash` and apply it to the defaults: the config to run and what was
-/// found. A store that cannot even be opened (a wrong range: a defect) gives the defaults and
-/// `Corrupt`.
-pub fn boot<F: embedded_storage::nor_flash::NorFlash>(flash: F) -> (RobotConfig, BootParams) {
+/// The store the device writes `ParamSet`'s values to.
+#[cfg(feature = "qemu")]
+pub type Store = ParamStore<&'static mut StoreFlash>;
+/// The store the device writes `ParamSet`'s values to.
+#[cfg(feature = "hardware")]
+pub type Store = ParamStore<StoreFlash>;
+
+/// Load the store in `flash` and apply it to the defaults: the config to run, what was found,
+/// and the store for `ParamSet` (`None` when it cannot even be opened: a wrong range, a
+/// defect; then the defaults and `Corrupt`).
+///
+/// On the board, a store that is not `Ok` is formatted here (erased, the format word
+/// written), before the watchdog starts: the first `ParamSet` then writes one record (0.3 ms)
+/// instead of erasing two sectors (up to 8 s, which the 150 ms watchdog would cut). What was
+/// found is still reported (`Empty`, `Corrupt`, `OldVersion`) for this boot; the values were
+/// the defaults' anyway. It costs up to 8 s at the first boot of a blank chip, once.
+pub fn boot<F: embedded_storage::nor_flash::NorFlash>(
+    flash: F,
+) -> (RobotConfig, BootParams, Option<ParamStore<F>>) {
     match ParamStore::new(flash, STORE_RANGE) {
-        Ok(mut store) => load_robot_config(&mut store, &RobotConfig::DEFAULT),
+        Ok(mut store) => {
+            let (config, boot) = load_robot_config(&mut store, &RobotConfig::DEFAULT);
+            if cfg!(feature = "hardware") && boot.load.status != StoreStatus::Ok {
+                // A failure leaves the status unknown: the first save tries again.
+                let _ = store.format();
+            }
+            (config, boot, Some(store))
+        }
         Err(_) => (
             RobotConfig::DEFAULT,
             BootParams {
@@ -110,6 +136,7 @@ pub fn boot<F: embedded_storage::nor_flash::NorFlash>(flash: F) -> (RobotConfig,
                 refused: 0,
                 first_refused: None,
             },
+            None,
         ),
     }
 }

@@ -21,12 +21,21 @@ use std::time::Duration;
 use anyhow::{anyhow, Result};
 use twil_core::control::Pose;
 use twil_core::grid::words_for_cells;
+use twil_core::link::params::DeviceParams;
 use twil_core::link::{Build, DeviceInfo, RobotDevice, RunState, WorldUpload};
 use twil_core::mission::{Mission300, MissionPlanner300, Pilot};
+use twil_core::params_store::ram_flash::RamFlash;
+use twil_core::params_store::robot::load_robot_config;
+use twil_core::params_store::ParamStore;
 use twil_core::plant::Plant;
+use twil_core::robot::RobotConfig;
 
 /// The device: the seed's 300 x 300 map for the planning service and the mission.
 pub type SimDevice = RobotDevice<{ words_for_cells(300 * 300) }>;
+
+/// The device's parameter store: in RAM, as the QEMU build's (two pages of 1 KiB), empty at
+/// every start, so a value set lasts as long as this device (one `twil` command).
+pub type SimStore = ParamStore<RamFlash<2048, 1024>>;
 
 /// Writes (a request's reply, or one tick's telemetry) the pipe towards the host holds before
 /// the device waits.
@@ -119,6 +128,9 @@ struct Shell {
     mission: Box<Mission300>,
     planner: Box<MissionPlanner300>,
     world: Box<WorldUpload>,
+    /// Where `ParamSet` keeps its values (`None` only if the store could not be opened: a
+    /// defect, then values last in RAM).
+    store: Option<SimStore>,
     pilot: Option<Pilot>,
     plant: Option<Plant>,
     previous_counts: (i32, i32),
@@ -131,8 +143,19 @@ struct Shell {
 
 impl Shell {
     fn new(pace: u32) -> Self {
+        let mut device = Box::new(SimDevice::new(DeviceInfo::for_build(Build::Host)));
+        // The firmware's boot: load the store, apply it through the one validation.
+        let mut store = SimStore::new(RamFlash::ERASED, 0..2048).ok();
+        if let Some(store) = store.as_mut() {
+            let (robot, boot) = load_robot_config(store, &RobotConfig::DEFAULT);
+            device.set_params(DeviceParams {
+                robot,
+                store: Some(boot.load.status),
+            });
+        }
         Self {
-            device: Box::new(SimDevice::new(DeviceInfo::for_build(Build::Host))),
+            device,
+            store,
             mission: Box::new(Mission300::IDLE),
             planner: Box::new(MissionPlanner300::new()),
             world: Box::new(WorldUpload::new()),
@@ -173,7 +196,11 @@ impl Shell {
             self.device.set_now_ms(now_ms);
             let mut wire = Vec::new();
             for bytes in received {
-                self.device.link(&mut self.mission).receive(
+                let mut link = match self.store.as_mut() {
+                    Some(store) => self.device.link_with_store(&mut self.mission, store),
+                    None => self.device.link(&mut self.mission),
+                };
+                link.receive(
                     &bytes,
                     &mut *self.planner,
                     &mut || 0,

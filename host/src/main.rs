@@ -38,6 +38,8 @@ enum Command {
     Ping(cmd::ping::Args),
     /// Write a robot file (`init FILE.toml`) or show the robot constants in use (`show`).
     Robot(cmd::robot::Args),
+    /// Read and set the device's parameters (`list`, `get NAME`, `set NAME VALUE`), kept in its flash.
+    Param(cmd::param::Args),
 }
 
 fn main() {
@@ -52,6 +54,7 @@ fn main() {
         Command::Ping(args) => cmd::ping::run(args),
         Command::View(args) => cmd::view::run(args),
         Command::Robot(args) => cmd::robot::run(args),
+        Command::Param(args) => cmd::param::run(args),
     };
     match result {
         Ok(ending) => std::process::exit(ending.code()),

@@ -54,6 +54,7 @@
 pub mod frame;
 pub mod handler;
 pub mod message;
+pub mod params;
 pub mod replay;
 pub mod robot;
 

@@ -103,8 +103,9 @@ impl ParamId {
     }
 }
 
-/// What [`ParamStore::load`] found (see the module's doc).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// What [`ParamStore::load`] found (see the module's doc). On the link in
+/// [`ParamEntry::store`](crate::link::ParamEntry::store), variant index = the order here.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum StoreStatus {
     /// This format; the stored values were returned.
@@ -380,20 +381,28 @@ impl<F: NorFlash> ParamStore<F> {
 
     fn save_in(&mut self, status: StoreStatus, id: ParamId, value: f32) -> Result<(), StoreError> {
         if status != StoreStatus::Ok {
-            self.status = None;
-            block_on(self.map.erase_all())??;
-            self.status = Some(StoreStatus::Empty);
-            block_on(
-                self.map
-                    .store_item(&mut self.buffer, &ParamId::FORMAT.0, &FORMAT_WORD),
-            )??;
-            self.status = Some(StoreStatus::Ok);
+            self.format()?;
         }
         let bits = value.to_bits();
         let stored = block_on(self.map.fetch_item::<u32>(&mut self.buffer, &id.0))??;
         if stored != Some(bits) {
             block_on(self.map.store_item(&mut self.buffer, &id.0, &bits))??;
         }
+        Ok(())
+    }
+
+    /// Erase the whole range and write the format word: the store loads `Ok` with no value,
+    /// and the next [`ParamStore::save`] needs no erase. The board's boot does this to a
+    /// store that is not `Ok`, before its watchdog starts (firmware/src/params.rs).
+    pub fn format(&mut self) -> Result<(), StoreError> {
+        self.status = None;
+        block_on(self.map.erase_all())??;
+        self.status = Some(StoreStatus::Empty);
+        block_on(
+            self.map
+                .store_item(&mut self.buffer, &ParamId::FORMAT.0, &FORMAT_WORD),
+        )??;
+        self.status = Some(StoreStatus::Ok);
         Ok(())
     }
 

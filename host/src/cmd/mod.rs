@@ -5,6 +5,7 @@ pub mod compare;
 pub mod cspace;
 pub mod mission;
 pub mod mission_link;
+pub mod param;
 pub mod ping;
 pub mod plan;
 pub mod preset;

@@ -23,6 +23,8 @@ pub struct Args {
 pub fn run(args: Args) -> Result<crate::exit::Ending> {
     let (mut remote, info) = Remote::connect(&args.remote)?;
     let firmware = info.build != twil_core::link::Build::Host;
+    // What the parameter store held at boot (protocol 6; see docs/params.md).
+    let store = remote.param_store();
     if args.json {
         let mut round_trips_ms = Vec::new();
         for i in 0..args.count {
@@ -38,6 +40,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
             "max_vertices": info.max_vertices,
             "max_frame_bytes": info.max_frame_bytes,
             "static_ram_bytes": firmware.then_some(info.static_ram_bytes),
+            "param_store": store,
             "round_trips_ms": round_trips_ms,
         });
         println!("{json}");
@@ -52,8 +55,11 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     } else {
         ("twil device (in process, no firmware)", String::new())
     };
+    let store = store
+        .map(|s| format!(", parameter store {s}"))
+        .unwrap_or_default();
     println!(
-        "{who}: protocol v{}, build {:?}, grid {} cells, planner {} cells, {} polygons / {} vertices, frames up to {} bytes{ram}",
+        "{who}: protocol v{}, build {:?}, grid {} cells, planner {} cells, {} polygons / {} vertices, frames up to {} bytes{ram}{store}",
         info.protocol_version,
         info.build,
         info.grid_capacity_cells,

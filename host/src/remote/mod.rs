@@ -778,5 +778,8 @@ pub fn plan_like_the_mcu(
     })
 }
 
+mod params;
+pub use params::SetOutcome;
+
 #[cfg(test)]
 mod tests;

@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 use crate::failsafe::{LinkLossPolicy, ResetCause, StopCause};
 use crate::geom::PointM;
 use crate::mission::{MissionMode, MissionPhase, MissionStats, MissionStatus};
+use crate::params_store::StoreStatus;
 use crate::plan::{PlanStatus, PlannerKind};
 
 /// Version of this protocol. A host and a device only talk when their versions are equal
@@ -21,7 +22,9 @@ use crate::plan::{PlanStatus, PlannerKind};
 /// the reset cause in `DeviceStatus` and `Telemetry::Boot`). 4: the plant's sonar model and the
 /// following choices of `--preset` in `SetMission` (fields 13–19), `MissionStats::blind_cuts`.
 /// 5: `StopCause::SensorFault` (the board's body: homing, sonar, battery, motors, e-stop input).
-pub const PROTOCOL_VERSION: u16 = 5;
+/// 6: the device's parameters (requests `ParamList`, `ParamGet`, `ParamSet`; replies `Param`,
+/// `ParamRefused`; error codes `UnknownParam`, `StoreFailed`).
+pub const PROTOCOL_VERSION: u16 = 6;
 
 /// Points carried by one telemetry chunk of hits, prefix or path.
 pub const TELEMETRY_CHUNK_POINTS: usize = 32;
@@ -36,6 +39,13 @@ pub const OBSTACLE_CHUNK_VERTICES: usize = 32;
 pub const PATH_CHUNK_POINTS: usize = 32;
 /// Grid words (32 cells each) carried by one [`Reply::MapChunk`] or [`Request::WriteMap`].
 pub const MAP_CHUNK_WORDS: usize = 64;
+/// Bytes of a parameter's name on the wire (the longest, `sonar_spurious_probability`, has 26).
+pub const PARAM_NAME_BYTES: usize = 32;
+/// Bytes of a parameter's unit on the wire (the longest, `V s^2 per rad`, has 13).
+pub const PARAM_UNIT_BYTES: usize = 16;
+/// Bytes of the rule a refused parameter broke (the longest of `RobotConfig::validate` has 77;
+/// a longer one is cut at a character boundary).
+pub const PARAM_RULE_BYTES: usize = 96;
 
 /// A request as it travels: the host's sequence number and the request.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -186,6 +196,65 @@ pub enum Request {
     ClearEmergencyStop,
     /// Answered by [`Reply::Mission`].
     MissionStatus,
+    /// Row `index` of the device's parameter table (0 first; read them all by counting up to
+    /// [`ParamEntry::count`]). Answered by [`Reply::Param`]; [`ErrorCode::OutOfRange`] past the
+    /// end.
+    ParamList {
+        /// The row.
+        index: u16,
+    },
+    /// The parameter `name`. Answered by [`Reply::Param`]; [`ErrorCode::UnknownParam`].
+    ParamGet {
+        /// Its name (the robot file's key).
+        name: heapless::String<PARAM_NAME_BYTES>,
+    },
+    /// Set the parameter `name` to `value` in the robot config of the next mission, validated
+    /// with the rest of that config, and store it (when the device has a store). Answered by
+    /// [`Reply::Param`] with the new value; a value the model refuses by
+    /// [`Reply::ParamRefused`] (nothing changed); [`ErrorCode::UnknownParam`],
+    /// [`ErrorCode::WrongState`] while a mission runs, [`ErrorCode::StoreFailed`].
+    ParamSet {
+        /// Its name (the robot file's key).
+        name: heapless::String<PARAM_NAME_BYTES>,
+        /// The new value (a whole number, 0 / 1, a choice's index: see `twil_core::params`).
+        value: f32,
+    },
+}
+
+/// One row of the device's parameter table ([`Reply::Param`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParamEntry {
+    /// The row's index in the device's table.
+    pub index: u16,
+    /// Rows in the device's table.
+    pub count: u16,
+    /// The name (the robot file's key).
+    pub name: heapless::String<PARAM_NAME_BYTES>,
+    /// The unit, in words (empty: none).
+    pub unit: heapless::String<PARAM_UNIT_BYTES>,
+    /// The value the next mission uses.
+    pub value: f32,
+    /// The firmware's default.
+    pub default: f32,
+    /// Lower limit (see `twil_core::params::Param::min`).
+    pub min: f32,
+    /// Upper limit (infinite: none).
+    pub max: f32,
+    /// What the device's store held at boot, `Ok` once a value has been stored since; `None`:
+    /// the device has no store (values last until it resets).
+    pub store: Option<StoreStatus>,
+}
+
+/// Why a [`Request::ParamSet`] was refused: nothing changed ([`Reply::ParamRefused`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParamRefusal {
+    /// The parameter whose rule the new config breaks (the one set, or one it depends on:
+    /// `sonar_range_m` for a `sonar_min_range_m` above it).
+    pub name: heapless::String<PARAM_NAME_BYTES>,
+    /// That parameter's value in the refused config.
+    pub value: f32,
+    /// What is accepted, in words.
+    pub rule: heapless::String<PARAM_RULE_BYTES>,
 }
 
 /// What a mission needs beyond the map (`SetParams`: size, resolution, planning radius) and
@@ -465,6 +534,10 @@ pub enum Reply {
     Error(ErrorReply),
     /// The mission's state ([`Request::MissionStatus`]).
     Mission(MissionReport),
+    /// A parameter ([`Request::ParamList`], [`Request::ParamGet`], [`Request::ParamSet`]).
+    Param(ParamEntry),
+    /// A [`Request::ParamSet`] refused by the model: nothing changed.
+    ParamRefused(ParamRefusal),
 }
 
 /// Why a request failed. The variant index is the code on the wire (postcard varint).
@@ -516,6 +589,11 @@ pub enum ErrorCode {
     /// height), more than the `limit` one request may
     /// ([`MAX_MARKING_ROWS`](super::handler::MAX_MARKING_ROWS)): fewer vertices or a lower map.
     MarkingBudget,
+    /// 18: no parameter has the name asked for (`value` = the name's length in bytes).
+    UnknownParam,
+    /// 19: the value was valid but the store could not write it, so nothing changed (`value`:
+    /// 0 flash error, 1 store full, 2 damaged store, 3 other).
+    StoreFailed,
 }
 
 /// An error answer: a code and up to three numbers whose meaning the code documents.
@@ -622,6 +700,19 @@ impl core::fmt::Display for ErrorReply {
                 "marking the obstacles would visit {v} map rows (vertices x map height), \
                  more than the {l} one request may: fewer vertices or a lower map"
             ),
+            ErrorCode::UnknownParam => write!(f, "the device has no parameter of that name"),
+            ErrorCode::StoreFailed => {
+                let why = match v {
+                    0 => "the flash reported an error",
+                    1 => "the store is full",
+                    2 => "the store is damaged",
+                    _ => "an internal error",
+                };
+                write!(
+                    f,
+                    "the device could not store the value ({why}): nothing changed"
+                )
+            }
         }
     }
 }

@@ -14,8 +14,10 @@
 //! `ClearWorld`, `StartMission`, `PauseMission`, `ResumeMission`, `AbortMission`,
 //! `EmergencyStop`, `ClearEmergencyStop`). Their replies are small (`Ack`, `Obstacles`,
 //! `Plan`, `Error`: [`CachedReply`], 48 bytes). The pure reads (`Hello`, `Ping`, `ReadPath`,
-//! `ReadMap`, `Status`, `MissionStatus`) are executed again: harmless, and their replies (up to
-//! 270 bytes) are not worth the RAM.
+//! `ReadMap`, `Status`, `MissionStatus`, `ParamList`, `ParamGet`) are executed again: harmless,
+//! and their replies (up to 270 bytes) are not worth the RAM. `ParamSet`'s reply (a parameter
+//! row, about 80 bytes) is not kept either: a retry sets the same value again, which changes
+//! nothing and writes nothing (the store skips a value it already holds).
 
 use serde::Serialize;
 
@@ -89,6 +91,8 @@ pub fn is_replayed(request: &Request) -> bool {
             | Request::ReadMap { .. }
             | Request::Status
             | Request::MissionStatus
+            | Request::ParamList { .. }
+            | Request::ParamGet { .. }
     )
 }
 

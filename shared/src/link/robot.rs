@@ -39,6 +39,7 @@ use heapless::Vec;
 use super::frame::{FrameDecoder, FrameFault};
 use super::handler::{upload_chunk, Handler, MAX_PENDING_VERTICES};
 use super::message::*;
+use super::params::{DeviceParams, ParamSave};
 use super::replay::ReplayCache;
 use super::Device;
 use crate::failsafe::{LinkLossReaction, LinkWatch, StopCause};
@@ -198,6 +199,9 @@ pub struct RobotDevice<const W: usize> {
     reported: (MissionPhase, MissionStatus),
     pending: Pending,
     replay: ReplayCache,
+    /// The robot config of the next mission and the store's status (`ParamList` / `Get` /
+    /// `Set`, see [`super::params`]).
+    params: DeviceParams,
 }
 
 impl<const W: usize> RobotDevice<W> {
@@ -250,7 +254,21 @@ impl<const W: usize> RobotDevice<W> {
                 },
             },
             replay: ReplayCache::new(),
+            params: DeviceParams::DEFAULT,
         }
+    }
+
+    /// The robot config the next mission starts from (the defaults until the shell calls
+    /// [`RobotDevice::set_params`] or the host sets a parameter).
+    pub fn params(&self) -> &DeviceParams {
+        &self.params
+    }
+
+    /// Set the robot config and the store's status (the firmware's boot: the defaults with
+    /// the stored values applied). `params.robot` is trusted to be valid
+    /// ([`crate::params_store::robot::load_robot_config`] validates it).
+    pub fn set_params(&mut self, params: DeviceParams) {
+        self.params = params;
     }
 
     /// This device with `mission` (kept apart so the firmware can place it in its own memory
@@ -259,7 +277,24 @@ impl<const W: usize> RobotDevice<W> {
         &'a mut self,
         mission: &'a mut Mission<W, E>,
     ) -> RobotLink<'a, W, E> {
-        RobotLink { d: self, mission }
+        RobotLink {
+            d: self,
+            mission,
+            store: None,
+        }
+    }
+
+    /// As [`RobotDevice::link`], with the store an accepted `ParamSet` is written to.
+    pub fn link_with_store<'a, const E: usize>(
+        &'a mut self,
+        mission: &'a mut Mission<W, E>,
+        store: &'a mut dyn ParamSave,
+    ) -> RobotLink<'a, W, E> {
+        RobotLink {
+            d: self,
+            mission,
+            store: Some(store),
+        }
     }
 
     /// Where the mission stands.
@@ -316,6 +351,7 @@ impl<const W: usize> RobotDevice<W> {
 pub struct RobotLink<'a, const W: usize, const E: usize = W> {
     d: &'a mut RobotDevice<W>,
     mission: &'a mut Mission<W, E>,
+    store: Option<&'a mut dyn ParamSave>,
 }
 
 impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
@@ -490,6 +526,14 @@ impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
     fn try_handle_mission(&mut self, request: &Request) -> Option<Result<Reply, ErrorReply>> {
         let wrong = |state: RunState| ErrorReply::new(ErrorCode::WrongState, state_index(state), 0);
         let running = matches!(self.d.state, RunState::Running | RunState::Paused);
+        let store = self.store.as_mut().map(|s| &mut **s as &mut dyn ParamSave);
+        if let Some(reply) =
+            self.d
+                .params
+                .handle(request, running.then(|| state_index(self.d.state)), store)
+        {
+            return Some(reply);
+        }
         Some(match request {
             Request::SetMission(setup) => {
                 if running {
@@ -556,7 +600,8 @@ impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
             sonar_beam_half_angle_deg: setup.beam_half_angle_deg,
             sonar_incidence_limit_deg: setup.incidence_limit_deg,
             sweep_layout: setup.sweep_layout,
-            ..RobotConfig::DEFAULT
+            // The device's parameters (the stored values, `ParamSet`) for the rest.
+            ..self.d.params.robot
         };
         let par = Params {
             robot_radius_m: params.robot_radius_m,

@@ -24,6 +24,7 @@ use super::message::{
 };
 use crate::failsafe::{LinkLossReaction, ResetCause, Sensor, StopCause};
 use crate::mission::{MissionMode, MissionPhase, MissionStatus, SettleRule, UnreachableReason};
+use crate::params_store::StoreStatus;
 use crate::plan::{PlanStatus, PlannerKind};
 use crate::sonar::SweepLayout;
 
@@ -64,6 +65,7 @@ fn registry() -> Registry {
         Sensor,
         SettleRule,
         StopCause,
+        StoreStatus,
         SweepLayout,
         UnreachableReason
     );

@@ -139,6 +139,17 @@ fn a_damaged_record_is_ignored_and_the_one_before_it_loads() {
 }
 
 #[test]
+fn format_leaves_an_ok_store_without_values() {
+    let mut s = store(Ram::ERASED);
+    s.save(id("a"), 3.0).unwrap();
+    s.format().unwrap();
+    let mut values = [None; 1];
+    let load = s.load(&[id("a")], &mut values);
+    assert_eq!((load.status, load.records), (StoreStatus::Ok, 1));
+    assert_eq!(values, [None]);
+}
+
+#[test]
 fn erase_brings_back_the_defaults() {
     let mut s = store(Ram::ERASED);
     s.save(id("a"), 3.0).unwrap();

@@ -15,6 +15,8 @@ pub struct Inputs {
     pub geometry: GridGeometry,
     /// The robot (its body radius measures the clearance).
     pub robot: RobotConfig,
+    /// The robot file's values for `ParamSet` (name, value, `FILE:LINE`).
+    pub robot_file_values: Vec<(&'static str, f32, String)>,
 }
 
 /// Read and check the files and numbers of `args` (errors name the file and line, or the
@@ -59,9 +61,10 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
         },
         &mut params,
     )?;
-    if let Some(path) = &args.robot {
-        refuse_unsent(path, &robot)?;
-    }
+    let robot_file_values = match &args.robot {
+        Some(path) => file_values(path)?,
+        None => Vec::new(),
+    };
     let time_limit_s = args.time_limit_s();
     if !(time_limit_s.is_finite() && time_limit_s > 0.0) {
         bail!("--time-limit: must be a positive number of seconds, got {time_limit_s}");
@@ -88,6 +91,7 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
         real,
         geometry,
         robot,
+        robot_file_values,
     })
 }
 
@@ -105,38 +109,24 @@ impl Args {
     }
 }
 
-/// The constants `SetParams` and `SetMission` carry to the device; the device keeps its own
-/// defaults for every other (until it takes parameters: issue 25).
-pub const SENT_TO_DEVICE: [&str; 7] = [
-    "planning_radius_m",
-    "sonar_range_m",
-    "sonar_noise_std_m",
-    "sonar_beam",
-    "sonar_beam_half_angle_deg",
-    "sonar_incidence_limit_deg",
-    "sweep_layout",
-];
-
-/// Refuse a robot file that sets a constant the device cannot be sent to a value other than
-/// its default: the mission would run with another robot than the file says.
-fn refuse_unsent(path: &std::path::Path, robot: &RobotConfig) -> Result<()> {
+/// The robot file's values, sent to the device with `ParamSet` before the mission (issue 25):
+/// name, value, and `FILE:LINE` for the messages. `SetParams` (the planning radius) and
+/// `SetMission` (the sonar range, noise and beam, the sweep layout) carry their own for this
+/// mission as well; every other key the file leaves out keeps the device's value
+/// (`twil param list`).
+fn file_values(path: &std::path::Path) -> Result<Vec<(&'static str, f32, String)>> {
     let file = crate::robot_file::read(path)?;
-    for entry in &file.entries {
-        let p = entry.param;
-        if !SENT_TO_DEVICE.contains(&p.name) && p.get(robot) != p.default_value() {
-            bail!(
-                "{}:{}: `{}` = {}: twil mission cannot send this constant to the device yet \
-                 (it keeps its default, {}); only {} are sent",
-                path.display(),
-                entry.line,
-                p.name,
-                crate::robot_file::toml_text(p, entry.value),
-                crate::robot_file::toml_text(p, p.default_value()),
-                SENT_TO_DEVICE.join(", ")
-            );
-        }
-    }
-    Ok(())
+    Ok(file
+        .entries
+        .iter()
+        .map(|e| {
+            (
+                e.param.name,
+                e.value,
+                format!("{}:{}", path.display(), e.line),
+            )
+        })
+        .collect())
 }
 
 /// The `SetMission` of `args` and `inputs` (the robot's sonar constants, resolved from the

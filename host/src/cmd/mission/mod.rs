@@ -409,8 +409,17 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     )))
 }
 
-/// Map, known obstacles, real world, mission setup.
+/// The robot file's values, map, known obstacles, real world, mission setup.
 fn upload(args: &Args, inputs: &Inputs, remote: &mut Remote, build: Build) -> Result<()> {
+    if !inputs.robot_file_values.is_empty() {
+        let set = remote.send_params(&inputs.robot_file_values)?;
+        {
+            eprintln!(
+                "twil: robot file: {set} of {} values set on the device (the others it had)",
+                inputs.robot_file_values.len()
+            );
+        }
+    }
     let map = MapParams {
         width_cells: inputs.geometry.width(),
         height_cells: inputs.geometry.height(),

@@ -277,7 +277,10 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             | Request::AbortMission
             | Request::EmergencyStop
             | Request::ClearEmergencyStop
-            | Request::MissionStatus => Err(ErrorReply::new(ErrorCode::NotOnThisBuild, 0, 0)),
+            | Request::MissionStatus
+            | Request::ParamList { .. }
+            | Request::ParamGet { .. }
+            | Request::ParamSet { .. } => Err(ErrorReply::new(ErrorCode::NotOnThisBuild, 0, 0)),
         }
     }
 
