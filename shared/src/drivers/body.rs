@@ -267,6 +267,31 @@ where
         }
     }
 
+    /// Read the e-stop input now (the self-test): pressed or not; an unreadable input is
+    /// [`Sensor::EmergencyStopInput`]. A press latches the stop as in [`drive`](Self::drive).
+    pub fn read_estop(&mut self) -> Result<bool, StopCause> {
+        let pressed = self.estop.read_pressed();
+        if self.estop.last_read_failed() {
+            Err(StopCause::SensorFault(Sensor::EmergencyStopInput))
+        } else {
+            Ok(pressed)
+        }
+    }
+
+    /// Read the battery now (the self-test), volts; a failed read is [`Sensor::Battery`].
+    pub fn read_battery_v(&mut self) -> Result<f32, StopCause> {
+        match self.battery.read_battery_v() {
+            Ok(v) => {
+                self.battery_v = v;
+                Ok(v)
+            }
+            Err(_) => {
+                self.battery_v = f32::NAN;
+                Err(StopCause::SensorFault(Sensor::Battery))
+            }
+        }
+    }
+
     /// The battery voltage last read, volts (NaN before the first reading or after a failed
     /// one).
     pub fn battery_v(&self) -> f32 {
