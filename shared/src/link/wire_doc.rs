@@ -65,7 +65,10 @@ fn registry() -> Registry {
         SettleRule,
         StopCause,
         SweepLayout,
-        UnreachableReason
+        UnreachableReason,
+        crate::selftest::Check,
+        crate::selftest::CheckStatus,
+        crate::selftest::Hint
     );
     tracer
         .registry()

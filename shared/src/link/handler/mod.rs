@@ -277,7 +277,9 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             | Request::AbortMission
             | Request::EmergencyStop
             | Request::ClearEmergencyStop
-            | Request::MissionStatus => Err(ErrorReply::new(ErrorCode::NotOnThisBuild, 0, 0)),
+            | Request::MissionStatus
+            | Request::SelfTest
+            | Request::SelfTestReport => Err(ErrorReply::new(ErrorCode::NotOnThisBuild, 0, 0)),
         }
     }
 
