@@ -38,6 +38,8 @@ enum Command {
     Ping(cmd::ping::Args),
     /// Write a robot file (`init FILE.toml`) or show the robot constants in use (`show`).
     Robot(cmd::robot::Args),
+    /// Bring-up self-test of the device: link, clock, e-stop, battery, neck, sonar, motors.
+    Check(cmd::check::Args),
 }
 
 fn main() {
@@ -52,6 +54,7 @@ fn main() {
         Command::Ping(args) => cmd::ping::run(args),
         Command::View(args) => cmd::view::run(args),
         Command::Robot(args) => cmd::robot::run(args),
+        Command::Check(args) => cmd::check::run(args),
     };
     match result {
         Ok(ending) => std::process::exit(ending.code()),

@@ -484,7 +484,7 @@ impl SelfTest {
                 Stage::Battery
             }
             Stage::Battery => {
-                self.push(Check::Battery, skip, nan, nan, nan, nan, hint);
+                self.push(Check::Battery, skip, nan, MIN_BATTERY_V, MAX_BATTERY_V, nan, hint);
                 Stage::Neck(0)
             }
             Stage::Neck(_) => {
@@ -492,7 +492,8 @@ impl SelfTest {
                 Stage::Sonar(0)
             }
             Stage::Sonar(_) => {
-                self.push(Check::Sonar, skip, nan, nan, nan, nan, hint);
+                let pings = SWEEP_ANGLES_DEG.len() as f32;
+                self.push(Check::Sonar, skip, nan, pings, pings, nan, hint);
                 Stage::Motor(Side::Left)
             }
             Stage::Motor(side) => {
