@@ -178,3 +178,32 @@ where
         }
     }
 }
+
+/// The chassis alone (a shell whose neck, sonar and wheel pulses are not wired for the test):
+/// the e-stop and the battery are read, every other probe is [`Answer::Absent`] (its row
+/// `skip`).
+pub struct ChassisCheck<'a, C> {
+    /// The wheels, the e-stop and the battery.
+    pub chassis: &'a mut C,
+}
+
+impl<PWML, DIRL, PWMR, DIRR, QL, QR, ESTOP, BAT> CheckBody
+    for ChassisCheck<'_, Chassis<PWML, DIRL, PWMR, DIRR, QL, QR, ESTOP, BAT>>
+where
+    PWML: SetDutyCycle,
+    DIRL: OutputPin,
+    PWMR: SetDutyCycle,
+    DIRR: OutputPin,
+    QL: QuadratureCounter,
+    QR: QuadratureCounter,
+    ESTOP: InputPin,
+    BAT: BatterySensor,
+{
+    fn probe(&mut self, probe: Probe) -> Answer {
+        match probe {
+            Probe::EmergencyStop => Answer::EmergencyStop(self.chassis.read_estop()),
+            Probe::Battery => Answer::Battery(self.chassis.read_battery_v()),
+            _ => Answer::Absent,
+        }
+    }
+}
