@@ -21,7 +21,7 @@
 //!    fails (and the motors are skipped); above [`MAX_BATTERY_V`] fails too (a wrong divider).
 //! 4. **neck**: home, go to 0°, home again (steps `a`), then out to both limits
 //!    (±`full_half_sweep_deg`) and back to 0°, home again (steps `b`): `|b − a|` is the steps
-//!    lost on the way (expected at most [`MAX_LOST_STEPS`]); the neck is left at 0°.
+//!    lost on the way (expected at most [`MAX_LOST_STEPS`]).
 //! 5. **sonar**: [`SWEEP_ANGLES_DEG`].len() pings over a short sweep: every ping must be
 //!    answered (an echo pulse, even the no-target one); the nearest range is reported and a
 //!    sweep with nothing in the window passes with a hint to put a target in front.
@@ -31,8 +31,11 @@
 //!    motor model: gain, time constant, `encoder_pulses_per_rev`). The wheels must be off the
 //!    floor.
 //!
-//! Bounded: at most [`MAX_PROBES`] probes. With the default robot the board's probes take about
-//! 4.5 s (three homings of at most 1.07 s, 400 neck steps, five 60 ms pings, two 0.8 s pulses).
+//! Bounded: at most [`MAX_PROBES`] probes, and each probe is bounded by its driver (a homing
+//! by `max_homing_steps`, a ping by its window). With the default robot the board's probes take
+//! 5.5 s (measured on the virtual board: three homings, the neck's trip to both limits, five
+//! pings, two pulses of 0.8 s plus the e-stop's 150 ms of released polls each; `cargo test
+//! --release -p twil-host --test suite virtual_board::selftest -- --nocapture` prints it).
 
 use serde::{Deserialize, Serialize};
 

@@ -7,9 +7,9 @@
 //! (with a line naming the failed checks) otherwise. The device refuses the test while a
 //! mission runs.
 //!
-//! Time: a board takes about 4.5 s with the default robot (three homings, the neck's trip to
-//! both limits, five pings, two 0.8 s wheel pulses; `selftest` module docs); a simulated
-//! device answers at once. The host gives up after [`CHECK_TIMEOUT`].
+//! Time: the board's probes take 5.5 s with the default robot (measured on the virtual board;
+//! `twil_core::selftest` module docs); a simulated device answers at once. The host gives up
+//! after [`CHECK_TIMEOUT`].
 
 use std::time::{Duration, Instant};
 
@@ -259,7 +259,7 @@ fn line_of(row: &CheckRow) -> Line {
 }
 
 /// The words of a hint; motor rows name their side and pins (docs/firmware.md's wiring table).
-fn hint_text(check: Check, hint: Hint) -> Option<String> {
+pub fn hint_text(check: Check, hint: Hint) -> Option<String> {
     let (side, encoder_pins, motor_pins) = match check {
         Check::RightMotor => ("right", "PB6/PB7", "PB15 PWM, PB13 dir"),
         _ => ("left", "PA6/PA7", "PB14 PWM, PB12 dir"),
