@@ -1065,9 +1065,7 @@ mod app {
         };
         let config = twil_core::robot::RobotConfig::DEFAULT;
         let mut test = twil_core::selftest::SelfTest::new(&config, clock);
-        body.lock(|b| {
-            twil_core::selftest::run(&mut test, &mut b.checks()).clone()
-        })
+        body.lock(|b| twil_core::selftest::run(&mut test, &mut b.checks()).clone())
     }
 
     /// The body stopped the motors (`stop`: why, once): an e-stop press is timed like a stop

@@ -451,7 +451,15 @@ impl SelfTest {
                 if status == CheckStatus::Fail {
                     self.motors_skip = Some(Hint::SkippedEstop);
                 }
-                self.push(Check::EmergencyStop, status, value, 0.0, 0.0, f32::NAN, hint);
+                self.push(
+                    Check::EmergencyStop,
+                    status,
+                    value,
+                    0.0,
+                    0.0,
+                    f32::NAN,
+                    hint,
+                );
                 self.stage = Stage::Battery;
             }
             (Stage::Battery, Answer::Battery(result)) => {
@@ -487,7 +495,15 @@ impl SelfTest {
                 Stage::Battery
             }
             Stage::Battery => {
-                self.push(Check::Battery, skip, nan, MIN_BATTERY_V, MAX_BATTERY_V, nan, hint);
+                self.push(
+                    Check::Battery,
+                    skip,
+                    nan,
+                    MIN_BATTERY_V,
+                    MAX_BATTERY_V,
+                    nan,
+                    hint,
+                );
                 Stage::Neck(0)
             }
             Stage::Neck(_) => {
@@ -511,7 +527,15 @@ impl SelfTest {
         if let (Stage::Motor(_), Some(hint)) = (self.stage, self.motors_skip) {
             let nan = f32::NAN;
             for side in [Side::Left, Side::Right] {
-                self.push(motor_check(side), CheckStatus::Skip, nan, nan, nan, nan, hint);
+                self.push(
+                    motor_check(side),
+                    CheckStatus::Skip,
+                    nan,
+                    nan,
+                    nan,
+                    nan,
+                    hint,
+                );
             }
             self.stage = Stage::Done;
         }
@@ -527,7 +551,15 @@ impl SelfTest {
                     _ => Hint::NeckFault,
                 };
                 let (lo, hi) = expected;
-                self.push(Check::Neck, CheckStatus::Fail, f32::NAN, lo, hi, f32::NAN, hint);
+                self.push(
+                    Check::Neck,
+                    CheckStatus::Fail,
+                    f32::NAN,
+                    lo,
+                    hi,
+                    f32::NAN,
+                    hint,
+                );
                 self.stage = Stage::Sonar(0);
                 return;
             }
@@ -574,7 +606,15 @@ impl SelfTest {
                 };
                 let answered = self.sonar_answered as f32;
                 let nearest = self.nearest_m;
-                self.push(Check::Sonar, CheckStatus::Fail, answered, pings, pings, nearest, hint);
+                self.push(
+                    Check::Sonar,
+                    CheckStatus::Fail,
+                    answered,
+                    pings,
+                    pings,
+                    nearest,
+                    hint,
+                );
                 self.stage = Stage::Motor(Side::Left);
                 return;
             }
@@ -644,7 +684,12 @@ fn next_motor(side: Side) -> Stage {
 /// `coast_ms` at 0 V, from rest: the first-order motor (gain K, time constant τ) turns the
 /// wheel `K·V·(T − τ(1 − e^(−T/τ)))` radians while driven and `ω(T)·τ(1 − e^(−Tc/τ))` while it
 /// coasts.
-pub fn predicted_pulse_counts(config: &RobotConfig, voltage_v: f32, on_ms: u32, coast_ms: u32) -> f32 {
+pub fn predicted_pulse_counts(
+    config: &RobotConfig,
+    voltage_v: f32,
+    on_ms: u32,
+    coast_ms: u32,
+) -> f32 {
     let v = voltage_v.clamp(-config.max_voltage_v, config.max_voltage_v);
     let tau = config.motor_time_constant_s.max(1e-6);
     let on_s = on_ms as f32 / 1000.0;

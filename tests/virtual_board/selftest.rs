@@ -71,7 +71,11 @@ fn a_healthy_board_passes_every_check_within_seven_seconds() {
     );
     let nearest_m = row(&report, Check::Sonar).detail;
     assert!((nearest_m - 0.8).abs() < 0.005, "the wall: {nearest_m} m");
-    assert_eq!(row(&report, Check::Neck).detail, 102.0, "homing from 0° to the switch");
+    assert_eq!(
+        row(&report, Check::Neck).detail,
+        102.0,
+        "homing from 0° to the switch"
+    );
     let left = row(&report, Check::LeftMotor);
     assert!(
         (left.value / left.detail - 1.0).abs() < 0.1,
@@ -95,11 +99,15 @@ fn a_swapped_encoder_fails_its_wheel_with_the_swap_hint() {
     w.0.borrow_mut().encoder_swapped[0] = true;
     let (report, _) = check(&w);
     let left = row(&report, Check::LeftMotor);
-    assert_eq!((left.status, left.hint), (CheckStatus::Fail, Hint::EncoderBackwards));
+    assert_eq!(
+        (left.status, left.hint),
+        (CheckStatus::Fail, Hint::EncoderBackwards)
+    );
     assert!(left.value < 0.0, "{left:?}");
     let text = hint_text(Check::LeftMotor, left.hint).unwrap();
     assert!(
-        text.starts_with("left encoder counts backwards: ") && text.contains("swap the encoder's A/B wires (PA6/PA7)"),
+        text.starts_with("left encoder counts backwards: ")
+            && text.contains("swap the encoder's A/B wires (PA6/PA7)"),
         "{text}"
     );
     assert_eq!(row(&report, Check::RightMotor).status, CheckStatus::Pass);
@@ -112,9 +120,14 @@ fn a_dead_sonar_fails_the_sonar_with_its_wiring_hint() {
     w.0.borrow_mut().sonar_answers = false;
     let (report, _) = check(&w);
     let sonar = row(&report, Check::Sonar);
-    assert_eq!((sonar.status, sonar.hint), (CheckStatus::Fail, Hint::SonarSilent));
+    assert_eq!(
+        (sonar.status, sonar.hint),
+        (CheckStatus::Fail, Hint::SonarSilent)
+    );
     assert_eq!(sonar.value, 0.0, "no ping answered");
-    assert!(hint_text(Check::Sonar, sonar.hint).unwrap().contains("echo line"));
+    assert!(hint_text(Check::Sonar, sonar.hint)
+        .unwrap()
+        .contains("echo line"));
     assert_eq!(report.failures(), 1);
 }
 
@@ -124,7 +137,10 @@ fn a_pressed_e_stop_fails_and_no_wheel_turns() {
     w.0.borrow_mut().estop_pressed_at_ns = vec![(0, u64::MAX)];
     let (report, _) = check(&w);
     let estop = row(&report, Check::EmergencyStop);
-    assert_eq!((estop.status, estop.hint), (CheckStatus::Fail, Hint::EstopPressed));
+    assert_eq!(
+        (estop.status, estop.hint),
+        (CheckStatus::Fail, Hint::EstopPressed)
+    );
     for side in [Check::LeftMotor, Check::RightMotor] {
         assert_eq!(row(&report, side).status, CheckStatus::Skip);
         assert_eq!(row(&report, side).hint, Hint::SkippedEstop);
@@ -133,7 +149,9 @@ fn a_pressed_e_stop_fails_and_no_wheel_turns() {
         w.0.borrow().duty_log.iter().all(|&(_, _, duty)| duty == 0),
         "no duty while pressed"
     );
-    assert!(hint_text(Check::EmergencyStop, estop.hint).unwrap().contains("release"));
+    assert!(hint_text(Check::EmergencyStop, estop.hint)
+        .unwrap()
+        .contains("release"));
 }
 
 #[test]
@@ -142,9 +160,14 @@ fn a_low_battery_fails_and_skips_the_wheels() {
     w.0.borrow_mut().battery_v = 9.8;
     let (report, _) = check(&w);
     let battery = row(&report, Check::Battery);
-    assert_eq!((battery.status, battery.hint), (CheckStatus::Fail, Hint::BatteryLow));
+    assert_eq!(
+        (battery.status, battery.hint),
+        (CheckStatus::Fail, Hint::BatteryLow)
+    );
     assert!((battery.value - 9.8).abs() < 1e-4);
     assert_eq!(row(&report, Check::LeftMotor).hint, Hint::SkippedBattery);
-    assert!(hint_text(Check::Battery, battery.hint).unwrap().contains("10.5 V"));
+    assert!(hint_text(Check::Battery, battery.hint)
+        .unwrap()
+        .contains("10.5 V"));
     assert_eq!(report.failures(), 1);
 }

@@ -17,7 +17,8 @@ struct Scripted {
 
 impl Scripted {
     fn healthy() -> Self {
-        let predicted = predicted_pulse_counts(&RobotConfig::DEFAULT, PULSE_V, PULSE_ON_MS, COAST_MS);
+        let predicted =
+            predicted_pulse_counts(&RobotConfig::DEFAULT, PULSE_V, PULSE_ON_MS, COAST_MS);
         Self {
             estop: Ok(false),
             battery: Ok(12.6),
@@ -82,7 +83,10 @@ fn a_healthy_robot_passes_every_row_in_order() {
             Check::RightMotor
         ]
     );
-    assert!(report.rows.iter().all(|r| r.status == CheckStatus::Pass), "{report:?}");
+    assert!(
+        report.rows.iter().all(|r| r.status == CheckStatus::Pass),
+        "{report:?}"
+    );
     assert_eq!(report.failures(), 0);
     assert_eq!(row(&report, Check::Sonar).detail, 0.8);
     // 1 + 1 + 8 neck + 5 pings + 2 pulses.
@@ -105,7 +109,10 @@ fn each_fault_fails_its_row_with_its_hint() {
     assert_eq!(row(&r, Check::RightMotor).hint, Hint::EncoderCountsOff);
     body = Scripted::healthy();
     body.counts.1 = 0;
-    assert_eq!(row(&run_on(&mut body), Check::RightMotor).hint, Hint::EncoderStill);
+    assert_eq!(
+        row(&run_on(&mut body), Check::RightMotor).hint,
+        Hint::EncoderStill
+    );
 
     let mut body = Scripted::healthy();
     body.echo = Ok(Echo::Silent);
@@ -138,7 +145,10 @@ fn a_pressed_e_stop_or_a_low_battery_fails_and_skips_the_motors() {
         assert_eq!(row(&r, check).status, CheckStatus::Skip);
         assert_eq!(row(&r, check).hint, Hint::SkippedEstop);
     }
-    assert!(!body.probes.iter().any(|p| matches!(p, Probe::Pulse { .. })), "no pulse");
+    assert!(
+        !body.probes.iter().any(|p| matches!(p, Probe::Pulse { .. })),
+        "no pulse"
+    );
 
     let mut body = Scripted::healthy();
     body.battery = Ok(9.8);
@@ -170,7 +180,10 @@ fn the_predicted_pulse_matches_the_plant() {
     plant.step(COAST_MS as f32 / 1000.0, 0.0, 0.0);
     let simulated = plant.encoder_counts().0 as f32;
     let predicted = predicted_pulse_counts(&config, PULSE_V, PULSE_ON_MS, COAST_MS);
-    assert!((simulated / predicted - 1.0).abs() < 0.02, "{simulated} vs {predicted}");
+    assert!(
+        (simulated / predicted - 1.0).abs() < 0.02,
+        "{simulated} vs {predicted}"
+    );
     // 6 V for 0.5 s then 0.3 s of coasting: about 760 counts of 2000 per turn.
     assert!((700.0..800.0).contains(&predicted), "{predicted}");
 }
@@ -194,5 +207,9 @@ fn the_simulated_robot_passes_with_skips_for_what_it_lacks() {
     assert_eq!(row(&r, Check::Neck).status, CheckStatus::Pass);
     assert_eq!(row(&r, Check::Neck).detail, 102.0, "homing from ahead");
     assert_eq!(row(&r, Check::LeftMotor).status, CheckStatus::Pass);
-    assert_eq!(plant.pose().x_m, 1.0, "a pulse leaves the robot where it stands");
+    assert_eq!(
+        plant.pose().x_m,
+        1.0,
+        "a pulse leaves the robot where it stands"
+    );
 }

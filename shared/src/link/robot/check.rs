@@ -75,15 +75,13 @@ pub(super) fn self_test_busy(state: RunState) -> ErrorReply {
 #[cfg(test)]
 mod tests {
     use super::super::tests::ready;
-    use crate::link::message::{ErrorCode, Reply, Request};
     use crate::link::frame::{encode, MAX_FRAME_BYTES};
+    use crate::link::message::{ErrorCode, Reply, Request};
     use crate::link::DeviceFrame;
     use crate::mission::MissionMode;
     extern crate std;
+    use crate::selftest::{Check, CheckRow, CheckStatus, Hint, SelfTestReport, MAX_CHECK_ROWS};
     use std::string::ToString;
-    use crate::selftest::{
-        Check, CheckRow, CheckStatus, Hint, SelfTestReport, MAX_CHECK_ROWS,
-    };
 
     #[test]
     fn a_self_test_runs_between_missions_and_keeps_missions_out() {
@@ -103,14 +101,19 @@ mod tests {
         assert!(b.device.take_self_test());
         assert!(!b.device.take_self_test(), "taken once");
         let mut report = SelfTestReport::new();
-        assert_eq!(b.call(Request::SelfTestReport), Reply::SelfTest(report.clone()));
+        assert_eq!(
+            b.call(Request::SelfTestReport),
+            Reply::SelfTest(report.clone())
+        );
         report.done = true;
         b.device.note_self_test(&report);
         assert_eq!(b.call(Request::SelfTestReport), Reply::SelfTest(report));
         assert_eq!(b.call(Request::StartMission), Reply::Ack);
         // And no test while the mission runs.
         match b.call(Request::SelfTest) {
-            Reply::Error(e) => assert_eq!((e.code, e.value, e.detail), (ErrorCode::WrongState, 2, 0)),
+            Reply::Error(e) => {
+                assert_eq!((e.code, e.value, e.detail), (ErrorCode::WrongState, 2, 0))
+            }
             other => panic!("{other:?}"),
         }
     }
