@@ -592,7 +592,7 @@ impl SelfTest {
         match result {
             Ok(Echo::Range(range_m)) => {
                 self.sonar_answered += 1;
-                if !(self.nearest_m <= range_m) {
+                if self.nearest_m.is_nan() || range_m < self.nearest_m {
                     self.nearest_m = range_m;
                 }
             }

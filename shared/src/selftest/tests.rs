@@ -104,7 +104,7 @@ fn each_fault_fails_its_row_with_its_hint() {
     assert_eq!(row(&r, Check::RightMotor).status, CheckStatus::Pass);
 
     let mut body = Scripted::healthy();
-    body.counts.1 = body.counts.1 * 4;
+    body.counts.1 *= 4;
     let r = run_on(&mut body);
     assert_eq!(row(&r, Check::RightMotor).hint, Hint::EncoderCountsOff);
     body = Scripted::healthy();
