@@ -251,6 +251,24 @@ pub enum Side {
     Right,
 }
 
+impl Side {
+    /// `(left, right)` volts with `voltage_v` on this wheel and 0 on the other.
+    pub fn volts(self, voltage_v: f32) -> (f32, f32) {
+        match self {
+            Side::Left => (voltage_v, 0.0),
+            Side::Right => (0.0, voltage_v),
+        }
+    }
+
+    /// This wheel's value of a `(left, right)` pair.
+    pub fn of<T>(self, (left, right): (T, T)) -> T {
+        match self {
+            Side::Left => left,
+            Side::Right => right,
+        }
+    }
+}
+
 /// What the self-test asks the body.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

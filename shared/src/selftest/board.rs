@@ -11,15 +11,11 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::pwm::SetDutyCycle;
 
-use super::{Answer, CheckBody, Echo, Probe, Side};
-use crate::drivers::body::{neck_fault, sonar_fault, Chassis, SonarHead};
+use super::{Answer, CheckBody, Echo, Probe};
+use crate::drivers::body::{neck_fault, Chassis, SonarHead};
 use crate::drivers::echo::EchoOutcome;
 use crate::drivers::{BatterySensor, EchoCapture, QuadratureCounter};
-use crate::failsafe::StopCause;
 use crate::robot::RobotConfig;
-
-/// Control periods a pulse may take beyond its own (the e-stop's released polls before duty).
-const EXTRA_PERIODS: u32 = crate::drivers::emergency_stop::RELEASED_POLLS_TO_RUN + 1;
 
 /// The board's body for [`super::run`]: the chassis, the head, a delay for the control
 /// periods of a pulse, and the robot they were built for.
@@ -74,107 +70,35 @@ where
                     .map(|steps| steps.unsigned_abs())
                     .map_err(neck_fault),
             ),
-            Probe::Sonar(angle_deg) => Answer::Sonar(self.ping(angle_deg)),
+            Probe::Sonar(angle_deg) => {
+                Answer::Sonar(self.head.ping(angle_deg.to_radians()).map(|reading| {
+                    match (reading.outcome, reading.range_m) {
+                        (EchoOutcome::Silent, _) => Echo::Silent,
+                        (_, Some(range_m)) => Echo::Range(range_m),
+                        (_, None) => Echo::NoTarget,
+                    }
+                }))
+            }
             Probe::Pulse {
                 side,
                 voltage_v,
                 on_ms,
                 coast_ms,
-            } => Answer::Pulse(self.pulse(side, voltage_v, on_ms, coast_ms)),
-        }
-    }
-}
-
-impl<PWML, DIRL, PWMR, DIRR, QL, QR, ESTOP, BAT, TRIG, ECHO, SD, STEP, DIR, HOME, ND, D>
-    BoardCheck<
-        '_,
-        Chassis<PWML, DIRL, PWMR, DIRR, QL, QR, ESTOP, BAT>,
-        SonarHead<TRIG, ECHO, SD, STEP, DIR, HOME, ND>,
-        D,
-    >
-where
-    PWML: SetDutyCycle,
-    DIRL: OutputPin,
-    PWMR: SetDutyCycle,
-    DIRR: OutputPin,
-    QL: QuadratureCounter,
-    QR: QuadratureCounter,
-    ESTOP: InputPin,
-    BAT: BatterySensor,
-    TRIG: OutputPin,
-    ECHO: EchoCapture,
-    SD: DelayNs,
-    STEP: OutputPin,
-    DIR: OutputPin,
-    HOME: InputPin,
-    ND: DelayNs,
-    D: DelayNs,
-{
-    /// One ping at `angle_deg` (the neck moved there first when it is homed).
-    fn ping(&mut self, angle_deg: f32) -> Result<Echo, StopCause> {
-        if self.head.neck().position_steps().is_some() {
-            self.head
-                .neck_mut()
-                .move_to_angle(angle_deg)
-                .map_err(neck_fault)?;
-        }
-        let reading = self.head.sonar_mut().read().map_err(sonar_fault)?;
-        Ok(match (reading.outcome, reading.range_m) {
-            (EchoOutcome::Silent, _) => Echo::Silent,
-            (_, Some(range_m)) => Echo::Range(range_m),
-            (_, None) => Echo::NoTarget,
-        })
-    }
-
-    /// Drive one wheel for `on_ms` (counted from its first period with duty), then coast for
-    /// `coast_ms`; the wheel's counts over all of it.
-    fn pulse(
-        &mut self,
-        side: Side,
-        voltage_v: f32,
-        on_ms: u32,
-        coast_ms: u32,
-    ) -> Result<i32, StopCause> {
-        let period_ms = ((self.config.controller_period_s * 1000.0) as u32).max(1);
-        let on_periods = on_ms.div_ceil(period_ms);
-        let coast_periods = coast_ms.div_ceil(period_ms);
-        self.chassis.restart(&self.config)?;
-        let _ = self.chassis.read_counts();
-        let (left_v, right_v) = match side {
-            Side::Left => (voltage_v, 0.0),
-            Side::Right => (0.0, voltage_v),
-        };
-        let mut counts = 0i32;
-        let mut driven = 0;
-        let mut result = Ok(());
-        for _ in 0..on_periods + EXTRA_PERIODS {
-            let drive = self.chassis.drive(left_v, right_v);
-            if let Some(cause) = drive.stop {
-                result = Err(cause);
-                break;
+            } => {
+                let period_ms = ((self.config.controller_period_s * 1000.0) as u32).max(1);
+                let periods = (
+                    on_ms.div_ceil(period_ms),
+                    coast_ms.div_ceil(period_ms),
+                    period_ms,
+                );
+                let counts = self.chassis.pulse(
+                    &self.config,
+                    side.volts(voltage_v),
+                    periods,
+                    &mut self.delay,
+                );
+                Answer::Pulse(counts.map(|counts| side.of(counts)))
             }
-            self.delay.delay_ms(period_ms);
-            counts = counts.saturating_add(self.side_counts(side));
-            if drive.left_v != 0.0 || drive.right_v != 0.0 {
-                driven += 1;
-                if driven >= on_periods {
-                    break;
-                }
-            }
-        }
-        self.chassis.stop();
-        for _ in 0..coast_periods {
-            self.delay.delay_ms(period_ms);
-            counts = counts.saturating_add(self.side_counts(side));
-        }
-        result.map(|()| counts)
-    }
-
-    fn side_counts(&mut self, side: Side) -> i32 {
-        let (left, right) = self.chassis.read_counts();
-        match side {
-            Side::Left => left.counts,
-            Side::Right => right.counts,
         }
     }
 }

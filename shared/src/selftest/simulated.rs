@@ -7,7 +7,7 @@
 //! step); a ping casts the sonar's ray on the real world the host uploaded; a pulse drives a
 //! copy of the plant, as wheels lifted off the floor, so the simulated robot does not move.
 
-use super::{Answer, CheckBody, Echo, Probe, Side};
+use super::{Answer, CheckBody, Echo, Probe};
 use crate::drivers::neck_stepper::NeckGeometry;
 use crate::plant::Plant;
 use crate::world::Obstacles;
@@ -83,18 +83,16 @@ impl CheckBody for SimulatedCheck<'_> {
                 coast_ms,
             } => {
                 let mut plant = self.plant.clone();
-                let (left_v, right_v) = match side {
-                    Side::Left => (voltage_v, 0.0),
-                    Side::Right => (0.0, voltage_v),
-                };
+                let (left_v, right_v) = side.volts(voltage_v);
                 let before = plant.encoder_counts();
                 plant.step(on_ms as f32 / 1000.0, left_v, right_v);
                 plant.step(coast_ms as f32 / 1000.0, 0.0, 0.0);
                 let after = plant.encoder_counts();
-                Answer::Pulse(Ok(match side {
-                    Side::Left => after.0.wrapping_sub(before.0),
-                    Side::Right => after.1.wrapping_sub(before.1),
-                }))
+                let (left, right) = (
+                    after.0.wrapping_sub(before.0),
+                    after.1.wrapping_sub(before.1),
+                );
+                Answer::Pulse(Ok(side.of((left, right))))
             }
         }
     }
