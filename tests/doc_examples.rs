@@ -58,6 +58,21 @@ const SKIPPED: &[(&str, &str, &str)] = &[
         "needs QEMU and the firmware ELF (the console example beside it runs it)",
     ),
     (
+        "docs/bring-up.md",
+        "twil ping --remote /dev/ttyUSB0",
+        "needs a board on a serial port (tests/serial_pty.rs runs it on QEMU's pseudo-terminal)",
+    ),
+    (
+        "docs/bring-up.md",
+        "twil check --remote /dev/ttyUSB0",
+        "needs a board on a serial port (tests/serial_pty.rs runs it on QEMU's pseudo-terminal)",
+    ),
+    (
+        "docs/bring-up.md",
+        "twil mission --remote /dev/ttyUSB0",
+        "needs a board on a serial port and a room (tests/serial_pty.rs runs a mission on QEMU's pseudo-terminal)",
+    ),
+    (
         "docs/mission.md",
         "twil mission --remote qemu",
         "QEMU runs the firmware for minutes (tests/mission_remote.rs covers it under cargo xtask test)",

@@ -29,6 +29,7 @@ mod protocol_client;
 mod recording;
 mod robot_file;
 mod safe_params;
+mod serial_pty;
 mod sim_scenarios;
 mod sonar_beam;
 mod sonar_grid;

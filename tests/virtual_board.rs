@@ -8,6 +8,7 @@
 //! (`begin_move_to_angle` / `step`, `fire` / decoder / `finish`, `judge`); plans run at once.
 //! Each test runs in well under a second (a few simulated seconds of events).
 
+mod selftest;
 mod world;
 
 use twil_core::drivers::body::{neck_fault, sonar_fault};

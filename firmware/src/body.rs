@@ -161,6 +161,13 @@ mod board_body {
             self.chassis.stop();
         }
 
+        /// The self-test's probes the chassis answers at once (the e-stop, the battery).
+        pub fn checks(&mut self) -> twil_core::selftest::board::ChassisCheck<'_, BoardChassis> {
+            twil_core::selftest::board::ChassisCheck {
+                chassis: &mut self.chassis,
+            }
+        }
+
         /// Encoder counts since the previous call (left, right); implausible jumps count 0.
         pub fn encoder_deltas(&mut self) -> (i32, i32) {
             let (l, r) = self.chassis.read_counts();

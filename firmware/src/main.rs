@@ -158,6 +158,10 @@ fn instructions() -> u64 {
     raw_clock() / NS_PER_INSTRUCTION.load(Ordering::Relaxed).max(1) as u64
 }
 
+/// The core clock comes from the crystal (board; set once in `init`), for the self-test.
+#[cfg(feature = "hardware")]
+static CRYSTAL_RUNNING: AtomicBool = AtomicBool::new(false);
+
 /// Bytes dropped on the way in (a queue full, or a line error: overrun, framing, noise).
 static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
 /// Frames not sent because the transmit queue could not take the whole frame (the mission
@@ -364,6 +368,10 @@ mod app {
         #[cfg(feature = "hardware")]
         let mut rcc = {
             let (rcc, source) = board::start_clocks(rcc);
+            CRYSTAL_RUNNING.store(
+                matches!(source, board::ClockSource::Crystal { .. }),
+                Ordering::Relaxed,
+            );
             board::log_clocks(&rcc, source);
             rcc
         };
@@ -900,6 +908,17 @@ mod app {
                     &mut |bytes: &[u8]| queue_frame(tx, bytes),
                 );
             }
+            // The bring-up self-test, between missions (the device refuses it during one).
+            if device.take_self_test() {
+                busy = true;
+                let report = self_test(&mut cx.shared.body, &mut cx.shared.world);
+                log!(
+                    "self-test: {} rows, {} failed",
+                    report.rows.len(),
+                    report.failures()
+                );
+                device.note_self_test(&report);
+            }
             // Failsafes: a control step that missed its period (motors already zeroed), a host
             // silent for longer than the mission's link-loss timeout.
             if OVERRUN.swap(false, Ordering::AcqRel) {
@@ -1016,6 +1035,49 @@ mod app {
                 Mono::delay(ms(1)).await;
             }
         }
+    }
+
+    /// The self-test on the simulated robot where it stands (QEMU): the sonar's pings on the
+    /// real world, the pulses on a copy of the plant; at once (a few thousand plant sub-steps).
+    #[cfg(feature = "qemu")]
+    fn self_test(
+        body: &mut impl rtic::Mutex<T = body::Body>,
+        world: &mut impl rtic::Mutex<T = body::World>,
+    ) -> twil_core::selftest::SelfTestReport {
+        use twil_core::selftest::{run, simulated::SimulatedCheck, ClockFacts, ClockSource};
+        let config = twil_core::robot::RobotConfig::DEFAULT;
+        let plant = body.lock(|b| b.snapshot());
+        let clock = ClockFacts {
+            core_hz: SYSTICK_HZ,
+            source: ClockSource::Emulated,
+        };
+        let mut test = twil_core::selftest::SelfTest::new(&config, clock);
+        world.lock(|w| {
+            let mut check = SimulatedCheck::new(&plant, &w.obstacles, config.sonar_range_m);
+            run(&mut test, &mut check).clone()
+        })
+    }
+
+    /// The self-test on the board: the e-stop and the battery from the chassis; the neck, the
+    /// sonar and the wheel pulses need the sonar task's and the control task's waits and are
+    /// not wired yet (their rows say so).
+    #[cfg(feature = "hardware")]
+    fn self_test(
+        body: &mut impl rtic::Mutex<T = body::Body>,
+        _world: &mut impl rtic::Mutex<T = body::World>,
+    ) -> twil_core::selftest::SelfTestReport {
+        use twil_core::selftest::{ClockFacts, ClockSource};
+        let clock = ClockFacts {
+            core_hz: SYSTICK_HZ,
+            source: if CRYSTAL_RUNNING.load(Ordering::Relaxed) {
+                ClockSource::Crystal
+            } else {
+                ClockSource::Internal
+            },
+        };
+        let config = twil_core::robot::RobotConfig::DEFAULT;
+        let mut test = twil_core::selftest::SelfTest::new(&config, clock);
+        body.lock(|b| twil_core::selftest::run(&mut test, &mut b.checks()).clone())
     }
 
     /// The body stopped the motors (`stop`: why, once): an e-stop press is timed like a stop

@@ -211,6 +211,9 @@ impl Shell {
                 // next tick.
                 self.command_pilot();
             }
+            if self.device.take_self_test() {
+                self.self_test();
+            }
             // The host silent for longer than the mission's link timeout: its reaction.
             if self.device.link(&mut self.mission).watch_link().is_some() {
                 self.command_pilot();
@@ -228,6 +231,25 @@ impl Shell {
                 return;
             }
         }
+    }
+
+    /// The self-test on the simulated robot where it stands (at the origin before the first
+    /// mission), at once: the report goes to the device, which answers the host's polls.
+    fn self_test(&mut self) {
+        use twil_core::selftest::{run, simulated::SimulatedCheck, ClockFacts, ClockSource};
+        let config = twil_core::robot::RobotConfig::DEFAULT;
+        let plant = self
+            .plant
+            .clone()
+            .unwrap_or_else(|| Plant::new(&config, Pose::default()));
+        let clock = ClockFacts {
+            core_hz: twil_core::selftest::CORE_CLOCK_HZ,
+            source: ClockSource::Emulated,
+        };
+        let mut test = twil_core::selftest::SelfTest::new(&config, clock);
+        let mut body = SimulatedCheck::new(&plant, &self.world.obstacles, config.sonar_range_m);
+        let report = run(&mut test, &mut body).clone();
+        self.device.note_self_test(&report);
     }
 
     fn command_pilot(&mut self) {

@@ -40,6 +40,8 @@ enum Command {
     Robot(cmd::robot::Args),
     /// Read and set the device's parameters (`list`, `get NAME`, `set NAME VALUE`), kept in its flash.
     Param(cmd::param::Args),
+    /// Bring-up self-test of the device: link, clock, e-stop, battery, neck, sonar, motors.
+    Check(cmd::check::Args),
 }
 
 fn main() {
@@ -55,6 +57,7 @@ fn main() {
         Command::View(args) => cmd::view::run(args),
         Command::Robot(args) => cmd::robot::run(args),
         Command::Param(args) => cmd::param::run(args),
+        Command::Check(args) => cmd::check::run(args),
     };
     match result {
         Ok(ending) => std::process::exit(ending.code()),

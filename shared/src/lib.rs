@@ -23,6 +23,8 @@
 //!   `embedded-storage` NOR flash.
 //! - [`failsafe`]: the robot's failsafes (watchdog gate, reset cause, link loss, overrun) as
 //!   pure step functions the firmware wires.
+//! - [`selftest`]: the bring-up self-test (`twil check`) as a pure step function over probes
+//!   that the board's drivers and the simulated robot answer alike.
 //! - [`drivers`]: the logic of the drivers for Twil's boards (sonar, neck, motors, encoders,
 //!   emergency stop) over embedded-hal 1.0 traits.
 //!
@@ -48,6 +50,7 @@ pub mod plan;
 pub mod plant;
 pub mod raster;
 pub mod robot;
+pub mod selftest;
 pub mod sonar;
 pub mod trajectory;
 pub mod world;

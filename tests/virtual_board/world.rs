@@ -59,6 +59,14 @@ pub struct State {
     pub counts_per_s: (f64, f64),
     /// Raw counters at time 0.
     pub counter_start: (u16, u16),
+    /// Wheels driven by their motors (the self-test's pulses): forward counts per second per
+    /// volt applied (duty × battery), left and right; 0 (the default) leaves the counters to
+    /// [`State::counts_per_s`] alone. The right encoder is mounted mirrored, as the board's.
+    pub counts_per_s_per_v: [f64; 2],
+    /// An encoder's A and B wires swapped: it counts the other way.
+    pub encoder_swapped: [bool; 2],
+    driven_counts: [f64; 2],
+    driven_at_ns: u64,
     /// The home switch closes at or below [`State::home_at_steps`] (false: broken).
     pub home_switch_works: bool,
     /// Where the home switch is, steps from straight ahead.
@@ -110,6 +118,10 @@ impl World {
             battery_fails: false,
             counts_per_s: (0.0, 0.0),
             counter_start: (0, 0),
+            counts_per_s_per_v: [0.0; 2],
+            encoder_swapped: [false; 2],
+            driven_counts: [0.0; 2],
+            driven_at_ns: 0,
             home_switch_works: true,
             home_at_steps: -102,
             neck_steps: 30,
@@ -169,6 +181,30 @@ impl State {
                 self.battery_v - self.sag_v_per_s * ((self.now_ns - from) as f32 * 1e-9)
             }
             _ => self.battery_v,
+        }
+    }
+
+    /// Move the driven wheels up to now at the duty and direction they have had since the last
+    /// change (the left bridge's direction high is forward, the right's low: mirrored).
+    fn integrate_wheels(&mut self) {
+        let dt_s = self.now_ns.saturating_sub(self.driven_at_ns) as f64 * 1e-9;
+        self.driven_at_ns = self.now_ns;
+        let battery_v = f64::from(self.battery_now_v());
+        for side in 0..2 {
+            let (duty, dir_high) = self.duty[side];
+            let forward = dir_high == (side == 0);
+            let volts = f64::from(duty) / f64::from(MAX_DUTY) * battery_v;
+            let mut raw = self.counts_per_s_per_v[side] * volts * dt_s;
+            if !forward {
+                raw = -raw;
+            }
+            if side == 1 {
+                raw = -raw;
+            }
+            if self.encoder_swapped[side] {
+                raw = -raw;
+            }
+            self.driven_counts[side] += raw;
         }
     }
 
@@ -261,7 +297,10 @@ impl OutputPin for Pin {
                     s.trigger_high_since = Some(s.now_ns);
                 }
             }
-            PinKind::MotorDir(side) => s.duty[side].1 = true,
+            PinKind::MotorDir(side) => {
+                s.integrate_wheels();
+                s.duty[side].1 = true
+            }
             PinKind::Home | PinKind::Estop => {}
         }
         Ok(())
@@ -288,7 +327,10 @@ impl OutputPin for Pin {
                     s.trigger_fall(since);
                 }
             }
-            PinKind::MotorDir(side) => s.duty[side].1 = false,
+            PinKind::MotorDir(side) => {
+                s.integrate_wheels();
+                s.duty[side].1 = false
+            }
             PinKind::Home | PinKind::Estop => {}
         }
         Ok(())
@@ -384,6 +426,7 @@ impl SetDutyCycle for Pwm {
 
     fn set_duty_cycle(&mut self, duty: u16) -> Result<(), Infallible> {
         let mut s = self.0 .0.borrow_mut();
+        s.integrate_wheels();
         s.duty[self.1].0 = duty;
         let now = s.now_ns;
         s.duty_log.push((now, self.1, duty));
@@ -396,13 +439,14 @@ pub struct Counter(pub World, pub usize);
 
 impl QuadratureCounter for Counter {
     fn count(&mut self) -> u16 {
-        let s = self.0 .0.borrow();
+        let mut s = self.0 .0.borrow_mut();
+        s.integrate_wheels();
         let (rate, start) = if self.1 == 0 {
             (s.counts_per_s.0, s.counter_start.0)
         } else {
             (s.counts_per_s.1, s.counter_start.1)
         };
-        let moved = (rate * s.now_ns as f64 * 1e-9).round() as i64;
+        let moved = (rate * s.now_ns as f64 * 1e-9 + s.driven_counts[self.1]).round() as i64;
         (i64::from(start) + moved).rem_euclid(65_536) as u16
     }
 }

@@ -1,6 +1,7 @@
 //! One module per `twil` subcommand.
 
 pub mod args;
+pub mod check;
 pub mod compare;
 pub mod cspace;
 pub mod mission;

@@ -267,6 +267,79 @@ where
         }
     }
 
+    /// Read the e-stop input now (the self-test): pressed or not; an unreadable input is
+    /// [`Sensor::EmergencyStopInput`]. A press latches the stop as in [`drive`](Self::drive).
+    pub fn read_estop(&mut self) -> Result<bool, StopCause> {
+        let pressed = self.estop.read_pressed();
+        if self.estop.last_read_failed() {
+            Err(StopCause::SensorFault(Sensor::EmergencyStopInput))
+        } else {
+            Ok(pressed)
+        }
+    }
+
+    /// Read the battery now (the self-test), volts; a failed read is [`Sensor::Battery`].
+    pub fn read_battery_v(&mut self) -> Result<f32, StopCause> {
+        match self.battery.read_battery_v() {
+            Ok(v) => {
+                self.battery_v = v;
+                Ok(v)
+            }
+            Err(_) => {
+                self.battery_v = f32::NAN;
+                Err(StopCause::SensorFault(Sensor::Battery))
+            }
+        }
+    }
+
+    /// Drive the wheels at `left_v` / `right_v` for `on_periods` control periods of
+    /// `period_ms` (counted from the first with duty: the e-stop's released polls come first),
+    /// then at 0 V for `coast_periods`, waiting with `delay`: the self-test's pulse. Armed as
+    /// a mission start ([`restart`](Self::restart): refused while the e-stop is pressed) and
+    /// disarmed at the end. Returns both wheels' counts over all of it (forward positive), or
+    /// what stopped it (the e-stop, the battery, a motor pin).
+    pub fn pulse(
+        &mut self,
+        config: &RobotConfig,
+        (left_v, right_v): (f32, f32),
+        (on_periods, coast_periods, period_ms): (u32, u32, u32),
+        delay: &mut impl DelayNs,
+    ) -> Result<(i32, i32), StopCause> {
+        self.restart(config)?;
+        let _ = self.read_counts();
+        let mut counts = (0i32, 0i32);
+        let mut add = |(l, r): (WheelCounts, WheelCounts)| {
+            counts = (
+                counts.0.saturating_add(l.counts),
+                counts.1.saturating_add(r.counts),
+            );
+        };
+        let mut driven = 0;
+        let mut result = Ok(());
+        let extra = super::emergency_stop::RELEASED_POLLS_TO_RUN + 1;
+        for _ in 0..on_periods.saturating_add(extra) {
+            let drive = self.drive(left_v, right_v);
+            if let Some(cause) = drive.stop {
+                result = Err(cause);
+                break;
+            }
+            delay.delay_ms(period_ms);
+            add(self.read_counts());
+            if drive.left_v != 0.0 || drive.right_v != 0.0 {
+                driven += 1;
+                if driven >= on_periods {
+                    break;
+                }
+            }
+        }
+        self.stop();
+        for _ in 0..coast_periods {
+            delay.delay_ms(period_ms);
+            add(self.read_counts());
+        }
+        result.map(|()| counts)
+    }
+
     /// The battery voltage last read, volts (NaN before the first reading or after a failed
     /// one).
     pub fn battery_v(&self) -> f32 {
@@ -340,6 +413,18 @@ where
             .map_err(neck_fault)?;
         let reading = self.sonar.read();
         self.judge(reading)
+    }
+
+    /// One ping at `neck_angle_rad`, the neck moved there first when it is homed (else where
+    /// it points), without the silence counting of [`judge`](Self::judge): the self-test's
+    /// ping, which reports a silent echo line itself.
+    pub fn ping(&mut self, neck_angle_rad: f32) -> Result<SonarReading, StopCause> {
+        if self.neck.position_steps().is_some() {
+            self.neck
+                .move_to_angle(neck_angle_rad.to_degrees())
+                .map_err(neck_fault)?;
+        }
+        self.sonar.read().map_err(sonar_fault)
     }
 
     /// The range of one ping's reading, counting silent pings: [`SILENT_PINGS_TO_FAULT`] in a

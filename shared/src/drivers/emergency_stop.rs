@@ -133,6 +133,18 @@ impl<P: InputPin> EmergencyStop<P> {
         !self.latched && self.released_polls >= RELEASED_POLLS_TO_RUN
     }
 
+    /// Read the pin now, for the self-test: pressed (or unreadable, see
+    /// [`last_read_failed`](Self::last_read_failed)). A press latches as in a poll; a release
+    /// changes nothing.
+    pub fn read_pressed(&mut self) -> bool {
+        let pressed = self.pressed_now();
+        if pressed {
+            self.released_polls = 0;
+            self.latch(self.last_read_failed);
+        }
+        pressed
+    }
+
     /// Latch from software (an abort request), as if pressed.
     pub fn trip(&mut self) {
         self.latch(false);

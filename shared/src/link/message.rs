@@ -23,7 +23,8 @@ use crate::plan::{PlanStatus, PlannerKind};
 /// following choices of `--preset` in `SetMission` (fields 13–19), `MissionStats::blind_cuts`.
 /// 5: `StopCause::SensorFault` (the board's body: homing, sonar, battery, motors, e-stop input).
 /// 6: the device's parameters (requests `ParamList`, `ParamGet`, `ParamSet`; replies `Param`,
-/// `ParamRefused`; error codes `UnknownParam`, `StoreFailed`).
+/// `ParamRefused`; error codes `UnknownParam`, `StoreFailed`) and the bring-up self-test
+/// (`Request::SelfTest`, `Request::SelfTestReport`, `Reply::SelfTest`).
 pub const PROTOCOL_VERSION: u16 = 6;
 
 /// Points carried by one telemetry chunk of hits, prefix or path.
@@ -219,6 +220,13 @@ pub enum Request {
         /// The new value (a whole number, 0 / 1, a choice's index: see `twil_core::params`).
         value: f32,
     },
+    /// Start the bring-up self-test ([`crate::selftest`]): the motors pulse one wheel at a
+    /// time, the neck homes and turns, the sonar pings. Refused while a mission runs or is
+    /// paused, or a self-test runs. Answered by [`Reply::Ack`]; then poll
+    /// [`Request::SelfTestReport`].
+    SelfTest,
+    /// Answered by [`Reply::SelfTest`]: the rows so far, `done` once all are in.
+    SelfTestReport,
 }
 
 /// One row of the device's parameter table ([`Reply::Param`]).
@@ -538,6 +546,8 @@ pub enum Reply {
     Param(ParamEntry),
     /// A [`Request::ParamSet`] refused by the model: nothing changed.
     ParamRefused(ParamRefusal),
+    /// The self-test's rows ([`Request::SelfTestReport`]).
+    SelfTest(crate::selftest::SelfTestReport),
 }
 
 /// Why a request failed. The variant index is the code on the wire (postcard varint).
@@ -578,7 +588,7 @@ pub enum ErrorCode {
     NotOnThisBuild,
     /// 15: not now: `value` is the [`RunState`] index that refuses it (e.g. `SetMission` while
     /// running, `StartMission` without a setup: 0), `detail` 1 when the emergency stop is
-    /// latched.
+    /// latched, 2 when the self-test runs.
     WrongState,
     /// 16: the mission setup is refused: `value` is the index of the offending field of
     /// [`MissionSetup`] (or 100 + the robot config's, see the device log; 100 is the planning
@@ -672,6 +682,8 @@ impl core::fmt::Display for ErrorReply {
             ErrorCode::WrongState => {
                 if self.detail == 1 {
                     write!(f, "the emergency stop is latched (clear it first)")
+                } else if self.detail == 2 {
+                    write!(f, "not now: the self-test runs")
                 } else {
                     let state = match v {
                         0 => "no mission is set up",

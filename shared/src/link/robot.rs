@@ -202,6 +202,8 @@ pub struct RobotDevice<const W: usize> {
     /// The robot config of the next mission and the store's status (`ParamList` / `Get` /
     /// `Set`, see [`super::params`]).
     params: DeviceParams,
+    check_state: CheckState,
+    check_report: crate::selftest::SelfTestReport,
 }
 
 impl<const W: usize> RobotDevice<W> {
@@ -255,6 +257,8 @@ impl<const W: usize> RobotDevice<W> {
             },
             replay: ReplayCache::new(),
             params: DeviceParams::DEFAULT,
+            check_state: CheckState::Idle,
+            check_report: crate::selftest::SelfTestReport::new(),
         }
     }
 
@@ -583,6 +587,8 @@ impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
                 Ok(Reply::Ack)
             }
             Request::MissionStatus => Ok(Reply::Mission(self.report())),
+            Request::SelfTest => self.d.start_self_test(),
+            Request::SelfTestReport => Ok(Reply::SelfTest(self.d.check_report.clone())),
             _ => return None,
         })
     }
@@ -685,6 +691,9 @@ impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
                 limit: 0,
                 detail: 1,
             });
+        }
+        if self.d.self_test_busy() {
+            return Err(check::self_test_busy(self.d.state));
         }
         let Some(setup) = self.d.setup else {
             return Err(ErrorReply::new(ErrorCode::WrongState, 0, 0));
@@ -980,6 +989,9 @@ fn state_index(state: RunState) -> u32 {
         RunState::Ended => 4,
     }
 }
+
+mod check;
+pub use check::CheckState;
 
 #[cfg(test)]
 mod tests;

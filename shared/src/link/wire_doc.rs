@@ -67,7 +67,10 @@ fn registry() -> Registry {
         StopCause,
         StoreStatus,
         SweepLayout,
-        UnreachableReason
+        UnreachableReason,
+        crate::selftest::Check,
+        crate::selftest::CheckStatus,
+        crate::selftest::Hint
     );
     tracer
         .registry()

@@ -280,7 +280,9 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
             | Request::MissionStatus
             | Request::ParamList { .. }
             | Request::ParamGet { .. }
-            | Request::ParamSet { .. } => Err(ErrorReply::new(ErrorCode::NotOnThisBuild, 0, 0)),
+            | Request::ParamSet { .. }
+            | Request::SelfTest
+            | Request::SelfTestReport => Err(ErrorReply::new(ErrorCode::NotOnThisBuild, 0, 0)),
         }
     }
 
