@@ -1,4 +1,4 @@
-//! How the mission writes the evidence map ([`MissionConfig::evidence_map`]): rays, reflectors,
+//! How the mission writes the evidence map ([`MissionConfig::evidence_map`](crate::mission::MissionConfig::evidence_map)): rays, reflectors,
 //! taken-back marks and suspects, and the grown 1-bit grid the planners read, derived from the
 //! occupied evidence.
 //!

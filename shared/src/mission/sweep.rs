@@ -65,7 +65,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     }
 
     /// The robot config a sweep is planned with: moving sweeps use
-    /// [`MissionConfig::moving_half_sweep_deg`].
+    /// [`MissionConfig::moving_half_sweep_deg`](crate::mission::MissionConfig::moving_half_sweep_deg).
     pub(super) fn sweep_robot(&self, moving: bool) -> RobotConfig {
         let mut robot = self.config.robot;
         if moving {

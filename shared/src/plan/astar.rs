@@ -11,7 +11,7 @@
 //! corridor cells counted as expanded); the steps that got there: docs/planners-history.md,
 //! "Cell-by-cell A\*: the expansion loop" and the sections before it.
 
-use super::class_queue::{ClassQueue, QueueState};
+use super::class_queue::ClassQueue;
 use super::codes::{Dir, CODE_START, E, N, NE, NW, S, SE, STEPS, SW, W};
 use super::corridor::{corridor_index, walk_corridor, CORRIDOR_SIDES, WALK_GIVE_UP_CREDIT};
 use super::goal::{
@@ -19,7 +19,7 @@ use super::goal::{
     GOAL_TABLE_WORDS, STEP_CLASSES,
 };
 use super::layout::{CellMap, Flat, Framed, Interior, FRAMED_WORDS, NIBBLE_WINDOWS};
-use super::open_list::{OpenEntry, OpenList, NIL};
+use super::open_list::{OpenEntry, OpenList, QueueState, NIL};
 use super::planner::{Layout, Planner, Search};
 use super::ring_queue::RingQueue;
 use super::{scratch_words_for_cells, PlanError, DIAGONAL_COST, STRAIGHT_COST};

@@ -8,23 +8,7 @@
 //! "Cell-by-cell A\*: queue by reduced-cost class".
 
 use super::goal::{CLASSES, CLASS_COSTS};
-use super::open_list::{OpenEntry, OpenList, NIL};
-
-/// The scalar state of a [`ClassQueue`], kept apart from its arrays so that the search loop
-/// holds it in registers (it is passed by value to the queue's out-of-line parts).
-#[derive(Clone, Copy)]
-pub(super) struct QueueState {
-    /// Head of the stack of entries whose key equals `last` (reduced cost 0).
-    pub(super) stack: u32,
-    /// The last key popped (every key in the queue is at least this).
-    pub(super) last: u32,
-    /// Entries of the pool ever used (the queue peak).
-    pub(super) bump: u32,
-    /// Head of the list of freed entries.
-    pub(super) free: u32,
-    /// The FIFO class of the last pop from a FIFO (1 ..= 5): its head is tried first.
-    pub(super) class: u32,
-}
+use super::open_list::{OpenEntry, OpenList, QueueState, NIL};
 
 /// The open list of the cell-by-cell A*: lists by *reduced cost* over a fixed pool of entries.
 ///

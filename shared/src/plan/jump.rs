@@ -2,10 +2,10 @@
 //! uncluttered maps (unit costs, `jump_points::<UNIT>`): A* over jump points only, each reached
 //! by a side or 45° scan ([`JumpScan`], on the grid's packed bits: 32 cells per step along a
 //! row, diagonal runs scan their columns together). Closed jump points take *records* from the
-//! back of the queue, whose chain gives the path exactly. Before searching, [`cluttered`]
+//! back of the queue, whose chain gives the path exactly. Before searching, [`cluttered`](super::choice::cluttered)
 //! counts obstacle runs in a sample of the grid's words: cluttered maps go cell by cell at once,
 //! and a search that finds too many jump points gives up ([`JPS_MAX_EXPANSIONS_PER_CELLS`],
-//! [`JPS_STEPS_MAX_EXPANSIONS`]). Measured effect (`cargo xtask mcu-bench` and `twil plan
+//! [`JPS_STEPS_MAX_EXPANSIONS`](super::choice::JPS_STEPS_MAX_EXPANSIONS)). Measured effect (`cargo xtask mcu-bench` and `twil plan
 //! --remote qemu --json` on the bundled worlds): a room-map plan takes 0.9–2.9 M Cortex-M4
 //! instructions for 9–22 jump points (A*), 0.76–1.76 M for 8–15 (BFS); see docs/planners.md,
 //! "A\*: jump point search", and docs/planners-history.md, "BFS by jump points".
@@ -18,7 +18,7 @@ use super::open_list::{OpenEntry, NIL};
 use super::planner::{Planner, Search};
 use super::{DIAGONAL_COST, STRAIGHT_COST};
 use crate::geom::Cell;
-use crate::grid::{Grid, GridGeometry};
+use crate::grid::Grid;
 
 /// The jump scans of [`Planner::jps`], on the grid's packed occupancy bits (1 = occupied):
 /// side scans along a row test 32 cells per step with a few word operations; scans along a
@@ -349,59 +349,6 @@ const JPS_MAX_EXPANSIONS_PER_CELLS: usize = 256;
 /// obstacles, 2 in a maze of 1-cell corridors, where jump point search stays 3x ahead).
 const JPS_WIDE_FRONTIER: usize = 16;
 
-/// Unit-cost jump point search (BFS) gives up, and the layered BFS runs, past this many jump
-/// points (with the wide-frontier test of [`JPS_WIDE_FRONTIER`]): the bundled worlds need 8–15,
-/// sparse random obstacles (1–3 %, not cluttered by the count) hundreds, at about 7 400
-/// Cortex-M4 instructions each, which the layered BFS (about 4 M on 300 × 300) does not repay.
-pub(super) const JPS_STEPS_MAX_EXPANSIONS: u32 = 32;
-
-/// A* runs cell by cell straight away (no jump point search) when the rows between start and
-/// goal (plus [`CLUTTER_MARGIN_ROWS`] on each side) hold more than one obstacle run per this
-/// many cells: 20 % random obstacles have about 1 in 6, a maze of 1-cell corridors 1 in 4, the
-/// bundled room worlds fewer than 1 in 100.
-const CLUTTER_CELLS_PER_RUN: usize = 32;
-/// [`cluttered`] reads one word in this many (of 32 cells each).
-const CLUTTER_SAMPLE_STRIDE: usize = 16;
-/// Rows beyond the start and goal rows that [`cluttered`] also counts.
-const CLUTTER_MARGIN_ROWS: u32 = 16;
-
-/// `true` when the map around start and goal is cluttered (see [`CLUTTER_CELLS_PER_RUN`]): it
-/// counts the runs of occupied cells (a set bit after a clear one) in a sample of the grid's
-/// words (one in [`CLUTTER_SAMPLE_STRIDE`]) over the rows from the lower of the two rows to the
-/// higher, widened by [`CLUTTER_MARGIN_ROWS`]: about 180 word reads on a 300 × 300 grid.
-pub(super) fn cluttered(words: &[u32], geometry: &GridGeometry, start: Cell, goal: Cell) -> bool {
-    let width = geometry.width() as usize;
-    let (lo, hi) = if start.y < goal.y {
-        (start.y, goal.y)
-    } else {
-        (goal.y, start.y)
-    };
-    let first_row = (lo as u32).saturating_sub(CLUTTER_MARGIN_ROWS) as usize;
-    let last_row =
-        ((hi as u32) + CLUTTER_MARGIN_ROWS).min((geometry.height() as u32).saturating_sub(1));
-    let (first_word, end_word) = (
-        first_row * width / 32,
-        ((last_row as usize + 1) * width).div_ceil(32),
-    );
-    // Every `CLUTTER_SAMPLE_STRIDE`-th word; a run that enters a sampled word counts as starting
-    // there.
-    let mut runs = 0usize;
-    let mut sampled = 0usize;
-    for &w in words
-        .get(first_word..end_word)
-        .unwrap_or(&[])
-        .iter()
-        .step_by(CLUTTER_SAMPLE_STRIDE)
-    {
-        if w != 0 {
-            runs += (w & !(w << 1)).count_ones() as usize;
-        }
-        sampled += 1;
-    }
-    let cells = sampled * 32;
-    runs * CLUTTER_CELLS_PER_RUN > cells
-}
-
 /// Unit-cost jump point search ([`Planner::jps_steps`]): the heap key is
 /// `f << UNIT_KEY_SHIFT | h`.
 const UNIT_KEY_SHIFT: u32 = 12;
@@ -435,7 +382,7 @@ impl<const SCRATCH_WORDS: usize, const QUEUE: usize> Planner<SCRATCH_WORDS, QUEU
     /// Chebyshev heuristic): BFS's fewest steps on uncluttered maps. `Search::cost` is the
     /// number of steps. `Err(expanded)` (the caller then runs the layered BFS) when the entries
     /// run out, when more than `max_expanded` jump points were expanded with a wide open list
-    /// (the planner passes [`JPS_STEPS_MAX_EXPANSIONS`]), or when a key would not fit (`f ≥ 2²⁰`
+    /// (the planner passes [`JPS_STEPS_MAX_EXPANSIONS`](super::choice::JPS_STEPS_MAX_EXPANSIONS)), or when a key would not fit (`f ≥ 2²⁰`
     /// steps).
     pub(super) fn jps_steps<const GW: usize>(
         &mut self,

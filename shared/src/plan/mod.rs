@@ -49,6 +49,7 @@
 mod any_angle;
 mod astar;
 mod bfs;
+mod choice;
 mod class_queue;
 mod codes;
 mod corridor;
@@ -57,6 +58,7 @@ mod heap;
 mod jump;
 mod layout;
 mod los;
+mod meet;
 mod open_list;
 mod path;
 mod planner;

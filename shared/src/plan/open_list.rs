@@ -4,8 +4,23 @@
 //! search runs again on a `ClassQueue`). The search loop is generic over the trait: two
 //! instances, the same pops in the same order (tested against each other on random grids).
 
-use super::class_queue::QueueState;
 use super::goal::reduced_cost_class;
+
+/// The scalar state of a `ClassQueue` (or any [`OpenList`]), kept apart from its arrays so that the search loop
+/// holds it in registers (it is passed by value to the queue's out-of-line parts).
+#[derive(Clone, Copy)]
+pub(super) struct QueueState {
+    /// Head of the stack of entries whose key equals `last` (reduced cost 0).
+    pub(super) stack: u32,
+    /// The last key popped (every key in the queue is at least this).
+    pub(super) last: u32,
+    /// Entries of the pool ever used (the queue peak).
+    pub(super) bump: u32,
+    /// Head of the list of freed entries.
+    pub(super) free: u32,
+    /// The FIFO class of the last pop from a FIFO (1 ..= 5): its head is tried first.
+    pub(super) class: u32,
+}
 
 /// One open-list / queue entry: 12 bytes.
 #[derive(Clone, Copy, Debug)]

@@ -5,10 +5,10 @@
 //! The searches themselves live in `jump.rs`, `astar.rs` and `bfs/`, the rebuilds in `path.rs`
 //! and `any_angle.rs`.
 
-use super::bfs::Meet;
+use super::choice::{cluttered, JPS_STEPS_MAX_EXPANSIONS};
 use super::codes::{set_nibble, spread_bits_to_nibbles, BLOCKED, BLOCKED_NIBBLES, CODE_START};
 use super::goal::GOAL_TABLE_WORDS;
-use super::jump::{cluttered, JPS_STEPS_MAX_EXPANSIONS};
+use super::meet::Meet;
 use super::open_list::OpenEntry;
 use super::{
     scratch_words_for_cells, PathCells, PlanError, PlanReport, PlanStatus, PlannerKind,

@@ -7,8 +7,8 @@
 //! random obstacles 5.39 M → 4.99 M instructions; see docs/planners-history.md,
 //! "Cell-by-cell A\*: open list on rings".
 
-use super::class_queue::QueueState;
 use super::goal::{reduced_cost_class, CLASSES, CLASS_COSTS};
+use super::open_list::QueueState;
 use super::open_list::{OpenEntry, OpenList, NIL};
 
 /// Share of the pool per FIFO class `2 ..= 5` of a [`RingQueue`], in 256ths of what the far

@@ -1,4 +1,4 @@
-//! The self-test on the mission device ([`Request::SelfTest`], [`Request::SelfTestReport`]):
+//! The self-test on the mission device ([`Request::SelfTest`](crate::link::Request::SelfTest), [`Request::SelfTestReport`](crate::link::Request::SelfTestReport)):
 //! the device only keeps where the test stands and its latest report; the shell, which owns
 //! the body, runs [`crate::selftest::SelfTest`] when [`RobotDevice::take_self_test`] says so
 //! and hands each report back with [`RobotDevice::note_self_test`]. While the test runs no

@@ -7,25 +7,9 @@
 
 use super::{BfsLayout, FreeBits, NARROW_CHECK_LAYER, NARROW_PAIRS_PER_LAYER, RUN_JOIN_GAP};
 use crate::geom::Cell;
+use crate::plan::meet::Meet;
 use crate::plan::path::PathOut;
 use crate::plan::PathCells;
-
-/// Where the two sides of a layered search met: rows `rows.0 ..= rows.1` of word `word` hold
-/// a cell of the other side that is a legal move away from a cell of the side that was
-/// expanding its layer `layer`. One-sided: the goal's row and word.
-#[derive(Clone, Copy, Debug)]
-pub(in crate::plan) struct Meet {
-    pub(super) rows: (usize, usize),
-    pub(super) word: usize,
-    /// The expanding side was the goal's.
-    pub(super) goal_side: bool,
-    /// The expanding side's frontier layer.
-    pub(super) layer: u32,
-    /// The other side's last layer.
-    pub(super) other_layer: u32,
-    /// The search ran from the start only (no `SIDE` plane): `layer` is the goal's layer.
-    pub(super) one_sided: bool,
-}
 
 /// A merged polyline built move by move: a move in the previous move's direction moves the
 /// last vertex, any other adds one.

@@ -39,6 +39,7 @@
 
 use super::codes::{set_nibble, CODE_START, E, N, NE, NW, S, SE, STEPS, SW, W};
 use super::layout::{Interior, NIBBLE_WINDOWS};
+use super::meet::Meet;
 use super::path::PathOut;
 use super::planner::{Planner, Search};
 use super::{scratch_words_for_cells, PlanError};
@@ -48,7 +49,6 @@ use crate::grid::{Grid, GridGeometry};
 mod kernel;
 mod layers;
 
-pub(super) use layers::Meet;
 use layers::{count_reached, Layers, Outcome, PathBuilder};
 
 /// Where the BFS planes and row sets live in the scratch.
