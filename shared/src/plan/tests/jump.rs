@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::grid::GridGeometry;
-use crate::plan::jump::{cluttered, JPS_STEPS_MAX_EXPANSIONS};
+use crate::plan::choice::{cluttered, JPS_STEPS_MAX_EXPANSIONS};
 
 #[test]
 fn jump_point_search_needs_few_entries_on_room_maps() {
