@@ -2,7 +2,8 @@
 //! pseudo-terminal (`-serial pty`) at the chip's pace and the wall clock's (`-icount
 //! shift=3,sleep=on`: 8 ns per instruction, and idle time passes as real time, so the device's
 //! link-loss clock and the host's agree), and `twil` talking to `/dev/pts/N` through the
-//! `serialport` code a USB adapter uses: `twil ping`, `twil check` and a short mission. About
+//! `serialport` code a USB adapter uses: `twil ping`, `twil check`, `twil param get/set` (a value the
+//! self-test then judges by) and a short mission. About
 //! 20 s, most of it the mission's 14 s of robot time.
 //!
 //! A missing `qemu-system-arm` or ELF fails the test with what to run (as `firmware_qemu`).
@@ -86,6 +87,16 @@ fn twil_ok(args: &[&str]) -> String {
     stdout
 }
 
+/// `twil param get NAME --json` on `pts`: the value.
+fn param_value(pts: &str, name: &str) -> f64 {
+    let line = twil_ok(&["param", "get", name, "--remote", pts, "--json"]);
+    let v: serde_json::Value = serde_json::from_str(line.trim()).expect("one JSON line");
+    assert_eq!(v["name"], name, "{v}");
+    v["value"]
+        .as_f64()
+        .unwrap_or_else(|| panic!("a number: {v}"))
+}
+
 #[test]
 fn ping_check_and_a_short_mission_over_a_pseudo_terminal() {
     let qemu = start();
@@ -120,6 +131,55 @@ fn ping_check_and_a_short_mission_over_a_pseudo_terminal() {
         checks[7]["status"], "pass",
         "the simulated wheel turns: {v}"
     );
+
+    // Parameters over the same line: the device's value feeds its self-test. A robot file
+    // that claims 4 × the encoder's counts makes the simulated wheel's count (756, from the
+    // built-in encoder) a quarter of the prediction: the motor rows fail with their hint.
+    let default = param_value(pts, "encoder_pulses_per_rev");
+    let claimed = (default * 4.0).to_string();
+    twil_ok(&[
+        "param",
+        "set",
+        "encoder_pulses_per_rev",
+        &claimed,
+        "--remote",
+        pts,
+    ]);
+    let out = common::twil()
+        .args(["check", "--remote", pts, "--json"])
+        .output()
+        .expect("run twil");
+    assert_eq!(out.status.code(), Some(1), "a failed row: exit 1");
+    let v: serde_json::Value =
+        serde_json::from_str(String::from_utf8_lossy(&out.stdout).trim()).expect("JSON");
+    let left = &v["checks"][7];
+    assert_eq!(left["status"], "fail", "{v}");
+    assert!(
+        left["hint"]
+            .as_str()
+            .is_some_and(|h| h.contains("encoder_pulses_per_rev")),
+        "{v}"
+    );
+    // A refused value changes nothing; the default goes back for the mission.
+    let out = common::twil()
+        .args(["param", "set", "wheel_radius_m", "100", "--remote", pts])
+        .output()
+        .expect("run twil");
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("refuses `wheel_radius_m` = 100") && stderr.contains("at most 1 m"),
+        "{stderr}"
+    );
+    twil_ok(&[
+        "param",
+        "set",
+        "encoder_pulses_per_rev",
+        &default.to_string(),
+        "--remote",
+        pts,
+    ]);
+    assert_eq!(param_value(pts, "encoder_pulses_per_rev"), default);
 
     // A short mission: 0.8 m ahead in the open, a wall off to the side (14 s of robot time).
     let dir = tempfile::tempdir().unwrap();

@@ -127,13 +127,16 @@ mod board_body {
     use rtic_monotonics::Timebase;
     use twil_core::drivers::body::{neck_fault, sonar_fault};
     use twil_core::drivers::echo::{cycle_us, listen_us};
-    use twil_core::drivers::{EchoCapture, NeckProgress};
+    use twil_core::drivers::{EchoCapture, NeckProgress, SonarReading, WheelPulse};
     use twil_core::failsafe::StopCause;
     use twil_core::robot::RobotConfig;
 
-    /// The wheels, the e-stop and the battery, for the control task.
+    /// The wheels, the e-stop and the battery, for the control task; between missions, the
+    /// self-test's wheel pulse, which the control task runs in its own periods.
     pub struct Body {
         chassis: BoardChassis,
+        pulse: Option<WheelPulse>,
+        pulse_result: Option<Result<(i32, i32), StopCause>>,
     }
 
     /// Split the board into the wheels and the sonar head.
@@ -141,6 +144,8 @@ mod board_body {
         (
             Body {
                 chassis: board.chassis,
+                pulse: None,
+                pulse_result: None,
             },
             Head {
                 head: board.head,
@@ -153,18 +158,74 @@ mod board_body {
         /// A mission starts: its encoder and voltage limits, the encoders' reference, the
         /// e-stop cleared (refused while pressed: the mission then ends with that cause).
         pub fn restart(&mut self, config: &MissionConfig) -> Result<(), StopCause> {
+            self.pulse = None;
             self.chassis.restart(&config.robot)
         }
 
         /// The mission is over: motors at 0, disarmed until the next start.
         pub fn stop(&mut self) {
+            self.pulse = None;
             self.chassis.stop();
         }
 
-        /// The self-test's probes the chassis answers at once (the e-stop, the battery).
-        pub fn checks(&mut self) -> twil_core::selftest::board::ChassisCheck<'_, BoardChassis> {
-            twil_core::selftest::board::ChassisCheck {
-                chassis: &mut self.chassis,
+        /// The self-test: read the e-stop input now.
+        pub fn read_estop(&mut self) -> Result<bool, StopCause> {
+            self.chassis.read_estop()
+        }
+
+        /// The self-test: read the battery now, volts.
+        pub fn read_battery_v(&mut self) -> Result<f32, StopCause> {
+            self.chassis.read_battery_v()
+        }
+
+        /// The self-test: start a wheel pulse (`volts` for `on_periods` control periods with
+        /// duty, then `coast_periods` at 0 V), which [`idle_period`](Self::idle_period) runs;
+        /// its end comes from [`take_pulse_result`](Self::take_pulse_result). Returns the most
+        /// control periods it takes.
+        pub fn begin_pulse(
+            &mut self,
+            robot: &RobotConfig,
+            volts: (f32, f32),
+            on_periods: u32,
+            coast_periods: u32,
+        ) -> u32 {
+            self.pulse_result = None;
+            match self
+                .chassis
+                .begin_pulse(robot, volts, on_periods, coast_periods)
+            {
+                Ok(pulse) => {
+                    let periods = pulse.periods_max();
+                    self.pulse = Some(pulse);
+                    periods
+                }
+                Err(cause) => {
+                    self.pulse = None;
+                    self.pulse_result = Some(Err(cause));
+                    0
+                }
+            }
+        }
+
+        /// The end of the pulse: the counts (left, right) over all of it, or what stopped it;
+        /// `None` while it runs.
+        pub fn take_pulse_result(&mut self) -> Option<Result<(i32, i32), StopCause>> {
+            self.pulse_result.take()
+        }
+
+        /// A control period with no mission: the self-test's pulse when one runs (its
+        /// e-stop, battery and motor faults end the pulse, not a mission: never a stop
+        /// cause), else both motors at 0 (the chassis is disarmed).
+        pub fn idle_period(&mut self) -> Option<StopCause> {
+            match self.pulse.as_mut() {
+                Some(pulse) => {
+                    if let Some(result) = self.chassis.pulse_period(pulse) {
+                        self.pulse = None;
+                        self.pulse_result = Some(result);
+                    }
+                    None
+                }
+                None => self.chassis.drive(0.0, 0.0).stop,
             }
         }
 
@@ -213,19 +274,45 @@ mod board_body {
             self.run_neck(worst).await
         }
 
-        /// Turn to `angle_rad`, then ping: `Ok(None)` is no echo. The cycles spent in pulses
-        /// are noted in `worst` (the waits are not work).
+        /// Turn to `angle_rad`, then ping: `Ok(None)` is no echo (silent pings counted: three
+        /// in a row are a fault). The cycles spent in pulses are noted in `worst` (the waits
+        /// are not work).
         pub async fn read(
             &mut self,
             angle_rad: f32,
             worst: &AtomicU32,
         ) -> Result<Option<f32>, StopCause> {
+            self.turn(angle_rad, worst).await?;
+            let reading = self.ping(worst).await?;
+            self.head.judge(Ok(reading))
+        }
+
+        /// Turn the neck to `angle_rad`: the steps it took.
+        pub async fn turn(&mut self, angle_rad: f32, worst: &AtomicU32) -> Result<u32, StopCause> {
             self.head
                 .neck_mut()
                 .begin_move_to_angle(angle_rad.to_degrees())
                 .map_err(neck_fault)?;
-            self.run_neck(worst).await?;
+            self.run_neck(worst).await
+        }
 
+        /// The self-test's ping at `angle_rad`: the neck turned there first when it is homed
+        /// (else the ping goes where it points), the reading as it came (no silence counting:
+        /// the self-test judges a silent line itself).
+        pub async fn check_ping(
+            &mut self,
+            angle_rad: f32,
+            worst: &AtomicU32,
+        ) -> Result<SonarReading, StopCause> {
+            if self.head.neck().position_steps().is_some() {
+                self.turn(angle_rad, worst).await?;
+            }
+            self.ping(worst).await
+        }
+
+        /// One sonar cycle where the neck points: fire (at least the module's cycle after the
+        /// last), listen out the window, decode the latched edges.
+        async fn ping(&mut self, worst: &AtomicU32) -> Result<SonarReading, StopCause> {
             let window = self.head.sonar().window();
             if let Some(last) = self.last_fire {
                 Mono::delay_until(last + cycle_us(&window).div_ceil(1_000).millis()).await;
@@ -249,8 +336,7 @@ mod board_body {
                     None => break decoder.expire(),
                 }
             };
-            let reading = self.head.sonar_mut().finish(outcome, tick_hz);
-            self.head.judge(Ok(reading))
+            Ok(self.head.sonar_mut().finish(outcome, tick_hz))
         }
 
         /// Step the move (or homing) under way to its end, each wait a `Mono` delay (whole

@@ -234,6 +234,8 @@ const SONAR_REQUESTS: usize = 3;
 /// Stop causes queued from `control` and `sonar` to `mission` (the body's faults: each ends
 /// the mission, so one per mission is all that matters; a full queue drops the later ones).
 const FAULTS: usize = 4;
+/// The self-test's reports waiting for the mission task (sonar task → mission task).
+const SELF_TEST_REPORTS: usize = 1;
 /// Bytes of the queue from the USART1 interrupt to `link_rx` (holds one less): 22 ms of
 /// 115 200 baud, while `link_rx` runs within a control step's time of the interrupt.
 const IRQ_QUEUE_BYTES: usize = 256;
@@ -265,6 +267,7 @@ mod app {
         MAX_FRAME_BYTES,
     };
     use twil_core::mission::{Pilot, PilotReport, SonarRequest};
+    use twil_core::selftest::SelfTestReport;
 
     /// The independent watchdog (hardware); QEMU 7.2 does not emulate the IWDG (writes to it
     /// are ignored), so the QEMU build has none and only logs the gate's decision.
@@ -283,6 +286,14 @@ mod app {
         Restart(twil_core::robot::RobotConfig),
         /// One reading.
         Read(SonarRequest),
+        /// The bring-up self-test with this robot (the device's parameters) and clock: the
+        /// board runs its probes stepwise in the sonar task (the wheel pulses in the control
+        /// task's periods) and sends each report as rows come in.
+        #[cfg(feature = "hardware")]
+        SelfTest(
+            twil_core::robot::RobotConfig,
+            twil_core::selftest::ClockFacts,
+        ),
     }
 
     /// The vector `link_rx` is bound to: CAN1's first receive FIFO, whose peripheral is never
@@ -662,8 +673,9 @@ mod app {
             if !ACTIVE.load(Ordering::Acquire) {
                 // No mission: the motors stay at 0 (a board's chassis, disarmed, is told so each
                 // period; the simulated robot stands still without being stepped).
+                // A self-test's wheel pulse runs here, in the control periods.
                 #[cfg(feature = "hardware")]
-                let stop = cx.shared.body.lock(|b| b.drive(0.0, 0.0, period_s));
+                let stop = cx.shared.body.lock(|b| b.idle_period());
                 #[cfg(feature = "qemu")]
                 let stop = None;
                 body_stopped(stop, &mut faults);
@@ -737,9 +749,12 @@ mod app {
         mut requests: Receiver<'static, HeadCommand, SONAR_REQUESTS>,
         mut readings: Sender<'static, Reading, READINGS>,
         mut faults: Sender<'static, StopCause, FAULTS>,
+        mut checks: Sender<'static, SelfTestReport, SELF_TEST_REPORTS>,
     ) {
         #[cfg(feature = "hardware")]
-        let _ = (&mut cx.shared.body, &mut cx.shared.world);
+        let _ = &mut cx.shared.world;
+        #[cfg(feature = "qemu")]
+        let _ = &mut checks;
         let mut first = true;
         while let Ok(command) = requests.recv().await {
             let request = match command {
@@ -768,6 +783,18 @@ mod app {
                     continue;
                 }
                 HeadCommand::Read(request) => request,
+                #[cfg(feature = "hardware")]
+                HeadCommand::SelfTest(robot, clock) => {
+                    board_self_test(
+                        cx.local.head,
+                        &mut cx.shared.body,
+                        &robot,
+                        clock,
+                        &mut checks,
+                    )
+                    .await;
+                    continue;
+                }
             };
             let angle = request.neck_angle_rad;
             #[cfg(feature = "qemu")]
@@ -854,9 +881,11 @@ mod app {
         let (readings_tx, mut readings) = make_channel!(Reading, READINGS);
         let (mut sonar_tx, sonar_rx) = make_channel!(HeadCommand, SONAR_REQUESTS);
         let (faults_tx, mut faults) = make_channel!(StopCause, FAULTS);
+        #[cfg_attr(feature = "qemu", allow(unused_mut, unused_variables))]
+        let (checks_tx, mut checks) = make_channel!(SelfTestReport, SELF_TEST_REPORTS);
         control::spawn(reports_tx, faults_tx.clone())
             .unwrap_or_else(|_| panic!("control spawns once"));
-        sonar::spawn(sonar_rx, readings_tx, faults_tx)
+        sonar::spawn(sonar_rx, readings_tx, faults_tx, checks_tx)
             .unwrap_or_else(|_| panic!("sonar spawns once"));
 
         let device = &mut **cx.local.device;
@@ -909,15 +938,39 @@ mod app {
                 );
             }
             // The bring-up self-test, between missions (the device refuses it during one).
+            #[cfg(feature = "qemu")]
             if device.take_self_test() {
                 busy = true;
-                let report = self_test(&mut cx.shared.body, &mut cx.shared.world);
+                let robot = device.params().robot;
+                let report = self_test(&robot, &mut cx.shared.body, &mut cx.shared.world);
                 log!(
                     "self-test: {} rows, {} failed",
                     report.rows.len(),
                     report.failures()
                 );
                 device.note_self_test(&report);
+            }
+            // The board's runs in the sonar task, which sends the report as rows come in.
+            #[cfg(feature = "hardware")]
+            {
+                if device.take_self_test() {
+                    busy = true;
+                    log!("self-test: started");
+                    let _ = sonar_tx
+                        .send(HeadCommand::SelfTest(device.params().robot, clock_facts()))
+                        .await;
+                }
+                while let Ok(report) = checks.try_recv() {
+                    busy = true;
+                    if report.done {
+                        log!(
+                            "self-test: {} rows, {} failed",
+                            report.rows.len(),
+                            report.failures()
+                        );
+                    }
+                    device.note_self_test(&report);
+                }
             }
             // Failsafes: a control step that missed its period (motors already zeroed), a host
             // silent for longer than the mission's link-loss timeout.
@@ -1041,11 +1094,12 @@ mod app {
     /// real world, the pulses on a copy of the plant; at once (a few thousand plant sub-steps).
     #[cfg(feature = "qemu")]
     fn self_test(
+        robot: &twil_core::robot::RobotConfig,
         body: &mut impl rtic::Mutex<T = body::Body>,
         world: &mut impl rtic::Mutex<T = body::World>,
-    ) -> twil_core::selftest::SelfTestReport {
+    ) -> SelfTestReport {
         use twil_core::selftest::{run, simulated::SimulatedCheck, ClockFacts, ClockSource};
-        let config = twil_core::robot::RobotConfig::DEFAULT;
+        let config = *robot;
         let plant = body.lock(|b| b.snapshot());
         let clock = ClockFacts {
             core_hz: SYSTICK_HZ,
@@ -1058,26 +1112,102 @@ mod app {
         })
     }
 
-    /// The self-test on the board: the e-stop and the battery from the chassis; the neck, the
-    /// sonar and the wheel pulses need the sonar task's and the control task's waits and are
-    /// not wired yet (their rows say so).
+    /// The board's core clock and its source, for the self-test.
     #[cfg(feature = "hardware")]
-    fn self_test(
-        body: &mut impl rtic::Mutex<T = body::Body>,
-        _world: &mut impl rtic::Mutex<T = body::World>,
-    ) -> twil_core::selftest::SelfTestReport {
+    fn clock_facts() -> twil_core::selftest::ClockFacts {
         use twil_core::selftest::{ClockFacts, ClockSource};
-        let clock = ClockFacts {
+        ClockFacts {
             core_hz: SYSTICK_HZ,
             source: if CRYSTAL_RUNNING.load(Ordering::Relaxed) {
                 ClockSource::Crystal
             } else {
                 ClockSource::Internal
             },
-        };
-        let config = twil_core::robot::RobotConfig::DEFAULT;
-        let mut test = twil_core::selftest::SelfTest::new(&config, clock);
-        body.lock(|b| twil_core::selftest::run(&mut test, &mut b.checks()).clone())
+        }
+    }
+
+    /// The self-test on the board, probe by probe (`SelfTest::step`): the e-stop and the
+    /// battery read from the chassis at once; the neck's homing and moves and the sonar's
+    /// pings by the head, every wait a `Mono` delay; each wheel pulse run by the control
+    /// task in its own periods (`Body::idle_period`) while this task sleeps a period at a
+    /// time. Every report with a new row goes to the mission task, the last one `done`.
+    #[cfg(feature = "hardware")]
+    async fn board_self_test(
+        head: &mut body::Head,
+        body: &mut impl rtic::Mutex<T = body::Body>,
+        robot: &twil_core::robot::RobotConfig,
+        clock: twil_core::selftest::ClockFacts,
+        checks: &mut Sender<'static, SelfTestReport, SELF_TEST_REPORTS>,
+    ) {
+        use twil_core::failsafe::Sensor;
+        use twil_core::selftest::board::echo_of;
+        use twil_core::selftest::{Answer, Probe, SelfTest, MAX_PROBES};
+        let worst = &WORST_SONAR_INSTRUCTIONS;
+        let mut test = SelfTest::new(robot, clock);
+        let mut answer = None;
+        let mut rows = 0;
+        for _ in 0..=MAX_PROBES {
+            let Some(probe) = test.step(answer.take()) else {
+                break;
+            };
+            // The rows so far, when the mission task has taken the last ones (it polls every
+            // millisecond; a report skipped here is in the next one). Not held across a wait:
+            // this task's future stays small (static SRAM).
+            if test.report().rows.len() != rows && checks.try_send(test.report().clone()).is_ok() {
+                rows = test.report().rows.len();
+            }
+            answer = Some(match probe {
+                Probe::EmergencyStop => Answer::EmergencyStop(body.lock(|b| b.read_estop())),
+                Probe::Battery => Answer::Battery(body.lock(|b| b.read_battery_v())),
+                Probe::NeckHome => Answer::Neck(head.restart(robot, worst).await),
+                Probe::NeckTo(angle_deg) => {
+                    Answer::Neck(head.turn(angle_deg.to_radians(), worst).await)
+                }
+                Probe::Sonar(angle_deg) => Answer::Sonar(
+                    head.check_ping(angle_deg.to_radians(), worst)
+                        .await
+                        .map(|reading| echo_of(&reading)),
+                ),
+                Probe::Pulse {
+                    side,
+                    voltage_v,
+                    on_ms,
+                    coast_ms,
+                } => {
+                    let periods = body.lock(|b| {
+                        b.begin_pulse(
+                            robot,
+                            side.volts(voltage_v),
+                            on_ms.div_ceil(PERIOD_MS),
+                            coast_ms.div_ceil(PERIOD_MS),
+                        )
+                    });
+                    // The control task ends the pulse within `periods` of its periods; one
+                    // more is slack. A pulse that does not end (a control task that stopped)
+                    // is the motor's fault, and the motors are put at 0.
+                    let mut result = body.lock(|b| b.take_pulse_result());
+                    for _ in 0..=periods {
+                        if result.is_some() {
+                            break;
+                        }
+                        Mono::delay(ms(PERIOD_MS)).await;
+                        result = body.lock(|b| b.take_pulse_result());
+                    }
+                    let result = result.unwrap_or_else(|| {
+                        body.lock(|b| b.stop());
+                        Err(StopCause::SensorFault(Sensor::Motor))
+                    });
+                    Answer::Pulse(result.map(|counts| side.of(counts)))
+                }
+            });
+        }
+        // The last report, `done`: waits for room (the mission task polls every millisecond).
+        for _ in 0..1_000 {
+            if checks.try_send(test.report().clone()).is_ok() {
+                return;
+            }
+            Mono::delay(ms(1)).await;
+        }
     }
 
     /// The body stopped the motors (`stop`: why, once): an e-stop press is timed like a stop

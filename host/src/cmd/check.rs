@@ -284,6 +284,6 @@ pub fn hint_text(check: Check, hint: Hint) -> Option<String> {
         Hint::MotorFault => format!("{side} motor's pins failed ({motor_pins})"),
         Hint::SkippedEstop => "not run: the e-stop is pressed".into(),
         Hint::SkippedBattery => "not run: the battery is not fit".into(),
-        Hint::NotOnThisBuild => "not run on this build: the simulated robot has none; the board runs only the e-stop and battery probes so far".into(),
+        Hint::NotOnThisBuild => "not run on this build: the simulated robot has no such part".into(),
     })
 }

@@ -294,50 +294,91 @@ where
 
     /// Drive the wheels at `left_v` / `right_v` for `on_periods` control periods of
     /// `period_ms` (counted from the first with duty: the e-stop's released polls come first),
-    /// then at 0 V for `coast_periods`, waiting with `delay`: the self-test's pulse. Armed as
-    /// a mission start ([`restart`](Self::restart): refused while the e-stop is pressed) and
-    /// disarmed at the end. Returns both wheels' counts over all of it (forward positive), or
+    /// then at 0 V for `coast_periods`, waiting with `delay`: the self-test's pulse, blocking
+    /// ([`begin_pulse`](Self::begin_pulse) and [`pulse_period`](Self::pulse_period) with the
+    /// waits in between). Returns both wheels' counts over all of it (forward positive), or
     /// what stopped it (the e-stop, the battery, a motor pin).
     pub fn pulse(
         &mut self,
         config: &RobotConfig,
-        (left_v, right_v): (f32, f32),
+        volts: (f32, f32),
         (on_periods, coast_periods, period_ms): (u32, u32, u32),
         delay: &mut impl DelayNs,
     ) -> Result<(i32, i32), StopCause> {
+        let mut pulse = self.begin_pulse(config, volts, on_periods, coast_periods)?;
+        // Bounded: `pulse_period` ends the pulse after at most `WheelPulse::periods_max` calls.
+        loop {
+            if let Some(result) = self.pulse_period(&mut pulse) {
+                return result;
+            }
+            delay.delay_ms(period_ms);
+        }
+    }
+
+    /// Start the self-test's pulse (`volts` for `on_periods` periods with duty, then
+    /// `coast_periods` at 0 V): armed as a mission start ([`restart`](Self::restart): refused
+    /// while the e-stop is pressed or unreadable), the encoders re-referenced. Then call
+    /// [`pulse_period`](Self::pulse_period) once per control period, in place of
+    /// [`drive`](Self::drive), until it returns the result: a firmware whose control task
+    /// cannot block runs the pulse that way, in its own periods.
+    pub fn begin_pulse(
+        &mut self,
+        config: &RobotConfig,
+        volts: (f32, f32),
+        on_periods: u32,
+        coast_periods: u32,
+    ) -> Result<WheelPulse, StopCause> {
         self.restart(config)?;
         let _ = self.read_counts();
-        let mut counts = (0i32, 0i32);
-        let mut add = |(l, r): (WheelCounts, WheelCounts)| {
-            counts = (
-                counts.0.saturating_add(l.counts),
-                counts.1.saturating_add(r.counts),
-            );
-        };
-        let mut driven = 0;
-        let mut result = Ok(());
-        let extra = super::emergency_stop::RELEASED_POLLS_TO_RUN + 1;
-        for _ in 0..on_periods.saturating_add(extra) {
-            let drive = self.drive(left_v, right_v);
-            if let Some(cause) = drive.stop {
-                result = Err(cause);
-                break;
-            }
-            delay.delay_ms(period_ms);
-            add(self.read_counts());
-            if drive.left_v != 0.0 || drive.right_v != 0.0 {
-                driven += 1;
-                if driven >= on_periods {
-                    break;
+        Ok(WheelPulse {
+            volts,
+            on_periods,
+            tries_left: on_periods
+                .saturating_add(super::emergency_stop::RELEASED_POLLS_TO_RUN)
+                .saturating_add(1),
+            coast_left: coast_periods,
+            driven: 0,
+            counts: (0, 0),
+            driving: true,
+            result: Ok(()),
+        })
+    }
+
+    /// One control period of `pulse`: the counts since the last period, then this period's
+    /// output (the e-stop polled first, as in [`drive`](Self::drive)). `Some` at the end, with
+    /// the counts over the whole pulse or what stopped it; the motors are then at 0 V and
+    /// disarmed.
+    pub fn pulse_period(
+        &mut self,
+        pulse: &mut WheelPulse,
+    ) -> Option<Result<(i32, i32), StopCause>> {
+        let (l, r) = self.read_counts();
+        pulse.counts = (
+            pulse.counts.0.saturating_add(l.counts),
+            pulse.counts.1.saturating_add(r.counts),
+        );
+        if pulse.driving {
+            if pulse.driven < pulse.on_periods && pulse.tries_left > 0 {
+                pulse.tries_left -= 1;
+                let drive = self.drive(pulse.volts.0, pulse.volts.1);
+                match drive.stop {
+                    Some(cause) => pulse.result = Err(cause),
+                    None => {
+                        if drive.left_v != 0.0 || drive.right_v != 0.0 {
+                            pulse.driven += 1;
+                        }
+                        return None;
+                    }
                 }
             }
+            self.stop();
+            pulse.driving = false;
         }
-        self.stop();
-        for _ in 0..coast_periods {
-            delay.delay_ms(period_ms);
-            add(self.read_counts());
+        if pulse.coast_left == 0 {
+            return Some(pulse.result.map(|()| pulse.counts));
         }
-        result.map(|()| counts)
+        pulse.coast_left -= 1;
+        None
     }
 
     /// The battery voltage last read, volts (NaN before the first reading or after a failed
@@ -359,6 +400,30 @@ where
     /// The voltages the motors have now, volts.
     pub fn applied_v(&self) -> (f32, f32) {
         (self.motor_left.applied_v(), self.motor_right.applied_v())
+    }
+}
+
+/// A self-test pulse under way ([`Chassis::begin_pulse`]); it ends after at most
+/// [`periods_max`](Self::periods_max) calls of [`Chassis::pulse_period`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WheelPulse {
+    volts: (f32, f32),
+    on_periods: u32,
+    /// Periods left to try for duty (the e-stop's released polls take the first ones).
+    tries_left: u32,
+    coast_left: u32,
+    driven: u32,
+    counts: (i32, i32),
+    driving: bool,
+    result: Result<(), StopCause>,
+}
+
+impl WheelPulse {
+    /// Calls of [`Chassis::pulse_period`] this pulse takes at most.
+    pub fn periods_max(&self) -> u32 {
+        self.tries_left
+            .saturating_add(self.coast_left)
+            .saturating_add(2)
     }
 }
 
@@ -615,6 +680,61 @@ mod tests {
         );
         assert_eq!(
             c.restart(&RobotConfig::DEFAULT),
+            Err(StopCause::EmergencyStop)
+        );
+    }
+
+    /// The stepwise pulse, as a control task runs it: duty for exactly `on` periods, then `coast` periods at 0 V, within `periods_max` calls; a
+    /// press during it ends it with that cause and the motors at 0, disarmed.
+    #[test]
+    fn a_stepwise_pulse_drives_its_periods_and_stops_on_a_press() {
+        let (dir, estop) = (Flaky::new(), Flaky::new());
+        let mut c = armed(&dir, &estop);
+        c.stop();
+        let mut pulse = c
+            .begin_pulse(&RobotConfig::DEFAULT, (6.0, 0.0), 4, 2)
+            .unwrap();
+        let max = pulse.periods_max();
+        let (mut calls, mut driven) = (0, 0);
+        let result = loop {
+            calls += 1;
+            assert!(calls <= max, "{calls} calls, at most {max}");
+            if let Some(result) = c.pulse_period(&mut pulse) {
+                break result;
+            }
+            if c.applied_v().0 != 0.0 {
+                driven += 1;
+            }
+        };
+        assert_eq!(result, Ok((0, 0)), "the encoders stand still");
+        assert_eq!(driven, 4);
+        // The e-stop was released all along (no polls to wait): 4 periods with duty, the
+        // period that stops, 2 coasting.
+        assert_eq!(calls, 4 + 1 + 2);
+        assert!(!c.is_armed());
+
+        let mut pulse = c
+            .begin_pulse(&RobotConfig::DEFAULT, (0.0, 6.0), 10, 3)
+            .unwrap();
+        for _ in 0..3 {
+            assert_eq!(c.pulse_period(&mut pulse), None);
+        }
+        assert_eq!(c.applied_v().1, 6.0);
+        estop.level.set(true);
+        let mut calls = 0;
+        let result = loop {
+            calls += 1;
+            assert!(calls <= 10, "ends after the coast");
+            if let Some(result) = c.pulse_period(&mut pulse) {
+                break result;
+            }
+            assert_eq!(c.applied_v(), (0.0, 0.0), "zeroed at the press's period");
+        };
+        assert_eq!(result, Err(StopCause::EmergencyStop));
+        assert!(!c.is_armed());
+        // Pressed: a new pulse is refused, as a mission start is.
+        assert_eq!(
+            c.begin_pulse(&RobotConfig::DEFAULT, (6.0, 0.0), 4, 2),
             Err(StopCause::EmergencyStop)
         );
     }

@@ -43,7 +43,7 @@ pub mod sonar_ranger;
 pub mod wheel_encoder;
 
 pub use battery::{BatteryReadError, BatterySensor};
-pub use body::{Chassis, Drive, SonarHead};
+pub use body::{Chassis, Drive, SonarHead, WheelPulse};
 pub use echo::{EchoDecoder, EchoEdge, EchoOutcome};
 pub use emergency_stop::{ActiveLevel, EmergencyStop};
 pub use motor::{Motor, MotorError};

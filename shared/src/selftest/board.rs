@@ -14,6 +14,7 @@ use embedded_hal::pwm::SetDutyCycle;
 use super::{Answer, CheckBody, Echo, Probe};
 use crate::drivers::body::{neck_fault, Chassis, SonarHead};
 use crate::drivers::echo::EchoOutcome;
+use crate::drivers::sonar_ranger::SonarReading;
 use crate::drivers::{BatterySensor, EchoCapture, QuadratureCounter};
 use crate::robot::RobotConfig;
 
@@ -71,13 +72,7 @@ where
                     .map_err(neck_fault),
             ),
             Probe::Sonar(angle_deg) => {
-                Answer::Sonar(self.head.ping(angle_deg.to_radians()).map(|reading| {
-                    match (reading.outcome, reading.range_m) {
-                        (EchoOutcome::Silent, _) => Echo::Silent,
-                        (_, Some(range_m)) => Echo::Range(range_m),
-                        (_, None) => Echo::NoTarget,
-                    }
-                }))
+                Answer::Sonar(self.head.ping(angle_deg.to_radians()).map(|r| echo_of(&r)))
             }
             Probe::Pulse {
                 side,
@@ -103,31 +98,13 @@ where
     }
 }
 
-/// The chassis alone (a shell whose neck, sonar and wheel pulses are not wired for the test):
-/// the e-stop and the battery are read, every other probe is [`Answer::Absent`] (its row
-/// `skip`).
-pub struct ChassisCheck<'a, C> {
-    /// The wheels, the e-stop and the battery.
-    pub chassis: &'a mut C,
-}
-
-impl<PWML, DIRL, PWMR, DIRR, QL, QR, ESTOP, BAT> CheckBody
-    for ChassisCheck<'_, Chassis<PWML, DIRL, PWMR, DIRR, QL, QR, ESTOP, BAT>>
-where
-    PWML: SetDutyCycle,
-    DIRL: OutputPin,
-    PWMR: SetDutyCycle,
-    DIRR: OutputPin,
-    QL: QuadratureCounter,
-    QR: QuadratureCounter,
-    ESTOP: InputPin,
-    BAT: BatterySensor,
-{
-    fn probe(&mut self, probe: Probe) -> Answer {
-        match probe {
-            Probe::EmergencyStop => Answer::EmergencyStop(self.chassis.read_estop()),
-            Probe::Battery => Answer::Battery(self.chassis.read_battery_v()),
-            _ => Answer::Absent,
-        }
+/// A ping's reading as the self-test judges it: an echo line that never rose is
+/// [`Echo::Silent`], the module's no-target pulse (or an echo outside the window)
+/// [`Echo::NoTarget`].
+pub fn echo_of(reading: &SonarReading) -> Echo {
+    match (reading.outcome, reading.range_m) {
+        (EchoOutcome::Silent, _) => Echo::Silent,
+        (_, Some(range_m)) => Echo::Range(range_m),
+        (_, None) => Echo::NoTarget,
     }
 }
