@@ -13,11 +13,12 @@
 //!   saves), on `ParamStore::erase`, on the first save over a store that is not `Ok`, or when
 //!   it repairs an erase cut by a power loss. The boot's load runs in `init`, before the
 //!   independent watchdog starts, and formats a store that is not `Ok` (see [`boot`]). A
-//!   `ParamSet` (refused while a mission runs) then writes one record. Not done: the erase
-//!   that `sequential-storage` makes when a page fills (after about 8 190 saves) stalls the
-//!   core for seconds, and the 150 ms watchdog resets the chip during it; the next boot
-//!   repairs the cut erase (the power-loss tests cover it) and the value saved last may be
-//!   lost.
+//!   `ParamSet` (refused while a mission runs) then writes one record. The erase that
+//!   `sequential-storage` makes when a page fills (after about 8 190 saves) stalls the core
+//!   for seconds: every erase runs with the watchdog's window widened to 32.8 s and put back
+//!   after (`with_wide_watchdog`), so the 150 ms watchdog does not reset the chip in the
+//!   middle of it. (An erase cut by a power loss is repaired at the next boot: the power-loss
+//!   tests cover it.) Not run here: QEMU has neither the flash writes nor the IWDG.
 //! - QEMU: QEMU 7.2's `netduinoplus2` does not emulate flash programming or erasing, so the
 //!   QEMU build keeps the store in a 2 KiB [`RamFlash`] in SRAM (two 1 KiB pages: 63 records
 //!   each), erased at every reset: it always boots `Empty`, on the defaults. Above the flash,
@@ -85,13 +86,59 @@ mod board_flash {
         const ERASE_SIZE: usize = 128 * 1024;
 
         fn erase(&mut self, from: u32, to: u32) -> Result<(), Error> {
-            NorFlash::erase(&mut self.0.unlocked(), from, to)
+            super::with_wide_watchdog(|| NorFlash::erase(&mut self.0.unlocked(), from, to))
         }
 
         fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Error> {
             NorFlash::write(&mut self.0.unlocked(), offset, bytes)
         }
     }
+}
+
+/// Run `erase` with the independent watchdog's window widened to its longest, 32.8 s (LSI
+/// / 256, reload 4095), then put the window back as it was, restarted. An erase stalls the
+/// core for up to 4 s per 128 KiB sector (nothing runs, nothing feeds the watchdog); the LSI
+/// and the watchdog count on. Before `init` starts the watchdog (the boot's format) this
+/// changes nothing that matters: the values written are the ones `start` overwrites.
+#[cfg(feature = "hardware")]
+fn with_wide_watchdog<R>(erase: impl FnOnce() -> R) -> R {
+    use stm32f4xx_hal::pac::IWDG;
+    // SAFETY: the IWDG's registers, owned by the control task's `IndependentWatchdog`, which
+    // only writes the key register (a feed). The changes below are made with interrupts off,
+    // so no feed falls between the unlock key and the writes it unlocks (any other key would
+    // lock them again); a feed after them only restarts the count.
+    let iwdg = unsafe { &*IWDG::ptr() };
+    // A prescaler or reload update takes up to 5 LSI periods (RM0090, IWDG_SR): wait for it,
+    // bounded (about 2 ms at 168 MHz, ten times the need).
+    let settled = || {
+        for _ in 0..100_000 {
+            let sr = iwdg.sr().read();
+            if !sr.pvu().bit() && !sr.rvu().bit() {
+                return;
+            }
+        }
+    };
+    settled();
+    let prescaler = iwdg.pr().read().pr().variant();
+    let reload = iwdg.rlr().read().rl().bits();
+    cortex_m::interrupt::free(|_| {
+        iwdg.kr().write(|w| w.key().unlock());
+        iwdg.pr().write(|w| w.pr().divide_by256());
+        iwdg.rlr().write(|w| w.rl().set(0xFFF));
+    });
+    settled();
+    // The count restarts from the new reload only once it is in effect.
+    iwdg.kr().write(|w| w.key().feed());
+    let result = erase();
+    settled();
+    cortex_m::interrupt::free(|_| {
+        iwdg.kr().write(|w| w.key().unlock());
+        iwdg.pr().write(|w| w.pr().variant(prescaler));
+        iwdg.rlr().write(|w| w.rl().set(reload));
+    });
+    settled();
+    iwdg.kr().write(|w| w.key().feed());
+    result
 }
 
 /// The store the device writes `ParamSet`'s values to.
