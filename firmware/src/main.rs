@@ -67,7 +67,7 @@ mod board;
 mod body;
 mod params;
 
-use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use core::sync::atomic::{AtomicU32, Ordering};
 
 use twil_core::failsafe::{ResetCause, WatchdogDecision, WatchdogGate};
 use twil_core::link::{Build, PROTOCOL_VERSION};
@@ -158,22 +158,17 @@ fn instructions() -> u64 {
     raw_clock() / NS_PER_INSTRUCTION.load(Ordering::Relaxed).max(1) as u64
 }
 
-/// The core clock comes from the crystal (board; set once in `init`), for the self-test.
-#[cfg(feature = "hardware")]
-static CRYSTAL_RUNNING: AtomicBool = AtomicBool::new(false);
+// The atomics that stay are counters written from the USART1 interrupt (priority 5) or from
+// every task: an atomic add or `fetch_max` is lock-free, where an RTIC resource would raise
+// every task that notes a number to the interrupt's priority. (`NS_PER_INSTRUCTION` above is
+// measured once at boot and read by `instructions()` everywhere.) The state the tasks share
+// is in RTIC resources (`Shared`: `stop`, `control_state`) and channels.
 
 /// Bytes dropped on the way in (a queue full, or a line error: overrun, framing, noise).
 static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
 /// Frames not sent because the transmit queue could not take the whole frame (the mission
 /// task checks for room first, so this stays 0 unless that rule is broken).
 static TX_DROPPED_FRAMES: AtomicU32 = AtomicU32::new(0);
-/// Set by `link_rx` on `AbortMission` / `EmergencyStop` (and by the e-stop input): the control
-/// task zeroes the motors at its next tick, before the mission task answers.
-static STOP: AtomicBool = AtomicBool::new(false);
-/// A mission is running: the control task ticks the pilot (otherwise the motors stay at 0).
-static ACTIVE: AtomicBool = AtomicBool::new(false);
-/// Most instructions one control step took (the pilot's tick; not the simulated body's step).
-static MAX_CONTROL_INSTRUCTIONS: AtomicU32 = AtomicU32::new(0);
 /// Most instructions (QEMU) or cycles (board) one run of each task took, for the latency
 /// table of docs/firmware.md: a sonar reading's own work (QEMU: the ray cast; board: the
 /// neck's pulses and the trigger, not the `Mono` waits), one USART1 interrupt, one `link_rx`
@@ -189,28 +184,6 @@ fn note_worst(worst: &AtomicU32, spent: u64) {
     worst.fetch_max(spent.min(u32::MAX as u64) as u32, Ordering::Relaxed);
 }
 
-/// Control ticks so far (counted while a mission runs).
-static CONTROL_TICKS: AtomicU32 = AtomicU32::new(0);
-/// [`CONTROL_TICKS`] when the last stop frame arrived.
-static STOP_ASKED_AT_TICK: AtomicU32 = AtomicU32::new(0);
-/// Control periods from the last stop frame to the tick that zeroed the motors (see
-/// `MissionReport::stop_ticks`).
-static STOP_TICKS: AtomicU32 = AtomicU32::new(0);
-/// [`systick_counts`] (low 32 bits) when the last stop frame arrived (or the e-stop input
-/// tripped): the start of the stop latency.
-static STOP_ASKED_AT_COUNTS: AtomicU32 = AtomicU32::new(0);
-/// Microseconds from the stop frame's receive interrupt to the control step that put zero
-/// volts on the motors (see `MissionReport::stop_latency_us`).
-static STOP_LATENCY_US: AtomicU32 = AtomicU32::new(0);
-/// [`Mono`] milliseconds when the mission task last turned its loop (the watchdog gate's
-/// progress mark of that task).
-static MISSION_TURN_MS: AtomicU32 = AtomicU32::new(0);
-/// Set by the control task when a step missed its period (motors already zeroed); the mission
-/// task ends the mission with `StopCause::ControllerOverrun`.
-static OVERRUN: AtomicBool = AtomicBool::new(false);
-/// The watchdog gate refused to feed (logged once; on QEMU, which has no IWDG, nothing resets).
-static WATCHDOG_STARVED: AtomicBool = AtomicBool::new(false);
-
 /// Independent watchdog timeout, milliseconds (hardware build), at the LSI's typical 32 kHz:
 /// three control periods. The LSI runs at 17 … 47 kHz (DS8626, table "LSI oscillator
 /// characteristics"), so the real timeout is 102 … 282 ms: never shorter than two periods
@@ -219,9 +192,6 @@ static WATCHDOG_STARVED: AtomicBool = AtomicBool::new(false);
 /// makes no progress for [`WatchdogGate::MISSION_LIMIT_MS`], so a stall resets the chip
 /// within that plus this.
 pub const WATCHDOG_TIMEOUT_MS: u32 = 150;
-
-/// The mission's sonar range, metres (f32 bits), for the simulated sonar.
-static SONAR_RANGE_BITS: AtomicU32 = AtomicU32::new(0x3FC0_0000); // 1.5
 
 /// Reports queued from `control` to `mission` (8 periods, 400 ms).
 const REPORTS: usize = 8;
@@ -261,7 +231,7 @@ mod app {
         prelude::*,
         serial::{Config, Rx, Serial, Tx},
     };
-    use twil_core::failsafe::StopCause;
+    use twil_core::failsafe::{StopCause, StopTiming};
     use twil_core::link::{
         DeviceInfo, FrameDecoder, Request, RequestFrame, Telemetry, WorldAccess, WorldUpload,
         MAX_FRAME_BYTES,
@@ -300,11 +270,32 @@ mod app {
     /// clocked, so only `rtic::pend` (from `usart1`) raises it.
     const LINK_RX_VECTOR: Interrupt = Interrupt::CAN1_RX0;
 
+    /// What the control task and the mission task tell each other besides the pilot's
+    /// reports (a channel) and the stop's timing (`StopTiming`).
+    pub struct ControlState {
+        /// A mission runs (or is paused): the control task ticks the pilot; otherwise the
+        /// motors stay at 0.
+        active: bool,
+        /// The control task missed a period (motors already zeroed): the mission task ends
+        /// the mission with `StopCause::ControllerOverrun`.
+        overrun: bool,
+        /// Most instructions one control step took in this mission (the pilot's tick; not the
+        /// simulated body's step).
+        max_control_instructions: u32,
+        /// `Mono` milliseconds when the mission task last turned its loop: the watchdog
+        /// gate's progress mark of that task.
+        mission_turn_ms: u32,
+    }
+
     #[shared]
     struct Shared {
         pilot: &'static mut Pilot,
         body: body::Body,
         world: body::World,
+        /// The stop's timing: asked by `link_rx` (a stop frame) or the control task (the
+        /// e-stop input), measured by the control task, reported by the mission task.
+        stop: StopTiming,
+        control_state: ControlState,
     }
 
     #[local]
@@ -327,6 +318,9 @@ mod app {
         watchdog: Watchdog,
         /// Where `ParamSet` keeps its values (`None`: the store could not be opened).
         store: Option<params::Store>,
+        /// The core clock and its source (the crystal or not, found in `init`): the
+        /// self-test's clock row.
+        clock: twil_core::selftest::ClockFacts,
     }
 
     #[init(local = [
@@ -374,17 +368,20 @@ mod app {
         // its ready flags never set, so nothing may wait on them.
         #[cfg(feature = "qemu")]
         let mut rcc = rcc.freeze(stm32f4xx_hal::rcc::Config::hsi());
+        #[cfg(feature = "qemu")]
+        let clock_source = twil_core::selftest::ClockSource::Emulated;
         // The board: the 8 MHz crystal through the PLL to 168 MHz (the HSI if the crystal does
         // not start; logged).
         #[cfg(feature = "hardware")]
-        let mut rcc = {
+        let (mut rcc, clock_source) = {
             let (rcc, source) = board::start_clocks(rcc);
-            CRYSTAL_RUNNING.store(
-                matches!(source, board::ClockSource::Crystal { .. }),
-                Ordering::Relaxed,
-            );
             board::log_clocks(&rcc, source);
-            rcc
+            let clock_source = if matches!(source, board::ClockSource::Crystal { .. }) {
+                twil_core::selftest::ClockSource::Crystal
+            } else {
+                twil_core::selftest::ClockSource::Internal
+            };
+            (rcc, clock_source)
         };
 
         let gpioa = cx.device.GPIOA.split(&mut rcc);
@@ -524,6 +521,13 @@ mod app {
                 pilot: cx.local.pilot_memory,
                 body,
                 world,
+                stop: StopTiming::NEW,
+                control_state: ControlState {
+                    active: false,
+                    overrun: false,
+                    max_control_instructions: 0,
+                    mission_turn_ms: 0,
+                },
             },
             Local {
                 rx,
@@ -540,6 +544,10 @@ mod app {
                 head,
                 watchdog,
                 store,
+                clock: twil_core::selftest::ClockFacts {
+                    core_hz: SYSTICK_HZ,
+                    source: clock_source,
+                },
             },
         )
     }
@@ -601,12 +609,12 @@ mod app {
         );
     }
 
-    /// The received bytes on to the mission's queue; a frame that asks to stop sets [`STOP`]
-    /// at once (the mission task, which may be planning, answers it later). Decoding a whole
+    /// The received bytes on to the mission's queue; a frame that asks to stop asks the
+    /// stop (`StopTiming::ask`) at once (the mission task, which may be planning, answers it later). Decoding a whole
     /// frame (its CRC and postcard) takes up to ~20 k instructions, longer than a byte time,
     /// which is why it is here and not in `usart1`.
-    #[task(binds = CAN1_RX0, priority = 3, local = [irq_consumer, producer, peek: FrameDecoder = FrameDecoder::new()])]
-    fn link_rx(cx: link_rx::Context) {
+    #[task(binds = CAN1_RX0, priority = 3, shared = [stop], local = [irq_consumer, producer, peek: FrameDecoder = FrameDecoder::new()])]
+    fn link_rx(mut cx: link_rx::Context) {
         let before = instructions();
         while let Some(byte) = cx.local.irq_consumer.dequeue() {
             if cx.local.producer.enqueue(byte).is_err() {
@@ -617,12 +625,9 @@ mod app {
                 if matches!(
                     frame.request,
                     Request::AbortMission | Request::EmergencyStop
-                ) && !STOP.swap(true, Ordering::AcqRel)
-                {
-                    STOP_ASKED_AT_TICK
-                        .store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
-                    STOP_ASKED_AT_COUNTS.store(systick_counts() as u32, Ordering::Release);
-                    STOP_TICKS.store(0, Ordering::Release);
+                ) {
+                    let counts = systick_counts() as u32;
+                    cx.shared.stop.lock(|stop| stop.ask(counts));
                 }
             }
         }
@@ -635,7 +640,7 @@ mod app {
     /// Every 50 ms: encoders → pilot → motors. Idle (motors at 0) while no mission runs. It
     /// feeds the watchdog while the gate allows it, and zeroes the motors when a step misses
     /// its period.
-    #[task(priority = 4, shared = [pilot, body], local = [watchdog])]
+    #[task(priority = 4, shared = [pilot, body, stop, control_state], local = [watchdog])]
     async fn control(
         mut cx: control::Context,
         mut reports: Sender<'static, PilotReport, REPORTS>,
@@ -645,6 +650,8 @@ mod app {
         let mut next = Mono::now();
         let mut last = Mono::now();
         let mut gate = WatchdogGate::new(WatchdogGate::MISSION_LIMIT_MS, next.ticks());
+        // The gate refused to feed (logged once; on QEMU, which has no IWDG, nothing resets).
+        let mut starved = false;
         loop {
             next += ms(PERIOD_MS);
             Mono::delay_until(next).await;
@@ -652,14 +659,14 @@ mod app {
             let elapsed_s = now.ticks().wrapping_sub(last.ticks()) as f32 / MONO_HZ as f32;
             last = now;
             gate.control_ticked(now.ticks());
-            gate.mission_turned(MISSION_TURN_MS.load(Ordering::Acquire));
+            gate.mission_turned(cx.shared.control_state.lock(|c| c.mission_turn_ms));
             match gate.check(now.ticks()) {
                 WatchdogDecision::Feed => feed(cx.local.watchdog),
                 WatchdogDecision::Starve {
                     control_silent_ms,
                     mission_silent_ms,
                 } => {
-                    if !WATCHDOG_STARVED.swap(true, Ordering::AcqRel) {
+                    if !core::mem::replace(&mut starved, true) {
                         log!(
                             "watchdog: not fed (control silent {} ms, mission silent {} ms): the IWDG resets the board{}",
                             control_silent_ms,
@@ -669,8 +676,8 @@ mod app {
                     }
                 }
             }
-            let tick = CONTROL_TICKS.fetch_add(1, Ordering::AcqRel).wrapping_add(1);
-            if !ACTIVE.load(Ordering::Acquire) {
+            let tick = cx.shared.stop.lock(|stop| stop.tick());
+            if !cx.shared.control_state.lock(|c| c.active) {
                 // No mission: the motors stay at 0 (a board's chassis, disarmed, is told so each
                 // period; the simulated robot stands still without being stepped).
                 // A self-test's wheel pulse runs here, in the control periods.
@@ -678,13 +685,13 @@ mod app {
                 let stop = cx.shared.body.lock(|b| b.idle_period());
                 #[cfg(feature = "qemu")]
                 let stop = None;
-                body_stopped(stop, &mut faults);
-                note_stop(tick, true);
+                body_stopped(stop, &mut faults, &mut cx.shared.stop);
+                note_stop(tick, true, &mut cx.shared.stop);
                 continue;
             }
             let (left, right) = cx.shared.body.lock(|b| b.encoder_deltas());
             let before = instructions();
-            let stopping = STOP.load(Ordering::Acquire);
+            let stopping = cx.shared.stop.lock(|stop| stop.asked());
             let report = cx.shared.pilot.lock(|pilot| {
                 if stopping {
                     pilot.stop();
@@ -695,7 +702,11 @@ mod app {
                 stopping && report.left_voltage_v == 0.0 && report.right_voltage_v == 0.0;
             let spent = instructions().saturating_sub(before);
             let spent = spent.min(u32::MAX as u64) as u32;
-            let worst = MAX_CONTROL_INSTRUCTIONS.fetch_max(spent, Ordering::Relaxed);
+            let worst = cx.shared.control_state.lock(|c| {
+                let worst = c.max_control_instructions;
+                c.max_control_instructions = worst.max(spent);
+                worst
+            });
             if spent > worst {
                 log!("worst control step so far: {} instructions", spent);
             }
@@ -714,23 +725,26 @@ mod app {
                 // The body zeroed its motors; the pilot stops too.
                 cx.shared.pilot.lock(|p| p.stop());
             }
-            body_stopped(stop, &mut faults);
+            body_stopped(stop, &mut faults, &mut cx.shared.stop);
             if body_stop {
-                note_stop(tick, true);
+                note_stop(tick, true, &mut cx.shared.stop);
             }
             // The motors have their voltages now: a stop is measured to here.
-            note_stop(tick, motors_off);
+            note_stop(tick, motors_off, &mut cx.shared.stop);
             // A step that ends after the next one was due: the controller cannot be trusted to
             // hold the robot on its path. Motors to zero now, the mission ends (mission task).
             if twil_core::failsafe::control_period_missed(
                 next.ticks(),
                 Mono::now().ticks(),
                 PERIOD_MS,
-            ) && !OVERRUN.swap(true, Ordering::AcqRel)
+            ) && !cx
+                .shared
+                .control_state
+                .lock(|c| core::mem::replace(&mut c.overrun, true))
             {
                 cx.shared.pilot.lock(|p| p.stop());
                 let stop = cx.shared.body.lock(|b| b.drive(0.0, 0.0, period_s));
-                body_stopped(stop, &mut faults);
+                body_stopped(stop, &mut faults, &mut cx.shared.stop);
                 log!("controller overrun at tick {}: motors zeroed", tick);
             }
             // A full queue means the mission task is more than 400 ms behind: the report is
@@ -756,6 +770,9 @@ mod app {
         #[cfg(feature = "qemu")]
         let _ = &mut checks;
         let mut first = true;
+        // The mission's sonar range, for the simulated sonar (each start sends its robot).
+        #[cfg(feature = "qemu")]
+        let mut range_m = twil_core::robot::RobotConfig::DEFAULT.sonar_range_m;
         while let Ok(command) = requests.recv().await {
             let request = match command {
                 HeadCommand::Restart(robot) => {
@@ -779,7 +796,10 @@ mod app {
                         }
                     }
                     #[cfg(feature = "qemu")]
-                    let _ = (robot, &mut faults);
+                    {
+                        range_m = robot.sonar_range_m;
+                        let _ = &mut faults;
+                    }
                     continue;
                 }
                 HeadCommand::Read(request) => request,
@@ -802,7 +822,7 @@ mod app {
                 Mono::delay(ms(READING_MS)).await;
                 let before = instructions();
                 let mut plant = cx.shared.body.lock(|b| b.snapshot());
-                let range = f32::from_bits(SONAR_RANGE_BITS.load(Ordering::Relaxed));
+                let range = range_m;
                 let range_m = cx
                     .shared
                     .world
@@ -856,7 +876,7 @@ mod app {
     }
 
     /// The mission task: the link, the mission's steps and the planner, at the lowest priority.
-    #[task(priority = 1, shared = [pilot, body, world], local = [consumer, tx_producer, device, planner, mission, store])]
+    #[task(priority = 1, shared = [pilot, body, world, stop, control_state], local = [consumer, tx_producer, device, planner, mission, store, clock])]
     async fn mission(mut cx: mission::Context) {
         // Calibration of the instruction count: `asm::delay(n)` runs n + 1 times a
         // two-instruction loop, so 500 000 gives 1 000 002 instructions (+ a few for the
@@ -898,7 +918,7 @@ mod app {
             let mut busy = false;
             // Progress mark for the watchdog gate; the link's clock for its silence.
             let now_ms = Mono::now().ticks();
-            MISSION_TURN_MS.store(now_ms, Ordering::Release);
+            cx.shared.control_state.lock(|c| c.mission_turn_ms = now_ms);
             device.set_now_ms(now_ms);
             // The link: requests in, replies out. At most one frame per round (the bytes up to
             // its 0x00), and only while its reply fits in the transmit queue: a slow host
@@ -942,7 +962,8 @@ mod app {
             if device.take_self_test() {
                 busy = true;
                 let robot = device.params().robot;
-                let report = self_test(&robot, &mut cx.shared.body, &mut cx.shared.world);
+                let clock = *cx.local.clock;
+                let report = self_test(&robot, clock, &mut cx.shared.body, &mut cx.shared.world);
                 log!(
                     "self-test: {} rows, {} failed",
                     report.rows.len(),
@@ -957,7 +978,10 @@ mod app {
                     busy = true;
                     log!("self-test: started");
                     let _ = sonar_tx
-                        .send(HeadCommand::SelfTest(device.params().robot, clock_facts()))
+                        .send(HeadCommand::SelfTest(
+                            device.params().robot,
+                            *cx.local.clock,
+                        ))
                         .await;
                 }
                 while let Ok(report) = checks.try_recv() {
@@ -974,7 +998,11 @@ mod app {
             }
             // Failsafes: a control step that missed its period (motors already zeroed), a host
             // silent for longer than the mission's link-loss timeout.
-            if OVERRUN.swap(false, Ordering::AcqRel) {
+            if cx
+                .shared
+                .control_state
+                .lock(|c| core::mem::replace(&mut c.overrun, false))
+            {
                 device.link(mission).fail(StopCause::ControllerOverrun);
             }
             if let Some(reaction) = device.link(mission).watch_link() {
@@ -986,13 +1014,13 @@ mod app {
             }
             // A mission that starts: the pilot and the body at its start.
             if let Some(config) = device.link(mission).take_started() {
-                SONAR_RANGE_BITS.store(config.robot.sonar_range_m.to_bits(), Ordering::Relaxed);
-                MAX_CONTROL_INSTRUCTIONS.store(0, Ordering::Relaxed);
+                cx.shared
+                    .control_state
+                    .lock(|c| c.max_control_instructions = 0);
                 let body = cx.shared.body.lock(|b| b.restart(&config));
                 cx.shared.pilot.lock(|p| p.restart(&config));
-                STOP.store(false, Ordering::Release);
-                STOP_LATENCY_US.store(0, Ordering::Release);
-                ACTIVE.store(true, Ordering::Release);
+                cx.shared.stop.lock(|stop| stop.restart());
+                cx.shared.control_state.lock(|c| c.active = true);
                 // The head homes with the mission's geometry before its first reading (the
                 // queue is in order).
                 let _ = sonar_tx.send(HeadCommand::Restart(config.robot)).await;
@@ -1008,12 +1036,13 @@ mod app {
                 log!("the body stopped the mission: {}", cause);
                 device.link(mission).fail(cause);
             }
-            device.note_timing(
-                MAX_CONTROL_INSTRUCTIONS.load(Ordering::Relaxed) as u64,
-                high_water,
-                STOP_TICKS.load(Ordering::Acquire),
-            );
-            device.note_stop_latency_us(STOP_LATENCY_US.load(Ordering::Acquire));
+            let worst_control = cx.shared.control_state.lock(|c| c.max_control_instructions);
+            let (stop_ticks, stop_latency_us) = cx
+                .shared
+                .stop
+                .lock(|stop| (stop.stop_ticks(), stop.latency_us()));
+            device.note_timing(worst_control as u64, high_water, stop_ticks);
+            device.note_stop_latency_us(stop_latency_us);
             // What the other tasks sent.
             while let Ok(report) = reports.try_recv() {
                 busy = true;
@@ -1061,10 +1090,8 @@ mod app {
             }
             reported_end = ended;
             if device.state() != twil_core::link::RunState::Running {
-                ACTIVE.store(
-                    device.state() == twil_core::link::RunState::Paused,
-                    Ordering::Release,
-                );
+                let paused = device.state() == twil_core::link::RunState::Paused;
+                cx.shared.control_state.lock(|c| c.active = paused);
             }
             // Telemetry, a few messages per round so that readings and reports are not held
             // up, each only while a largest frame fits: otherwise it waits in the device
@@ -1095,35 +1122,18 @@ mod app {
     #[cfg(feature = "qemu")]
     fn self_test(
         robot: &twil_core::robot::RobotConfig,
+        clock: twil_core::selftest::ClockFacts,
         body: &mut impl rtic::Mutex<T = body::Body>,
         world: &mut impl rtic::Mutex<T = body::World>,
     ) -> SelfTestReport {
-        use twil_core::selftest::{run, simulated::SimulatedCheck, ClockFacts, ClockSource};
+        use twil_core::selftest::{run, simulated::SimulatedCheck};
         let config = *robot;
         let plant = body.lock(|b| b.snapshot());
-        let clock = ClockFacts {
-            core_hz: SYSTICK_HZ,
-            source: ClockSource::Emulated,
-        };
         let mut test = twil_core::selftest::SelfTest::new(&config, clock);
         world.lock(|w| {
             let mut check = SimulatedCheck::new(&plant, &w.obstacles, config.sonar_range_m);
             run(&mut test, &mut check).clone()
         })
-    }
-
-    /// The board's core clock and its source, for the self-test.
-    #[cfg(feature = "hardware")]
-    fn clock_facts() -> twil_core::selftest::ClockFacts {
-        use twil_core::selftest::{ClockFacts, ClockSource};
-        ClockFacts {
-            core_hz: SYSTICK_HZ,
-            source: if CRYSTAL_RUNNING.load(Ordering::Relaxed) {
-                ClockSource::Crystal
-            } else {
-                ClockSource::Internal
-            },
-        }
     }
 
     /// The self-test on the board, probe by probe (`SelfTest::step`): the e-stop and the
@@ -1212,15 +1222,17 @@ mod app {
 
     /// The body stopped the motors (`stop`: why, once): an e-stop press is timed like a stop
     /// frame (from this tick); the cause goes to the mission task, which ends the mission.
-    fn body_stopped(stop: Option<StopCause>, faults: &mut Sender<'static, StopCause, FAULTS>) {
+    fn body_stopped(
+        stop: Option<StopCause>,
+        faults: &mut Sender<'static, StopCause, FAULTS>,
+        timing: &mut impl rtic::Mutex<T = StopTiming>,
+    ) {
         let Some(cause) = stop else {
             return;
         };
-        if cause == StopCause::EmergencyStop && !STOP.swap(true, Ordering::AcqRel) {
+        let counts = systick_counts() as u32;
+        if cause == StopCause::EmergencyStop && timing.lock(|t| t.ask(counts)) {
             log!("emergency-stop input tripped: motors zeroed at this tick");
-            STOP_ASKED_AT_TICK.store(CONTROL_TICKS.load(Ordering::Acquire), Ordering::Release);
-            STOP_ASKED_AT_COUNTS.store(systick_counts() as u32, Ordering::Release);
-            STOP_TICKS.store(0, Ordering::Release);
         }
         // A full queue: earlier causes are waiting, and the first one ends the mission.
         let _ = faults.try_send(cause);
@@ -1228,15 +1240,10 @@ mod app {
 
     /// At control tick `tick`, with zero volts on the motors (`motors_off`): if a stop frame
     /// came and this is the first such tick since, note how many periods it took.
-    fn note_stop(tick: u32, motors_off: bool) {
-        if motors_off && STOP.load(Ordering::Acquire) && STOP_TICKS.load(Ordering::Acquire) == 0 {
-            let asked = STOP_ASKED_AT_TICK.load(Ordering::Acquire);
-            STOP_TICKS.store(tick.wrapping_sub(asked), Ordering::Release);
-            // SysTick counts at 168 MHz on both builds (QEMU: virtual time).
-            let counts = (systick_counts() as u32)
-                .wrapping_sub(STOP_ASKED_AT_COUNTS.load(Ordering::Acquire));
-            STOP_LATENCY_US.store(counts / (SYSTICK_HZ / 1_000_000), Ordering::Release);
-        }
+    fn note_stop(tick: u32, motors_off: bool, timing: &mut impl rtic::Mutex<T = StopTiming>) {
+        // SysTick counts at 168 MHz on both builds (QEMU: virtual time).
+        let counts = systick_counts() as u32;
+        timing.lock(|t| t.motors_at(tick, motors_off, counts, SYSTICK_HZ / 1_000_000));
     }
 
     /// Feed the independent watchdog (hardware; QEMU has none).

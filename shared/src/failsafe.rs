@@ -10,8 +10,12 @@
 //! - [`control_period_missed`]: the control step overran its period (the firmware then zeroes
 //!   the motors and ends the mission with [`StopCause::ControllerOverrun`]).
 //! - [`StopCause`]: why a mission was stopped from outside its own logic.
+//! - [`StopTiming`]: how long a stop took, from its request to the motors off.
 
 use serde::{Deserialize, Serialize};
+
+mod stop_timing;
+pub use stop_timing::StopTiming;
 
 /// Why the chip last reset (`RCC_CSR` flags of the STM32F4, RM0090 §7.3.21).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
