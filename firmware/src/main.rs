@@ -805,14 +805,10 @@ mod app {
                 HeadCommand::Read(request) => request,
                 #[cfg(feature = "hardware")]
                 HeadCommand::SelfTest(robot, clock) => {
-                    board_self_test(
-                        cx.local.head,
-                        &mut cx.shared.body,
-                        &robot,
-                        clock,
-                        &mut checks,
-                    )
-                    .await;
+                    cx.local
+                        .head
+                        .self_test(&mut cx.shared.body, &robot, clock, &mut checks)
+                        .await;
                     continue;
                 }
             };
@@ -1134,90 +1130,6 @@ mod app {
             let mut check = SimulatedCheck::new(&plant, &w.obstacles, config.sonar_range_m);
             run(&mut test, &mut check).clone()
         })
-    }
-
-    /// The self-test on the board, probe by probe (`SelfTest::step`): the e-stop and the
-    /// battery read from the chassis at once; the neck's homing and moves and the sonar's
-    /// pings by the head, every wait a `Mono` delay; each wheel pulse run by the control
-    /// task in its own periods (`Body::idle_period`) while this task sleeps a period at a
-    /// time. Every report with a new row goes to the mission task, the last one `done`.
-    #[cfg(feature = "hardware")]
-    async fn board_self_test(
-        head: &mut body::Head,
-        body: &mut impl rtic::Mutex<T = body::Body>,
-        robot: &twil_core::robot::RobotConfig,
-        clock: twil_core::selftest::ClockFacts,
-        checks: &mut Sender<'static, SelfTestReport, SELF_TEST_REPORTS>,
-    ) {
-        use twil_core::failsafe::Sensor;
-        use twil_core::selftest::board::echo_of;
-        use twil_core::selftest::{Answer, Probe, SelfTest, MAX_PROBES};
-        let worst = &WORST_SONAR_INSTRUCTIONS;
-        let mut test = SelfTest::new(robot, clock);
-        let mut answer = None;
-        let mut rows = 0;
-        for _ in 0..=MAX_PROBES {
-            let Some(probe) = test.step(answer.take()) else {
-                break;
-            };
-            // The rows so far, when the mission task has taken the last ones (it polls every
-            // millisecond; a report skipped here is in the next one). Not held across a wait:
-            // this task's future stays small (static SRAM).
-            if test.report().rows.len() != rows && checks.try_send(test.report().clone()).is_ok() {
-                rows = test.report().rows.len();
-            }
-            answer = Some(match probe {
-                Probe::EmergencyStop => Answer::EmergencyStop(body.lock(|b| b.read_estop())),
-                Probe::Battery => Answer::Battery(body.lock(|b| b.read_battery_v())),
-                Probe::NeckHome => Answer::Neck(head.restart(robot, worst).await),
-                Probe::NeckTo(angle_deg) => {
-                    Answer::Neck(head.turn(angle_deg.to_radians(), worst).await)
-                }
-                Probe::Sonar(angle_deg) => Answer::Sonar(
-                    head.check_ping(angle_deg.to_radians(), worst)
-                        .await
-                        .map(|reading| echo_of(&reading)),
-                ),
-                Probe::Pulse {
-                    side,
-                    voltage_v,
-                    on_ms,
-                    coast_ms,
-                } => {
-                    let periods = body.lock(|b| {
-                        b.begin_pulse(
-                            robot,
-                            side.volts(voltage_v),
-                            on_ms.div_ceil(PERIOD_MS),
-                            coast_ms.div_ceil(PERIOD_MS),
-                        )
-                    });
-                    // The control task ends the pulse within `periods` of its periods; one
-                    // more is slack. A pulse that does not end (a control task that stopped)
-                    // is the motor's fault, and the motors are put at 0.
-                    let mut result = body.lock(|b| b.take_pulse_result());
-                    for _ in 0..=periods {
-                        if result.is_some() {
-                            break;
-                        }
-                        Mono::delay(ms(PERIOD_MS)).await;
-                        result = body.lock(|b| b.take_pulse_result());
-                    }
-                    let result = result.unwrap_or_else(|| {
-                        body.lock(|b| b.stop());
-                        Err(StopCause::SensorFault(Sensor::Motor))
-                    });
-                    Answer::Pulse(result.map(|counts| side.of(counts)))
-                }
-            });
-        }
-        // The last report, `done`: waits for room (the mission task polls every millisecond).
-        for _ in 0..1_000 {
-            if checks.try_send(test.report().clone()).is_ok() {
-                return;
-            }
-            Mono::delay(ms(1)).await;
-        }
     }
 
     /// The body stopped the motors (`stop`: why, once): an e-stop press is timed like a stop
