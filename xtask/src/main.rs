@@ -512,10 +512,86 @@ fn test() -> Result<()> {
     doc()?;
     // The 5 M instruction budget per 300 x 300 plan is a test too (about a minute of QEMU).
     run_mcu_bench()?;
-    // Last, so that the run ends with cargo test's own summary.
+    // Last, so that the run ends with cargo test's own summary (and, on a failure, with the
+    // failing tests' messages).
     let mut c = cargo();
     c.args(["test", "--release"]).args(HOST_PACKAGES);
-    run(c)
+    run_tests(c)
+}
+
+/// `cargo test`, its output passed through as it comes; when it fails, the failing tests'
+/// messages are printed again at the very end, without their backtraces. A CI log often shows
+/// only its head and tail, and cargo's own end (the list of names, then a backtrace) left the
+/// message that said *why* in the cut middle (stop 32's doc-example failure).
+fn run_tests(mut c: Command) -> Result<()> {
+    use std::io::{BufRead, BufReader, Write};
+    eprintln!("xtask: running {c:?}");
+    let mut child = c
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .with_context(|| format!("could not start {c:?}"))?;
+    let mut kept = Vec::new();
+    if let Some(out) = child.stdout.take() {
+        let mut stdout = std::io::stdout().lock();
+        for line in BufReader::new(out).lines() {
+            let line = line.unwrap_or_else(|e| format!("(unreadable line: {e})"));
+            let _ = writeln!(stdout, "{line}");
+            kept.push(line);
+        }
+    }
+    let status = child.wait().with_context(|| format!("waiting for {c:?}"))?;
+    if !status.success() {
+        let recap = failure_recap(&kept, 60);
+        if !recap.is_empty() {
+            println!("\nxtask: the failing tests' messages again (backtraces left out):");
+            for line in recap {
+                println!("{line}");
+            }
+        }
+        bail!("{c:?} failed with {status}");
+    }
+    Ok(())
+}
+
+/// The `---- NAME stdout ----` blocks of libtest's failure section, without backtrace lines,
+/// each cut to `lines_per_test` lines.
+fn failure_recap(output: &[String], lines_per_test: usize) -> Vec<String> {
+    let mut recap = Vec::new();
+    let mut in_block = false;
+    let mut block_lines = 0;
+    for line in output {
+        if line.starts_with("---- ") && line.ends_with(" ----") {
+            in_block = true;
+            block_lines = 0;
+            recap.push(line.clone());
+            continue;
+        }
+        if !in_block {
+            continue;
+        }
+        // libtest's list of failing names ends the blocks.
+        if line == "failures:" || line.starts_with("test result:") {
+            in_block = false;
+            continue;
+        }
+        let trimmed = line.trim_start();
+        let backtrace = trimmed == "stack backtrace:"
+            || trimmed.starts_with("at ")
+            || trimmed.starts_with("note: Some details are omitted")
+            || trimmed
+                .split_once(": ")
+                .is_some_and(|(n, _)| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
+        if backtrace {
+            continue;
+        }
+        block_lines += 1;
+        if block_lines <= lines_per_test {
+            recap.push(line.clone());
+        } else if block_lines == lines_per_test + 1 {
+            recap.push("  [… cut: the whole message is above]".to_string());
+        }
+    }
+    recap
 }
 
 /// The API documentation of the host crates with warnings as errors: a broken or private
@@ -577,6 +653,42 @@ fn lint() -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The recap keeps each failing test's message and drops its backtrace and the name list.
+    #[test]
+    fn the_failure_recap_keeps_messages_and_drops_backtraces() {
+        let output: Vec<String> = [
+            "test a::b ... FAILED",
+            "",
+            "failures:",
+            "",
+            "---- a::b stdout ----",
+            "thread 'a::b' panicked at tests/a.rs:3:5:",
+            "docs/x.md:12: $ twil ping",
+            "stack backtrace:",
+            "   0: rust_begin_unwind",
+            "             at /rustc/abc/library/std/src/panicking.rs:665:5",
+            "  12: main",
+            "",
+            "failures:",
+            "    a::b",
+            "",
+            "test result: FAILED. 1 passed; 1 failed",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        assert_eq!(
+            failure_recap(&output, 60),
+            [
+                "---- a::b stdout ----",
+                "thread 'a::b' panicked at tests/a.rs:3:5:",
+                "docs/x.md:12: $ twil ping",
+                "",
+            ]
+        );
+        assert_eq!(failure_recap(&output, 1).len(), 3);
+    }
 
     /// The QEMU firmware's defmt log (semihosting) decodes into its boot lines, with their
     /// timestamps, and the instruction-count calibration it logs is within 0.1 % of the truth. Needs the QEMU ELF
