@@ -321,3 +321,69 @@ fn twil_mission_refuses_the_flag_and_says_why() {
         "{stderr}"
     );
 }
+
+/// World 0 of `twil sonar-grid` (seed 1), written out: a room divided by a long smooth wall
+/// at 27° to the way across, a doorway 1.5 m wide in it, a box of clutter beside the robot's
+/// way.
+fn sonar_grid_world_0() -> (String, String) {
+    let polygons = [
+        "4\n7.987 7.634\n8.170 8.256\n7.547 8.439\n7.364 7.817\n",
+        "4\n10.090 3.752\n10.211 4.334\n9.630 4.455\n9.509 3.874\n",
+        "2\n1.054 0.579\n13.783 0.579\n",
+        "2\n13.783 0.579\n13.783 14.376\n",
+        "2\n13.783 14.376\n1.054 14.376\n",
+        "2\n1.054 14.376\n1.054 0.579\n",
+        "2\n11.133 14.376\n9.932 11.977\n",
+        "2\n9.280 10.675\n6.345 4.813\n",
+        "2\n5.752 3.629\n4.225 0.579\n",
+        "2\n13.783 1.562\n12.264 1.156\n",
+        "2\n13.783 3.326\n12.264 2.920\n",
+    ];
+    world_files(
+        "grid-world-0",
+        &format!("{}\n{}", polygons.len(), polygons.concat()),
+        "0.4\n0.2\n302.2\n10.865 9.657\n2.843 7.428\n",
+    )
+}
+
+/// After a full sweep the body never follows a prefix whose corridor reaches, within two
+/// cells, a point no sweep vouched for. The evidence map used to keep the whole prefix then
+/// ("no cut is a move at all"): on this world (10° beam and incidence limit, 4 m, stop mode)
+/// the robot drove north along the dividing wall's silent middle, 0.3 m from it between two
+/// reflectors 1.7 m apart, and touched it (clearance −0.003 m). Now the point is marked a
+/// suspect and the robot plans round it.
+#[test]
+fn a_silent_wall_between_two_reflectors_beside_the_path_is_not_touched() {
+    let (da, par) = sonar_grid_world_0();
+    let r = simulate(
+        &da,
+        &par,
+        &[
+            "--sonar",
+            "beam",
+            "--beam-half-angle",
+            "10",
+            "--incidence-limit",
+            "10",
+            "--sonar-range",
+            "4",
+            "--mode",
+            "stop",
+            "--seed",
+            "1",
+            "--evidence-map",
+        ],
+    );
+    assert_ne!(
+        outcome(&r),
+        Outcome::Collision,
+        "{:?}, clearance {} m",
+        r.status,
+        r.min_clearance_m
+    );
+    assert!(
+        r.min_clearance_m > 0.05,
+        "clearance {} m",
+        r.min_clearance_m
+    );
+}

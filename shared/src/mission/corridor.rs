@@ -52,6 +52,12 @@ impl<const W: usize> Corridor<'_, W> {
     /// Length along `prefix` the centre may go before the body reaches an unknown point, or
     /// `None` when everything beside the prefix within `range_m` of the robot is known.
     pub fn first_unknown_m(&self, prefix: &[PointM], range_m: f32) -> Option<f32> {
+        self.first_unknown(prefix, range_m)
+            .map(|(stop_m, _)| stop_m)
+    }
+
+    /// [`Corridor::first_unknown_m`], with the unknown point that set the stop.
+    pub fn first_unknown(&self, prefix: &[PointM], range_m: f32) -> Option<(f32, PointM)> {
         let step_m = self.grid.geometry().resolution_m();
         if !(step_m > 0.0 && self.radius_m.is_finite() && range_m.is_finite()) {
             return None;
@@ -62,7 +68,7 @@ impl<const W: usize> Corridor<'_, W> {
         let mut samples = 0;
         // Evidence map: the least stop over the samples (a later sample can stop the centre
         // earlier, by up to the radius); without it, the first.
-        let mut best: Option<f32> = None;
+        let mut best: Option<(f32, PointM)> = None;
         let segments = prefix.len().saturating_sub(1);
         for (i, w) in prefix.windows(2).enumerate() {
             let (a, b) = (w[0], w[1]);
@@ -83,7 +89,7 @@ impl<const W: usize> Corridor<'_, W> {
                 if samples > MAX_SAMPLES {
                     return best;
                 }
-                if best.is_some_and(|b| along_m + s_m - r > b) {
+                if best.is_some_and(|(b, _)| along_m + s_m - r > b) {
                     return best;
                 }
                 let p = PointM::new(a.x_m + s_m * ux, a.y_m + s_m * uy);
@@ -92,14 +98,18 @@ impl<const W: usize> Corridor<'_, W> {
                 }
                 let beyond_m = (s_m - len_m).max(0.0);
                 let half_width_m = sqrt((r * r - beyond_m * beyond_m).max(0.0));
-                if let Some(ahead_m) = self.first_unknown_beside(p, nx, ny, step_m, half_width_m) {
+                if let Some((ahead_m, q)) =
+                    self.first_unknown_beside(p, nx, ny, step_m, half_width_m)
+                {
                     // The body reaches `ahead_m` ahead of its centre at that lateral offset:
                     // stop its centre that much short of the sample.
                     let stop_m = (along_m + s_m - ahead_m).max(0.0);
                     if !self.evidence {
-                        return Some(stop_m);
+                        return Some((stop_m, q));
                     }
-                    best = Some(best.map_or(stop_m, |b: f32| b.min(stop_m)));
+                    if best.is_none_or(|(b, _)| stop_m < b) {
+                        best = Some((stop_m, q));
+                    }
                 }
                 s_m += step_m;
             }
@@ -111,7 +121,7 @@ impl<const W: usize> Corridor<'_, W> {
     /// The points beside `p` along the unit normal `(nx, ny)`, every `step_m` out to
     /// `half_width_m` (at most the planning radius) on each side, and `p` itself past the
     /// prefix's end: `None` when all are known, else how far ahead of its centre the body
-    /// reaches at the lateral offset of the first unknown one, `sqrt(r² − d²)`.
+    /// reaches at the lateral offset of the first unknown one, `sqrt(r² − d²)`, and that point.
     fn first_unknown_beside(
         &self,
         p: PointM,
@@ -119,7 +129,7 @@ impl<const W: usize> Corridor<'_, W> {
         ny: f32,
         step_m: f32,
         half_width_m: f32,
-    ) -> Option<f32> {
+    ) -> Option<(f32, PointM)> {
         let r = self.radius_m;
         let full = half_width_m >= r - 1.0e-4;
         // On the prefix the centre line is the path's (checked by the pruning); past its end
@@ -144,7 +154,7 @@ impl<const W: usize> Corridor<'_, W> {
                     self.free_or_seen(q)
                 };
                 if !known {
-                    return Some(sqrt((r * r - d * d).max(0.0)));
+                    return Some((sqrt((r * r - d * d).max(0.0)), q));
                 }
             }
             if d >= half_width_m {

@@ -213,6 +213,21 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         }
     }
 
+    /// A point the body would reach that no sweep could vouch for, after a full standing sweep
+    /// (`prefix`): an unknown cell becomes tentative and is grown into the grid, so the next
+    /// plan goes round it. Anything else is left as it is. Returns whether the map changed.
+    pub(super) fn mark_suspect_m(&mut self, p: PointM) -> bool {
+        let g = *self.grid.geometry();
+        let Some((x, y)) = g.cell_xy_on_map(p) else {
+            return false;
+        };
+        if self.evidence.suspect_xy(x, y) != Change::NowOccupied {
+            return false;
+        }
+        mark_point_m(&mut self.grid, centre(&g, x, y), self.expansion_cells);
+        true
+    }
+
     /// After a full standing sweep: unknown cells no reading vouched for, in the ring from one
     /// to three cells outside the planning radius, become suspects (tentative, grown into the
     /// grid). The ring starts outside the radius so the robot's own cell stays free.

@@ -78,6 +78,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             last_plan_origin: None,
             stalled_plans: 0,
             stall_sweep_at: None,
+            suspect_replans: 0,
             last_stop_position: None,
             pending_plan: None,
             deferred_sweep_end: None,
@@ -163,6 +164,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.last_plan_origin = None;
         self.stalled_plans = 0;
         self.stall_sweep_at = None;
+        self.suspect_replans = 0;
         self.last_stop_position = None;
         self.pending_plan = None;
         self.deferred_sweep_end = None;

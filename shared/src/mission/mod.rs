@@ -141,6 +141,12 @@ pub const MAX_SWEEP_READINGS: usize = SWEEP_CAPACITY;
 /// Most events one [`Mission::step`] can report.
 pub const MAX_EVENTS_PER_STEP: usize = 8;
 
+/// Plans in a row from one place that each went round a new suspect (evidence map, see
+/// `prefix`) before they count as stalls. A suspect is grown by the planning radius (a disc
+/// 0.8 m across at 0.4 m), so 16 of them can line about 13 m of silent wall beside the robot,
+/// more than a 6 m sonar's circle holds.
+pub const MAX_SUSPECT_REPLANS: u16 = 16;
+
 /// Open-list capacity of [`MissionPlanner300`] (entries, 12 bytes each: 36 KiB), as
 /// [`crate::plan::Planner300`]: the planner reclaims stale entries, and the bundled worlds
 /// need at most 2122 live ones.
@@ -244,6 +250,9 @@ pub struct Mission<const W: usize, const E: usize = W> {
     /// Where a stall was last answered by a full standing sweep (world frame): a second stall
     /// there ends the mission.
     stall_sweep_at: Option<PointM>,
+    /// Plans asked in a row from one place because the body corridor met a suspect (see
+    /// `prefix`, evidence map): outside the stall count, up to [`MAX_SUSPECT_REPLANS`].
+    suspect_replans: u16,
     /// Where the last standing sweep was taken (world frame).
     last_stop_position: Option<PointM>,
     pending_plan: Option<PendingPlan>,

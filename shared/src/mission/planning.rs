@@ -15,7 +15,7 @@ use crate::raster::BresenhamLine;
 use super::messages::{push, push_planned};
 use super::{
     Mission, MissionEvent, MissionMode, MissionOutput, MissionPhase, MissionStatus, PendingPlan,
-    PilotCommand, PlanRequest, UnreachableReason,
+    PilotCommand, PlanRequest, UnreachableReason, MAX_SUSPECT_REPLANS,
 };
 
 impl<const W: usize, const E: usize> Mission<W, E> {
@@ -52,7 +52,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             {
                 self.stalled_plans = self.stalled_plans.saturating_add(1)
             }
-            _ => self.stalled_plans = 0,
+            _ => {
+                self.stalled_plans = 0;
+                self.suspect_replans = 0;
+            }
         }
         self.last_plan_origin = Some(origin);
         if self.stalled_plans >= self.config.max_stalled_plans {
@@ -76,6 +79,20 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         }
 
         self.ask_plan_from(origin, moving, blocked, false, out);
+    }
+
+    /// Plan again from where the robot stands after marking a suspect (`prefix`): each such
+    /// plan changes the map, so it is not a stall, but a place gets at most
+    /// [`MAX_SUSPECT_REPLANS`] of them before they count as stalls again.
+    pub(super) fn replan_round_suspect(&mut self, out: &mut MissionOutput) {
+        if self.suspect_replans >= MAX_SUSPECT_REPLANS {
+            self.plan_and_go(true, out);
+            return;
+        }
+        self.suspect_replans += 1;
+        let origin = self.plan_origin(false);
+        self.last_plan_origin = Some(origin);
+        self.ask_plan_from(origin, false, true, false, out);
     }
 
     /// The evidence map's proof (`verdict`): a standing plan on the grid as it is now (redrawn
