@@ -10,12 +10,12 @@
 //! received bytes (only while its reply fits in the transmit queue), the self-test, the
 //! failsafes (a missed control period, a silent host), a mission's start, the body's faults,
 //! the control task's reports and the sonar's readings, the pilot's command and the sonar's
-//! request, a slice of the planner, the end of a mission, and up to four telemetry messages.
+//! request, the mission's plan, the end of a mission, and up to four telemetry messages.
 //!
 //! ## Waiting for work
 //!
 //! A turn that found nothing to do waits on one [`Wake`] signal (`rtic_sync::signal`), raced
-//! with a timeout of [`IDLE_TURN_MS`]. Every task that leaves work for this one writes the
+//! with a timeout (`Mono::timeout_after`, at most [`IDLE_TURN_MS`]: below). Every task that leaves work for this one writes the
 //! signal after leaving it, so the work is never missed (a signal written while a turn runs
 //! stays set, and the next wait returns at once):
 //!
@@ -27,15 +27,17 @@
 //!   after a body fault;
 //! - `sonar`, after a reading, a fault or a self-test report.
 //!
-//! A busy turn (a frame, a report, a plan slice, telemetry sent, ...) is followed by another
+//! A busy turn (a frame, a report, a plan, telemetry sent, ...) is followed by another
 //! at once, without waiting, until a turn finds nothing.
 //!
-//! The timeout is for the work that time alone brings: the watchdog gate wants a turn within
-//! `WatchdogGate::MISSION_LIMIT_MS` (1 s), and the link's silence timeout (200 ms at least)
-//! is checked on a turn. During a mission the control task's reports wake the task every
-//! 50 ms anyway; between missions nothing else does, so the timeout of one control period
-//! keeps the watchdog mark 20 times fresher than its limit and a link-loss reaction within a
-//! period of its timeout, at 20 turns a second instead of the 1 000 of a 1 ms poll.
+//! The timeout is for the work that time alone brings. The watchdog gate wants a turn within
+//! `WatchdogGate::MISSION_LIMIT_MS` (1 s): during a mission the control task's reports wake
+//! the task every 50 ms anyway, between missions nothing else does, so a wait lasts at most
+//! [`IDLE_TURN_MS`] (one control period: the mark stays 20 times fresher than its limit, at
+//! 20 turns a second instead of the 1 000 of the old 1 ms poll). The link's silence is checked
+//! on a turn: a wait also ends when the host's silence reaches the mission's link-loss timeout
+//! (`RobotDevice::link_loss_in_ms`), so the mission stops at the timeout, to the millisecond,
+//! as with the poll, not up to a period after it.
 use core::sync::atomic::Ordering;
 
 use heapless::spsc::{Consumer, Producer};
@@ -292,9 +294,13 @@ pub async fn run(
             log_stack(high_water);
         }
         if !busy {
-            // Nothing left to do now: sleep until a task brings work (`Wake`) or a period
-            // passes, whichever is first (see the module's doc for why the bound).
-            let _ = Mono::timeout_after(ms(IDLE_TURN_MS), local.wake.wait()).await;
+            // Nothing left to do now: sleep until a task brings work (`Wake`), a period
+            // passes or the host's silence reaches the link-loss timeout, whichever is first
+            // (see the module's doc for why the bounds).
+            let wait_ms = device
+                .link_loss_in_ms()
+                .map_or(IDLE_TURN_MS, |left| left.clamp(1, IDLE_TURN_MS));
+            let _ = Mono::timeout_after(ms(wait_ms), local.wake.wait()).await;
         }
     }
 }
