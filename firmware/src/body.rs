@@ -352,7 +352,9 @@ mod board_body {
             robot: &twil_core::robot::RobotConfig,
             clock: twil_core::selftest::ClockFacts,
             checks: &mut Sender<'static, SelfTestReport, { crate::SELF_TEST_REPORTS }>,
-            wake: &mut crate::mission_task::Wake,
+            // The mission task's wake signal (`mission_task::Wake`, named here by its
+            // `rtic-sync` type: the mission task's module uses this one).
+            wake: &mut rtic_sync::signal::SignalWriter<'static, ()>,
         ) {
             use twil_core::failsafe::Sensor;
             use twil_core::selftest::board::echo_of;
