@@ -352,6 +352,9 @@ mod board_body {
             robot: &twil_core::robot::RobotConfig,
             clock: twil_core::selftest::ClockFacts,
             checks: &mut Sender<'static, SelfTestReport, { crate::SELF_TEST_REPORTS }>,
+            // The mission task's wake signal (`mission_task::Wake`, named here by its
+            // `rtic-sync` type: the mission task's module uses this one).
+            wake: &mut rtic_sync::signal::SignalWriter<'static, ()>,
         ) {
             use twil_core::failsafe::Sensor;
             use twil_core::selftest::board::echo_of;
@@ -364,13 +367,14 @@ mod board_body {
                 let Some(probe) = test.step(answer.take()) else {
                     break;
                 };
-                // The rows so far, when the mission task has taken the last ones (it polls every
-                // millisecond; a report skipped here is in the next one). Not held across a wait:
-                // this task's future stays small (static SRAM).
+                // The rows so far, when the mission task has taken the last ones (it is woken for
+                // each; a report skipped here is in the next one). Not held across a wait: this
+                // task's future stays small (static SRAM).
                 if test.report().rows.len() != rows
                     && checks.try_send(test.report().clone()).is_ok()
                 {
                     rows = test.report().rows.len();
+                    wake.write(());
                 }
                 answer = Some(match probe {
                     Probe::EmergencyStop => Answer::EmergencyStop(body.lock(|b| b.read_estop())),
@@ -417,9 +421,11 @@ mod board_body {
                     }
                 });
             }
-            // The last report, `done`: waits for room (the mission task polls every millisecond).
+            // The last report, `done`: waits for room (the mission task, woken for the report
+            // before, takes it within a turn).
             for _ in 0..1_000 {
                 if checks.try_send(test.report().clone()).is_ok() {
+                    wake.write(());
                     return;
                 }
                 Mono::delay(1.millis()).await;

@@ -15,7 +15,7 @@
 //! | `control` | 4 | 50 ms (`Mono::delay_until`) | encoders → `Pilot::tick` → motors; the stop flag (abort, e-stop) zeroes the motors; the report to `mission` |
 //! | `link_rx` | 3 | per batch of bytes (pended by `usart1`) | bytes on to the mission's queue; frames decoded to look for `AbortMission` / `EmergencyStop`, which set the stop flag at once |
 //! | `sonar` | 2 | per request | board: neck steps paced by `Mono`, a trigger, the echo's two edges latched by a timer and read after `Mono::delay`; QEMU: a ray cast on the real world; the reading to `mission` |
-//! | `mission` | 1 | event-driven | the link's requests and replies, the mission's steps, the planner, the pilot's commands, telemetry into the transmit queue |
+//! | `mission` | 1 | when woken (a frame's end, a report, a reading, room to send), at least every 50 ms | the link's requests and replies, the mission's steps, the planner, the pilot's commands, telemetry into the transmit queue (`mission_task.rs`) |
 //!
 //! Nothing at or above the receive path waits in a loop: the USART interrupt is the highest
 //! priority and moves one byte per register access, the decoding runs in `link_rx`, and the
@@ -24,7 +24,9 @@
 //! planner runs in `mission`, the lowest priority, and everything above preempts it. Values
 //! cross between tasks through `rtic-sync` channels (reports, sonar requests, readings),
 //! single-producer queues (bytes) and two locked resources (the pilot, taken by `mission` only
-//! to hand it a command; the body).
+//! to hand it a command; the body). The tasks that leave `mission` work also write its wake
+//! signal (`rtic-sync`'s `Signal`): it waits on that, with a timeout, instead of polling
+//! (`mission_task.rs` says when each task writes it, and why the timeout).
 //!
 //! ## Memory
 //!
@@ -80,6 +82,8 @@ macro_rules! log {
         defmt::info!($($arg)*);
     }};
 }
+
+mod mission_task;
 
 /// Planner open-list capacity, entries (`twil_core::link::mcu`, shared with the host).
 pub const QUEUE: usize = twil_core::link::mcu::PLANNER_QUEUE;
@@ -222,6 +226,7 @@ const READING_MS: u32 = 36;
 mod app {
     use super::*;
     use heapless::spsc::{Consumer, Producer};
+    use mission_task::{Wake, WakeReader};
     use rtic_monotonics::rtic_time::monotonic::TimerQueueBasedInstant;
     use rtic_monotonics::systick::prelude::*;
     use rtic_sync::channel::{Receiver, Sender};
@@ -233,8 +238,7 @@ mod app {
     };
     use twil_core::failsafe::{StopCause, StopTiming};
     use twil_core::link::{
-        DeviceInfo, FrameDecoder, Request, RequestFrame, Telemetry, WorldAccess, WorldUpload,
-        MAX_FRAME_BYTES,
+        DeviceInfo, FrameDecoder, Request, RequestFrame, Telemetry, MAX_FRAME_BYTES,
     };
     use twil_core::mission::{Pilot, PilotReport, SonarRequest};
     use twil_core::selftest::SelfTestReport;
@@ -275,16 +279,16 @@ mod app {
     pub struct ControlState {
         /// A mission runs (or is paused): the control task ticks the pilot; otherwise the
         /// motors stay at 0.
-        active: bool,
+        pub active: bool,
         /// The control task missed a period (motors already zeroed): the mission task ends
         /// the mission with `StopCause::ControllerOverrun`.
-        overrun: bool,
+        pub overrun: bool,
         /// Most instructions one control step took in this mission (the pilot's tick; not the
         /// simulated body's step).
-        max_control_instructions: u32,
+        pub max_control_instructions: u32,
         /// `Mono` milliseconds when the mission task last turned its loop: the watchdog
         /// gate's progress mark of that task.
-        mission_turn_ms: u32,
+        pub mission_turn_ms: u32,
     }
 
     #[shared]
@@ -311,6 +315,12 @@ mod app {
         /// `mission` → `usart1`: whole frames to send.
         tx_producer: Producer<'static, u8>,
         tx_consumer: Consumer<'static, u8>,
+        /// The mission task's wake signal (`mission_task.rs`): its reader, a writer for
+        /// `control` and `sonar` (cloned when they are spawned), `usart1`'s and `link_rx`'s.
+        wake: WakeReader,
+        wake_writer: Wake,
+        usart_wake: Wake,
+        link_wake: Wake,
         device: &'static mut TwilDevice,
         planner: &'static mut TwilPlanner,
         mission: &'static mut TwilMission,
@@ -425,7 +435,7 @@ mod app {
                 protocol_version: PROTOCOL_VERSION,
                 reset_cause,
             },
-            &mut |bytes: &[u8]| queue_frame(&mut tx_producer, bytes),
+            &mut |bytes: &[u8]| mission_task::queue_frame(&mut tx_producer, bytes),
         );
         // The stored parameters, before the watchdog starts: a repair of a cut erase may erase
         // a sector, which stalls the core for up to 4 s (params.rs).
@@ -460,6 +470,7 @@ mod app {
         log!("bring-up 3: USART1 115200 8N1, TX PA9, RX PA10; boot frame queued");
         let (producer, consumer) = ccm.rx_queue.split();
         let (irq_producer, irq_consumer) = cx.local.irq_queue.split();
+        let (wake_writer, wake) = rtic_sync::make_signal!(());
 
         // The simulated body runs on the defaults (the QEMU store boots empty: params.rs).
         #[cfg(feature = "qemu")]
@@ -538,6 +549,10 @@ mod app {
                 consumer,
                 tx_producer,
                 tx_consumer,
+                wake,
+                usart_wake: wake_writer.clone(),
+                link_wake: wake_writer.clone(),
+                wake_writer,
                 device,
                 planner: cx.local.planner_memory,
                 mission: ccm.mission,
@@ -568,7 +583,7 @@ mod app {
     /// the next). TXE raises this interrupt only while bytes wait (`listen` / `unlisten`);
     /// `mission` pends it after queueing a frame. QEMU 7.2's USART raises no TXE interrupt
     /// and takes every byte at once, so there the pended run sends the whole queue.
-    #[task(binds = USART1, priority = 5, local = [rx, tx, irq_producer, tx_consumer])]
+    #[task(binds = USART1, priority = 5, local = [rx, tx, irq_producer, tx_consumer, usart_wake])]
     fn usart1(cx: usart1::Context) {
         let before = instructions();
         let mut received = false;
@@ -591,6 +606,9 @@ mod app {
             rtic::pend(LINK_RX_VECTOR);
         }
         let tx = cx.local.tx;
+        // The mission task holds received frames and telemetry back while a largest frame
+        // does not fit: it is woken when one fits again.
+        let short = mission_task::room_behind(cx.local.tx_consumer) < MAX_FRAME_BYTES;
         while tx.is_tx_empty() {
             let Some(byte) = cx.local.tx_consumer.dequeue() else {
                 break;
@@ -603,6 +621,9 @@ mod app {
         } else {
             tx.unlisten();
         }
+        if short && mission_task::room_behind(cx.local.tx_consumer) >= MAX_FRAME_BYTES {
+            cx.local.usart_wake.write(());
+        }
         note_worst(
             &WORST_USART_INSTRUCTIONS,
             instructions().saturating_sub(before),
@@ -613,13 +634,17 @@ mod app {
     /// stop (`StopTiming::ask`) at once (the mission task, which may be planning, answers it later). Decoding a whole
     /// frame (its CRC and postcard) takes up to ~20 k instructions, longer than a byte time,
     /// which is why it is here and not in `usart1`.
-    #[task(binds = CAN1_RX0, priority = 3, shared = [stop], local = [irq_consumer, producer, peek: FrameDecoder = FrameDecoder::new()])]
+    #[task(binds = CAN1_RX0, priority = 3, shared = [stop], local = [irq_consumer, producer, link_wake, peek: FrameDecoder = FrameDecoder::new()])]
     fn link_rx(mut cx: link_rx::Context) {
         let before = instructions();
+        // The mission task is woken by a frame's end, or by a chunk's worth of bytes without
+        // one (`mission_task.rs`), not by every byte.
+        let mut wake = false;
         while let Some(byte) = cx.local.irq_consumer.dequeue() {
             if cx.local.producer.enqueue(byte).is_err() {
                 RX_DROPPED.fetch_add(1, Ordering::Relaxed);
             }
+            wake |= byte == 0 || cx.local.producer.len() == mission_task::CHUNK_BYTES;
             let (got, _) = cx.local.peek.feed::<RequestFrame>(&[byte]);
             if let Some(Ok(frame)) = got {
                 if matches!(
@@ -630,6 +655,9 @@ mod app {
                     cx.shared.stop.lock(|stop| stop.ask(counts));
                 }
             }
+        }
+        if wake {
+            cx.local.link_wake.write(());
         }
         note_worst(
             &WORST_DECODE_INSTRUCTIONS,
@@ -645,6 +673,7 @@ mod app {
         mut cx: control::Context,
         mut reports: Sender<'static, PilotReport, REPORTS>,
         mut faults: Sender<'static, StopCause, FAULTS>,
+        mut wake: Wake,
     ) {
         let period_s = PERIOD_MS as f32 / 1000.0;
         let mut next = Mono::now();
@@ -685,7 +714,7 @@ mod app {
                 let stop = cx.shared.body.lock(|b| b.idle_period());
                 #[cfg(feature = "qemu")]
                 let stop = None;
-                body_stopped(stop, &mut faults, &mut cx.shared.stop);
+                body_stopped(stop, &mut faults, &mut wake, &mut cx.shared.stop);
                 note_stop(tick, true, &mut cx.shared.stop);
                 continue;
             }
@@ -725,7 +754,7 @@ mod app {
                 // The body zeroed its motors; the pilot stops too.
                 cx.shared.pilot.lock(|p| p.stop());
             }
-            body_stopped(stop, &mut faults, &mut cx.shared.stop);
+            body_stopped(stop, &mut faults, &mut wake, &mut cx.shared.stop);
             if body_stop {
                 note_stop(tick, true, &mut cx.shared.stop);
             }
@@ -744,12 +773,13 @@ mod app {
             {
                 cx.shared.pilot.lock(|p| p.stop());
                 let stop = cx.shared.body.lock(|b| b.drive(0.0, 0.0, period_s));
-                body_stopped(stop, &mut faults, &mut cx.shared.stop);
+                body_stopped(stop, &mut faults, &mut wake, &mut cx.shared.stop);
                 log!("controller overrun at tick {}: motors zeroed", tick);
             }
             // A full queue means the mission task is more than 400 ms behind: the report is
             // dropped (the mission's clock then runs slow), the wheels are not affected.
             let _ = reports.try_send(report);
+            wake.write(());
         }
     }
 
@@ -764,6 +794,7 @@ mod app {
         mut readings: Sender<'static, Reading, READINGS>,
         mut faults: Sender<'static, StopCause, FAULTS>,
         mut checks: Sender<'static, SelfTestReport, SELF_TEST_REPORTS>,
+        mut wake: Wake,
     ) {
         #[cfg(feature = "hardware")]
         let _ = &mut cx.shared.world;
@@ -792,6 +823,7 @@ mod app {
                             Err(cause) => {
                                 defmt::error!("bring-up 6: neck homing failed: {}", cause);
                                 let _ = faults.send(cause).await;
+                                wake.write(());
                             }
                         }
                     }
@@ -807,7 +839,7 @@ mod app {
                 HeadCommand::SelfTest(robot, clock) => {
                     cx.local
                         .head
-                        .self_test(&mut cx.shared.body, &robot, clock, &mut checks)
+                        .self_test(&mut cx.shared.body, &robot, clock, &mut checks, &mut wake)
                         .await;
                     continue;
                 }
@@ -836,6 +868,7 @@ mod app {
                     // No reading to map: the mission ends with the fault instead.
                     defmt::error!("sonar head fault: {}", cause);
                     let _ = faults.send(cause).await;
+                    wake.write(());
                     None
                 }
             };
@@ -850,29 +883,13 @@ mod app {
             if readings.send((angle, range_m)).await.is_err() {
                 return;
             }
+            wake.write(());
         }
     }
 
-    /// The world of a simulated build, reached through its lock.
-    struct LockedWorld<'a, M>(&'a mut M);
-
-    #[cfg(feature = "qemu")]
-    impl<M: rtic::Mutex<T = &'static mut WorldUpload>> WorldAccess for LockedWorld<'_, M> {
-        fn with_world(&mut self, f: &mut dyn FnMut(&mut WorldUpload)) {
-            self.0.lock(|w| f(w));
-        }
-    }
-
-    #[cfg(feature = "hardware")]
-    impl<M> WorldAccess for LockedWorld<'_, M> {
-        fn with_world(&mut self, _f: &mut dyn FnMut(&mut WorldUpload)) {
-            // A board has no real world to upload: the request is answered NotOnThisBuild.
-            let _ = &self.0;
-        }
-    }
-
-    /// The mission task: the link, the mission's steps and the planner, at the lowest priority.
-    #[task(priority = 1, shared = [pilot, body, world, stop, control_state], local = [consumer, tx_producer, device, planner, mission, store, clock])]
+    /// The mission task: the link, the mission's steps and the planner, at the lowest priority
+    /// (its loop, and how it waits for work: `mission_task.rs`).
+    #[task(priority = 1, shared = [pilot, body, world, stop, control_state], local = [consumer, tx_producer, device, planner, mission, store, clock, wake, wake_writer])]
     async fn mission(mut cx: mission::Context) {
         // Calibration of the instruction count: `asm::delay(n)` runs n + 1 times a
         // two-instruction loop, so 500 000 gives 1 000 002 instructions (+ a few for the
@@ -890,246 +907,29 @@ mod app {
             NS_PER_INSTRUCTION.store(ns.clamp(1, 1024) as u32, Ordering::Relaxed);
             log!("QEMU pace: {} ns per instruction", ns as u32);
         }
-        let mut high_water = memory::stack_high_water_bytes();
-        log_stack(high_water);
-
-        let (reports_tx, mut reports) = make_channel!(PilotReport, REPORTS);
-        let (readings_tx, mut readings) = make_channel!(Reading, READINGS);
-        let (mut sonar_tx, sonar_rx) = make_channel!(HeadCommand, SONAR_REQUESTS);
-        let (faults_tx, mut faults) = make_channel!(StopCause, FAULTS);
-        #[cfg_attr(feature = "qemu", allow(unused_mut, unused_variables))]
-        let (checks_tx, mut checks) = make_channel!(SelfTestReport, SELF_TEST_REPORTS);
-        control::spawn(reports_tx, faults_tx.clone())
+        let (reports_tx, reports) = make_channel!(PilotReport, REPORTS);
+        let (readings_tx, readings) = make_channel!(Reading, READINGS);
+        let (sonar_tx, sonar_rx) = make_channel!(HeadCommand, SONAR_REQUESTS);
+        let (faults_tx, faults) = make_channel!(StopCause, FAULTS);
+        let (checks_tx, checks) = make_channel!(SelfTestReport, SELF_TEST_REPORTS);
+        control::spawn(reports_tx, faults_tx.clone(), cx.local.wake_writer.clone())
             .unwrap_or_else(|_| panic!("control spawns once"));
-        sonar::spawn(sonar_rx, readings_tx, faults_tx, checks_tx)
-            .unwrap_or_else(|_| panic!("sonar spawns once"));
-
-        let device = &mut **cx.local.device;
-        let mission = &mut **cx.local.mission;
-        let planner = &mut **cx.local.planner;
-        let tx = &mut *cx.local.tx_producer;
-        let mut chunk = [0u8; 64];
-        let mut reported_end = false;
-        loop {
-            let mut busy = false;
-            // Progress mark for the watchdog gate; the link's clock for its silence.
-            let now_ms = Mono::now().ticks();
-            cx.shared.control_state.lock(|c| c.mission_turn_ms = now_ms);
-            device.set_now_ms(now_ms);
-            // The link: requests in, replies out. At most one frame per round (the bytes up to
-            // its 0x00), and only while its reply fits in the transmit queue: a slow host
-            // holds its own requests back (their bytes wait in the receive queue).
-            let mut n = 0;
-            if room(tx) >= MAX_FRAME_BYTES {
-                while n < chunk.len() {
-                    match cx.local.consumer.dequeue() {
-                        Some(b) => {
-                            chunk[n] = b;
-                            n += 1;
-                            if b == 0 {
-                                break;
-                            }
-                        }
-                        None => break,
-                    }
-                }
-            }
-            if n > 0 {
-                busy = true;
-                let dropped = RX_DROPPED.swap(0, Ordering::Relaxed);
-                if dropped > 0 {
-                    device.handler.note_rx_dropped(dropped);
-                }
-                let mut world = LockedWorld(&mut cx.shared.world);
-                let mut link = match cx.local.store.as_mut() {
-                    Some(store) => device.link_with_store(mission, store),
-                    None => device.link(mission),
-                };
-                link.receive(
-                    &chunk[..n],
-                    planner,
-                    &mut instructions,
-                    &mut world,
-                    &mut |bytes: &[u8]| queue_frame(tx, bytes),
-                );
-            }
-            // The bring-up self-test, between missions (the device refuses it during one).
-            #[cfg(feature = "qemu")]
-            if device.take_self_test() {
-                busy = true;
-                let robot = device.params().robot;
-                let clock = *cx.local.clock;
-                let report = self_test(&robot, clock, &mut cx.shared.body, &mut cx.shared.world);
-                log!(
-                    "self-test: {} rows, {} failed",
-                    report.rows.len(),
-                    report.failures()
-                );
-                device.note_self_test(&report);
-            }
-            // The board's runs in the sonar task, which sends the report as rows come in.
-            #[cfg(feature = "hardware")]
-            {
-                if device.take_self_test() {
-                    busy = true;
-                    log!("self-test: started");
-                    let _ = sonar_tx
-                        .send(HeadCommand::SelfTest(
-                            device.params().robot,
-                            *cx.local.clock,
-                        ))
-                        .await;
-                }
-                while let Ok(report) = checks.try_recv() {
-                    busy = true;
-                    if report.done {
-                        log!(
-                            "self-test: {} rows, {} failed",
-                            report.rows.len(),
-                            report.failures()
-                        );
-                    }
-                    device.note_self_test(&report);
-                }
-            }
-            // Failsafes: a control step that missed its period (motors already zeroed), a host
-            // silent for longer than the mission's link-loss timeout.
-            if cx
-                .shared
-                .control_state
-                .lock(|c| core::mem::replace(&mut c.overrun, false))
-            {
-                device.link(mission).fail(StopCause::ControllerOverrun);
-            }
-            if let Some(reaction) = device.link(mission).watch_link() {
-                log!(
-                    "link lost: the host silent for {} ms: {}",
-                    device.link(mission).link_silent_ms(),
-                    reaction
-                );
-            }
-            // A mission that starts: the pilot and the body at its start.
-            if let Some(config) = device.link(mission).take_started() {
-                cx.shared
-                    .control_state
-                    .lock(|c| c.max_control_instructions = 0);
-                let body = cx.shared.body.lock(|b| b.restart(&config));
-                cx.shared.pilot.lock(|p| p.restart(&config));
-                cx.shared.stop.lock(|stop| stop.restart());
-                cx.shared.control_state.lock(|c| c.active = true);
-                // The head homes with the mission's geometry before its first reading (the
-                // queue is in order).
-                let _ = sonar_tx.send(HeadCommand::Restart(config.robot)).await;
-                log!("mission start: e-stop cleared: {}", body.is_ok());
-                if let Err(cause) = body {
-                    // The e-stop still pressed (or unreadable): the mission ends at once.
-                    device.link(mission).fail(cause);
-                }
-            }
-            // The body's faults (an e-stop press, a sensor) end the mission with their cause.
-            while let Ok(cause) = faults.try_recv() {
-                busy = true;
-                log!("the body stopped the mission: {}", cause);
-                device.link(mission).fail(cause);
-            }
-            let worst_control = cx.shared.control_state.lock(|c| c.max_control_instructions);
-            let (stop_ticks, stop_latency_us) = cx
-                .shared
-                .stop
-                .lock(|stop| (stop.stop_ticks(), stop.latency_us()));
-            device.note_timing(worst_control as u64, high_water, stop_ticks);
-            device.note_stop_latency_us(stop_latency_us);
-            // What the other tasks sent.
-            while let Ok(report) = reports.try_recv() {
-                busy = true;
-                device.link(mission).tick(&report);
-            }
-            while let Ok((angle, range_m)) = readings.try_recv() {
-                busy = true;
-                device.link(mission).reading(angle, range_m);
-            }
-            // What the mission asks.
-            if let Some(command) = device.take_pilot_command() {
-                let prefix = mission.prefix();
-                cx.shared.pilot.lock(|p| {
-                    let _ = p.command(command, prefix);
-                });
-            }
-            if let Some(request) = device.take_sonar_request() {
-                // At most one is out at a time (the mission waits for its answer).
-                let _ = sonar_tx.try_send(HeadCommand::Read(request));
-            }
-            if device.plan_pending() {
-                device.link(mission).run_planner(planner, &mut instructions);
-                busy = true;
-            }
-            let ended = device.state() == twil_core::link::RunState::Ended;
-            if ended && !reported_end {
-                let r = device.link(mission).report();
-                log!(
-                    "mission done: worst instructions: control step {}, plan {}, sonar reading {}, usart1 interrupt {}, link_rx {}, body step {}; frames not sent {}; stack {} bytes; stop cause {}, stop latency {} us",
-                    r.max_control_instructions as u32,
-                    r.max_plan_instructions as u32,
-                    WORST_SONAR_INSTRUCTIONS.load(Ordering::Relaxed),
-                    WORST_USART_INSTRUCTIONS.load(Ordering::Relaxed),
-                    WORST_DECODE_INSTRUCTIONS.load(Ordering::Relaxed),
-                    WORST_BODY_INSTRUCTIONS.load(Ordering::Relaxed),
-                    TX_DROPPED_FRAMES.load(Ordering::Relaxed),
-                    r.stack_high_water_bytes,
-                    r.stop_cause,
-                    r.stop_latency_us
-                );
-            }
-            if ended && !reported_end {
-                // Motors at 0 and, on the board, disarmed until the next start.
-                cx.shared.body.lock(|b| b.stop());
-            }
-            reported_end = ended;
-            if device.state() != twil_core::link::RunState::Running {
-                let paused = device.state() == twil_core::link::RunState::Paused;
-                cx.shared.control_state.lock(|c| c.active = paused);
-            }
-            // Telemetry, a few messages per round so that readings and reports are not held
-            // up, each only while a largest frame fits: otherwise it waits in the device
-            // (backpressure), and the loop sleeps while the USART sends.
-            for _ in 0..4 {
-                if room(tx) < MAX_FRAME_BYTES {
-                    break;
-                }
-                let Some(t) = device.link(mission).next_telemetry() else {
-                    break;
-                };
-                busy = true;
-                TwilDevice::send_telemetry(&t, &mut |bytes: &[u8]| queue_frame(tx, bytes));
-            }
-            let now = memory::stack_high_water_bytes();
-            if now > high_water {
-                high_water = now;
-                log_stack(high_water);
-            }
-            if !busy {
-                Mono::delay(ms(1)).await;
-            }
-        }
-    }
-
-    /// The self-test on the simulated robot where it stands (QEMU): the sonar's pings on the
-    /// real world, the pulses on a copy of the plant; at once (a few thousand plant sub-steps).
-    #[cfg(feature = "qemu")]
-    fn self_test(
-        robot: &twil_core::robot::RobotConfig,
-        clock: twil_core::selftest::ClockFacts,
-        body: &mut impl rtic::Mutex<T = body::Body>,
-        world: &mut impl rtic::Mutex<T = body::World>,
-    ) -> SelfTestReport {
-        use twil_core::selftest::{run, simulated::SimulatedCheck};
-        let config = *robot;
-        let plant = body.lock(|b| b.snapshot());
-        let mut test = twil_core::selftest::SelfTest::new(&config, clock);
-        world.lock(|w| {
-            let mut check = SimulatedCheck::new(&plant, &w.obstacles, config.sonar_range_m);
-            run(&mut test, &mut check).clone()
-        })
+        sonar::spawn(
+            sonar_rx,
+            readings_tx,
+            faults_tx,
+            checks_tx,
+            cx.local.wake_writer.clone(),
+        )
+        .unwrap_or_else(|_| panic!("sonar spawns once"));
+        let mail = mission_task::Mail {
+            reports,
+            readings,
+            sonar: sonar_tx,
+            faults,
+            checks,
+        };
+        mission_task::run(&mut cx.shared, &mut cx.local, mail).await
     }
 
     /// The body stopped the motors (`stop`: why, once): an e-stop press is timed like a stop
@@ -1137,6 +937,7 @@ mod app {
     fn body_stopped(
         stop: Option<StopCause>,
         faults: &mut Sender<'static, StopCause, FAULTS>,
+        wake: &mut Wake,
         timing: &mut impl rtic::Mutex<T = StopTiming>,
     ) {
         let Some(cause) = stop else {
@@ -1148,6 +949,7 @@ mod app {
         }
         // A full queue: earlier causes are waiting, and the first one ends the mission.
         let _ = faults.try_send(cause);
+        wake.write(());
     }
 
     /// At control tick `tick`, with zero volts on the motors (`motors_off`): if a stop frame
@@ -1171,36 +973,6 @@ mod app {
     /// `n` milliseconds of [`Mono`] (one tick per millisecond).
     fn ms(n: u32) -> fugit::Duration<u32, 1, { MONO_HZ as u64 }> {
         fugit::Duration::<u32, 1, { MONO_HZ as u64 }>::from_ticks(n)
-    }
-
-    /// Log the stack's high-water mark and what is left below it.
-    fn log_stack(high_water: u32) {
-        let stack = memory::stack_bytes();
-        log!(
-            "stack high-water: {} of {} bytes ({} free)",
-            high_water,
-            stack,
-            stack.saturating_sub(high_water)
-        );
-    }
-
-    /// Free bytes in the transmit queue.
-    fn room(tx: &Producer<'static, u8>) -> usize {
-        tx.capacity() - tx.len()
-    }
-
-    /// Queue one whole frame for `usart1` and pend it; a frame that does not fit is dropped
-    /// whole (counted), never cut: the receiver would lose the next frame too.
-    fn queue_frame(tx: &mut Producer<'static, u8>, bytes: &[u8]) {
-        if room(tx) < bytes.len() {
-            TX_DROPPED_FRAMES.fetch_add(1, Ordering::Relaxed);
-            return;
-        }
-        for &b in bytes {
-            // Checked above: there is room.
-            let _ = tx.enqueue(b);
-        }
-        rtic::pend(Interrupt::USART1);
     }
 }
 

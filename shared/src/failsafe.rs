@@ -256,6 +256,16 @@ impl LinkWatch {
         self.reacted = true;
         Some(policy.reaction)
     }
+
+    /// Milliseconds until [`LinkWatch::check`] would react, if it still may (a timeout, not
+    /// reacted yet): 0 when it would react now. A shell that sleeps between checks sleeps no
+    /// longer than this, so that it reacts at the timeout.
+    pub fn reaction_in_ms(&self, policy: &LinkLossPolicy) -> Option<u32> {
+        if policy.timeout_ms == 0 || self.reacted {
+            return None;
+        }
+        Some(policy.timeout_ms.saturating_sub(self.silent_ms()))
+    }
 }
 
 /// Why a mission was stopped from outside its own logic (`MissionReport::stop_cause`).
@@ -481,9 +491,12 @@ mod tests {
         // Then silence.
         let last = 20_000;
         watch.set_now_ms(last + 1_999);
+        assert_eq!(watch.reaction_in_ms(&policy), Some(1));
         assert_eq!(watch.check(&policy), None);
         watch.set_now_ms(last + 2_000);
+        assert_eq!(watch.reaction_in_ms(&policy), Some(0));
         assert_eq!(watch.check(&policy), Some(LinkLossReaction::StopAndHold));
+        assert_eq!(watch.reaction_in_ms(&policy), None, "reacted");
         watch.set_now_ms(last + 5_000);
         assert_eq!(watch.check(&policy), None, "once per mission");
         watch.start();
@@ -491,6 +504,7 @@ mod tests {
         assert_eq!(watch.check(&policy), Some(LinkLossReaction::StopAndHold));
         // Timeout 0: never.
         assert_eq!(watch.check(&LinkLossPolicy::NEVER), None);
+        assert_eq!(watch.reaction_in_ms(&LinkLossPolicy::NEVER), None);
     }
 
     #[test]

@@ -345,6 +345,18 @@ impl<const W: usize> RobotDevice<W> {
         self.link_watch.set_now_ms(now_ms);
     }
 
+    /// Milliseconds from the time of [`RobotDevice::set_now_ms`] until
+    /// [`RobotLink::watch_link`] would act on the host's silence, while it still may (a
+    /// running or paused mission whose link-loss policy has a timeout, not acted on yet). A
+    /// shell that sleeps between turns sleeps no longer than this.
+    pub fn link_loss_in_ms(&self) -> Option<u32> {
+        if !matches!(self.state, RunState::Running | RunState::Paused) {
+            return None;
+        }
+        let policy = self.setup.map(|s| s.link_loss)?;
+        self.link_watch.reaction_in_ms(&policy)
+    }
+
     /// Encode a telemetry message as a frame and pass the bytes to `send`.
     pub fn send_telemetry(telemetry: &Telemetry, send: &mut impl FnMut(&[u8])) {
         Device::<W>::send_encoded(&DeviceFrame::Telemetry(telemetry.clone()), send);

@@ -50,9 +50,12 @@ fn heartbeats_keep_the_mission_and_silence_stops_it_within_the_timeout_plus_a_pe
     // the 40th tick.
     assert!(matches!(b.call(Request::MissionStatus), Reply::Mission(_)));
     let heard_at_ms = b.now_ms;
+    // A shell that sleeps between turns is told how long it may.
+    assert_eq!(b.device.link_loss_in_ms(), Some(2_000));
     let n = ticks_until_ended(&mut b, 100);
     assert_eq!(n, 40, "stopped after {n} silent periods");
     assert_eq!(b.now_ms - heard_at_ms, 2_000);
+    assert_eq!(b.device.link_loss_in_ms(), None, "ended");
     let report = b.device.link(&mut b.mission).report();
     assert_eq!(report.state, RunState::Ended);
     assert_eq!(report.status, MissionStatus::Aborted);
