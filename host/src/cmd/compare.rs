@@ -33,7 +33,7 @@ pub struct Args {
     #[arg(long, value_name = "P.par")]
     pub params: PathBuf,
     /// Map size in metres, WIDTHxHEIGHT (or one number for a square).
-    #[arg(long, default_value = "15x15", value_parser = planning::parse_size)]
+    #[arg(long, default_value = "15x15", value_name = "WxH", value_parser = planning::parse_size)]
     pub size: SizeM,
     /// Cell side in metres (grid planners, Voronoi, quadtree, potential field).
     #[arg(long, default_value_t = 0.05)]

@@ -42,7 +42,7 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub map: Option<PathBuf>,
     /// Map size in metres, WIDTHxHEIGHT (or one number for a square).
-    #[arg(long, default_value = "15x15", value_parser = parse_size)]
+    #[arg(long, default_value = "15x15", value_name = "WxH", value_parser = parse_size)]
     pub size: SizeM,
     /// Cell side in metres.
     #[arg(long, default_value_t = 0.05)]

@@ -24,9 +24,7 @@ use crate::record::sim::{Pace, SimRecorder};
 use crate::record::topics::StatusMessage;
 use crate::record::Recorder;
 
-use super::args::{
-    read_da, Faults, LoopChoices, MissionArgs, OutputArgs, RobotArgs, WorldArgs,
-};
+use super::args::{read_da, Faults, LoopChoices, MissionArgs, OutputArgs, RobotArgs, WorldArgs};
 
 use crate::sim::{self, SimResult, SimSetup};
 
@@ -45,9 +43,6 @@ pub struct Args {
     /// `--mode`, the loop choices (`--preset`, `--planner`, `--settle`, …), `--time-limit`.
     #[command(flatten)]
     pub mission: MissionArgs,
-    /// `--out`, `--json`, `--gif-scale`, `--record`, `--live`.
-    #[command(flatten)]
-    pub output: OutputArgs,
     /// `--robot`, `--seed`, `--sonar-range`, `--sonar-noise`, `--sonar`, ….
     #[command(flatten)]
     pub robot: RobotArgs,
@@ -69,6 +64,9 @@ pub struct Args {
     /// 30 ms at 168 MHz); 0 applies every plan at once.
     #[arg(long, default_value_t = 50.0, value_name = "MS")]
     pub plan_latency_ms: f32,
+    /// `--out`, `--json`, `--gif-scale`, `--record`, `--live`.
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// With `--live`: run mission time this many times faster than the wall clock.
     #[arg(long, default_value_t = 1.0, value_name = "X", requires = "live")]
     pub speed: f64,
@@ -351,7 +349,10 @@ fn run_recorded(
             args.speed
         );
     }
-    let recorder = Recorder::open(args.output.record.record.as_deref(), args.output.record.live)?;
+    let recorder = Recorder::open(
+        args.output.record.record.as_deref(),
+        args.output.record.live,
+    )?;
     if let (Some(port), Some(addr)) = (recorder.live_port(), args.output.record.live) {
         eprintln!(
             "twil: serving live on ws://{}:{port} (Foxglove: Open connection; layout docs/foxglove-layout.json); Ctrl-C stops",

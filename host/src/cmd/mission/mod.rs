@@ -61,27 +61,27 @@ pub struct Args {
     /// The device: `sim` (in this process), `qemu`, `tcp:HOST:PORT` or a serial port.
     #[arg(long, value_name = "DEVICE")]
     pub remote: RemoteSpec,
-    /// `--params`, `--known`, `--size` (0.05 m cells).
-    #[command(flatten)]
-    pub world: WorldArgs,
     /// The real world (.da) of a simulated device (`sim`, `qemu`): required there, refused by
     /// a board.
     #[arg(long, value_name = "R.da")]
     pub real: Option<PathBuf>,
+    /// `--params`, `--known`, `--size` (0.05 m cells).
+    #[command(flatten)]
+    pub world: WorldArgs,
     /// `--mode`, the loop choices (`--preset`, `--planner`, `--settle`, …; `SetMission`
     /// carries them all to the device), `--time-limit`.
     #[command(flatten)]
     pub mission: MissionArgs,
-    /// `--out`, `--json`, `--gif-scale`, `--record`, `--live` (the telemetry as Foxglove
-    /// messages).
-    #[command(flatten)]
-    pub output: OutputArgs,
     /// `--robot`, `--seed`, `--sonar-range`, `--sonar-noise`, `--sonar`, ….
     #[command(flatten)]
     pub robot: RobotArgs,
     /// Give up when the device sends nothing for this many seconds.
     #[arg(long, default_value_t = 10.0, value_name = "S")]
     pub silence: f32,
+    /// `--out`, `--json`, `--gif-scale`, `--record`, `--live` (the telemetry as Foxglove
+    /// messages).
+    #[command(flatten)]
+    pub output: OutputArgs,
     /// The device reacts (--on-link-loss) when it hears nothing from the host for this long,
     /// milliseconds: 0 (never) or 200 to 3 600 000. The host sends a heartbeat
     /// (`MissionStatus`) every quarter of it, at most every 500 ms.
@@ -231,7 +231,10 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     let _ = ctrlc::set_handler(on_ctrl_c);
     let mut follower = Follower::new(&inputs, args.output.out.is_some())?;
     if args.output.record.wanted() {
-        let recorder = Recorder::open(args.output.record.record.as_deref(), args.output.record.live)?;
+        let recorder = Recorder::open(
+            args.output.record.record.as_deref(),
+            args.output.record.live,
+        )?;
         if let (Some(port), Some(addr)) = (recorder.live_port(), args.output.record.live) {
             note(
                 &bar,
