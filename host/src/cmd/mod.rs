@@ -5,7 +5,6 @@ pub mod check;
 pub mod compare;
 pub mod cspace;
 pub mod mission;
-pub mod mission_link;
 pub mod param;
 pub mod ping;
 pub mod plan;

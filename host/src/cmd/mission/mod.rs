@@ -17,7 +17,8 @@
 //!
 //! Files: this one (arguments, the session, Ctrl-C), `inputs.rs` (the files read and the
 //! mission set-up), `follower.rs` (the telemetry followed into a trajectory, plans and
-//! pictures), `report.rs` (the JSON result and the files written).
+//! pictures), `link.rs` (what the host does when telemetry is lost), `report.rs` (the JSON
+//! result and the files written).
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -48,6 +49,7 @@ use crate::sim::{ControlSample, SimResult, SimSetup, SimStatus, Snapshot, Trajec
 
 mod follower;
 mod inputs;
+pub mod link;
 mod report;
 
 pub(crate) use follower::Follower;
@@ -259,7 +261,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         let _ = remote.request(Request::AbortMission);
     }
     bar.finish_and_clear();
-    let link = crate::cmd::mission_link::LinkReport::of(&remote, follower.telemetry_gaps);
+    let link = link::LinkReport::of(&remote, follower.telemetry_gaps);
     // Done with the device (QEMU, if any, ends here).
     drop(remote);
     // Close the recording even when following failed, so what arrived stays readable.
@@ -557,7 +559,7 @@ mod tests {
         follow(&args, &mut remote, &mut follower, &ProgressBar::hidden()).unwrap();
         let waited = started.elapsed();
         assert!(
-            waited >= crate::cmd::mission_link::POLL_AFTER && waited < Duration::from_secs(3),
+            waited >= link::POLL_AFTER && waited < Duration::from_secs(3),
             "{waited:?}"
         );
         assert_eq!(

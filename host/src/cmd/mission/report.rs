@@ -23,7 +23,7 @@ pub struct Outcome {
     /// Ctrl-C aborted the mission.
     pub interrupted: bool,
     /// What the link lost and repaired (`summary.json`).
-    pub link: crate::cmd::mission_link::LinkReport,
+    pub link: super::link::LinkReport,
     /// Where and how the mission ended, for the sentence that says why (crate::answer).
     pub place: EndPlace,
 }
