@@ -1,4 +1,5 @@
-//! One module per `twil` subcommand.
+//! One module per `twil` subcommand (a file, or a folder for `mission`), and [`args`], the
+//! options the commands share.
 
 pub mod args;
 pub mod check;
