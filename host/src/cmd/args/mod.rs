@@ -1,5 +1,6 @@
 //! The options the host commands share, one `clap::Args` group per file, flattened into each
-//! command's `Args`: the world ([`WorldArgs`]: `--params`, `--known`, `--size`), the mission
+//! command's `Args`: the world ([`WorldArgs`]: `--params`, `--known`, `--size`; for `plan` and
+//! `compare`, [`PlanningArgs`]: `--params`, `--size`, `--resolution`, `--robot`), the mission
 //! loop ([`MissionArgs`]: `--mode`, `--preset` and its overrides, `--time-limit`), the robot
 //! and its sonar ([`RobotArgs`]: `--robot`, `--seed`, `--sonar-range`, `--sonar`, …) and the
 //! output ([`OutputArgs`]: `--out`, `--json`, `--gif-scale`, `--record`, `--live`, and the one
@@ -28,7 +29,7 @@ pub use mission::MissionArgs;
 pub use output::OutputArgs;
 pub use preset::{FollowArgs, LoopArgs, LoopChoices, Preset};
 pub use robot::{resolve, Faults, RobotArgs, RobotOptions, SonarArg, SonarArgs};
-pub use world::{parse_size, SizeM, WorldArgs};
+pub use world::{parse_size, PlanningArgs, SizeM, WorldArgs};
 
 /// Sonar use.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]

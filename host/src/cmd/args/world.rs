@@ -1,6 +1,7 @@
 //! The world a mission runs in: `--params`, `--known` and `--size`, the options `twil simulate`
 //! and `twil mission` share (each adds its own `--real`: required by the simulator, refused
-//! by a board).
+//! by a board); and the planning problem of `twil plan` and `twil compare`: `--params`,
+//! `--size`, `--resolution`, `--robot` (each adds its own `--world`).
 //!
 //! `--size` has one grammar in every command, [`parse_size`] (`15x10`, `15X10`, or `15` for a
 //! square), given to clap as the value parser: a bad value is a usage error that names the
@@ -16,6 +17,7 @@ pub use crate::planning::{parse_size, SizeM};
 
 use super::{read_da, read_par};
 use crate::answer::OffMap;
+use crate::planning::WorldFiles;
 
 /// `--params`, `--known`, `--size`.
 #[derive(clap::Args, Debug, Clone)]
@@ -62,5 +64,40 @@ impl WorldArgs {
     /// `--size`: the commands answer `out_of_bounds` ([`crate::answer::OffMap`]).
     pub fn check_on_map(&self, geometry: &GridGeometry, params: &Params) -> Result<(), OffMap> {
         OffMap::check(&self.params, &self.size.to_string(), geometry, params)
+    }
+}
+
+/// `--params`, `--size`, `--resolution`, `--robot` of `twil plan` and `twil compare`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct PlanningArgs {
+    /// Mission parameters (.par): robot radius, speed, heading, start, goal.
+    #[arg(long, value_name = "P.par")]
+    pub params: PathBuf,
+    /// Map size in metres, WIDTHxHEIGHT (or one number for a square).
+    #[arg(long, default_value = "15x15", value_name = "WxH", value_parser = parse_size)]
+    pub size: SizeM,
+    /// Cell side in metres (the grid planners'; in `twil compare` also Voronoi's, the
+    /// quadtree's and the potential field's).
+    #[arg(long, default_value_t = 0.05)]
+    pub resolution: f32,
+    /// Robot file (`twil robot init`): its `planning_radius_m`, if set, replaces the `.par`
+    /// radius; every value is checked against the robot model. `twil compare`: its
+    /// `sonar_range_m` is the Bug robot's unless --sonar-range is given.
+    #[arg(long, value_name = "FILE.toml")]
+    pub robot: Option<PathBuf>,
+}
+
+impl PlanningArgs {
+    /// The files to read ([`crate::planning::load_world`]): these options with the command's
+    /// `.da` polygons (`world`) and saved map (`map`), if any.
+    pub fn files(&self, world: Option<PathBuf>, map: Option<PathBuf>) -> WorldFiles {
+        WorldFiles {
+            world,
+            params: self.params.clone(),
+            map,
+            size: self.size,
+            resolution_m: self.resolution,
+            robot: self.robot.clone(),
+        }
     }
 }
