@@ -16,7 +16,7 @@ fn world(name: &str, size: Option<(f32, f32)>) -> twil_host::cmd::plan::World {
         dir.join(format!("{name}.par")),
     );
     if let Some((width_m, height_m)) = size {
-        args.size = SizeM { width_m, height_m };
+        args.planning.size = SizeM { width_m, height_m };
     }
     load(&args).unwrap()
 }

@@ -10,17 +10,19 @@ use twil_host::cmd::plan::{load, parse_size, Args};
 fn world(name: &str, size: &str) -> twil_host::cmd::plan::World {
     load(&Args {
         world: Some(crate::common::world(&format!("{name}.da"))),
-        params: crate::common::world(&format!("{name}.par")),
+        planning: twil_host::cmd::args::PlanningArgs {
+            params: crate::common::world(&format!("{name}.par")),
+            size: parse_size(size).unwrap(),
+            resolution: 0.05,
+            robot: None,
+        },
         map: None,
-        size: parse_size(size).unwrap(),
-        resolution: 0.05,
         planner: Method::Voronoi,
         json: false,
         png: None,
         record: None,
         scale: None,
         remote: None,
-        robot: None,
     })
     .unwrap()
 }

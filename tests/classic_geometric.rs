@@ -21,7 +21,7 @@ const WORLDS: [(&str, f32, f32); 5] = [
 
 fn load_world(da: PathBuf, par: PathBuf, width_m: f32, height_m: f32) -> World {
     let mut args = common::plan_args(Some(da), par);
-    args.size = SizeM { width_m, height_m };
+    args.planning.size = SizeM { width_m, height_m };
     load(&args).expect("load the world")
 }
 

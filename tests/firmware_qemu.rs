@@ -38,20 +38,22 @@ fn qemu() -> (Remote, twil_core::link::DeviceInfo) {
 fn plan_args(world: &str, kind: twil_host::classic::Method) -> host_plan::Args {
     host_plan::Args {
         world: Some(common::world(&format!("{world}.da"))),
-        params: common::world(&format!("{world}.par")),
-        map: None,
-        size: host_plan::SizeM {
-            width_m: 15.0,
-            height_m: 15.0,
+        planning: twil_host::cmd::args::PlanningArgs {
+            params: common::world(&format!("{world}.par")),
+            size: host_plan::SizeM {
+                width_m: 15.0,
+                height_m: 15.0,
+            },
+            resolution: 0.05,
+            robot: None,
         },
-        resolution: 0.05,
+        map: None,
         planner: kind,
         json: false,
         png: None,
         record: None,
         scale: None,
         remote: None,
-        robot: None,
     }
 }
 

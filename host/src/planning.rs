@@ -36,12 +36,24 @@ pub struct SizeM {
     pub height_m: f32,
 }
 
-/// Parse `15x15`, `15X10` or `15`.
+impl std::fmt::Display for SizeM {
+    /// As `--size` takes it: `15x10` (`15x15` for `--size 15`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}x{}", self.width_m, self.height_m)
+    }
+}
+
+/// The one `--size` grammar of every command (clap's value parser, so a bad value is a usage
+/// error naming the option and the value): `15x10`, `15X10`, or `15` for a 15 x 15 m square
+/// (one number cannot be read two ways), each side a positive number of metres.
 pub fn parse_size(text: &str) -> Result<SizeM, String> {
     let number = |t: &str| -> Result<f32, String> {
         match t.trim().parse::<f32>() {
             Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-            _ => Err(format!("`{t}` is not a positive number of metres")),
+            _ => Err(format!(
+                "`{t}` is not a positive number of metres (expected WIDTHxHEIGHT, e.g. 15x10, \
+                 or one number for a square)"
+            )),
         }
     };
     match text.split_once(['x', 'X']) {
@@ -308,6 +320,9 @@ mod tests {
             }
         );
         assert_eq!(parse_size("7").unwrap().height_m, 7.0);
+        assert_eq!(parse_size(" 7 X 5 ").unwrap().to_string(), "7x5");
+        assert_eq!(parse_size("15").unwrap().to_string(), "15x15");
+        assert_eq!(parse_size("12.5x10").unwrap().to_string(), "12.5x10");
         assert!(parse_size("0x3").is_err());
         assert!(parse_size("ax3").is_err());
         assert!(parse_size("inf").is_err());

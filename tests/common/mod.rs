@@ -34,20 +34,22 @@ pub fn ctrl_c(child: &std::process::Child) {
 pub fn plan_args(world: Option<PathBuf>, params: PathBuf) -> twil_host::cmd::plan::Args {
     twil_host::cmd::plan::Args {
         world,
-        params,
-        map: None,
-        size: twil_host::cmd::plan::SizeM {
-            width_m: 15.0,
-            height_m: 15.0,
+        planning: twil_host::cmd::args::PlanningArgs {
+            params,
+            size: twil_host::cmd::plan::SizeM {
+                width_m: 15.0,
+                height_m: 15.0,
+            },
+            resolution: 0.05,
+            robot: None,
         },
-        resolution: 0.05,
+        map: None,
         planner: twil_host::classic::Method::Astar,
         json: true,
         png: None,
         record: None,
         scale: None,
         remote: None,
-        robot: None,
     }
 }
 

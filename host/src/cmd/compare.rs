@@ -19,9 +19,10 @@ use std::path::PathBuf;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
+use super::args::PlanningArgs;
 use crate::classic::{self, Method, Options, Run, Status};
 use crate::picture::{self, Figure, FigureSpec, PanelSpec};
-use crate::planning::{self, SizeM, World, WorldFiles};
+use crate::planning::{self, World};
 
 /// Arguments of `twil compare`.
 #[derive(clap::Args, Debug, Clone)]
@@ -29,25 +30,15 @@ pub struct Args {
     /// Environment file (.da): obstacle polygons.
     #[arg(long, value_name = "W.da")]
     pub world: PathBuf,
-    /// Mission parameters (.par): robot radius, start, goal.
-    #[arg(long, value_name = "P.par")]
-    pub params: PathBuf,
-    /// Map size in metres, WIDTHxHEIGHT (or one number for a square).
-    #[arg(long, default_value = "15x15", value_parser = planning::parse_size)]
-    pub size: SizeM,
-    /// Cell side in metres (grid planners, Voronoi, quadtree, potential field).
-    #[arg(long, default_value_t = 0.05)]
-    pub resolution: f32,
+    /// `--params`, `--size`, `--resolution`, `--robot`.
+    #[command(flatten)]
+    pub planning: PlanningArgs,
     /// Methods to run, comma-separated (default: all).
     #[arg(long, value_enum, value_delimiter = ',', value_name = "M,M,…")]
     pub planners: Vec<Method>,
     /// Sonar range of the Bug robot, metres [default: 3, or the --robot file's `sonar_range_m`].
     #[arg(long, value_name = "M")]
     pub sonar_range: Option<f32>,
-    /// Robot file (`twil robot init`): its `planning_radius_m`, if set, replaces the `.par`
-    /// radius, and its `sonar_range_m` is the Bug robot's unless --sonar-range is given.
-    #[arg(long, value_name = "FILE.toml")]
-    pub robot: Option<PathBuf>,
     /// Write compare.png, compare.json and compare.md to this folder.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -203,16 +194,10 @@ const DEFAULT_BUG_SONAR_RANGE_M: f32 = 3.0;
 
 /// Run `twil compare`.
 pub fn run(args: Args) -> anyhow::Result<crate::exit::Ending> {
-    let world = planning::load_world(&WorldFiles {
-        world: Some(args.world.clone()),
-        params: args.params.clone(),
-        map: None,
-        size: args.size,
-        resolution_m: args.resolution,
-        robot: args.robot.clone(),
-    })?;
+    let world = planning::load_world(&args.planning.files(Some(args.world.clone()), None))?;
     // The file's sonar range, if it sets one (load_world has checked it).
     let file = args
+        .planning
         .robot
         .as_deref()
         .map(crate::robot_file::read)

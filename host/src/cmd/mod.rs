@@ -1,17 +1,15 @@
-//! One module per `twil` subcommand.
+//! One module per `twil` subcommand (a file, or a folder for `mission`), and [`args`], the
+//! options the commands share.
 
 pub mod args;
 pub mod check;
 pub mod compare;
 pub mod cspace;
 pub mod mission;
-pub mod mission_link;
 pub mod param;
 pub mod ping;
 pub mod plan;
-pub mod preset;
 pub mod robot;
-pub mod robot_options;
 pub mod simulate;
 pub mod sonar_grid;
 pub mod view;

@@ -25,6 +25,7 @@ pub use crate::planning::{
     Outcome, PlanJson, SizeM, World, WorldFiles, HOST_CELLS, HOST_QUEUE, HOST_SCRATCH_WORDS,
 };
 
+use super::args::PlanningArgs;
 use crate::classic::Method;
 use crate::picture::{self, palette, Figure, FigureSpec, LegendEntry, Mark, Marker, PanelSpec};
 
@@ -34,19 +35,13 @@ pub struct Args {
     /// Environment file (.da): obstacle polygons, grown by the robot radius.
     #[arg(long, value_name = "W.da", required_unless_present = "map")]
     pub world: Option<PathBuf>,
-    /// Mission parameters (.par): robot radius, speed, heading, start, goal.
-    #[arg(long, value_name = "P.par")]
-    pub params: PathBuf,
+    /// `--params`, `--size`, `--resolution`, `--robot`.
+    #[command(flatten)]
+    pub planning: PlanningArgs,
     /// Saved map (the seed's `-s` file: width*height bytes, x-major, nonzero = occupied,
     /// already grown). Replaces --world, or is combined with it (cells of both are occupied).
     #[arg(long, value_name = "FILE")]
     pub map: Option<PathBuf>,
-    /// Map size in metres, WIDTHxHEIGHT (or one number for a square).
-    #[arg(long, default_value = "15x15", value_parser = parse_size)]
-    pub size: SizeM,
-    /// Cell side in metres.
-    #[arg(long, default_value_t = 0.05)]
-    pub resolution: f32,
     /// Which planner: a grid planner (bfs, astar, anyangle; these also run on the device) or
     /// one of the seeds' classic methods (docs/classic.md).
     #[arg(long, value_enum, default_value_t = Method::Astar)]
@@ -69,22 +64,11 @@ pub struct Args {
     /// plan, and the JSON adds `mcu_instructions`, `static_ram_bytes` and `matches_host`.
     #[arg(long, value_name = "DEVICE")]
     pub remote: Option<crate::remote::RemoteSpec>,
-    /// Robot file (`twil robot init`): its `planning_radius_m`, if set, replaces the `.par`
-    /// radius; every value is checked against the robot model.
-    #[arg(long, value_name = "FILE.toml")]
-    pub robot: Option<PathBuf>,
 }
 
 /// Read the files named by `args` and build the map ([`crate::planning::load_world`]).
 pub fn load(args: &Args) -> anyhow::Result<World> {
-    crate::planning::load_world(&WorldFiles {
-        world: args.world.clone(),
-        params: args.params.clone(),
-        map: args.map.clone(),
-        size: args.size,
-        resolution_m: args.resolution,
-        robot: args.robot.clone(),
-    })
+    crate::planning::load_world(&args.planning.files(args.world.clone(), args.map.clone()))
 }
 
 /// A short human summary (several lines, no trailing newline).

@@ -12,23 +12,21 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 use twil_core::control::Pose;
 use twil_core::geom::PointM;
-use twil_core::grid::GridGeometry;
 use twil_core::mission::{MissionMode, MissionStats};
 
 use crate::answer::MissionEnd;
 use crate::record::sim::{Pace, SimRecorder};
 use crate::record::topics::StatusMessage;
-use crate::record::{RecordArgs, Recorder};
+use crate::record::Recorder;
 
-use super::args::{parse_size, read_da, read_par, Mode, SonarArgs};
-use super::preset::{FollowArgs, LoopArgs, LoopChoices};
+use super::args::{read_da, Faults, LoopChoices, MissionArgs, OutputArgs, RobotArgs, WorldArgs};
 
-use crate::sim::{self, output, SimResult, SimSetup};
+use crate::sim::{self, SimResult, SimSetup};
 
 /// Arguments of `twil simulate`.
 #[derive(clap::Args, Debug, Clone)]
@@ -36,44 +34,18 @@ pub struct Args {
     /// The real world (.da): what the simulated sonar sees and the robot can hit.
     #[arg(long, value_name = "R.da")]
     pub real: PathBuf,
-    /// The mission (.par): radius, speed, initial heading, start, goal.
-    #[arg(long, value_name = "P.par")]
-    pub params: PathBuf,
-    /// Obstacles known before the first sweep (.da).
-    #[arg(long, value_name = "K.da")]
-    pub known: Option<PathBuf>,
-    /// Map size in metres, WIDTHxHEIGHT.
-    #[arg(long, default_value = "15x15", value_name = "WxH")]
-    pub size: String,
+    /// `--params`, `--known`, `--size`.
+    #[command(flatten)]
+    pub world: WorldArgs,
     /// Grid resolution, metres per cell.
     #[arg(long, default_value_t = 0.05)]
     pub resolution: f32,
-    /// Stop-and-sweep or continuous sweeping.
-    #[arg(long, value_enum, default_value_t = Mode::Stop)]
-    pub mode: Mode,
-    /// Loop choices: `--preset`, `--planner`, `--rcd`, `--seed-prune`.
+    /// `--mode`, the loop choices (`--preset`, `--planner`, `--settle`, …), `--time-limit`.
     #[command(flatten)]
-    pub loop_args: LoopArgs,
-    /// Following choices: `--settle`, `--feed-forward`, `--turn-in-place`, `--sweep-readings`.
+    pub mission: MissionArgs,
+    /// `--robot`, `--seed`, `--sonar-range`, `--sonar-noise`, `--sonar`, ….
     #[command(flatten)]
-    pub follow: FollowArgs,
-    /// Write trajectory.csv, plan PNGs, mission.gif and summary.json here.
-    #[arg(long, value_name = "DIR")]
-    pub out: Option<PathBuf>,
-    /// Print exactly one JSON object on stdout and nothing else.
-    #[arg(long)]
-    pub json: bool,
-    /// Seed of the simulated sonar noise and faults.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Sonar range, metres (0.26 < range ≤ 6) [default: the seed's 1.5, or the --robot
-    /// file's `sonar_range_m`].
-    #[arg(long)]
-    pub sonar_range: Option<f32>,
-    /// Standard deviation of the simulated sonar noise, metres [default: 0, or the --robot
-    /// file's `sonar_noise_std_m`].
-    #[arg(long)]
-    pub sonar_noise: Option<f32>,
+    pub robot: RobotArgs,
     /// Probability that a reading which would echo returns no echo (missed echo), 0 to 1
     /// [default: 0, or the --robot file's `sonar_dropout_probability`].
     #[arg(long, value_name = "P")]
@@ -82,17 +54,6 @@ pub struct Args {
     /// [default: 0, or the --robot file's `sonar_spurious_probability`].
     #[arg(long, value_name = "P")]
     pub sonar_spurious: Option<f32>,
-    #[command(flatten)]
-    pub sonar_model: SonarArgs,
-    /// Robot file (`twil robot init`): the robot's constants; keys left out keep their
-    /// defaults, an explicit option overrides the file, and its `planning_radius_m`, if set,
-    /// replaces the `.par` radius.
-    #[arg(long, value_name = "FILE.toml")]
-    pub robot: Option<PathBuf>,
-    /// Mission time limit, seconds of simulated time [default: the preset's: 900; seed: 1800, its
-    /// 18.85 s settles].
-    #[arg(long)]
-    pub time_limit: Option<f32>,
     /// Continuous mode: half-width of the sweeps taken while moving, degrees (narrower sweeps
     /// come round more often but see less to the sides; experimental).
     #[arg(long, default_value_t = 95.0)]
@@ -103,12 +64,9 @@ pub struct Args {
     /// 30 ms at 168 MHz); 0 applies every plan at once.
     #[arg(long, default_value_t = 50.0, value_name = "MS")]
     pub plan_latency_ms: f32,
-    /// GIF scale, pixels per cell.
-    #[arg(long, default_value_t = 2)]
-    pub gif_scale: u32,
-    /// `--record FILE.mcap`, `--live [ADDR]`: Foxglove recording and live view.
+    /// `--out`, `--json`, `--gif-scale`, `--record`, `--live`.
     #[command(flatten)]
-    pub record: RecordArgs,
+    pub output: OutputArgs,
     /// With `--live`: run mission time this many times faster than the wall clock.
     #[arg(long, default_value_t = 1.0, value_name = "X", requires = "live")]
     pub speed: f64,
@@ -117,37 +75,17 @@ pub struct Args {
 /// Turn the arguments into a simulation setup (reads and checks every file).
 pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
     let real = read_da(&args.real)?;
-    let params = read_par(&args.params)?;
-    let known = args.known.as_deref().map(read_da).transpose()?;
-    let (w, h) = parse_size(&args.size)?;
-    let geometry = GridGeometry::from_size_m(w, h, args.resolution).map_err(|e| {
-        anyhow::anyhow!("--size {} --resolution {}: {e}", args.size, args.resolution)
-    })?;
-    let cells = geometry.cell_count();
-    if cells > 400 * 400 {
-        bail!(
-            "--size {} --resolution {}: {} x {} cells; the simulator holds at most 400 x 400",
-            args.size,
-            args.resolution,
-            geometry.width(),
-            geometry.height()
-        );
-    }
+    let (mut params, known) = args.world.read()?;
+    let geometry = args.world.geometry(args.resolution)?;
     let choices = args.choices();
-    let mut params = params;
-    let robot = crate::cmd::robot_options::resolve(
-        &crate::cmd::robot_options::RobotOptions {
-            file: args.robot.as_deref(),
-            sonar_range_m: args.sonar_range,
-            sonar_noise_std_m: args.sonar_noise,
-            sonar_dropout_probability: args.sonar_dropout,
-            sonar_spurious_probability: args.sonar_spurious,
-            sonar: &args.sonar_model,
-            noise_seed: args.seed,
-            sweep_layout: choices.sweep_layout,
-            sweep_layout_explicit: args.follow.sweep_readings.is_some(),
-            params_path: &args.params,
+    let robot = args.robot.resolve(
+        &choices,
+        args.mission.follow.sweep_readings.is_some(),
+        Faults {
+            dropout_probability: args.sonar_dropout,
+            spurious_probability: args.sonar_spurious,
         },
+        &args.world.params,
         &mut params,
     )?;
     if !(args.plan_latency_ms.is_finite() && (0.0..=60_000.0).contains(&args.plan_latency_ms)) {
@@ -156,27 +94,19 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
             args.plan_latency_ms
         );
     }
-    let time_limit_s = args
-        .time_limit
-        .unwrap_or(args.loop_args.preset.time_limit_s());
-    if !(time_limit_s.is_finite() && time_limit_s > 0.0) {
-        bail!("--time-limit: must be a positive number of seconds, got {time_limit_s}");
-    }
+    let time_limit_s = args.mission.checked_time_limit_s()?;
     // `run` answers `out_of_bounds` (crate::answer); other callers see the error.
-    crate::answer::OffMap::check(&args.params, &args.size, &geometry, &params)?;
+    args.world.check_on_map(&geometry, &params)?;
     Ok(SimSetup {
         real,
         known,
         params,
         geometry,
-        mode: match args.mode {
-            Mode::Stop => MissionMode::Stop,
-            Mode::Continuous => MissionMode::Continuous,
-        },
+        mode: args.mission.mission_mode(),
         planner: choices.planner_kind(),
         robot,
         time_limit_s,
-        snapshot_period_s: if args.out.is_some() { 0.5 } else { 0.0 },
+        snapshot_period_s: if args.output.out.is_some() { 0.5 } else { 0.0 },
         constant_depth_filter: choices.rcd,
         trust_seen_space: !choices.seed_prune,
         evidence_map: choices.evidence_map,
@@ -185,14 +115,14 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         settle: choices.settle,
         reference_feed_forward: choices.reference_feed_forward,
         turn_in_place: choices.turn_in_place,
-        world_name: crate::sim::pictures::world_name(Some(&args.real), args.known.as_deref()),
+        world_name: crate::sim::pictures::world_name(Some(&args.real), args.world.known.as_deref()),
     })
 }
 
 impl Args {
     /// The loop choices of this run: `--preset`'s, with the explicit options applied.
     pub fn choices(&self) -> LoopChoices {
-        self.loop_args.resolve(Some(&self.follow))
+        self.mission.choices()
     }
 }
 
@@ -254,7 +184,7 @@ pub fn summary_json(args: &Args, setup: &SimSetup, result: &SimResult) -> serde_
     let stats: &MissionStats = &result.stats;
     let extra = json!({
         "mode": match setup.mode { MissionMode::Stop => "stop", MissionMode::Continuous => "continuous" },
-        "preset": args.loop_args.preset.name(),
+        "preset": args.mission.loop_args.preset.name(),
         "planner": args.choices().planner_name(),
         "settle": args.choices().settle_name(),
         "settle_time_s": round3(mission_config_settle_s(setup)),
@@ -263,9 +193,9 @@ pub fn summary_json(args: &Args, setup: &SimSetup, result: &SimResult) -> serde_
         "sweep_readings": LoopChoices { sweep_layout: setup.robot.sweep_layout, ..args.choices() }.sweep_readings_name(),
         "turn_in_place": setup.turn_in_place,
         "real": args.real.display().to_string(),
-        "known": args.known.as_ref().map(|p| p.display().to_string()),
-        "params": args.params.display().to_string(),
-        "seed": args.seed,
+        "known": args.world.known.as_ref().map(|p| p.display().to_string()),
+        "params": args.world.params.display().to_string(),
+        "seed": args.robot.seed,
         "sonar_range_m": setup.robot.sonar_range_m,
         "robot": crate::robot_file::robot_json(&setup.robot),
         "moving_sweeps": stats.moving_sweeps,
@@ -333,20 +263,20 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     let setup = match setup_from_args(&args) {
         Ok(setup) => setup,
         Err(e) => match e.downcast_ref::<crate::answer::OffMap>() {
-            Some(off) => return Ok(sim::start::answer_off_map(off, args.json)),
+            Some(off) => return Ok(sim::start::answer_off_map(off, args.output.json)),
             None => return Err(e),
         },
     };
     let robot = sim::mission_config(&setup).robot;
     if let Some(blocked) = sim::start::start_blocked(&robot, setup.params.start, &setup.real) {
-        if args.json {
+        if args.output.json {
             println!("{}", blocked.json(&args.real));
         } else {
             println!("{}", blocked.words(&args.real));
         }
         return Ok(crate::exit::Ending::NoPath);
     }
-    let bar = if args.json || !std::io::stderr().is_terminal() {
+    let bar = if args.output.json || !std::io::stderr().is_terminal() {
         ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden())
     } else {
         let b = ProgressBar::new(setup.time_limit_s as u64);
@@ -358,31 +288,17 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         b
     };
     let mut progress = Bar(bar);
-    let (result, recorded) = if args.record.wanted() {
+    let (result, recorded) = if args.output.record.wanted() {
         run_recorded(&args, &setup, &mut progress)?
     } else {
         (sim::run(&setup, &mut progress)?, None)
     };
     progress.0.finish_and_clear();
 
-    if let Some(dir) = &args.out {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create directory", dir.display()))?;
-        output::write_trajectory_csv(&dir.join("trajectory.csv"), &result)?;
-        output::write_plan_pngs(dir, &setup, &result)?;
-        output::write_gif(
-            &dir.join("mission.gif"),
-            &setup,
-            &result,
-            args.gif_scale.clamp(1, 8),
-        )?;
-        let summary = summary_json(&args, &setup, &result);
-        let path = dir.join("summary.json");
-        std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
-            .with_context(|| format!("{}: cannot write", path.display()))?;
-    }
+    args.output
+        .write(&setup, &result, &summary_json(&args, &setup, &result))?;
     let end = mission_end(&args, &setup, &result);
-    if args.json {
+    if args.output.json {
         println!("{}", result_json(&result, &end));
     } else {
         let s = &result.stats;
@@ -402,12 +318,12 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         if let Some(len) = result.known_map_plan_length_m {
             println!("known-map plan length: {len:.2} m");
         }
-        if let Some(dir) = &args.out {
+        if let Some(dir) = &args.output.out {
             println!("wrote {}", dir.display());
         }
     }
     if let Some(summary) = &recorded {
-        summary.print(args.json);
+        summary.print(args.output.json);
     }
     if result.status == sim::SimStatus::Aborted {
         eprintln!("twil: interrupted (Ctrl-C): the simulation was stopped");
@@ -433,8 +349,11 @@ fn run_recorded(
             args.speed
         );
     }
-    let recorder = Recorder::open(args.record.record.as_deref(), args.record.live)?;
-    if let (Some(port), Some(addr)) = (recorder.live_port(), args.record.live) {
+    let recorder = Recorder::open(
+        args.output.record.record.as_deref(),
+        args.output.record.live,
+    )?;
+    if let (Some(port), Some(addr)) = (recorder.live_port(), args.output.record.live) {
         eprintln!(
             "twil: serving live on ws://{}:{port} (Foxglove: Open connection; layout docs/foxglove-layout.json); Ctrl-C stops",
             addr.ip()
@@ -443,7 +362,7 @@ fn run_recorded(
     STOP.store(false, Ordering::SeqCst);
     // A handler can be set once per process; a second run keeps the first (same flag).
     let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
-    let pace = args.record.live.map(|_| Pace::new(args.speed));
+    let pace = args.output.record.live.map(|_| Pace::new(args.speed));
     let mut observer = SimRecorder::new(recorder, setup, pace, &STOP);
     let run = sim::run_observed(setup, progress, &mut observer);
     let mut recorder = observer.into_recorder();

@@ -30,7 +30,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 use twil_core::plant::faults;
 
-use super::preset::{FollowArgs, LoopArgs};
+use super::args::{FollowArgs, LoopArgs};
 use super::simulate;
 use crate::sim::{self, worldgen, NoProgress};
 

@@ -50,7 +50,7 @@ pub(crate) struct Follower {
     pub(super) next_frame_s: f32,
     pub(crate) finished: Option<MissionReport>,
     /// Telemetry chunks that arrived after a gap (a lost chunk before them): the pictured map
-    /// and plans miss what was lost (see `mission_link`).
+    /// and plans miss what was lost (see `link.rs`).
     pub(super) telemetry_gaps: u32,
     /// Sweeps whose hits have all arrived.
     pub(super) sweeps: u32,
@@ -426,7 +426,7 @@ pub(super) fn follow(
     // has advanced by a period.
     let mut last_beat_mission_ms = 0u32;
     let mut last_heard = Instant::now();
-    let mut fault_notes = crate::cmd::mission_link::FaultNotes::from_env();
+    let mut fault_notes = super::link::FaultNotes::from_env();
     loop {
         for t in std::mem::take(&mut remote.telemetry) {
             follower.absorb(t);
@@ -448,10 +448,10 @@ pub(super) fn follow(
         }
         // Ask `MissionStatus` when the heartbeat is due (the device's link-loss policy needs
         // to hear from the host) or when the device has been quiet for `POLL_AFTER` (its final
-        // report may have been lost on the way, see mission_link). Under QEMU (`sleep=off`)
+        // report may have been lost on the way, see link.rs). Under QEMU (`sleep=off`)
         // the device's clock runs ahead of the host's, so the heartbeat is also due when the
         // mission time of its telemetry has advanced by a period.
-        use crate::cmd::mission_link::{recover_final_report, Poll, POLL_AFTER};
+        use super::link::POLL_AFTER;
         let mission_ms = follower.t_ms();
         let beat_due = heartbeat.is_some_and(|period| {
             last_beat.elapsed() >= period
@@ -501,11 +501,43 @@ pub(super) fn follow(
         }
         if last_draw.elapsed() >= Duration::from_millis(50) {
             last_draw = Instant::now();
-            let link = crate::cmd::mission_link::LinkReport::of(remote, follower.telemetry_gaps);
+            let link = super::link::LinkReport::of(remote, follower.telemetry_gaps);
             bar.set_message(match link.words() {
                 Some(words) => format!("{}  {words}", follower.status_line()),
                 None => follower.status_line(),
             });
         }
+    }
+}
+
+/// What [`recover_final_report`] learnt.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Poll {
+    /// The mission has ended: the follower has its final report.
+    Finished,
+    /// The device answered: the mission goes on (the link is alive, only quiet).
+    Alive,
+    /// No reply within the timeout: the caller's silence limit decides.
+    NoReply,
+}
+
+/// Ask `MissionStatus`; if the mission has ended, hand its report to `follower` as the final
+/// report (the `Finished` telemetry was lost).
+fn recover_final_report(remote: &mut Remote, follower: &mut Follower) -> Poll {
+    let reply = remote.request(Request::MissionStatus);
+    // Telemetry that came in meanwhile goes first, in order.
+    for t in std::mem::take(&mut remote.telemetry) {
+        follower.absorb(t);
+    }
+    if follower.finished.is_some() {
+        return Poll::Finished;
+    }
+    match reply {
+        Ok(Reply::Mission(report)) if report.state == twil_core::link::RunState::Ended => {
+            follower.absorb(Telemetry::Finished(report));
+            Poll::Finished
+        }
+        Ok(_) => Poll::Alive,
+        Err(_) => Poll::NoReply,
     }
 }

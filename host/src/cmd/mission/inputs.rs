@@ -22,53 +22,30 @@ pub struct Inputs {
 /// Read and check the files and numbers of `args` (errors name the file and line, or the
 /// option).
 pub fn read_inputs(args: &Args) -> Result<Inputs> {
-    if args.loop_args.evidence_map {
+    if args.mission.loop_args.evidence_map {
         bail!(
             "--evidence-map: twil mission cannot carry it (SetMission has no field for it, and \
              the MCU has no room for the map's second bit plane: see docs/mapping.md); use twil \
              simulate --evidence-map"
         );
     }
-    let mut params = read_par(&args.params)?;
-    let known = args.known.as_deref().map(read_da).transpose()?;
+    let (mut params, known) = args.world.read()?;
     let real = args.real.as_deref().map(read_da).transpose()?;
-    let (w, h) = parse_size(&args.size)?;
-    let geometry = GridGeometry::from_size_m(w, h, DEFAULT_RESOLUTION_M)
-        .map_err(|e| anyhow!("--size {}: {e}", args.size))?;
-    if geometry.cell_count() > 400 * 400 {
-        bail!(
-            "--size {}: {} x {} cells; at most 400 x 400",
-            args.size,
-            geometry.width(),
-            geometry.height()
-        );
-    }
-    let choices = args.choices();
-    let robot = crate::cmd::robot_options::resolve(
-        &crate::cmd::robot_options::RobotOptions {
-            file: args.robot.as_deref(),
-            sonar_range_m: args.sonar_range,
-            sonar_noise_std_m: args.sonar_noise,
-            // The simulated ranger's faults are `twil simulate`'s options (the robot file
-            // can still set them for `--remote sim`).
-            sonar_dropout_probability: None,
-            sonar_spurious_probability: None,
-            sonar: &args.sonar_model,
-            noise_seed: args.seed,
-            sweep_layout: choices.sweep_layout,
-            sweep_layout_explicit: args.follow.sweep_readings.is_some(),
-            params_path: &args.params,
-        },
+    let geometry = args.world.geometry(DEFAULT_RESOLUTION_M)?;
+    let robot = args.robot.resolve(
+        &args.choices(),
+        args.mission.follow.sweep_readings.is_some(),
+        // The simulated ranger's faults are `twil simulate`'s options (the robot file can
+        // still set them for `--remote sim`).
+        Faults::default(),
+        &args.world.params,
         &mut params,
     )?;
-    let robot_file_values = match &args.robot {
+    let robot_file_values = match &args.robot.robot_file {
         Some(path) => file_values(path)?,
         None => Vec::new(),
     };
-    let time_limit_s = args.time_limit_s();
-    if !(time_limit_s.is_finite() && time_limit_s > 0.0) {
-        bail!("--time-limit: must be a positive number of seconds, got {time_limit_s}");
-    }
+    args.mission.checked_time_limit_s()?;
     if !(args.silence.is_finite() && args.silence > 0.0 && args.silence <= 3600.0) {
         bail!(
             "--silence: must be between 0 and 3600 seconds, got {}",
@@ -84,7 +61,7 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
         );
     }
     // `run` answers `out_of_bounds` (crate::answer).
-    crate::answer::OffMap::check(&args.params, &args.size, &geometry, &params)?;
+    args.world.check_on_map(&geometry, &params)?;
     Ok(Inputs {
         params,
         known,
@@ -95,17 +72,10 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
     })
 }
 
-/// The `SetMission` of `args` and `params`.
 impl Args {
     /// The loop choices of this run: `--preset`'s, with the explicit options applied.
-    pub fn choices(&self) -> crate::cmd::preset::LoopChoices {
-        self.loop_args.resolve(Some(&self.follow))
-    }
-
-    /// `--time-limit`, or the preset's.
-    pub fn time_limit_s(&self) -> f32 {
-        self.time_limit
-            .unwrap_or(self.loop_args.preset.time_limit_s())
+    pub fn choices(&self) -> crate::cmd::args::LoopChoices {
+        self.mission.choices()
     }
 }
 
@@ -134,17 +104,17 @@ fn file_values(path: &std::path::Path) -> Result<Vec<(&'static str, f32, String)
 pub fn mission_setup(args: &Args, inputs: &Inputs) -> MissionSetup {
     let (params, robot) = (&inputs.params, &inputs.robot);
     MissionSetup {
-        mode: mission_mode(args.mode),
+        mode: args.mission.mission_mode(),
         planner: args.choices().planner_kind(),
         start: params.start,
         initial_heading_rad: params.initial_heading_deg.to_radians(),
         goal: params.goal,
         speed_m_s: params.speed_m_s,
         sonar_range_m: robot.sonar_range_m,
-        time_limit_s: args.time_limit_s(),
+        time_limit_s: args.mission.time_limit_s(),
         constant_depth_filter: args.choices().rcd,
         trust_seen_space: !args.choices().seed_prune,
-        noise_seed: args.seed,
+        noise_seed: args.robot.seed,
         sonar_noise_std_m: robot.sonar_noise_std_m,
         link_loss: args.link_loss(),
         sonar_beam: robot.sonar_beam,
@@ -154,13 +124,6 @@ pub fn mission_setup(args: &Args, inputs: &Inputs) -> MissionSetup {
         reference_feed_forward: args.choices().reference_feed_forward,
         turn_in_place: args.choices().turn_in_place,
         sweep_layout: robot.sweep_layout,
-    }
-}
-
-pub(super) fn mission_mode(mode: Mode) -> MissionMode {
-    match mode {
-        Mode::Stop => MissionMode::Stop,
-        Mode::Continuous => MissionMode::Continuous,
     }
 }
 
@@ -178,10 +141,10 @@ pub(super) fn explain_bad_mission(args: &Args, robot: &RobotConfig, error: &Erro
         };
         return format!(
             "the device refused the mission: {which} of {} lies off its map",
-            args.params.display()
+            args.world.params.display()
         );
     }
-    let par = args.params.display();
+    let par = args.world.params.display();
     let field = match error.value {
         0 => "mode (--mode)".to_string(),
         1 => "planner (--planner)".to_string(),
@@ -194,7 +157,7 @@ pub(super) fn explain_bad_mission(args: &Args, robot: &RobotConfig, error: &Erro
         ),
         5 => format!("speed ({par})"),
         6 => format!("sonar range (--sonar-range {})", robot.sonar_range_m),
-        7 => format!("time limit (--time-limit {})", args.time_limit_s()),
+        7 => format!("time limit (--time-limit {})", args.mission.time_limit_s()),
         11 => format!("sonar noise (--sonar-noise {})", robot.sonar_noise_std_m),
         14 => format!(
             "beam half-angle (--beam-half-angle {})",

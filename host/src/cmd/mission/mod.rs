@@ -17,7 +17,8 @@
 //!
 //! Files: this one (arguments, the session, Ctrl-C), `inputs.rs` (the files read and the
 //! mission set-up), `follower.rs` (the telemetry followed into a trajectory, plans and
-//! pictures), `report.rs` (the JSON result and the files written).
+//! pictures), `link.rs` (what the host does when telemetry is lost), `report.rs` (the JSON
+//! result and the files written).
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -35,20 +36,20 @@ use twil_core::link::{
     Build, DeviceFrame, DeviceInfo, ErrorCode, ErrorReply, MapParams, MissionReport, MissionSetup,
     PoseReport, Reply, Request, Telemetry, PROTOCOL_VERSION,
 };
-use twil_core::mission::{MissionMode, MissionPhase, MissionStatus};
+use twil_core::mission::{MissionPhase, MissionStatus};
 use twil_core::plant::Plant;
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
-use super::args::{parse_size, read_da, read_par, Mode, SonarArgs};
-use crate::cmd::preset::{FollowArgs, LoopArgs};
+use super::args::{read_da, Faults, MissionArgs, OutputArgs, RobotArgs, WorldArgs};
 use crate::record::telemetry::TelemetryRecorder;
-use crate::record::{RecordArgs, Recorder};
+use crate::record::Recorder;
 use crate::remote::{Remote, RemoteSpec};
-use crate::sim::{output, ControlSample, SimResult, SimSetup, SimStatus, Snapshot, TrajectoryRow};
+use crate::sim::{ControlSample, SimResult, SimSetup, SimStatus, Snapshot, TrajectoryRow};
 
 mod follower;
 mod inputs;
+pub mod link;
 mod report;
 
 pub(crate) use follower::Follower;
@@ -62,68 +63,27 @@ pub struct Args {
     /// The device: `sim` (in this process), `qemu`, `tcp:HOST:PORT` or a serial port.
     #[arg(long, value_name = "DEVICE")]
     pub remote: RemoteSpec,
-    /// The mission (.par): radius, speed, initial heading, start, goal.
-    #[arg(long, value_name = "P.par")]
-    pub params: PathBuf,
-    /// Obstacles known before the first sweep (.da).
-    #[arg(long, value_name = "K.da")]
-    pub known: Option<PathBuf>,
     /// The real world (.da) of a simulated device (`sim`, `qemu`): required there, refused by
     /// a board.
     #[arg(long, value_name = "R.da")]
     pub real: Option<PathBuf>,
-    /// Map size in metres, WIDTHxHEIGHT (0.05 m cells).
-    #[arg(long, default_value = "15x15", value_name = "WxH")]
-    pub size: String,
-    /// Stop-and-sweep or continuous sweeping.
-    #[arg(long, value_enum, default_value_t = Mode::Stop)]
-    pub mode: Mode,
-    /// Loop choices: `--preset`, `--planner`, `--rcd`, `--seed-prune`.
+    /// `--params`, `--known`, `--size` (0.05 m cells).
     #[command(flatten)]
-    pub loop_args: LoopArgs,
-    /// Following choices: `--settle`, `--feed-forward`, `--turn-in-place`, `--sweep-readings`
-    /// (`SetMission` carries them all to the device).
+    pub world: WorldArgs,
+    /// `--mode`, the loop choices (`--preset`, `--planner`, `--settle`, …; `SetMission`
+    /// carries them all to the device), `--time-limit`.
     #[command(flatten)]
-    pub follow: FollowArgs,
-    /// Write trajectory.csv, plan PNGs, mission.gif and summary.json here.
-    #[arg(long, value_name = "DIR")]
-    pub out: Option<PathBuf>,
-    /// Print exactly one JSON object on stdout and nothing else.
-    #[arg(long)]
-    pub json: bool,
-    /// Seed of the simulated sonar noise (simulated devices).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Sonar range, metres (0.26 < range ≤ 6) [default: 1.5, or the --robot file's
-    /// `sonar_range_m`].
-    #[arg(long)]
-    pub sonar_range: Option<f32>,
-    /// Standard deviation of the simulated sonar noise, metres (simulated devices) [default: 0,
-    /// or the --robot file's `sonar_noise_std_m`].
-    #[arg(long)]
-    pub sonar_noise: Option<f32>,
-    /// Robot file (`twil robot init`): keys left out keep their defaults, an explicit option
-    /// overrides the file. Until the device takes parameters, only the constants the mission
-    /// set-up carries may differ from the device's defaults (`planning_radius_m`, the sonar's
-    /// range, noise and beam, `sweep_layout`); any other is refused, naming its line.
-    #[arg(long, value_name = "FILE.toml")]
-    pub robot: Option<PathBuf>,
-    /// The simulated sonar (simulated devices).
+    pub mission: MissionArgs,
+    /// `--robot`, `--seed`, `--sonar-range`, `--sonar-noise`, `--sonar`, ….
     #[command(flatten)]
-    pub sonar_model: SonarArgs,
-    /// Mission time limit, seconds of mission time [default: the preset's: 900; seed: 1800, its
-    /// 18.85 s settles].
-    #[arg(long)]
-    pub time_limit: Option<f32>,
+    pub robot: RobotArgs,
     /// Give up when the device sends nothing for this many seconds.
     #[arg(long, default_value_t = 10.0, value_name = "S")]
     pub silence: f32,
-    /// GIF scale, pixels per cell.
-    #[arg(long, default_value_t = 2)]
-    pub gif_scale: u32,
-    /// `--record FILE.mcap`, `--live [ADDR]`: the telemetry as Foxglove messages.
+    /// `--out`, `--json`, `--gif-scale`, `--record`, `--live` (the telemetry as Foxglove
+    /// messages).
     #[command(flatten)]
-    pub record: RecordArgs,
+    pub output: OutputArgs,
     /// The device reacts (--on-link-loss) when it hears nothing from the host for this long,
     /// milliseconds: 0 (never) or 200 to 3 600 000. The host sends a heartbeat
     /// (`MissionStatus`) every quarter of it, at most every 500 ms.
@@ -212,14 +172,14 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     let inputs = match read_inputs(&args) {
         Ok(inputs) => inputs,
         Err(e) => match e.downcast_ref::<crate::answer::OffMap>() {
-            Some(off) => return Ok(crate::sim::start::answer_off_map(off, args.json)),
+            Some(off) => return Ok(crate::sim::start::answer_off_map(off, args.output.json)),
             None => return Err(e),
         },
     };
     if let (Some(real), Some(path)) = (&inputs.real, &args.real) {
         let start = inputs.params.start;
         if let Some(blocked) = crate::sim::start::start_blocked(&inputs.robot, start, real) {
-            if args.json {
+            if args.output.json {
                 println!("{}", blocked.json(path));
             } else {
                 println!("{}", blocked.words(path));
@@ -248,7 +208,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     if inputs.geometry.cell_count() as u64 > info.grid_capacity_cells as u64 {
         bail!(
             "--size {}: the map has {} x {} cells but the device's grid holds {} cells",
-            args.size,
+            args.world.size,
             inputs.geometry.width(),
             inputs.geometry.height(),
             info.grid_capacity_cells
@@ -256,7 +216,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     }
     upload(&args, &inputs, &mut remote, info.build)?;
 
-    let bar = if args.json || !std::io::stderr().is_terminal() {
+    let bar = if args.output.json || !std::io::stderr().is_terminal() {
         ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden())
     } else {
         let b = ProgressBar::new_spinner();
@@ -271,10 +231,13 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
     INTERRUPTED.store(false, Ordering::SeqCst);
     FOLLOWING.store(true, Ordering::SeqCst);
     let _ = ctrlc::set_handler(on_ctrl_c);
-    let mut follower = Follower::new(&inputs, args.out.is_some())?;
-    if args.record.wanted() {
-        let recorder = Recorder::open(args.record.record.as_deref(), args.record.live)?;
-        if let (Some(port), Some(addr)) = (recorder.live_port(), args.record.live) {
+    let mut follower = Follower::new(&inputs, args.output.out.is_some())?;
+    if args.output.record.wanted() {
+        let recorder = Recorder::open(
+            args.output.record.record.as_deref(),
+            args.output.record.live,
+        )?;
+        if let (Some(port), Some(addr)) = (recorder.live_port(), args.output.record.live) {
             note(
                 &bar,
                 &format!(
@@ -298,7 +261,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         let _ = remote.request(Request::AbortMission);
     }
     bar.finish_and_clear();
-    let link = crate::cmd::mission_link::LinkReport::of(&remote, follower.telemetry_gaps);
+    let link = link::LinkReport::of(&remote, follower.telemetry_gaps);
     // Done with the device (QEMU, if any, ends here).
     drop(remote);
     // Close the recording even when following failed, so what arrived stays readable.
@@ -336,7 +299,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         stall_distance_m: follower.same_stop_m,
         goal: inputs.params.goal,
         radius_m: inputs.params.robot_radius_m,
-        time_limit_s: args.time_limit_s(),
+        time_limit_s: args.mission.time_limit_s(),
         real: args.real.as_deref().map(crate::answer::file_name),
         last_plan: follower.reasons.status(),
     };
@@ -350,10 +313,8 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         link,
         place,
     };
-    if let Some(dir) = &args.out {
-        write_outputs(dir, &args, &inputs, &outcome, follower)?;
-    }
-    if args.json {
+    write_outputs(&args, &inputs, &outcome, follower)?;
+    if args.output.json {
         println!("{}", result_json(&outcome));
     } else {
         let s = &report.stats;
@@ -390,12 +351,12 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         if report.stop_cause != StopCause::None {
             println!("stopped by the device: {}", report.stop_cause);
         }
-        if let Some(dir) = &args.out {
+        if let Some(dir) = &args.output.out {
             println!("wrote {}", dir.display());
         }
     }
     if let Some(summary) = &recorded {
-        summary.print(args.json);
+        summary.print(args.output.json);
     }
     if interrupted {
         eprintln!(
@@ -431,8 +392,8 @@ fn upload(args: &Args, inputs: &Inputs, remote: &mut Remote, build: Build) -> Re
         .context("clearing the device's map")?;
     remote
         .call(Request::SetParams(map))
-        .with_context(|| format!("setting the map (--size {})", args.size))?;
-    if let (Some(known), Some(path)) = (&inputs.known, &args.known) {
+        .with_context(|| format!("setting the map (--size {})", args.world.size))?;
+    if let (Some(known), Some(path)) = (&inputs.known, &args.world.known) {
         for (i, polygon) in known.iter().enumerate() {
             remote.upload_polygon(polygon).with_context(|| {
                 format!("{}: uploading known obstacle {}", path.display(), i + 1)
@@ -598,7 +559,7 @@ mod tests {
         follow(&args, &mut remote, &mut follower, &ProgressBar::hidden()).unwrap();
         let waited = started.elapsed();
         assert!(
-            waited >= crate::cmd::mission_link::POLL_AFTER && waited < Duration::from_secs(3),
+            waited >= link::POLL_AFTER && waited < Duration::from_secs(3),
             "{waited:?}"
         );
         assert_eq!(

@@ -23,7 +23,7 @@ pub struct Outcome {
     /// Ctrl-C aborted the mission.
     pub interrupted: bool,
     /// What the link lost and repaired (`summary.json`).
-    pub link: crate::cmd::mission_link::LinkReport,
+    pub link: super::link::LinkReport,
     /// Where and how the mission ended, for the sentence that says why (crate::answer).
     pub place: EndPlace,
 }
@@ -143,8 +143,8 @@ pub(super) fn summary_json(args: &Args, inputs: &Inputs, outcome: &Outcome) -> s
     let extra = json!({
         "remote": remote_name(&args.remote),
         "build": format!("{:?}", outcome.info.build).to_lowercase(),
-        "mode": match args.mode { Mode::Stop => "stop", Mode::Continuous => "continuous" },
-        "preset": args.loop_args.preset.name(),
+        "mode": args.mission.mode_name(),
+        "preset": args.mission.loop_args.preset.name(),
         "planner": args.choices().planner_name(),
         "constant_depth_filter": args.choices().rcd,
         "trust_seen_space": !args.choices().seed_prune,
@@ -152,15 +152,15 @@ pub(super) fn summary_json(args: &Args, inputs: &Inputs, outcome: &Outcome) -> s
         "reference_feed_forward": args.choices().reference_feed_forward,
         "turn_in_place": args.choices().turn_in_place,
         // The layout used: the preset's, `--sweep-readings`' or the robot file's.
-        "sweep_readings": crate::cmd::preset::LoopChoices {
+        "sweep_readings": crate::cmd::args::LoopChoices {
             sweep_layout: inputs.robot.sweep_layout,
             ..args.choices()
         }
         .sweep_readings_name(),
         "real": args.real.as_ref().map(|p| p.display().to_string()),
-        "known": args.known.as_ref().map(|p| p.display().to_string()),
-        "params": args.params.display().to_string(),
-        "seed": args.seed,
+        "known": args.world.known.as_ref().map(|p| p.display().to_string()),
+        "params": args.world.params.display().to_string(),
+        "seed": args.robot.seed,
         "sonar_range_m": inputs.robot.sonar_range_m,
         "robot": crate::robot_file::robot_json(&inputs.robot),
         "moving_sweeps": s.moving_sweeps,
@@ -187,25 +187,26 @@ pub(super) fn summary_json(args: &Args, inputs: &Inputs, outcome: &Outcome) -> s
     v
 }
 
-/// `summary.json`, `trajectory.csv`, `plan-NNN.png`, `mission.gif`.
+/// With `--out`: `summary.json`, `trajectory.csv`, `plan-NNN.png`, `mission.gif`, written as
+/// `twil simulate` writes them ([`OutputArgs::write`]) from the telemetry followed.
 pub(super) fn write_outputs(
-    dir: &std::path::Path,
     args: &Args,
     inputs: &Inputs,
     outcome: &Outcome,
     follower: Follower,
 ) -> Result<()> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("{}: cannot create directory", dir.display()))?;
+    if args.output.out.is_none() {
+        return Ok(());
+    }
     let setup = SimSetup {
         real: inputs.real.clone().unwrap_or_default(),
         known: inputs.known.clone(),
         params: inputs.params,
         geometry: inputs.geometry,
-        mode: mission_mode(args.mode),
+        mode: args.mission.mission_mode(),
         planner: args.choices().planner_kind(),
         robot: inputs.robot,
-        time_limit_s: args.time_limit_s(),
+        time_limit_s: args.mission.time_limit_s(),
         constant_depth_filter: args.choices().rcd,
         trust_seen_space: !args.choices().seed_prune,
         evidence_map: false,
@@ -215,7 +216,10 @@ pub(super) fn write_outputs(
         settle: args.choices().settle,
         reference_feed_forward: args.choices().reference_feed_forward,
         turn_in_place: args.choices().turn_in_place,
-        world_name: crate::sim::pictures::world_name(args.real.as_deref(), args.known.as_deref()),
+        world_name: crate::sim::pictures::world_name(
+            args.real.as_deref(),
+            args.world.known.as_deref(),
+        ),
     };
     let report = &outcome.report;
     let result = SimResult {
@@ -236,21 +240,8 @@ pub(super) fn write_outputs(
         frames: follower.frames,
         known_map_plan_length_m: None,
     };
-    output::write_trajectory_csv(&dir.join("trajectory.csv"), &result)?;
-    output::write_plan_pngs(dir, &setup, &result)?;
-    output::write_gif(
-        &dir.join("mission.gif"),
-        &setup,
-        &result,
-        args.gif_scale.clamp(1, 8),
-    )?;
-    let path = dir.join("summary.json");
-    std::fs::write(
-        &path,
-        serde_json::to_string_pretty(&summary_json(args, inputs, outcome))? + "\n",
-    )
-    .with_context(|| format!("{}: cannot write", path.display()))?;
-    Ok(())
+    args.output
+        .write(&setup, &result, &summary_json(args, inputs, outcome))
 }
 
 #[cfg(test)]

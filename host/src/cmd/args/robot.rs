@@ -1,20 +1,135 @@
-//! A robot configuration refused for a value the user gave as an option, said in the user's
-//! words: the option, its value and the bound in numbers (`--sonar-range 100: at most 6 m`),
-//! not the internal field name (`sonar_range_m`) and a rule about another field.
+//! The robot and its sonar: `--robot FILE.toml`, `--seed`, `--sonar-range`, `--sonar-noise`
+//! and the sonar model (`--sonar`, `--beam-half-angle`, `--incidence-limit`), shared by
+//! `twil simulate` and `twil mission`, and the one way both build the run's `RobotConfig`
+//! from them ([`RobotArgs::resolve`]).
 //!
-//! `twil simulate` and `twil mission` build a `RobotConfig` from their options and a robot
-//! file ([`resolve`]) and validate it; only the fields an option sets are translated, any
-//! other (a constant of the robot) keeps the core's wording, or the robot file's line.
+//! A robot configuration refused for a value the user gave as an option is said in the
+//! user's words: the option, its value and the bound in numbers (`--sonar-range 100: at most
+//! 6 m`, [`super::option_error`]), not the internal field name (`sonar_range_m`) and a rule
+//! about another field; any other field (a constant of the robot) keeps the core's wording,
+//! or the robot file's line.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use twil_core::robot::RobotConfig;
 use twil_core::sonar::SweepLayout;
 use twil_core::world::Params;
 
-use crate::cmd::args::{SonarArg, SonarArgs};
+use super::preset::LoopChoices;
 use crate::robot_file::{self, Explicit};
+
+/// The simulated sonar model.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SonarArg {
+    /// One exact ray along the neck's direction (the earlier model).
+    Ray,
+    /// An ultrasonic beam: cone, first echo, incidence limit, corners (the default).
+    Beam,
+}
+
+/// The simulated sonar's options, shared by `twil simulate` and `twil mission` (whose
+/// simulated devices use them).
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct SonarArgs {
+    /// Simulated sonar: `ray` one exact ray; `beam` an ultrasonic beam (cone, first echo,
+    /// smooth walls echo only near face-on, corners at any angle; docs/robot-model.md).
+    /// [default: beam, or the --robot file's `sonar_beam`]
+    #[arg(long, value_enum)]
+    pub sonar: Option<SonarArg>,
+    /// Half-angle of the beam's cone, degrees (0 to 45; the HC-SR04 data sheet's 15°)
+    /// [default: 15, or the --robot file's `sonar_beam_half_angle_deg`].
+    #[arg(long, value_name = "DEG")]
+    pub beam_half_angle: Option<f32>,
+    /// Beam: a smooth wall echoes only when the ray is within this angle of
+    /// its normal, degrees (0 to 90) [default: 70, or the --robot file's
+    /// `sonar_incidence_limit_deg`].
+    #[arg(long, value_name = "DEG")]
+    pub incidence_limit: Option<f32>,
+}
+
+impl SonarArgs {
+    /// `robot` with this sonar model (an option left out: the command's default).
+    pub fn apply(&self, robot: RobotConfig) -> RobotConfig {
+        RobotConfig {
+            sonar_beam: self.sonar.unwrap_or(SonarArg::Beam) == SonarArg::Beam,
+            sonar_beam_half_angle_deg: self
+                .beam_half_angle
+                .unwrap_or(RobotConfig::DEFAULT.sonar_beam_half_angle_deg),
+            sonar_incidence_limit_deg: self
+                .incidence_limit
+                .unwrap_or(RobotConfig::DEFAULT.sonar_incidence_limit_deg),
+            ..robot
+        }
+    }
+}
+
+/// `--robot`, `--seed`, `--sonar-range`, `--sonar-noise` and the sonar model.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RobotArgs {
+    /// Robot file (`twil robot init`): the robot's constants; keys left out keep their
+    /// defaults, an explicit option overrides the file, and its `planning_radius_m`, if set,
+    /// replaces the `.par` radius. `twil mission`: until the device takes parameters, only
+    /// the constants the mission set-up carries may differ from the device's defaults
+    /// (`planning_radius_m`, the sonar's range, noise and beam, `sweep_layout`); any other is
+    /// refused, naming its line.
+    #[arg(long = "robot", value_name = "FILE.toml")]
+    pub robot_file: Option<PathBuf>,
+    /// Seed of the simulated sonar noise and faults (simulated devices).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Sonar range, metres (0.26 < range ≤ 6) [default: the seed's 1.5, or the --robot
+    /// file's `sonar_range_m`].
+    #[arg(long)]
+    pub sonar_range: Option<f32>,
+    /// Standard deviation of the simulated sonar noise, metres (simulated devices) [default:
+    /// 0, or the --robot file's `sonar_noise_std_m`].
+    #[arg(long)]
+    pub sonar_noise: Option<f32>,
+    /// The simulated sonar (simulated devices).
+    #[command(flatten)]
+    pub sonar_model: SonarArgs,
+}
+
+/// The simulated ranger's faults, options of `twil simulate` only (`twil mission` leaves them
+/// to the robot file).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Faults {
+    /// `--sonar-dropout`, if given.
+    pub dropout_probability: Option<f32>,
+    /// `--sonar-spurious`, if given.
+    pub spurious_probability: Option<f32>,
+}
+
+impl RobotArgs {
+    /// The robot of a run ([`resolve`]) with these options, the loop's `choices` (the sweep
+    /// layout, unless `sweep_layout_explicit` it is the preset's) and the ranger's `faults`;
+    /// `params` (read from `params_path`) takes the robot's planning radius.
+    pub fn resolve(
+        &self,
+        choices: &LoopChoices,
+        sweep_layout_explicit: bool,
+        faults: Faults,
+        params_path: &Path,
+        params: &mut Params,
+    ) -> Result<RobotConfig> {
+        resolve(
+            &RobotOptions {
+                file: self.robot_file.as_deref(),
+                sonar_range_m: self.sonar_range,
+                sonar_noise_std_m: self.sonar_noise,
+                sonar_dropout_probability: faults.dropout_probability,
+                sonar_spurious_probability: faults.spurious_probability,
+                sonar: &self.sonar_model,
+                noise_seed: self.seed,
+                sweep_layout: choices.sweep_layout,
+                sweep_layout_explicit,
+                params_path,
+            },
+            params,
+        )
+    }
+}
 
 /// The options of `twil simulate` and `twil mission` that set robot constants.
 pub struct RobotOptions<'a> {

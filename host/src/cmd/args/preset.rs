@@ -10,7 +10,7 @@ use twil_core::mission::SettleRule;
 use twil_core::plan::PlannerKind;
 use twil_core::sonar::SweepLayout;
 
-use super::args::PlannerArg;
+use super::PlannerArg;
 
 /// A whole set of loop choices.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
