@@ -531,26 +531,8 @@ pub(crate) fn start_mission_on(
         }
     }
     let setup = MissionSetup {
-        mode,
-        planner: PlannerKind::AStar,
-        start: params.start,
-        initial_heading_rad: params.initial_heading_deg.to_radians(),
-        goal: params.goal,
-        speed_m_s: params.speed_m_s,
-        sonar_range_m: 1.5,
-        time_limit_s: 900.0,
-        constant_depth_filter: false,
-        trust_seen_space: true,
-        noise_seed: 1,
-        sonar_noise_std_m: 0.0,
         link_loss,
-        sonar_beam: false,
-        beam_half_angle_deg: 15.0,
-        incidence_limit_deg: 70.0,
-        settle: twil_core::mission::SettleRule::ReferenceModel,
-        reference_feed_forward: true,
-        turn_in_place: true,
-        sweep_layout: twil_core::sonar::SweepLayout::Symmetric,
+        ..MissionSetup::from_params(&params, mode)
     };
     assert_eq!(remote.call(Request::SetMission(setup)).unwrap(), Reply::Ack);
     assert_eq!(remote.call(Request::StartMission).unwrap(), Reply::Ack);

@@ -29,7 +29,6 @@ use twil_core::link::{
 use twil_core::mission::{
     Mission300, MissionMode, MissionPhase, MissionPlanner300, MissionStatus, Pilot,
 };
-use twil_core::plan::PlannerKind;
 use twil_core::robot::RobotConfig;
 use world::{Battery, Counter, Delay, Echo, Pin, PinKind, Pwm, World};
 
@@ -170,27 +169,18 @@ impl Rig {
             ..MapParams::default()
         };
         assert_eq!(self.call(Request::SetParams(map)), Reply::Ack);
-        let setup = MissionSetup {
-            mode: MissionMode::Stop,
-            planner: PlannerKind::AStar,
-            start: PointM::new(3.0, 1.5),
-            initial_heading_rad: std::f32::consts::FRAC_PI_2,
-            goal: PointM::new(3.0, 5.0),
+        let params = twil_core::world::Params {
+            robot_radius_m: 0.35,
             speed_m_s: 0.3,
-            sonar_range_m: 1.5,
+            initial_heading_deg: 90.0,
+            start: PointM::new(3.0, 1.5),
+            goal: PointM::new(3.0, 5.0),
+        };
+        let setup = MissionSetup {
+            initial_heading_rad: std::f32::consts::FRAC_PI_2,
             time_limit_s: 300.0,
-            constant_depth_filter: false,
-            trust_seen_space: true,
-            noise_seed: 1,
-            sonar_noise_std_m: 0.0,
             link_loss: twil_core::failsafe::LinkLossPolicy::default(),
-            sonar_beam: false,
-            beam_half_angle_deg: 15.0,
-            incidence_limit_deg: 70.0,
-            settle: twil_core::mission::SettleRule::ReferenceModel,
-            reference_feed_forward: true,
-            turn_in_place: true,
-            sweep_layout: twil_core::sonar::SweepLayout::Symmetric,
+            ..MissionSetup::from_params(&params, MissionMode::Stop)
         };
         assert_eq!(self.call(Request::SetMission(setup)), Reply::Ack);
         self.call(Request::StartMission)

@@ -326,31 +326,21 @@ mod tests {
     use twil_core::geom::PointM;
     use twil_core::link::{MapParams, MissionSetup, Reply, Request, Telemetry, PROTOCOL_VERSION};
     use twil_core::mission::{MissionMode, MissionStatus};
-    use twil_core::plan::PlannerKind;
 
     /// The mission across the tiny world's wall, from (3, 1.5) to (3, 5) m.
     fn tiny_mission(link_loss: twil_core::failsafe::LinkLossPolicy) -> MissionSetup {
-        MissionSetup {
-            mode: MissionMode::Continuous,
-            planner: PlannerKind::AStar,
-            start: PointM::new(3.0, 1.5),
-            initial_heading_rad: std::f32::consts::FRAC_PI_2,
-            goal: PointM::new(3.0, 5.0),
+        let params = twil_core::world::Params {
+            robot_radius_m: 0.35,
             speed_m_s: 0.3,
-            sonar_range_m: 1.5,
+            initial_heading_deg: 90.0,
+            start: PointM::new(3.0, 1.5),
+            goal: PointM::new(3.0, 5.0),
+        };
+        MissionSetup {
+            initial_heading_rad: std::f32::consts::FRAC_PI_2,
             time_limit_s: 300.0,
-            constant_depth_filter: false,
-            trust_seen_space: true,
-            noise_seed: 1,
-            sonar_noise_std_m: 0.0,
             link_loss,
-            sonar_beam: false,
-            beam_half_angle_deg: 15.0,
-            incidence_limit_deg: 70.0,
-            settle: twil_core::mission::SettleRule::ReferenceModel,
-            reference_feed_forward: true,
-            turn_in_place: true,
-            sweep_layout: twil_core::sonar::SweepLayout::Symmetric,
+            ..MissionSetup::from_params(&params, MissionMode::Continuous)
         }
     }
 

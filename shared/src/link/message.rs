@@ -313,6 +313,37 @@ pub struct MissionSetup {
     pub sweep_layout: crate::sonar::SweepLayout,
 }
 
+impl MissionSetup {
+    /// The mission of a `.par` (start, heading, goal, speed) in `mode` with the test benches'
+    /// choices: A*, a 1.5 m noiseless single-ray sonar (seed 1), 900 s, no filter, trusted seen
+    /// space, no link-loss reaction, the reference-model settle, feed-forward, turns in place,
+    /// the symmetric sweep. Change a field with struct-update syntax.
+    pub fn from_params(params: &crate::world::Params, mode: MissionMode) -> Self {
+        MissionSetup {
+            mode,
+            planner: PlannerKind::AStar,
+            start: params.start,
+            initial_heading_rad: params.initial_heading_deg.to_radians(),
+            goal: params.goal,
+            speed_m_s: params.speed_m_s,
+            sonar_range_m: 1.5,
+            time_limit_s: 900.0,
+            constant_depth_filter: false,
+            trust_seen_space: true,
+            noise_seed: 1,
+            sonar_noise_std_m: 0.0,
+            link_loss: LinkLossPolicy::NEVER,
+            sonar_beam: false,
+            beam_half_angle_deg: 15.0,
+            incidence_limit_deg: 70.0,
+            settle: crate::mission::SettleRule::ReferenceModel,
+            reference_feed_forward: true,
+            turn_in_place: true,
+            sweep_layout: crate::sonar::SweepLayout::Symmetric,
+        }
+    }
+}
+
 /// How the device's mission stands ([`Reply::Mission`], [`Telemetry::Finished`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MissionReport {

@@ -193,28 +193,7 @@ pub(super) fn office() -> (Obstacles, crate::world::Params) {
 }
 
 pub(super) fn setup(params: &crate::world::Params, mode: MissionMode) -> MissionSetup {
-    MissionSetup {
-        mode,
-        planner: PlannerKind::AStar,
-        start: params.start,
-        initial_heading_rad: params.initial_heading_deg.to_radians(),
-        goal: params.goal,
-        speed_m_s: params.speed_m_s,
-        sonar_range_m: 1.5,
-        time_limit_s: 900.0,
-        constant_depth_filter: false,
-        trust_seen_space: true,
-        noise_seed: 1,
-        sonar_noise_std_m: 0.0,
-        link_loss: crate::failsafe::LinkLossPolicy::NEVER,
-        sonar_beam: false,
-        beam_half_angle_deg: 15.0,
-        incidence_limit_deg: 70.0,
-        settle: crate::mission::SettleRule::ReferenceModel,
-        reference_feed_forward: true,
-        turn_in_place: true,
-        sweep_layout: crate::sonar::SweepLayout::Symmetric,
-    }
+    MissionSetup::from_params(params, mode)
 }
 
 /// A ready bench: map, radius, real world, the mission set up.
