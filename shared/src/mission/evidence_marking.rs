@@ -217,13 +217,19 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     /// (`prefix`): an unknown cell becomes tentative and is grown into the grid, so the next
     /// plan goes round it. Anything else is left as it is. Returns whether the map changed.
     pub(super) fn mark_suspect_m(&mut self, p: PointM) -> bool {
-        let g = *self.grid.geometry();
-        let Some((x, y)) = g.cell_xy_on_map(p) else {
-            return false;
-        };
+        match self.grid.geometry().cell_xy_on_map(p) {
+            Some((x, y)) => self.mark_suspect_xy(x, y),
+            None => false,
+        }
+    }
+
+    /// An unknown cell becomes a suspect: tentative on the evidence map, grown into the grid.
+    /// Returns whether it was unknown.
+    fn mark_suspect_xy(&mut self, x: i32, y: i32) -> bool {
         if self.evidence.suspect_xy(x, y) != Change::NowOccupied {
             return false;
         }
+        let g = *self.grid.geometry();
         mark_point_m(&mut self.grid, centre(&g, x, y), self.expansion_cells);
         true
     }
@@ -261,9 +267,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             }
         }
         for &(x, y) in suspects.iter() {
-            if self.evidence.suspect_xy(x, y) == Change::NowOccupied {
-                mark_point_m(&mut self.grid, centre(&g, x, y), e as u16);
-            }
+            self.mark_suspect_xy(x, y);
         }
     }
 }
