@@ -193,6 +193,8 @@ mod tests {
                 cell_m: 0.05,
                 echo_limited: true,
                 thales_beam_rad: -1.0,
+                heard_beam_rad: -1.0,
+                reading_shift_m: 0.0,
             },
         }
     }

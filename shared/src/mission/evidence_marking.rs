@@ -35,6 +35,7 @@ use crate::raster::mark_point_m;
 use crate::sonar::hit_to_world;
 
 use super::evidence::{CellEvidence, Change};
+use super::swept::Swept;
 use super::Mission;
 
 /// Take-backs redrawn in the grid per sweep; more are kept marked in the grid (the safe side)
@@ -198,12 +199,19 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             crate::sonar::SweepPlan::new(&robot, crate::sonar::SweepKind::Normal)
                 .covered_half_angle_rad()
         };
+        // Built once, from the fields it reads, so the loop may write the map.
+        let swept = Swept::of(
+            &self.config,
+            self.readings.as_slice(),
+            g.resolution_m(),
+            (pose, band_rad, true),
+        );
         for y in (sy - h).max(0)..=(sy + h).min(g.height() as i32 - 1) {
             for x in (sx - h).max(0)..=(sx + h).min(g.width() as i32 - 1) {
                 if self.evidence.get_xy(x, y) == CellEvidence::Free {
                     continue;
                 }
-                if self.swept(pose, band_rad, true).vouches(centre(&g, x, y))
+                if swept.vouches(centre(&g, x, y))
                     && self.evidence.observe_vouched_xy(x, y) == Change::TakenBack
                 {
                     // Full: the grid keeps the mark (the safe side).

@@ -320,23 +320,12 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     /// The last sweep as seen from `pose`, vouching within `half_band_rad` of the heading
     /// (see `swept`).
     pub(super) fn swept(&self, pose: Pose, half_band_rad: f32, echo_limited: bool) -> Swept<'_> {
-        let robot = &self.config.robot;
-        let thales_beam_rad = if self.config.evidence_map {
-            robot.sonar_beam_half_angle_deg.max(0.0) * (core::f32::consts::PI / 180.0)
-        } else {
-            -1.0
-        };
-        Swept {
-            readings: self.readings.as_slice(),
-            pose,
-            sonar_offset_m: robot.sonar_offset_m,
-            half_band_rad,
-            min_range_m: robot.sonar_min_range_m,
-            range_m: robot.sonar_range_m,
-            cell_m: self.grid.geometry().resolution_m(),
-            echo_limited,
-            thales_beam_rad,
-        }
+        Swept::of(
+            &self.config,
+            self.readings.as_slice(),
+            self.grid.geometry().resolution_m(),
+            (pose, half_band_rad, echo_limited),
+        )
     }
     /// How far along the path the seed's rule may keep: the sonar range minus the planning
     /// radius. An obstacle just beyond the range is not seen, and the robot's disc must stay

@@ -20,10 +20,12 @@ use crate::geom::PointM;
 use crate::math::{abs, atan2, cos, hypot, sqrt, wrap_angle_rad};
 use crate::sonar::Reading;
 
+use super::MissionConfig;
+
 /// A standing sweep, read from where it was taken.
 #[derive(Clone, Copy)]
 pub(super) struct Swept<'a> {
-    /// Its readings in neck-angle order (all from `pose`).
+    /// Its readings in neck-angle order (each with the pose it was taken from).
     pub readings: &'a [Reading],
     /// Where the robot stood and faced.
     pub pose: Pose,
@@ -43,9 +45,72 @@ pub(super) struct Swept<'a> {
     /// The evidence map's rule (see [`Swept::vouches_thales`]) with this beam half-angle,
     /// radians; negative: the rule above (an echo limits only its own bearing).
     pub thales_beam_rad: f32,
+    /// The cone within which a reading is sure to hear a reflector facing it, radians: the
+    /// beam's half-angle for a beam sonar, negative for a ray (which hears only on its axis).
+    /// It lets most readings of a candidate's cone outvote a few (see
+    /// [`Swept::vouches_thales`]); a wider cone than the sensor's would vouch for walls.
+    pub heard_beam_rad: f32,
+    /// How far the sonar stood from where `pose` puts it in any reading, metres (0: every
+    /// reading from `pose`; see [`reading_shift_m`]).
+    pub reading_shift_m: f32,
 }
 
-impl Swept<'_> {
+/// How far the sonar (`sonar_offset_m` ahead of the centre) stood from where `pose` puts it
+/// in any of `readings`, metres; infinite for a NaN.
+pub(super) fn reading_shift_m(readings: &[Reading], pose: Pose, sonar_offset_m: f32) -> f32 {
+    let here = pose.point_ahead(sonar_offset_m);
+    let mut shift_m = 0.0f32;
+    for r in readings {
+        let there = r.pose.point_ahead(sonar_offset_m);
+        let d_m = hypot(there.x_m - here.x_m, there.y_m - here.y_m);
+        if d_m.is_nan() {
+            return f32::INFINITY;
+        }
+        shift_m = shift_m.max(d_m);
+    }
+    shift_m
+}
+
+impl<'a> Swept<'a> {
+    /// The last sweep (`readings`) of a mission configured by `config`, on a grid of
+    /// `cell_m`, read from `pose`, vouching within `half_band_rad` of its heading, limited by
+    /// echoes or not (`echo_limited`).
+    pub fn of(
+        config: &MissionConfig,
+        readings: &'a [Reading],
+        cell_m: f32,
+        (pose, half_band_rad, echo_limited): (Pose, f32, bool),
+    ) -> Self {
+        let robot = &config.robot;
+        let evidence = config.evidence_map;
+        let thales_beam_rad = if evidence {
+            robot.sonar_beam_half_angle_deg.max(0.0) * (core::f32::consts::PI / 180.0)
+        } else {
+            -1.0
+        };
+        Swept {
+            readings,
+            pose,
+            sonar_offset_m: robot.sonar_offset_m,
+            half_band_rad,
+            min_range_m: robot.sonar_min_range_m,
+            range_m: robot.sonar_range_m,
+            cell_m,
+            echo_limited,
+            thales_beam_rad,
+            heard_beam_rad: if evidence && robot.sonar_beam {
+                thales_beam_rad
+            } else {
+                -1.0
+            },
+            reading_shift_m: if evidence {
+                reading_shift_m(readings, pose, robot.sonar_offset_m)
+            } else {
+                0.0
+            },
+        }
+    }
+
     /// Nothing: for moving passes, whose readings came from other poses.
     pub const NOTHING: Swept<'static> = Swept {
         readings: &[],
@@ -61,6 +126,8 @@ impl Swept<'_> {
         cell_m: 0.0,
         echo_limited: true,
         thales_beam_rad: -1.0,
+        heard_beam_rad: -1.0,
+        reading_shift_m: 0.0,
     };
 
     /// Does the sweep prove `q` free (see the module docs)?
@@ -130,27 +197,44 @@ impl Swept<'_> {
     ///   around `rel` (nearer feet lie in the blind zone, next to the robot's own disc), within
     ///   the readings' bearings widened by the beam;
     /// - no echo contradicts it: no reading `i` heard something at `d·cos(max(0, |φᵢ − rel| −
-    ///   beam)) + one cell` or nearer (the foot could be anywhere in its cone).
+    ///   beam)) + one cell` or nearer (the foot could be anywhere in its cone); or, with a beam
+    ///   sonar, every candidate is ruled out by most of the readings whose cones hold it
+    ///   ([`Swept::every_candidate_ruled_out`]).
     ///
     /// Silence alone never vouches: a silent bearing counts only with every other bearing of the
     /// window read. A dropped echo on a wall face leaves the face's other readings (a face
-    /// echoes over the beam's width plus the incidence limit, about 17 readings at 15°), and any
-    /// one of them contradicts.
+    /// echoes over the beam's width plus the incidence limit, about 17 readings at 15°), and
+    /// half a cone of them would have to drop to rule its foot out.
     ///
-    /// Cost: one pass over the readings (at most 201).
+    /// Readings taken elsewhere (a robot that had not quite stopped, or turned while it held):
+    /// each reading is read at its own heading, and the sonar's largest shift `δ` from `pose`
+    /// ([`Swept::reading_shift_m`]) is added to every bound (a wall's distance from the sonar
+    /// changes by at most `δ`) and taken off the cone in which a reading is sure to hear a
+    /// reflector (`asin(δ / min range)`: a wall's end, seen from `δ` away, moves that far
+    /// in bearing at worst). At `δ` ≥ the minimum range nothing is vouched for.
+    ///
+    /// Cost: one pass over the readings (at most 201); with a beam, when an echo contradicts,
+    /// one more per bearing step of the window, each over one cone of readings.
     pub fn vouches_thales(&self, rel: f32, d_m: f32) -> bool {
         let n = self.readings.len();
         if n < 2 || !(d_m >= self.min_range_m && d_m <= self.range_m - self.cell_m) {
             return false;
         }
-        let beam = self.thales_beam_rad;
-        let half_pi = core::f32::consts::FRAC_PI_2;
+        // Readings from elsewhere: each is read at its own heading (exact), and the sonar's
+        // shift from `pose` widens every bound (below).
+        let shift_m = self.reading_shift_m;
+        let x = shift_m / self.min_range_m;
+        if x.is_nan() || x >= 1.0 {
+            return false;
+        }
+        let slack = atan2(x, sqrt(1.0 - x * x)); // asin(shift / min range)
+        let heard = self.thales_beam_rad - slack;
         let c = (self.min_range_m / d_m).clamp(0.0, 1.0);
         let window = atan2(sqrt(1.0 - c * c), c); // acos(min range / d)
                                                   // Either direction: only the ends matter (every reading is looked at below).
         let (a, b) = (
-            self.readings[0].neck_angle_rad,
-            self.readings[n - 1].neck_angle_rad,
+            self.bearing_rad(&self.readings[0]),
+            self.bearing_rad(&self.readings[n - 1]),
         );
         let (first, last) = (a.min(b), a.max(b));
         let step = (last - first) / (n - 1) as f32;
@@ -160,24 +244,134 @@ impl Swept<'_> {
         // A sweep all round (its two ends a step apart or overlapping) reads every bearing.
         let all_round = last - first + 1.01 * step >= 2.0 * core::f32::consts::PI;
         let read = all_round
-            || (rel - window >= first - beam - 1.0e-4 && rel + window <= last + beam + 1.0e-4);
+            || (rel - window >= first - heard - 1.0e-4 && rel + window <= last + heard + 1.0e-4);
         if !read {
             return false;
         }
-        for r in self.readings {
+        let Some(worst) = self.most_contradicting(rel, d_m, slack) else {
+            return true;
+        };
+        let heard_rad = self.heard_beam_rad - slack;
+        self.every_candidate_ruled_out(rel, d_m, window, first, step, all_round, worst, heard_rad)
+    }
+
+    /// A reading's bearing off `pose`'s heading: its neck angle, turned by how far the robot's
+    /// heading was from `pose`'s when it was taken.
+    fn bearing_rad(&self, r: &Reading) -> f32 {
+        r.neck_angle_rad + wrap_angle_rad(r.pose.heading_rad - self.pose.heading_rad)
+    }
+
+    /// The first rule, a fast sufficient test: the reading that heard something nearest
+    /// inside the farthest candidate reflector its cone could hold (its index), or `None`
+    /// when no reading did.
+    fn most_contradicting(&self, rel: f32, d_m: f32, slack_rad: f32) -> Option<usize> {
+        let beam = self.thales_beam_rad + slack_rad;
+        let mut worst: Option<(usize, f32)> = None;
+        for (i, r) in self.readings.iter().enumerate() {
             let Some(range_m) = r.range_m else {
                 continue;
             };
-            let off = abs(wrap_angle_rad(r.neck_angle_rad - rel));
+            let off = abs(wrap_angle_rad(self.bearing_rad(r) - rel));
             let nearest = (off - beam).max(0.0);
-            if nearest.is_nan() || nearest >= half_pi {
+            if nearest.is_nan() || nearest >= core::f32::consts::FRAC_PI_2 {
                 continue;
             }
-            if range_m <= d_m * cos(nearest) + self.cell_m {
-                return false;
+            let inside_m = d_m * cos(nearest) + self.cell_m + self.reading_shift_m - range_m;
+            if inside_m >= 0.0 && worst.is_none_or(|(_, w)| inside_m > w) {
+                worst = Some((i, inside_m));
             }
         }
-        true
+        worst.map(|(i, _)| i)
+    }
+
+    /// The rule read candidate by candidate: every bearing `ψ` of the window is a candidate
+    /// for the nearest point of a wall through the point, at `d·cos(ψ − rel)` or nearer. It
+    /// is ruled out when most of the readings whose cones hold it (a majority of the
+    /// `2m + 1` a whole cone spans) heard nothing that near: such a reflector would have
+    /// echoed in every one of them. Bearings are taken a step wide, each with its farthest
+    /// candidate and only the readings whose cones hold the whole step (conservative).
+    ///
+    /// Why a majority and not every reading: a spurious short echo (crosstalk) or a jamb's
+    /// edge in one side of the cone contradicted the whole window before, and one such echo in
+    /// a sweep (1 % of readings) took the vouching of everything behind it; a dropped echo on
+    /// a real wall leaves the wall's other readings, and half a cone of them dropping is what
+    /// it would take to rule the wall out.
+    #[allow(clippy::too_many_arguments)]
+    fn every_candidate_ruled_out(
+        &self,
+        rel: f32,
+        d_m: f32,
+        window: f32,
+        first: f32,
+        step: f32,
+        all_round: bool,
+        worst: usize,
+        heard_rad: f32,
+    ) -> bool {
+        let n = self.readings.len() as i32;
+        let m = floor_i32((heard_rad - 0.5 * step) / step);
+        if m < 0 {
+            return false;
+        }
+        let ascending =
+            self.bearing_rad(&self.readings[0]) <= self.bearing_rad(&self.readings[n as usize - 1]);
+        // Bearing steps, counted from `first` in the readings' ascending order.
+        let index = |i: usize| {
+            if ascending {
+                i as i32
+            } else {
+                n - 1 - i as i32
+            }
+        };
+        let ruled_out = |k: i32| -> bool {
+            let centre = first + k as f32 * step;
+            let off = abs(wrap_angle_rad(centre - rel));
+            if off - 0.5 * step > window {
+                return true;
+            }
+            let farthest_m =
+                d_m * cos((off - 0.5 * step).max(0.0)) + self.cell_m + self.reading_shift_m;
+            let (mut covering, mut clear) = (0, 0);
+            for j in k - m..=k + m {
+                let j = if all_round { j.rem_euclid(n) } else { j };
+                if !(0..n).contains(&j) {
+                    continue;
+                }
+                let at = if ascending { j } else { n - 1 - j } as usize;
+                let Some(r) = self.readings.get(at) else {
+                    continue;
+                };
+                // Its cone must hold the whole step (an uneven sweep counts for less).
+                let r_off = abs(wrap_angle_rad(self.bearing_rad(r) - centre));
+                if r_off.is_nan() || r_off + 0.5 * step > heard_rad + 1.0e-4 {
+                    continue;
+                }
+                covering += 1;
+                if r.range_m.is_none_or(|range_m| range_m > farthest_m) {
+                    clear += 1;
+                }
+            }
+            covering > 0 && clear >= (m + 1).min(covering)
+        };
+        // The most contradicting reading's cone first: behind a wall, that is where a
+        // candidate stands, and the answer comes after a few steps.
+        let w = index(worst);
+        if !(w - m..=w + m).all(ruled_out) {
+            return false;
+        }
+        let k_lo = floor_i32((rel - window - first) / step - 0.5);
+        let k_hi = floor_i32((rel + window - first) / step + 0.5) + 1;
+        (k_lo..=k_hi).all(ruled_out)
+    }
+}
+
+/// `⌊x⌋` as an `i32` (saturating; NaN gives 0).
+fn floor_i32(x: f32) -> i32 {
+    let t = x as i32;
+    if (t as f32) > x {
+        t - 1
+    } else {
+        t
     }
 }
 
@@ -211,12 +405,15 @@ mod tests {
             cell_m: 0.05,
             echo_limited: true,
             thales_beam_rad: -1.0,
+            heard_beam_rad: -1.0,
+            reading_shift_m: 0.0,
         }
     }
 
     fn thales(readings: &[Reading]) -> Swept<'_> {
         Swept {
             thales_beam_rad: 15.0f32.to_radians(),
+            heard_beam_rad: 15.0f32.to_radians(),
             ..swept(readings)
         }
     }
@@ -268,6 +465,82 @@ mod tests {
         let s = thales(&r);
         assert!(!s.vouches(PointM::new(0.2 + 1.1, 0.0)));
         assert!(s.vouches(PointM::new(0.2 + 0.85, 0.0)));
+    }
+
+    #[test]
+    fn thales_one_spurious_short_echo_does_not_blind_the_sweep() {
+        // Nothing within range but one spurious echo at 0.4 m, 36° off the heading.
+        let r = sweep(|i| (i == 20).then_some(0.4));
+        // With a beam, the other readings whose cones hold each candidate outvote it.
+        assert!(thales(&r).vouches(PointM::new(0.2 + 1.0, 0.0)));
+        // Even on its own bearing: a reflector there would echo in every reading whose cone
+        // holds it (15 of them), not in one.
+        let a = 36.0f32.to_radians();
+        let behind = PointM::new(0.2 + 0.6 * cos_(a), 0.6 * sin_(a));
+        assert!(thales(&r).vouches(behind));
+        // A post that is really there echoes over the whole cone, and blocks it.
+        let post = sweep(|i| (12..=28).contains(&i).then_some(0.4));
+        assert!(!thales(&post).vouches(behind));
+        // A ray hears only on its axis: one reading is all it has, and it contradicts.
+        let ray = Swept {
+            heard_beam_rad: -1.0,
+            ..thales(&r)
+        };
+        assert!(!ray.vouches(PointM::new(0.2 + 1.0, 0.0)));
+    }
+
+    #[test]
+    fn thales_under_half_a_cone_of_dropouts_on_a_face_vouches_nothing_through_it() {
+        // A wall face-on at 1.0 m ahead, echoing within ±30° of its normal; seven readings in
+        // a row dropped out (a 15° cone holds 15 readings; 8 clear ones rule a candidate out).
+        let r = sweep(|i| {
+            let phi = i as f32 * STEP;
+            let echoes = abs(phi) <= 30.0f32.to_radians() && !(-6..=0).contains(&i);
+            echoes.then(|| 1.0 / cos_(phi))
+        });
+        assert!(!thales(&r).vouches(PointM::new(0.2 + 1.1, 0.0)));
+        assert!(thales(&r).vouches(PointM::new(0.2 + 0.85, 0.0)));
+    }
+
+    #[test]
+    fn thales_readings_taken_elsewhere_widen_every_bound() {
+        // The robot turned 3° while it swept a face-on wall 1.0 m ahead of the sonar: each
+        // reading is read at its own heading.
+        let turned = 3.0f32.to_radians();
+        let mut r = sweep(|i| {
+            let phi = i as f32 * STEP + turned;
+            (abs(phi) <= 20.0f32.to_radians()).then(|| 1.0 / cos_(phi))
+        });
+        for x in r.iter_mut() {
+            x.pose = Pose::new(0.2 - 0.2 * cos_(turned), -0.2 * sin_(turned), turned);
+        }
+        let s = Swept {
+            reading_shift_m: reading_shift_m(&r, Pose::new(0.0, 0.0, 0.0), 0.2),
+            ..thales(&r)
+        };
+        assert!(s.reading_shift_m < 0.001, "it turned about the sonar");
+        assert!(!s.vouches(PointM::new(0.2 + 1.05, 0.0)), "behind the wall");
+        assert!(s.vouches(PointM::new(0.2 + 0.85, 0.0)));
+        // Taken 5 cm back, the same readings prove 5 cm less.
+        for x in r.iter_mut() {
+            x.pose.x_m -= 0.05;
+        }
+        let s = Swept {
+            reading_shift_m: reading_shift_m(&r, Pose::new(0.0, 0.0, 0.0), 0.2),
+            ..thales(&r)
+        };
+        assert!((s.reading_shift_m - 0.05).abs() < 0.001);
+        assert!(!s.vouches(PointM::new(0.2 + 0.94, 0.0)));
+        assert!(s.vouches(PointM::new(0.2 + 0.85, 0.0)));
+        // Taken farther than the minimum range away, they prove nothing.
+        for x in r.iter_mut() {
+            x.pose.x_m -= 0.25;
+        }
+        let s = Swept {
+            reading_shift_m: reading_shift_m(&r, Pose::new(0.0, 0.0, 0.0), 0.2),
+            ..thales(&r)
+        };
+        assert!(!s.vouches(PointM::new(0.2 + 0.5, 0.0)));
     }
 
     #[test]
