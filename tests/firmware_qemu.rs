@@ -679,8 +679,7 @@ fn simulated_mission(
     world: &str,
     mode: twil_core::mission::MissionMode,
 ) -> twil_core::mission::MissionStats {
-    use twil_core::control::Pose;
-    use twil_core::mission::{LocalRunner, Mission300, MissionConfig, MissionPlanner300};
+    use twil_core::mission::{LocalRunner, Mission300, MissionConfig, MissionPlanner300, SimBody};
     use twil_core::robot::RobotConfig;
     let real = twil_host::cmd::args::read_da(&common::world(&format!("{world}.da"))).unwrap();
     let params = twil_host::cmd::args::read_par(&common::world(&format!("{world}.par"))).unwrap();
@@ -691,30 +690,9 @@ fn simulated_mission(
     let mut mission =
         Box::new(Mission300::new(config, twil_core::grid::GridGeometry::seed_default()).unwrap());
     let mut planner = Box::new(MissionPlanner300::new());
-    let mut plant = twil_core::plant::Plant::new(
-        &config.robot,
-        Pose::new(
-            params.start.x_m,
-            params.start.y_m,
-            config.initial_heading_rad,
-        ),
-    );
     let mut runner = LocalRunner::new(&mut mission, &mut planner, 1);
-    let mut previous = plant.encoder_counts();
-    loop {
-        let counts = plant.encoder_counts();
-        let o = runner.tick(
-            counts.0 - previous.0,
-            counts.1 - previous.1,
-            0.05,
-            &mut |a| plant.sonar_range_m(&real, a, 1.5),
-        );
-        previous = counts;
-        if o.status != twil_core::mission::MissionStatus::Running {
-            return runner.mission().stats();
-        }
-        plant.step(0.05, o.left_voltage_v, o.right_voltage_v);
-    }
+    runner.run_on(&mut SimBody::at_start(&config), &real, 1.5, 0.05);
+    runner.mission().stats()
 }
 
 #[test]

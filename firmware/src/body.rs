@@ -1,10 +1,19 @@
 //! The robot's body behind one interface for both builds: the wheels (encoders in, motor
 //! voltages out, the emergency-stop input) and the sonar head.
 //!
-//! - QEMU build: the simulated robot of `twil_core::plant` stands in for the drivers. The
-//!   control task reads its encoder counts and steps it with the voltages for one period (that
-//!   cost is measured apart from the control step's); the sonar task casts the sonar's ray on
-//!   the real world the host uploaded (`WorldChunk`), from the plant's true pose.
+//! - QEMU build: the core's simulated body (`twil_core::mission::SimBody`, the plant of
+//!   `twil_core::plant` with its encoder deltas) stands in for the drivers. The control task
+//!   reads its encoder counts and steps it with the voltages for one period (that cost is
+//!   measured apart from the control step's); the sonar task casts the sonar's ray on the real
+//!   world the host uploaded (`WorldChunk`), from the plant's true pose.
+//!
+//!   Only the body, not the core's whole `DeviceShell` (which the in-process device and the
+//!   link tests run): that shell runs a period in one thread of control, the pilot, the
+//!   mission, every plan and every reading in a row, while the firmware spreads them over its
+//!   tasks by priority (the pilot in the control task, readings in the sonar task, the mission
+//!   and its plans in the lowest-priority task, each plan deferred while the control task goes
+//!   on). That order, and its timing, are the firmware's to keep, so it wires the device itself
+//!   (`mission_task.rs`) and shares the simulated robot only.
 //! - Board build: `twil_core::drivers::body`'s `Chassis` (control task) and `SonarHead`
 //!   (sonar task) on the pins of [`crate::board`]. The head is driven stepwise, every wait a
 //!   `Mono` delay, so the sonar task never holds the core for more than a pulse.
@@ -27,37 +36,26 @@ mod sim {
     use twil_core::control::Pose;
     use twil_core::failsafe::StopCause;
     use twil_core::link::WorldUpload;
+    use twil_core::mission::SimBody;
     use twil_core::plant::Plant;
     use twil_core::robot::RobotConfig;
 
-    /// The simulated robot: its true pose, wheels and encoders.
+    /// The simulated robot: the core's [`SimBody`] (its true pose, wheels and encoders).
     pub struct Body {
-        plant: Plant,
-        previous_counts: (i32, i32),
+        body: SimBody,
     }
 
     impl Body {
         /// A robot at the origin (until a mission puts it at its start).
         pub fn new() -> Self {
-            let plant = Plant::new(&RobotConfig::DEFAULT, Pose::default());
-            let previous_counts = plant.encoder_counts();
             Self {
-                plant,
-                previous_counts,
+                body: SimBody::new(&RobotConfig::DEFAULT, Pose::default()),
             }
         }
 
         /// Put the robot at the start of `config`'s mission, standing.
         pub fn restart(&mut self, config: &MissionConfig) -> Result<(), StopCause> {
-            self.plant = Plant::new(
-                &config.robot,
-                Pose::new(
-                    config.start.x_m,
-                    config.start.y_m,
-                    config.initial_heading_rad,
-                ),
-            );
-            self.previous_counts = self.plant.encoder_counts();
+            self.body = SimBody::at_start(config);
             Ok(())
         }
 
@@ -66,13 +64,7 @@ mod sim {
 
         /// Encoder counts since the previous call (left, right).
         pub fn encoder_deltas(&mut self) -> (i32, i32) {
-            let counts = self.plant.encoder_counts();
-            let deltas = (
-                counts.0.wrapping_sub(self.previous_counts.0),
-                counts.1.wrapping_sub(self.previous_counts.1),
-            );
-            self.previous_counts = counts;
-            deltas
+            self.body.encoder_deltas()
         }
 
         /// Apply the voltages for one period (the simulated robot moves). No e-stop input and
@@ -83,14 +75,14 @@ mod sim {
             right_voltage_v: f32,
             period_s: f32,
         ) -> Option<StopCause> {
-            self.plant.step(period_s, left_voltage_v, right_voltage_v);
+            self.body.step(period_s, left_voltage_v, right_voltage_v);
             None
         }
 
         /// A copy of the simulated robot, for the sonar's ray cast (the plant is small; the
         /// cast then runs without holding the control task's resource).
         pub fn snapshot(&self) -> Plant {
-            self.plant.clone()
+            self.body.plant().clone()
         }
     }
 

@@ -1,7 +1,8 @@
-//! `--remote sim`: the mission device in this process. A [`RobotDevice`] with the simulated
-//! robot around it ([`Pilot`], [`Plant`], the mission planner and the real world of
-//! [`WorldUpload`]), wired exactly as the `Bench` of `twil_core::link::robot`'s tests, runs on
-//! its own thread; [`SimLink`] is the byte stream between it and [`crate::remote::Remote`].
+//! `--remote sim`: the mission device in this process. The core's device shell
+//! ([`DeviceShell300`]: a [`RobotDevice`] with the pilot, the mission planner, the real world
+//! the host uploads and the simulated body, wired once for this shell and the link tests) runs
+//! on its own thread with a parameter store in RAM and the wall clock; [`SimLink`] is the byte
+//! stream between it and [`crate::remote::Remote`].
 //!
 //! The device runs as fast as it can in simulated time (50 ms per tick; `sim:N` paces it at N
 //! times real time, to watch the live display or try Ctrl-C): it answers requests
@@ -10,6 +11,7 @@
 //! reader rather than filling memory. It reports [`Build::Host`]. The thread ends when the host
 //! drops its end of the link.
 //!
+//! [`RobotDevice`]: twil_core::link::RobotDevice
 //! [`RobotLink::next_telemetry`]: twil_core::link::RobotLink::next_telemetry
 
 use std::collections::VecDeque;
@@ -20,18 +22,14 @@ use std::time::Duration;
 
 use anyhow::{anyhow, Result};
 use twil_core::control::Pose;
-use twil_core::grid::words_for_cells;
-use twil_core::link::params::DeviceParams;
-use twil_core::link::{Build, DeviceInfo, RobotDevice, RunState, WorldUpload};
-use twil_core::mission::{Mission300, MissionPlanner300, Pilot};
+use twil_core::link::params::{DeviceParams, ParamSave};
+use twil_core::link::{Build, DeviceInfo, RunState};
+use twil_core::mission::DeviceShell300;
 use twil_core::params_store::ram_flash::RamFlash;
 use twil_core::params_store::robot::load_robot_config;
 use twil_core::params_store::ParamStore;
 use twil_core::plant::Plant;
 use twil_core::robot::RobotConfig;
-
-/// The device: the seed's 300 x 300 map for the planning service and the mission.
-pub type SimDevice = RobotDevice<{ words_for_cells(300 * 300) }>;
 
 /// The device's parameter store: in RAM, as the QEMU build's (two pages of 1 KiB), empty at
 /// every start, so a value set lasts as long as this device (one `twil` command).
@@ -44,7 +42,7 @@ pub const PIPE_CHUNKS: usize = 64;
 /// Control period of the simulated robot, seconds.
 const PERIOD_S: f32 = 0.05;
 
-/// Stack of the device thread: the device and the planner are built before they are boxed.
+/// Stack of the device thread: the shell (device, mission, planner) is built before it is boxed.
 const STACK_BYTES: usize = 64 << 20;
 
 /// The host's end of the link to the in-process device. Reads time out after 200 ms
@@ -65,7 +63,7 @@ impl SimLink {
         let thread = std::thread::Builder::new()
             .name("twil-device-sim".into())
             .stack_size(STACK_BYTES)
-            .spawn(move || Shell::new(pace).run(&requests, &telemetry))
+            .spawn(move || DeviceThread::new(pace).run(&requests, &telemetry))
             .map_err(|e| anyhow!("cannot start the simulated device: {e}"))?;
         Ok(Self {
             to_device: Some(to_device),
@@ -122,18 +120,13 @@ impl Drop for SimLink {
     }
 }
 
-/// The device and the simulated robot around it (the `Bench` of the core's tests).
-struct Shell {
-    device: Box<SimDevice>,
-    mission: Box<Mission300>,
-    planner: Box<MissionPlanner300>,
-    world: Box<WorldUpload>,
+/// The in-process device: the core's [`DeviceShell300`] with this shell's own parts, the
+/// parameter store, the wall clock and the pace.
+struct DeviceThread {
+    shell: Box<DeviceShell300>,
     /// Where `ParamSet` keeps its values (`None` only if the store could not be opened: a
     /// defect, then values last in RAM).
     store: Option<SimStore>,
-    pilot: Option<Pilot>,
-    plant: Option<Plant>,
-    previous_counts: (i32, i32),
     /// Real time per tick (zero: as fast as it can).
     tick_time: Duration,
     /// The device's clock for the host's silence (link-loss policy): wall time, as on the
@@ -141,27 +134,21 @@ struct Shell {
     started: std::time::Instant,
 }
 
-impl Shell {
+impl DeviceThread {
     fn new(pace: u32) -> Self {
-        let mut device = Box::new(SimDevice::new(DeviceInfo::for_build(Build::Host)));
+        let mut shell = Box::new(DeviceShell300::new(DeviceInfo::for_build(Build::Host)));
         // The firmware's boot: load the store, apply it through the one validation.
         let mut store = SimStore::new(RamFlash::ERASED, 0..2048).ok();
         if let Some(store) = store.as_mut() {
             let (robot, boot) = load_robot_config(store, &RobotConfig::DEFAULT);
-            device.set_params(DeviceParams {
+            shell.device.set_params(DeviceParams {
                 robot,
                 store: Some(boot.load.status),
             });
         }
         Self {
-            device,
+            shell,
             store,
-            mission: Box::new(Mission300::IDLE),
-            planner: Box::new(MissionPlanner300::new()),
-            world: Box::new(WorldUpload::new()),
-            pilot: None,
-            plant: None,
-            previous_counts: (0, 0),
             tick_time: if pace == 0 {
                 Duration::ZERO
             } else {
@@ -174,7 +161,10 @@ impl Shell {
     /// Serve requests and run the mission until the host goes away.
     fn run(mut self, requests: &Receiver<Vec<u8>>, out: &SyncSender<Vec<u8>>) {
         loop {
-            let running = matches!(self.device.state(), RunState::Running | RunState::Paused);
+            let running = matches!(
+                self.shell.device.state(),
+                RunState::Running | RunState::Paused
+            );
             // Between ticks: every request that has arrived; idle, wait for one.
             let mut received = Vec::new();
             if running {
@@ -193,40 +183,34 @@ impl Shell {
                 }
             }
             let now_ms = self.started.elapsed().as_millis() as u32;
-            self.device.set_now_ms(now_ms);
+            self.shell.device.set_now_ms(now_ms);
             let mut wire = Vec::new();
             for bytes in received {
-                let mut link = match self.store.as_mut() {
-                    Some(store) => self.device.link_with_store(&mut self.mission, store),
-                    None => self.device.link(&mut self.mission),
-                };
-                link.receive(
-                    &bytes,
-                    &mut *self.planner,
-                    &mut || 0,
-                    &mut *self.world,
-                    &mut |b: &[u8]| wire.extend_from_slice(b),
-                );
+                let store = self.store.as_mut().map(|s| s as &mut dyn ParamSave);
+                self.shell
+                    .receive(&bytes, store, &mut |b: &[u8]| wire.extend_from_slice(b));
                 // A stop, hold or follow asked for by a request reaches the pilot before the
                 // next tick.
-                self.command_pilot();
+                self.shell.command_pilot();
             }
-            if self.device.take_self_test() {
+            if self.shell.device.take_self_test() {
                 self.self_test();
             }
             // The host silent for longer than the mission's link timeout: its reaction.
-            if self.device.link(&mut self.mission).watch_link().is_some() {
-                self.command_pilot();
+            if self.shell.link().watch_link().is_some() {
+                self.shell.command_pilot();
             }
-            if matches!(self.device.state(), RunState::Running | RunState::Paused) {
-                self.tick();
+            if matches!(
+                self.shell.device.state(),
+                RunState::Running | RunState::Paused
+            ) {
+                self.shell.tick(PERIOD_S);
                 if !self.tick_time.is_zero() {
                     std::thread::sleep(self.tick_time);
                 }
             }
-            while let Some(t) = self.device.link(&mut self.mission).next_telemetry() {
-                SimDevice::send_telemetry(&t, &mut |b: &[u8]| wire.extend_from_slice(b));
-            }
+            self.shell
+                .send_telemetry(&mut |b: &[u8]| wire.extend_from_slice(b));
             if !wire.is_empty() && out.send(wire).is_err() {
                 return;
             }
@@ -238,83 +222,19 @@ impl Shell {
     fn self_test(&mut self) {
         use twil_core::selftest::{run, simulated::SimulatedCheck, ClockFacts, ClockSource};
         let config = twil_core::robot::RobotConfig::DEFAULT;
-        let plant = self
-            .plant
-            .clone()
-            .unwrap_or_else(|| Plant::new(&config, Pose::default()));
+        let plant = match &self.shell.body {
+            Some(body) => body.plant().clone(),
+            None => Plant::new(&config, Pose::default()),
+        };
         let clock = ClockFacts {
             core_hz: twil_core::selftest::CORE_CLOCK_HZ,
             source: ClockSource::Emulated,
         };
         let mut test = twil_core::selftest::SelfTest::new(&config, clock);
-        let mut body = SimulatedCheck::new(&plant, &self.world.obstacles, config.sonar_range_m);
+        let mut body =
+            SimulatedCheck::new(&plant, &self.shell.world.obstacles, config.sonar_range_m);
         let report = run(&mut test, &mut body).clone();
-        self.device.note_self_test(&report);
-    }
-
-    fn command_pilot(&mut self) {
-        if let Some(command) = self.device.take_pilot_command() {
-            if let Some(pilot) = &mut self.pilot {
-                let _ = pilot.command(command, self.mission.prefix());
-            }
-        }
-    }
-
-    /// Carry out what the device asks: the pilot's command, plans (at once), sonar readings.
-    fn serve(&mut self) {
-        loop {
-            self.command_pilot();
-            if self.device.plan_pending() {
-                self.device
-                    .link(&mut self.mission)
-                    .run_planner(&mut *self.planner, &mut || 0);
-                continue;
-            }
-            let Some(request) = self.device.take_sonar_request() else {
-                return;
-            };
-            let Some(plant) = &mut self.plant else {
-                return;
-            };
-            let range = self.mission.config().robot.sonar_range_m;
-            let range_m = plant.sonar_range_m(&self.world.obstacles, request.neck_angle_rad, range);
-            self.device
-                .link(&mut self.mission)
-                .reading(request.neck_angle_rad, range_m);
-        }
-    }
-
-    /// One control period.
-    fn tick(&mut self) {
-        if let Some(config) = self.device.link(&mut self.mission).take_started() {
-            self.pilot = Some(Pilot::new(&config));
-            let plant = Plant::new(
-                &config.robot,
-                Pose::new(
-                    config.start.x_m,
-                    config.start.y_m,
-                    config.initial_heading_rad,
-                ),
-            );
-            self.previous_counts = plant.encoder_counts();
-            self.plant = Some(plant);
-        }
-        let (Some(plant), Some(pilot)) = (&mut self.plant, &mut self.pilot) else {
-            return;
-        };
-        let counts = plant.encoder_counts();
-        let report = pilot.tick(
-            counts.0.wrapping_sub(self.previous_counts.0),
-            counts.1.wrapping_sub(self.previous_counts.1),
-            PERIOD_S,
-        );
-        self.previous_counts = counts;
-        self.device.link(&mut self.mission).tick(&report);
-        self.serve();
-        if let (Some(pilot), Some(plant)) = (&self.pilot, &mut self.plant) {
-            let (left, right) = pilot.voltages_v();
-            plant.step(PERIOD_S, left, right);
-        }
+        self.shell.device.note_self_test(&report);
     }
 }
 

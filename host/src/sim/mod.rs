@@ -1,5 +1,6 @@
 //! The simulator behind `twil simulate`: a [`twil_core::mission::Mission`] driven against a
-//! [`twil_core::plant::Plant`] (the simulated robot) on the real world's polygons.
+//! [`twil_core::plant::Plant`] (the simulated robot, in the core's [`SimBody`], which the
+//! in-process device and the firmware's QEMU build use too) on the real world's polygons.
 //!
 //! The loop, once per controller period:
 //!
@@ -41,10 +42,9 @@ use twil_core::geom::PointM;
 use twil_core::grid::{Grid400, GridGeometry};
 use twil_core::mission::{
     HostMissionPlanner, LocalRunner, Mission400, MissionConfig, MissionEvent, MissionMode,
-    MissionPhase, MissionStats, MissionStatus, Pilot,
+    MissionPhase, MissionStats, MissionStatus, Pilot, SimBody,
 };
 use twil_core::plan::PlannerKind;
-use twil_core::plant::Plant;
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
@@ -378,7 +378,7 @@ fn run_on_this_thread(
         y_m: setup.params.start.y_m,
         heading_rad: config.initial_heading_rad,
     };
-    let mut plant = Plant::new(&robot, start_pose);
+    let mut body = SimBody::new(&robot, start_pose);
     let period_s = robot.controller_period_s;
     let latency_ticks = plan_latency_ticks(setup.plan_latency_s, period_s);
     let mut runner = LocalRunner::new(&mut mission, &mut planner, latency_ticks);
@@ -387,15 +387,14 @@ fn run_on_this_thread(
     let mut frames = Vec::new();
     let mut t_s = 0.0f32;
     let mut distance_m = 0.0f32;
-    let mut min_clearance_m = plant.clearance_m(&setup.real);
+    let mut min_clearance_m = body.plant().clearance_m(&setup.real);
     let mut collision = min_clearance_m < 0.0;
-    let mut previous_counts = plant.encoder_counts();
     let mut next_snapshot_s = 0.0f32;
     let mut next_progress_s = 0.0f32;
     observer.start(runner.mission());
     let first = TrajectoryRow {
         t_s,
-        pose: plant.pose(),
+        pose: body.plant().pose(),
         control: ControlSample::default(),
         phase: Some(runner.mission().phase()),
     };
@@ -417,14 +416,9 @@ fn run_on_this_thread(
         if ticks > max_ticks {
             bail!("the mission did not end within its time limit (internal error)");
         }
-        let counts = plant.encoder_counts();
-        let deltas = (
-            counts.0.wrapping_sub(previous_counts.0),
-            counts.1.wrapping_sub(previous_counts.1),
-        );
-        previous_counts = counts;
+        let deltas = body.encoder_deltas();
         let outcome = runner.tick(deltas.0, deltas.1, period_s, &mut |angle| {
-            plant.sonar_range_m(&setup.real, angle, robot.sonar_range_m)
+            body.sonar_range_m(&setup.real, angle, robot.sonar_range_m)
         });
         reasons.observe(&outcome.events);
         if debug && !outcome.events.is_empty() {
@@ -438,7 +432,7 @@ fn run_on_this_thread(
                 m,
                 &reasons,
                 t_s,
-                plant.pose(),
+                body.plant().pose(),
                 trajectory.len(),
                 m.stats().plans,
             ));
@@ -450,7 +444,7 @@ fn run_on_this_thread(
             .count() as u32;
         let view = TickView {
             t_s,
-            pose: plant.pose(),
+            pose: body.plant().pose(),
             mission: runner.mission(),
             events: &outcome.events,
         };
@@ -462,10 +456,10 @@ fn run_on_this_thread(
         if outcome.status != MissionStatus::Running {
             break;
         }
-        let before = plant.pose();
-        plant.step(period_s, outcome.left_voltage_v, outcome.right_voltage_v);
+        let before = body.plant().pose();
+        body.step(period_s, outcome.left_voltage_v, outcome.right_voltage_v);
         t_s += period_s;
-        let after = plant.pose();
+        let after = body.plant().pose();
         let d = ((after.x_m - before.x_m).powi(2) + (after.y_m - before.y_m).powi(2)).sqrt();
         if d.is_finite() {
             distance_m += d;
@@ -482,7 +476,7 @@ fn run_on_this_thread(
         };
         observer.row(&row);
         trajectory.push(row);
-        let clearance = plant.clearance_m(&setup.real);
+        let clearance = body.plant().clearance_m(&setup.real);
         if clearance < min_clearance_m {
             min_clearance_m = clearance;
         }
@@ -510,7 +504,7 @@ fn run_on_this_thread(
         runner.mission(),
         &reasons,
         t_s,
-        plant.pose(),
+        body.plant().pose(),
         trajectory.len(),
         0,
     ));

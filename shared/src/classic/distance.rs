@@ -354,7 +354,8 @@ mod tests {
             let (w, h) = (8 + seed % 29, 5 + (seed * 7) % 33);
             let density = [1, 3, 8, 20][seed as usize % 4];
             let border = seed % 3 != 0;
-            let g = random_grid(seed * 2654435761, w, h, density);
+            // Wrapping: the multiplier (Knuth's) spreads the seeds over all of u32.
+            let g = random_grid(seed.wrapping_mul(2654435761), w, h, density);
             let geo = *g.geometry();
             let n = geo.cell_count();
             let mut sites = [0u32; 1600];

@@ -18,8 +18,9 @@
 use heapless::Vec;
 
 use crate::plan::{PlanError, PlanReport, Planner};
+use crate::world::PolygonSet;
 
-use super::{Mission, MissionEvent, MissionInput, MissionOutput, MissionStatus, Pilot};
+use super::{Mission, MissionEvent, MissionInput, MissionOutput, MissionStatus, Pilot, SimBody};
 
 /// Most events one [`LocalRunner::tick`] collects (a tick is a handful of steps of at most
 /// [`super::MAX_EVENTS_PER_STEP`] events each; more are dropped, the status still tells).
@@ -141,6 +142,29 @@ impl<'a, const W: usize, const S: usize, const Q: usize, const E: usize>
         outcome.right_voltage_v = right;
         outcome.status = self.mission.status();
         outcome
+    }
+
+    /// Run the mission to its end on the simulated `body` in `world` (sonar readings up to
+    /// `max_range_m`), `period_s` per tick; the last tick's outcome. The tests' reference run
+    /// of a device's mission: no collision check and nothing recorded (`twil simulate` has its
+    /// own loop). It ends: the mission's time limit ends every mission.
+    pub fn run_on<const V: usize, const P: usize>(
+        &mut self,
+        body: &mut SimBody,
+        world: &PolygonSet<V, P>,
+        max_range_m: f32,
+        period_s: f32,
+    ) -> TickOutcome {
+        loop {
+            let (left, right) = body.encoder_deltas();
+            let outcome = self.tick(left, right, period_s, &mut |angle_rad| {
+                body.sonar_range_m(world, angle_rad, max_range_m)
+            });
+            if outcome.status != MissionStatus::Running {
+                return outcome;
+            }
+            body.step(period_s, outcome.left_voltage_v, outcome.right_voltage_v);
+        }
     }
 
     /// Stop the mission (e.g. the simulated robot hit something): `Aborted`, motors off.

@@ -14,8 +14,9 @@
 //!   steers the pilot and asks for sonar readings and plans. It owns no planner: plans are
 //!   asked for and handed back.
 //!
-//! The shell (the firmware, [`LocalRunner`] in `twil simulate` and the tests) calls
-//! [`Pilot::tick`] with the encoder counts every period, and [`Mission::step`] with
+//! The shell (the firmware, [`LocalRunner`] in `twil simulate` and the tests, the
+//! [`DeviceShell`] of a device without hardware) calls [`Pilot::tick`] with the encoder counts
+//! every period, and [`Mission::step`] with
 //!
 //! - [`MissionInput::Tick`] with the pilot's [`PilotReport`] of that period; the output may
 //!   carry a [`PilotCommand`] (follow the new prefix, hold, stop) and, when the sonar is
@@ -181,6 +182,11 @@ pub type MissionPlanner300 = Planner<SCRATCH_WORDS_300, MISSION_QUEUE>;
 
 /// A planner for the plan requests of a [`Mission400`] (the simulator's).
 pub type HostMissionPlanner = Planner<SCRATCH_WORDS_400, HOST_MISSION_QUEUE>;
+
+/// The [`DeviceShell`] of a [`Mission300`] and its [`MissionPlanner300`]: the in-process
+/// device's (`twil mission --remote sim`) and the link tests'.
+pub type DeviceShell300 =
+    DeviceShell<{ words_for_cells(300 * 300) }, 1, SCRATCH_WORDS_300, MISSION_QUEUE>;
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct SweepState {
     full: bool,
@@ -267,6 +273,7 @@ pub struct Mission<const W: usize, const E: usize = W> {
 mod blind;
 mod config;
 mod corridor;
+mod device_shell;
 mod evidence;
 mod evidence_marking;
 mod local;
@@ -285,6 +292,7 @@ mod trust;
 mod verdict;
 
 pub use config::{MissionConfig, MissionError, MissionMode};
+pub use device_shell::{DeviceShell, SimBody};
 pub use evidence::{CellEvidence, Change, EvidenceMap};
 pub use local::{LocalRunner, TickOutcome, MAX_EVENTS_PER_TICK, MAX_READINGS_PER_TICK};
 pub use messages::{

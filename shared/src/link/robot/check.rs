@@ -86,7 +86,7 @@ mod tests {
     #[test]
     fn a_self_test_runs_between_missions_and_keeps_missions_out() {
         let (mut b, _, _) = ready(MissionMode::Stop);
-        assert!(!b.device.take_self_test(), "none asked");
+        assert!(!b.shell.device.take_self_test(), "none asked");
         assert_eq!(b.call(Request::SelfTest), Reply::Ack);
         // A second request, or a mission, waits for its end.
         for request in [Request::SelfTest, Request::StartMission] {
@@ -98,15 +98,15 @@ mod tests {
                 other => panic!("{other:?}"),
             }
         }
-        assert!(b.device.take_self_test());
-        assert!(!b.device.take_self_test(), "taken once");
+        assert!(b.shell.device.take_self_test());
+        assert!(!b.shell.device.take_self_test(), "taken once");
         let mut report = SelfTestReport::new();
         assert_eq!(
             b.call(Request::SelfTestReport),
             Reply::SelfTest(report.clone())
         );
         report.done = true;
-        b.device.note_self_test(&report);
+        b.shell.device.note_self_test(&report);
         assert_eq!(b.call(Request::SelfTestReport), Reply::SelfTest(report));
         assert_eq!(b.call(Request::StartMission), Reply::Ack);
         // And no test while the mission runs.

@@ -36,26 +36,26 @@ struct Stored {
 }
 
 fn stored(b: &Bench) -> Stored {
-    let handler = &b.device.handler;
+    let handler = &b.shell.device.handler;
     let n = handler.path_points() as usize;
     Stored {
-        map_words: b.mission.grid().words().to_vec(),
-        geometry: format!("{:?}", b.mission.grid().geometry()),
+        map_words: b.shell.mission.grid().words().to_vec(),
+        geometry: format!("{:?}", b.shell.mission.grid().geometry()),
         params: handler.params(),
         obstacles: handler.obstacles().iter().map(|p| p.to_vec()).collect(),
         pending: handler.pending().to_vec(),
-        path: b.planner.path_cells()[..n.min(b.planner.path_cells().len())].to_vec(),
-        setup: b.device.setup,
-        state: b.device.state,
-        emergency_stop: b.device.emergency_stop,
+        path: b.shell.planner.path_cells()[..n.min(b.shell.planner.path_cells().len())].to_vec(),
+        setup: b.shell.device.setup,
+        state: b.shell.device.state,
+        emergency_stop: b.shell.device.emergency_stop,
         mission: format!(
             "{:?} {:?} {:?}",
-            b.mission.phase(),
-            b.mission.status(),
-            b.mission.stats()
+            b.shell.mission.phase(),
+            b.shell.mission.status(),
+            b.shell.mission.stats()
         ),
-        world: b.world.obstacles.iter().map(|p| p.to_vec()).collect(),
-        world_pending: b.world.pending.to_vec(),
+        world: b.shell.world.obstacles.iter().map(|p| p.to_vec()).collect(),
+        world_pending: b.shell.world.pending.to_vec(),
     }
 }
 
@@ -156,11 +156,11 @@ fn loaded() -> (Bench, crate::world::Params) {
 #[test]
 fn every_refused_request_changes_nothing() {
     let (mut b, params) = loaded();
-    assert!(b.device.handler.path_points() >= 2);
-    assert!(!b.device.handler.pending().is_empty());
+    assert!(b.shell.device.handler.path_points() >= 2);
+    assert!(!b.shell.device.handler.pending().is_empty());
     let mut kinds = StdVec::new();
     let nan = PointM::new(f32::NAN, 1.0);
-    let map = b.device.handler.params();
+    let map = b.shell.device.handler.params();
 
     kinds.push(refused(
         &mut b,
@@ -309,7 +309,7 @@ fn every_refused_request_changes_nothing() {
     for _ in 0..40 {
         b.tick();
     }
-    assert_eq!(b.device.state(), RunState::Running);
+    assert_eq!(b.shell.device.state(), RunState::Running);
     for request in [
         Request::SetParams(map),
         Request::ClearMap,
@@ -423,7 +423,7 @@ fn a_plan_refused_for_path_capacity_keeps_the_last_path() {
             other => panic!("{kind:?}: {other:?}"),
         }
         assert_eq!(stored(&b), before, "{kind:?}");
-        assert_eq!(b.device.handler.path_points(), points);
+        assert_eq!(b.shell.device.handler.path_points(), points);
         assert_eq!(read(&mut b), path_before, "{kind:?}");
     }
 }

@@ -6,26 +6,20 @@ use std::boxed::Box;
 use std::vec::Vec as StdVec;
 
 use super::*;
-use crate::geom::Pose;
 use crate::grid::{words_for_cells, Grid, GridGeometry};
 use crate::link::frame::{encode, FrameDecoder, MAX_FRAME_BYTES};
-use crate::mission::{LocalRunner, Mission300, MissionMode, MissionPlanner300, Pilot};
+use crate::mission::{
+    DeviceShell300, LocalRunner, Mission300, MissionMode, MissionPlanner300, SimBody,
+};
 use crate::plan::PlannerKind;
-use crate::plant::Plant;
 use crate::raster::mark_point_m;
 
 type TestDevice = RobotDevice<{ words_for_cells(300 * 300) }>;
 
-/// The host side and the simulated robot around a device, run in the order of
-/// [`LocalRunner`] (pilot, mission, commands, plans at once, then the sonar).
+/// The host side of the link around the core's [`DeviceShell300`] (the in-process device's
+/// shell), on a simulated clock: one control period of 50 ms per tick.
 pub(super) struct Bench {
-    pub(super) device: Box<TestDevice>,
-    pub(super) mission: Box<Mission300>,
-    pub(super) planner: Box<MissionPlanner300>,
-    pub(super) world: Box<WorldUpload>,
-    pub(super) pilot: Option<Pilot>,
-    pub(super) plant: Option<Plant>,
-    pub(super) previous_counts: (i32, i32),
+    pub(super) shell: Box<DeviceShell300>,
     pub(super) decoder: FrameDecoder,
     pub(super) seq: u16,
     pub(super) telemetry: StdVec<Telemetry>,
@@ -36,13 +30,7 @@ pub(super) struct Bench {
 impl Bench {
     pub(super) fn new() -> Self {
         Self {
-            device: Box::new(TestDevice::new(DeviceInfo::default())),
-            mission: Box::new(Mission300::IDLE),
-            planner: Box::new(MissionPlanner300::new()),
-            world: Box::new(WorldUpload::new()),
-            pilot: None,
-            plant: None,
-            previous_counts: (0, 0),
+            shell: Box::new(DeviceShell300::new(DeviceInfo::default())),
             decoder: FrameDecoder::new(),
             seq: 0,
             telemetry: StdVec::new(),
@@ -50,7 +38,8 @@ impl Bench {
         }
     }
 
-    /// One request through the wire format; its reply (telemetry on the way is kept).
+    /// One request through the wire format; its reply (telemetry on the way is kept). The
+    /// pilot command a request leads to stays with the device (the tests take it).
     pub(super) fn call(&mut self, request: Request) -> Reply {
         self.seq = self.seq.wrapping_add(1);
         let mut wire = [0u8; MAX_FRAME_BYTES];
@@ -64,13 +53,8 @@ impl Bench {
         .unwrap()
         .to_vec();
         let mut out = StdVec::new();
-        self.device.link(&mut self.mission).receive(
-            &bytes,
-            &mut *self.planner,
-            &mut || 0,
-            &mut *self.world,
-            &mut |b: &[u8]| out.extend_from_slice(b),
-        );
+        self.shell
+            .receive(&bytes, None, &mut |b: &[u8]| out.extend_from_slice(b));
         let mut replies = StdVec::new();
         for frame in self.decode(&out) {
             match frame {
@@ -112,70 +96,16 @@ impl Bench {
         }
     }
 
-    /// Carry out what the device asks: the pilot's command, plans (at once), sonar readings.
-    fn serve(&mut self) {
-        loop {
-            if let Some(command) = self.device.take_pilot_command() {
-                if let Some(pilot) = &mut self.pilot {
-                    let _ = pilot.command(command, self.mission.prefix());
-                }
-            }
-            if self.device.plan_pending() {
-                self.device
-                    .link(&mut self.mission)
-                    .run_planner(&mut *self.planner, &mut || 0);
-                continue;
-            }
-            let Some(request) = self.device.take_sonar_request() else {
-                return;
-            };
-            let Some(plant) = &mut self.plant else {
-                return;
-            };
-            let range = self.mission.config().robot.sonar_range_m;
-            let range_m = plant.sonar_range_m(&self.world.obstacles, request.neck_angle_rad, range);
-            self.device
-                .link(&mut self.mission)
-                .reading(request.neck_angle_rad, range_m);
-        }
-    }
-
-    /// One control period; the telemetry it produced goes through the wire format.
+    /// One control period (the link watched first, its reaction left to the shell's serve);
+    /// the telemetry it produced goes through the wire format.
     pub(super) fn tick(&mut self) {
         self.now_ms += 50;
-        self.device.set_now_ms(self.now_ms);
-        self.device.link(&mut self.mission).watch_link();
-        if let Some(config) = self.device.link(&mut self.mission).take_started() {
-            self.pilot = Some(Pilot::new(&config));
-            let plant = Plant::new(
-                &config.robot,
-                Pose::new(
-                    config.start.x_m,
-                    config.start.y_m,
-                    config.initial_heading_rad,
-                ),
-            );
-            self.previous_counts = plant.encoder_counts();
-            self.plant = Some(plant);
-        }
-        let (Some(plant), Some(pilot)) = (&mut self.plant, &mut self.pilot) else {
-            return;
-        };
-        let counts = plant.encoder_counts();
-        let report = pilot.tick(
-            counts.0 - self.previous_counts.0,
-            counts.1 - self.previous_counts.1,
-            0.05,
-        );
-        self.previous_counts = counts;
-        self.device.link(&mut self.mission).tick(&report);
-        self.serve();
-        let (left, right) = self.pilot.as_ref().unwrap().voltages_v();
-        self.plant.as_mut().unwrap().step(0.05, left, right);
+        self.shell.device.set_now_ms(self.now_ms);
+        self.shell.link().watch_link();
+        self.shell.tick(0.05);
         let mut out = StdVec::new();
-        while let Some(t) = self.device.link(&mut self.mission).next_telemetry() {
-            TestDevice::send_telemetry(&t, &mut |b: &[u8]| out.extend_from_slice(b));
-        }
+        self.shell
+            .send_telemetry(&mut |b: &[u8]| out.extend_from_slice(b));
         for frame in self.decode(&out) {
             match frame {
                 DeviceFrame::Telemetry(t) => self.telemetry.push(t),
@@ -220,41 +150,19 @@ fn a_mission_over_the_link_runs_exactly_like_the_simulator_and_its_telemetry_reb
         assert_eq!(b.call(Request::StartMission), Reply::Ack);
         for _ in 0..40_000 {
             b.tick();
-            if b.device.state() == RunState::Ended {
+            if b.shell.device.state() == RunState::Ended {
                 break;
             }
         }
-        let report = b.device.link(&mut b.mission).report();
+        let report = b.shell.link().report();
         assert_eq!(report.status, MissionStatus::Reached, "{mode:?} {report:?}");
 
         // The same mission in the simulator's shell.
-        let config = *b.mission.config();
+        let config = *b.shell.mission.config();
         let mut mission = Box::new(Mission300::new(config, GridGeometry::seed_default()).unwrap());
         let mut planner = Box::new(MissionPlanner300::new());
-        let mut plant = Plant::new(
-            &config.robot,
-            Pose::new(
-                params.start.x_m,
-                params.start.y_m,
-                config.initial_heading_rad,
-            ),
-        );
         let mut runner = LocalRunner::new(&mut mission, &mut planner, 0);
-        let mut previous = plant.encoder_counts();
-        loop {
-            let counts = plant.encoder_counts();
-            let o = runner.tick(
-                counts.0 - previous.0,
-                counts.1 - previous.1,
-                0.05,
-                &mut |a| plant.sonar_range_m(&real, a, 1.5),
-            );
-            previous = counts;
-            if o.status != MissionStatus::Running {
-                break;
-            }
-            plant.step(0.05, o.left_voltage_v, o.right_voltage_v);
-        }
+        runner.run_on(&mut SimBody::at_start(&config), &real, 1.5, 0.05);
         assert_eq!(runner.mission().stats(), report.stats, "{mode:?}");
 
         // The telemetry: phases in order, a final report, poses at 5 Hz, and the hits of every
@@ -306,7 +214,7 @@ fn a_mission_over_the_link_runs_exactly_like_the_simulator_and_its_telemetry_reb
             "{mode:?}: {sweeps} sweeps, stops and moving sweeps {least}, full {}",
             report.stats.full_sweeps
         );
-        assert_eq!(&*map, b.mission.grid(), "{mode:?}");
+        assert_eq!(&*map, b.shell.mission.grid(), "{mode:?}");
         let planned = b
             .telemetry
             .iter()
@@ -325,7 +233,7 @@ fn abort_and_emergency_stop_put_zero_volts_on_the_motors_at_the_next_tick() {
         let mut driving = false;
         for _ in 0..2_000 {
             b.tick();
-            let (l, r) = b.pilot.as_ref().unwrap().voltages_v();
+            let (l, r) = b.shell.pilot.as_ref().unwrap().voltages_v();
             if l.abs() > 1.0 && r.abs() > 1.0 {
                 driving = true;
                 break;
@@ -335,12 +243,15 @@ fn abort_and_emergency_stop_put_zero_volts_on_the_motors_at_the_next_tick() {
         let stop_requested = request.clone();
         assert_eq!(b.call(request), Reply::Ack);
         // The shell hands the command to the pilot before its next tick.
-        assert_eq!(b.device.take_pilot_command(), Some(PilotCommand::Stop));
-        b.pilot.as_mut().unwrap().stop();
+        assert_eq!(
+            b.shell.device.take_pilot_command(),
+            Some(PilotCommand::Stop)
+        );
+        b.shell.pilot.as_mut().unwrap().stop();
         b.tick();
-        assert_eq!(b.pilot.as_ref().unwrap().voltages_v(), (0.0, 0.0));
-        assert_eq!(b.device.state(), RunState::Ended);
-        let report = b.device.link(&mut b.mission).report();
+        assert_eq!(b.shell.pilot.as_ref().unwrap().voltages_v(), (0.0, 0.0));
+        assert_eq!(b.shell.device.state(), RunState::Ended);
+        let report = b.shell.link().report();
         assert_eq!(report.status, MissionStatus::Aborted);
         let cause = if stop_requested == Request::EmergencyStop {
             crate::failsafe::StopCause::EmergencyStop
@@ -427,7 +338,7 @@ fn requests_in_the_wrong_state_are_refused_and_change_nothing() {
         b.call(Request::SetMission(bad)),
         Reply::Error(ErrorReply::new(ErrorCode::BadMission, 5, 364))
     );
-    assert_eq!(b.device.state(), RunState::Idle);
+    assert_eq!(b.shell.device.state(), RunState::Idle);
     b.upload_world(&real);
     assert_eq!(
         b.call(Request::SetMission(setup(&params, MissionMode::Stop))),
@@ -435,7 +346,7 @@ fn requests_in_the_wrong_state_are_refused_and_change_nothing() {
     );
     assert_eq!(b.call(Request::StartMission), Reply::Ack);
     // While it runs: no new setup, no map change, no planning service, no world upload.
-    let occupied = b.mission.grid().count_occupied();
+    let occupied = b.shell.mission.grid().count_occupied();
     for request in [
         Request::SetMission(setup(&params, MissionMode::Stop)),
         Request::ClearMap,
@@ -450,23 +361,26 @@ fn requests_in_the_wrong_state_are_refused_and_change_nothing() {
     ] {
         assert_eq!(code(b.call(request)), Some(ErrorCode::WrongState));
     }
-    assert_eq!(b.mission.grid().count_occupied(), occupied);
-    assert_eq!(b.world.obstacles.len(), real.len());
+    assert_eq!(b.shell.mission.grid().count_occupied(), occupied);
+    assert_eq!(b.shell.world.obstacles.len(), real.len());
     // Pause holds the robot and stops the mission's clock; resume sweeps afresh.
     for _ in 0..100 {
         b.tick();
     }
     assert_eq!(b.call(Request::PauseMission), Reply::Ack);
-    assert_eq!(b.device.take_pilot_command(), Some(PilotCommand::Hold));
-    b.pilot.as_mut().unwrap().hold();
-    let t = b.mission.stats().time_s;
+    assert_eq!(
+        b.shell.device.take_pilot_command(),
+        Some(PilotCommand::Hold)
+    );
+    b.shell.pilot.as_mut().unwrap().hold();
+    let t = b.shell.mission.stats().time_s;
     for _ in 0..50 {
         b.tick();
     }
-    assert_eq!(b.mission.stats().time_s, t);
+    assert_eq!(b.shell.mission.stats().time_s, t);
     assert_eq!(b.call(Request::ResumeMission), Reply::Ack);
     assert_eq!(
-        b.mission.phase(),
+        b.shell.mission.phase(),
         crate::mission::MissionPhase::Sweep { full: false }
     );
     match b.call(Request::MissionStatus) {

@@ -28,7 +28,7 @@ fn started_with(timeout_ms: u32, reaction: LinkLossReaction) -> Bench {
 fn ticks_until_ended(b: &mut Bench, limit: u32) -> u32 {
     for n in 1..=limit {
         b.tick();
-        if b.device.state() != RunState::Running {
+        if b.shell.device.state() != RunState::Running {
             return n;
         }
     }
@@ -44,25 +44,25 @@ fn heartbeats_keep_the_mission_and_silence_stops_it_within_the_timeout_plus_a_pe
             assert!(matches!(b.call(Request::MissionStatus), Reply::Mission(_)));
         }
         b.tick();
-        assert_eq!(b.device.state(), RunState::Running, "tick {k}");
+        assert_eq!(b.shell.device.state(), RunState::Running, "tick {k}");
     }
     // A last request, then the host falls silent: 2 000 ms are 40 periods; the stop comes at
     // the 40th tick.
     assert!(matches!(b.call(Request::MissionStatus), Reply::Mission(_)));
     let heard_at_ms = b.now_ms;
     // A shell that sleeps between turns is told how long it may.
-    assert_eq!(b.device.link_loss_in_ms(), Some(2_000));
+    assert_eq!(b.shell.device.link_loss_in_ms(), Some(2_000));
     let n = ticks_until_ended(&mut b, 100);
     assert_eq!(n, 40, "stopped after {n} silent periods");
     assert_eq!(b.now_ms - heard_at_ms, 2_000);
-    assert_eq!(b.device.link_loss_in_ms(), None, "ended");
-    let report = b.device.link(&mut b.mission).report();
+    assert_eq!(b.shell.device.link_loss_in_ms(), None, "ended");
+    let report = b.shell.link().report();
     assert_eq!(report.state, RunState::Ended);
     assert_eq!(report.status, MissionStatus::Aborted);
     assert_eq!(report.stop_cause, StopCause::LinkLost);
     // The pilot was told to stop in that tick: zero volts from the next one on.
     b.tick();
-    assert_eq!(b.pilot.as_ref().unwrap().voltages_v(), (0.0, 0.0));
+    assert_eq!(b.shell.pilot.as_ref().unwrap().voltages_v(), (0.0, 0.0));
     // The final report travels as telemetry with its cause.
     let finished = b.telemetry.iter().rev().find_map(|t| match t {
         Telemetry::Finished(r) => Some(*r),
@@ -77,17 +77,14 @@ fn continue_keeps_driving_through_the_silence() {
     let mut reactions = 0;
     for _ in 0..200 {
         b.tick();
-        if b.device.link(&mut b.mission).watch_link().is_some() {
+        if b.shell.link().watch_link().is_some() {
             reactions += 1;
         }
     }
-    assert_eq!(b.device.state(), RunState::Running);
+    assert_eq!(b.shell.device.state(), RunState::Running);
     assert_eq!(reactions, 0, "the bench's tick took the one reaction");
-    assert!(b.device.link(&mut b.mission).link_silent_ms() >= 200 * 50);
-    assert_eq!(
-        b.device.link(&mut b.mission).report().stop_cause,
-        StopCause::None
-    );
+    assert!(b.shell.link().link_silent_ms() >= 200 * 50);
+    assert_eq!(b.shell.link().report().stop_cause, StopCause::None);
 }
 
 #[test]
@@ -96,7 +93,7 @@ fn timeout_zero_never_reacts() {
     for _ in 0..1_000 {
         b.tick();
     }
-    assert_ne!(b.device.state(), RunState::Ended);
+    assert_ne!(b.shell.device.state(), RunState::Ended);
 }
 
 #[test]
@@ -112,7 +109,7 @@ fn a_link_loss_policy_out_of_range_is_refused_by_field() {
             "{timeout_ms} ms"
         );
     }
-    assert_eq!(b.device.state(), RunState::Idle, "nothing was set up");
+    assert_eq!(b.shell.device.state(), RunState::Idle, "nothing was set up");
 }
 
 #[test]
@@ -121,21 +118,19 @@ fn a_controller_overrun_ends_the_mission_with_its_cause_and_stops_the_pilot() {
     for _ in 0..20 {
         b.tick();
     }
-    let _ = b.device.take_pilot_command();
-    b.device
-        .link(&mut b.mission)
-        .fail(StopCause::ControllerOverrun);
-    assert_eq!(b.device.take_pilot_command(), Some(PilotCommand::Stop));
-    let report = b.device.link(&mut b.mission).report();
+    let _ = b.shell.device.take_pilot_command();
+    b.shell.link().fail(StopCause::ControllerOverrun);
+    assert_eq!(
+        b.shell.device.take_pilot_command(),
+        Some(PilotCommand::Stop)
+    );
+    let report = b.shell.link().report();
     assert_eq!(report.state, RunState::Ended);
     assert_eq!(report.status, MissionStatus::Aborted);
     assert_eq!(report.stop_cause, StopCause::ControllerOverrun);
     // A new mission starts clean.
     assert_eq!(b.call(Request::StartMission), Reply::Ack);
-    assert_eq!(
-        b.device.link(&mut b.mission).report().stop_cause,
-        StopCause::None
-    );
+    assert_eq!(b.shell.link().report().stop_cause, StopCause::None);
 }
 
 #[test]
@@ -144,11 +139,14 @@ fn a_sensor_fault_ends_the_mission_and_crosses_the_wire_with_its_sensor() {
     for _ in 0..5 {
         b.tick();
     }
-    let _ = b.device.take_pilot_command();
-    b.device
-        .link(&mut b.mission)
+    let _ = b.shell.device.take_pilot_command();
+    b.shell
+        .link()
         .fail(StopCause::SensorFault(Sensor::NeckHome));
-    assert_eq!(b.device.take_pilot_command(), Some(PilotCommand::Stop));
+    assert_eq!(
+        b.shell.device.take_pilot_command(),
+        Some(PilotCommand::Stop)
+    );
     // Through the wire format (postcard, COBS, CRC) and back.
     let Reply::Mission(report) = b.call(Request::MissionStatus) else {
         panic!("a mission report");
@@ -177,10 +175,13 @@ fn a_sensor_fault_ends_the_mission_and_crosses_the_wire_with_its_sensor() {
 fn the_emergency_stop_input_latches_like_the_request() {
     let mut b = started_with(0, LinkLossReaction::StopAndHold);
     b.tick();
-    let _ = b.device.take_pilot_command();
-    b.device.link(&mut b.mission).fail(StopCause::EmergencyStop);
-    assert_eq!(b.device.take_pilot_command(), Some(PilotCommand::Stop));
-    let report = b.device.link(&mut b.mission).report();
+    let _ = b.shell.device.take_pilot_command();
+    b.shell.link().fail(StopCause::EmergencyStop);
+    assert_eq!(
+        b.shell.device.take_pilot_command(),
+        Some(PilotCommand::Stop)
+    );
+    let report = b.shell.link().report();
     assert_eq!(report.stop_cause, StopCause::EmergencyStop);
     assert!(report.emergency_stop);
     // A new mission waits for the host to clear the stop.
@@ -196,7 +197,8 @@ fn status_reports_the_reset_cause() {
         panic!("no status");
     };
     assert_eq!(before.reset_cause, ResetCause::Unknown);
-    b.device
+    b.shell
+        .device
         .handler
         .set_reset_cause(ResetCause::IndependentWatchdog);
     let Reply::Status(after) = b.call(Request::Status) else {
