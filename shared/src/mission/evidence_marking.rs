@@ -29,13 +29,14 @@
 
 use heapless::Vec;
 
+use crate::control::Pose;
 use crate::geom::PointM;
 use crate::math::{abs, cos, hypot, sin};
 use crate::raster::mark_point_m;
 use crate::sonar::hit_to_world;
 
 use super::evidence::{CellEvidence, Change};
-use super::swept::Swept;
+use super::swept::{reading_shift_m, BlindCells, Swept};
 use super::Mission;
 
 /// Take-backs redrawn in the grid per sweep; more are kept marked in the grid (the safe side)
@@ -205,7 +206,8 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             self.readings.as_slice(),
             g.resolution_m(),
             (pose, band_rad, true),
-        );
+        )
+        .with_blind_cells(self.blind_cells(pose));
         for y in (sy - h).max(0)..=(sy + h).min(g.height() as i32 - 1) {
             for x in (sx - h).max(0)..=(sx + h).min(g.width() as i32 - 1) {
                 if self.evidence.get_xy(x, y) == CellEvidence::Free {
@@ -219,6 +221,61 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 }
             }
         }
+    }
+
+    /// The marked cells (tentative or confirmed) of the sonar's blind disc at `pose` (see
+    /// [`BlindCells`]): the disc is the minimum range, widened by how far the last sweep's
+    /// readings were taken from `pose`; a cell stands for its centre. None without the
+    /// evidence map (its rule is not in use).
+    ///
+    /// Only marks: unknown cells there are left to the blind-zone rule (`blind`), which ends
+    /// a prefix only where the disc is known (free, vouched for, or on the grown map). Asking
+    /// for every cell of the disc to be free on the evidence map (unknown ones blocking too,
+    /// and the blind-zone rule reading the map cell by cell) also took the beam collisions of
+    /// `twil sonar-grid --worlds 8 --evidence-map` to 0, but reached 163 goals there instead
+    /// of 193, and 39 instead of 66 on the bundled worlds (`evidence_map::grid`): most
+    /// stops near a wall hold an unknown cell in the disc, and each takes the half-plane
+    /// beyond it from the sweep.
+    ///
+    /// Cost: the square around the disc, about 150 cells at 0.26 m and 5 cm.
+    pub(super) fn blind_cells(&self, pose: Pose) -> BlindCells {
+        let mut cells = BlindCells::NONE;
+        if !self.config.evidence_map {
+            return cells;
+        }
+        let robot = &self.config.robot;
+        let res_m = self.grid.geometry().resolution_m();
+        let shift_m = reading_shift_m(self.readings.as_slice(), pose, robot.sonar_offset_m);
+        let radius_m = robot.sonar_min_range_m + shift_m;
+        // Readings from nowhere in particular (a NaN): nothing can be vouched for.
+        if !(radius_m.is_finite() && radius_m < robot.sonar_range_m && res_m > 0.0) {
+            cells.push(i32::MAX, i32::MAX);
+            return cells;
+        }
+        let sonar = pose.point_ahead(robot.sonar_offset_m);
+        let centre = pose.position();
+        let body_m = robot.physical_radius_m();
+        let n = (radius_m / res_m) as i32 + 2;
+        let (sx, sy) = ((sonar.x_m / res_m) as i32, (sonar.y_m / res_m) as i32);
+        for y in sy - n..=sy + n {
+            for x in sx - n..=sx + n {
+                let (x0, y0) = (x as f32 * res_m, y as f32 * res_m);
+                let (cx, cy) = (x0 + 0.5 * res_m, y0 + 0.5 * res_m);
+                if hypot(cx - sonar.x_m, cy - sonar.y_m) >= radius_m {
+                    continue;
+                }
+                if !self.evidence.is_occupied_xy(x, y) {
+                    continue;
+                }
+                let far_x = abs(centre.x_m - x0).max(abs(centre.x_m - (x0 + res_m)));
+                let far_y = abs(centre.y_m - y0).max(abs(centre.y_m - (y0 + res_m)));
+                if hypot(far_x, far_y) <= body_m {
+                    continue; // the body stands there
+                }
+                cells.push(x, y);
+            }
+        }
+        cells
     }
 
     /// A point the body would reach that no sweep could vouch for, after a full standing sweep

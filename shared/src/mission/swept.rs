@@ -17,7 +17,7 @@
 
 use crate::control::Pose;
 use crate::geom::PointM;
-use crate::math::{abs, atan2, cos, hypot, sqrt, wrap_angle_rad};
+use crate::math::{abs, atan2, cos, hypot, sin, sqrt, wrap_angle_rad};
 use crate::sonar::Reading;
 
 use super::MissionConfig;
@@ -53,6 +53,78 @@ pub(super) struct Swept<'a> {
     /// How far the sonar stood from where `pose` puts it in any reading, metres (0: every
     /// reading from `pose`; see [`reading_shift_m`]).
     pub reading_shift_m: f32,
+    /// Marked cells of the sonar's blind disc (see [`BlindCells`]).
+    pub blind_cells: BlindCells,
+}
+
+/// Most marked cells of the blind disc a sweep may hold; with more, the evidence map's rule
+/// vouches for nothing (a disc of 0.26 m holds about 85 cells of 5 cm).
+pub const MAX_BLIND_CELLS: usize = 64;
+
+/// The marked cells (a reflector heard there) of the sonar's blind disc (its minimum range
+/// around it, widened by the sweep's shift) when a sweep is read. The Thales rule
+/// ([`Swept::vouches_thales`]) hears the nearest point of every wall through a point *unless*
+/// that nearest point lies in the blind disc, where a wall reads as silence: a point is not
+/// vouched for when a marked cell of the disc lies inside the circle whose diameter joins the
+/// sonar and the point (a wall from that cell to the point would be silent). Without this a
+/// robot that stopped with its sonar 0.257 m from a thin wall it had heard face-on vouched for
+/// the cells behind the wall and drove into it (`twil sonar-grid --worlds 8 --evidence-map`,
+/// world 7, 10° beam and incidence limit, 3 m, stop mode). Unknown cells of the disc are the
+/// blind-zone rule's (`blind`); see `Mission::blind_cells` for why not here.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlindCells {
+    /// Grid cells (x, y).
+    cells: [(i16, i16); MAX_BLIND_CELLS],
+    len: u8,
+    /// More than [`MAX_BLIND_CELLS`] were found: vouch for nothing.
+    overflow: bool,
+}
+
+impl BlindCells {
+    /// None: no mark in the blind disc (or the rule not in use).
+    pub const NONE: BlindCells = BlindCells {
+        cells: [(0, 0); MAX_BLIND_CELLS],
+        len: 0,
+        overflow: false,
+    };
+
+    /// Add a cell; past the capacity (or off the `i16` range) the set overflows.
+    pub fn push(&mut self, x: i32, y: i32) {
+        let (Ok(x), Ok(y)) = (i16::try_from(x), i16::try_from(y)) else {
+            self.overflow = true;
+            return;
+        };
+        match self.cells.get_mut(self.len as usize) {
+            Some(slot) => {
+                *slot = (x, y);
+                self.len += 1;
+            }
+            None => self.overflow = true,
+        }
+    }
+
+    /// The cells found.
+    pub fn cells(&self) -> &[(i16, i16)] {
+        &self.cells[..self.len as usize]
+    }
+
+    /// Did more cells than [`MAX_BLIND_CELLS`] turn up?
+    pub fn overflowed(&self) -> bool {
+        self.overflow
+    }
+
+    /// Does one of the cells (`cell_m` wide, the grid's origin at 0) reach into the disc
+    /// centred on `centre` of radius `radius_m`?
+    fn reach_disc(&self, centre: PointM, radius_m: f32, cell_m: f32) -> bool {
+        self.overflow
+            || self.cells().iter().any(|&(x, y)| {
+                let (x0, y0) = (x as f32 * cell_m, y as f32 * cell_m);
+                let dx = abs(centre.x_m - centre.x_m.clamp(x0, x0 + cell_m));
+                let dy = abs(centre.y_m - centre.y_m.clamp(y0, y0 + cell_m));
+                // `!(… > …)`: a NaN blocks.
+                !(hypot(dx, dy) > radius_m)
+            })
+    }
 }
 
 /// How far the sonar (`sonar_offset_m` ahead of the centre) stood from where `pose` puts it
@@ -108,6 +180,15 @@ impl<'a> Swept<'a> {
             } else {
                 0.0
             },
+            blind_cells: BlindCells::NONE,
+        }
+    }
+
+    /// The same sweep, with the blind disc's marked cells.
+    pub fn with_blind_cells(self, blind_cells: BlindCells) -> Self {
+        Swept {
+            blind_cells,
+            ..self
         }
     }
 
@@ -128,6 +209,7 @@ impl<'a> Swept<'a> {
         thales_beam_rad: -1.0,
         heard_beam_rad: -1.0,
         reading_shift_m: 0.0,
+        blind_cells: BlindCells::NONE,
     };
 
     /// Does the sweep prove `q` free (see the module docs)?
@@ -199,7 +281,10 @@ impl Swept<'_> {
     /// - no echo contradicts it: no reading `i` heard something at `d·cos(max(0, |φᵢ − rel| −
     ///   beam)) + one cell` or nearer (the foot could be anywhere in its cone); or, with a beam
     ///   sonar, every candidate is ruled out by most of the readings whose cones hold it
-    ///   ([`Swept::every_candidate_ruled_out`]).
+    ///   ([`Swept::every_candidate_ruled_out`]);
+    /// - no marked cell of the blind disc ([`BlindCells`]) lies inside the circle on the sonar
+    ///   and the point: a wall from there to the point has its nearest point where the sonar
+    ///   is deaf.
     ///
     /// Silence alone never vouches: a silent bearing counts only with every other bearing of the
     /// window read. A dropped echo on a wall face leaves the face's other readings (a face
@@ -247,6 +332,21 @@ impl Swept<'_> {
             || (rel - window >= first - heard - 1.0e-4 && rel + window <= last + heard + 1.0e-4);
         if !read {
             return false;
+        }
+        // A wall whose nearest point lies in the blind disc is silent: none may pass through
+        // a marked cell there inside the circle on the sonar and the point
+        // (widened by half a cell for the point's cell and by the shift).
+        if self.blind_cells.overflowed() || !self.blind_cells.cells().is_empty() {
+            let sonar = self.pose.point_ahead(self.sonar_offset_m);
+            let heading = self.pose.heading_rad + rel;
+            let centre = PointM::new(
+                sonar.x_m + 0.5 * d_m * cos(heading),
+                sonar.y_m + 0.5 * d_m * sin(heading),
+            );
+            let radius_m = 0.5 * d_m + 0.5 * self.cell_m + shift_m;
+            if self.blind_cells.reach_disc(centre, radius_m, self.cell_m) {
+                return false;
+            }
         }
         let Some(worst) = self.most_contradicting(rel, d_m, slack) else {
             return true;
@@ -407,6 +507,7 @@ mod tests {
             thales_beam_rad: -1.0,
             heard_beam_rad: -1.0,
             reading_shift_m: 0.0,
+            blind_cells: BlindCells::NONE,
         }
     }
 
@@ -585,6 +686,34 @@ mod tests {
     fn cos_(a: f32) -> f32 {
         crate::math::cos(a)
     }
+    #[test]
+    fn thales_a_wall_in_the_blind_disc_vouches_nothing_behind_it() {
+        // Silent all round: a thin wall 0.23 m ahead of the sonar (at 0.2, 0), inside its
+        // 0.26 m blind disc, reads as silence. Its two cells were marked from afar.
+        let r = sweep(|_| None);
+        let behind = PointM::new(1.2, 0.0);
+        assert!(
+            thales(&r).vouches(behind),
+            "nothing known in the blind disc"
+        );
+        let mut ahead = BlindCells::NONE;
+        ahead.push(8, -1);
+        ahead.push(8, 0);
+        assert!(!thales(&r).with_blind_cells(ahead).vouches(behind));
+        // A cell behind the sonar's side: no wall through it and the point hides its
+        // nearest point there (the circle on the sonar and the point does not reach it).
+        let mut aside = BlindCells::NONE;
+        aside.push(1, 4);
+        assert!(thales(&r).with_blind_cells(aside).vouches(behind));
+        // More cells than it holds: nothing is vouched for.
+        let mut full = BlindCells::NONE;
+        for i in 0..=MAX_BLIND_CELLS as i32 {
+            full.push(-100 - i, -100);
+        }
+        assert!(full.overflowed());
+        assert!(!thales(&r).with_blind_cells(full).vouches(behind));
+    }
+
     fn sin_(a: f32) -> f32 {
         crate::math::sin(a)
     }
