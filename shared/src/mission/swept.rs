@@ -121,8 +121,8 @@ impl BlindCells {
                 let (x0, y0) = (x as f32 * cell_m, y as f32 * cell_m);
                 let dx = abs(centre.x_m - centre.x_m.clamp(x0, x0 + cell_m));
                 let dy = abs(centre.y_m - centre.y_m.clamp(y0, y0 + cell_m));
-                // `!(… > …)`: a NaN blocks.
-                !(hypot(dx, dy) > radius_m)
+                let gap_m = hypot(dx, dy);
+                gap_m.is_nan() || gap_m <= radius_m // a NaN blocks
             })
     }
 }
