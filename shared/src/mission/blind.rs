@@ -195,7 +195,7 @@ mod tests {
                 thales_beam_rad: -1.0,
                 heard_beam_rad: -1.0,
                 reading_shift_m: 0.0,
-                blind_cells: crate::mission::swept::BlindCells::NONE,
+                blind_cells: &crate::mission::swept::BlindCells::NONE,
             },
         }
     }

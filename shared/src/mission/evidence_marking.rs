@@ -207,7 +207,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             g.resolution_m(),
             (pose, band_rad, true),
         )
-        .with_blind_cells(self.blind_cells(pose));
+        .with_blind_cells(&self.blind_cells);
         for y in (sy - h).max(0)..=(sy + h).min(g.height() as i32 - 1) {
             for x in (sx - h).max(0)..=(sx + h).min(g.width() as i32 - 1) {
                 if self.evidence.get_xy(x, y) == CellEvidence::Free {
@@ -238,7 +238,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     /// beyond it from the sweep.
     ///
     /// Cost: the square around the disc, about 150 cells at 0.26 m and 5 cm.
-    pub(super) fn blind_cells(&self, pose: Pose) -> BlindCells {
+    pub(super) fn find_blind_cells(&self, pose: Pose) -> BlindCells {
         let mut cells = BlindCells::NONE;
         if !self.config.evidence_map {
             return cells;

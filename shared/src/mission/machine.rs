@@ -59,6 +59,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             frame: FrameTransform::identity(),
             expansion_cells: 0,
             readings: SweepBuffer::new(),
+            blind_cells: super::swept::BlindCells::NONE,
             filtered: HitBuffer::new(),
             hits: Vec::new(),
             sweep: None,
@@ -149,6 +150,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.path.clear();
         self.prefix.clear();
         self.readings.clear();
+        self.blind_cells = super::swept::BlindCells::NONE;
         self.filtered.clear();
         self.hits.clear();
         self.sweep = None;

@@ -237,6 +237,9 @@ pub struct Mission<const W: usize, const E: usize = W> {
     frame: FrameTransform,
     expansion_cells: u16,
     readings: SweepBuffer,
+    /// Evidence map: the marked cells of the blind disc where the last standing sweep was
+    /// read (`swept::BlindCells`).
+    blind_cells: swept::BlindCells,
     filtered: HitBuffer,
     hits: Vec<PointM, MAX_SWEEP_READINGS>,
     sweep: Option<SweepState>,

@@ -326,7 +326,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             self.grid.geometry().resolution_m(),
             (pose, half_band_rad, echo_limited),
         )
-        .with_blind_cells(self.blind_cells(pose))
+        .with_blind_cells(&self.blind_cells)
     }
     /// How far along the path the seed's rule may keep: the sonar range minus the planning
     /// radius. An obstacle just beyond the range is not seen, and the robot's disc must stay

@@ -34,6 +34,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         );
         let count = plan.readings().min(MAX_SWEEP_READINGS) as u16;
         self.readings.clear();
+        self.blind_cells = super::swept::BlindCells::NONE;
         let reversed = self.next_sweep_reversed;
         self.next_sweep_reversed = !reversed;
         self.sweep = Some(SweepState {
@@ -203,6 +204,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         let hits = if self.config.evidence_map {
             let hits = self.mark_reflectors();
             if !sweep.moving {
+                self.blind_cells = self.find_blind_cells(self.pose_world());
                 self.mark_vouched_free(sweep.full);
             }
             self.apply_take_backs();

@@ -54,12 +54,13 @@ pub(super) struct Swept<'a> {
     /// reading from `pose`; see [`reading_shift_m`]).
     pub reading_shift_m: f32,
     /// Marked cells of the sonar's blind disc (see [`BlindCells`]).
-    pub blind_cells: BlindCells,
+    pub blind_cells: &'a BlindCells,
 }
 
 /// Most marked cells of the blind disc a sweep may hold; with more, the evidence map's rule
-/// vouches for nothing (a disc of 0.26 m holds about 85 cells of 5 cm).
-pub const MAX_BLIND_CELLS: usize = 64;
+/// vouches for nothing. A straight wall across a 0.26 m disc marks about 11 cells of 5 cm, a
+/// corner about 21.
+pub const MAX_BLIND_CELLS: usize = 24;
 
 /// The marked cells (a reflector heard there) of the sonar's blind disc (its minimum range
 /// around it, widened by the sweep's shift) when a sweep is read. The Thales rule
@@ -180,12 +181,12 @@ impl<'a> Swept<'a> {
             } else {
                 0.0
             },
-            blind_cells: BlindCells::NONE,
+            blind_cells: &BlindCells::NONE,
         }
     }
 
     /// The same sweep, with the blind disc's marked cells.
-    pub fn with_blind_cells(self, blind_cells: BlindCells) -> Self {
+    pub fn with_blind_cells(self, blind_cells: &'a BlindCells) -> Self {
         Swept {
             blind_cells,
             ..self
@@ -209,7 +210,7 @@ impl<'a> Swept<'a> {
         thales_beam_rad: -1.0,
         heard_beam_rad: -1.0,
         reading_shift_m: 0.0,
-        blind_cells: BlindCells::NONE,
+        blind_cells: &BlindCells::NONE,
     };
 
     /// Does the sweep prove `q` free (see the module docs)?
@@ -507,7 +508,7 @@ mod tests {
             thales_beam_rad: -1.0,
             heard_beam_rad: -1.0,
             reading_shift_m: 0.0,
-            blind_cells: BlindCells::NONE,
+            blind_cells: &BlindCells::NONE,
         }
     }
 
@@ -699,19 +700,19 @@ mod tests {
         let mut ahead = BlindCells::NONE;
         ahead.push(8, -1);
         ahead.push(8, 0);
-        assert!(!thales(&r).with_blind_cells(ahead).vouches(behind));
+        assert!(!thales(&r).with_blind_cells(&ahead).vouches(behind));
         // A cell behind the sonar's side: no wall through it and the point hides its
         // nearest point there (the circle on the sonar and the point does not reach it).
         let mut aside = BlindCells::NONE;
         aside.push(1, 4);
-        assert!(thales(&r).with_blind_cells(aside).vouches(behind));
+        assert!(thales(&r).with_blind_cells(&aside).vouches(behind));
         // More cells than it holds: nothing is vouched for.
         let mut full = BlindCells::NONE;
         for i in 0..=MAX_BLIND_CELLS as i32 {
             full.push(-100 - i, -100);
         }
         assert!(full.overflowed());
-        assert!(!thales(&r).with_blind_cells(full).vouches(behind));
+        assert!(!thales(&r).with_blind_cells(&full).vouches(behind));
     }
 
     fn sin_(a: f32) -> f32 {
