@@ -239,36 +239,35 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     ///
     /// Cost: the square around the disc, about 150 cells at 0.26 m and 5 cm.
     pub(super) fn find_blind_cells(&self, pose: Pose) -> BlindCells {
-        let mut cells = BlindCells::NONE;
         if !self.config.evidence_map {
-            return cells;
+            return BlindCells::NONE;
         }
         let robot = &self.config.robot;
-        let res_m = self.grid.geometry().resolution_m();
+        let g = *self.grid.geometry();
+        let res_m = g.resolution_m();
         let shift_m = reading_shift_m(self.readings.as_slice(), pose, robot.sonar_offset_m);
         let radius_m = robot.sonar_min_range_m + shift_m;
         // Readings from nowhere in particular (a NaN): nothing can be vouched for.
         if !(radius_m.is_finite() && radius_m < robot.sonar_range_m && res_m > 0.0) {
-            cells.push(i32::MAX, i32::MAX);
-            return cells;
+            return BlindCells::OVERFLOWED;
         }
         let sonar = pose.point_ahead(robot.sonar_offset_m);
-        let centre = pose.position();
+        let body_at = pose.position();
         let body_m = robot.physical_radius_m();
         let n = (radius_m / res_m) as i32 + 2;
+        let mut cells = BlindCells::NONE;
         let (sx, sy) = ((sonar.x_m / res_m) as i32, (sonar.y_m / res_m) as i32);
         for y in sy - n..=sy + n {
             for x in sx - n..=sx + n {
+                let c = centre(&g, x, y);
+                if hypot(c.x_m - sonar.x_m, c.y_m - sonar.y_m) >= radius_m
+                    || !self.evidence.is_occupied_xy(x, y)
+                {
+                    continue;
+                }
                 let (x0, y0) = (x as f32 * res_m, y as f32 * res_m);
-                let (cx, cy) = (x0 + 0.5 * res_m, y0 + 0.5 * res_m);
-                if hypot(cx - sonar.x_m, cy - sonar.y_m) >= radius_m {
-                    continue;
-                }
-                if !self.evidence.is_occupied_xy(x, y) {
-                    continue;
-                }
-                let far_x = abs(centre.x_m - x0).max(abs(centre.x_m - (x0 + res_m)));
-                let far_y = abs(centre.y_m - y0).max(abs(centre.y_m - (y0 + res_m)));
+                let far_x = abs(body_at.x_m - x0).max(abs(body_at.x_m - (x0 + res_m)));
+                let far_y = abs(body_at.y_m - y0).max(abs(body_at.y_m - (y0 + res_m)));
                 if hypot(far_x, far_y) <= body_m {
                     continue; // the body stands there
                 }

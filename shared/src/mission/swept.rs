@@ -71,7 +71,7 @@ pub const MAX_BLIND_CELLS: usize = 24;
 /// robot that stopped with its sonar 0.257 m from a thin wall it had heard face-on vouched for
 /// the cells behind the wall and drove into it (`twil sonar-grid --worlds 8 --evidence-map`,
 /// world 7, 10° beam and incidence limit, 3 m, stop mode). Unknown cells of the disc are the
-/// blind-zone rule's (`blind`); see `Mission::blind_cells` for why not here.
+/// blind-zone rule's (`blind`); see `Mission::find_blind_cells` for why not here.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BlindCells {
     /// Grid cells (x, y).
@@ -87,6 +87,12 @@ impl BlindCells {
         cells: [(0, 0); MAX_BLIND_CELLS],
         len: 0,
         overflow: false,
+    };
+
+    /// Too many to hold, or not to be trusted: nothing is vouched for.
+    pub const OVERFLOWED: BlindCells = BlindCells {
+        overflow: true,
+        ..BlindCells::NONE
     };
 
     /// Add a cell; past the capacity (or off the `i16` range) the set overflows.
@@ -314,7 +320,8 @@ impl Swept<'_> {
             return false;
         }
         let slack = atan2(x, sqrt(1.0 - x * x)); // asin(shift / min range)
-        let heard = self.thales_beam_rad - slack;
+                                                 // The cone a foot may hide in, less the slack: what the window may be read with.
+        let beam_rad = self.thales_beam_rad - slack;
         let c = (self.min_range_m / d_m).clamp(0.0, 1.0);
         let window = atan2(sqrt(1.0 - c * c), c); // acos(min range / d)
                                                   // Either direction: only the ends matter (every reading is looked at below).
@@ -330,7 +337,8 @@ impl Swept<'_> {
         // A sweep all round (its two ends a step apart or overlapping) reads every bearing.
         let all_round = last - first + 1.01 * step >= 2.0 * core::f32::consts::PI;
         let read = all_round
-            || (rel - window >= first - heard - 1.0e-4 && rel + window <= last + heard + 1.0e-4);
+            || (rel - window >= first - beam_rad - 1.0e-4
+                && rel + window <= last + beam_rad + 1.0e-4);
         if !read {
             return false;
         }
@@ -512,6 +520,14 @@ mod tests {
         }
     }
 
+    /// [`thales`], read from the origin: readings taken elsewhere widen its bounds.
+    fn thales_shifted(readings: &[Reading]) -> Swept<'_> {
+        Swept {
+            reading_shift_m: reading_shift_m(readings, Pose::new(0.0, 0.0, 0.0), 0.2),
+            ..thales(readings)
+        }
+    }
+
     fn thales(readings: &[Reading]) -> Swept<'_> {
         Swept {
             thales_beam_rad: 15.0f32.to_radians(),
@@ -616,10 +632,7 @@ mod tests {
         for x in r.iter_mut() {
             x.pose = Pose::new(0.2 - 0.2 * cos_(turned), -0.2 * sin_(turned), turned);
         }
-        let s = Swept {
-            reading_shift_m: reading_shift_m(&r, Pose::new(0.0, 0.0, 0.0), 0.2),
-            ..thales(&r)
-        };
+        let s = thales_shifted(&r);
         assert!(s.reading_shift_m < 0.001, "it turned about the sonar");
         assert!(!s.vouches(PointM::new(0.2 + 1.05, 0.0)), "behind the wall");
         assert!(s.vouches(PointM::new(0.2 + 0.85, 0.0)));
@@ -627,10 +640,7 @@ mod tests {
         for x in r.iter_mut() {
             x.pose.x_m -= 0.05;
         }
-        let s = Swept {
-            reading_shift_m: reading_shift_m(&r, Pose::new(0.0, 0.0, 0.0), 0.2),
-            ..thales(&r)
-        };
+        let s = thales_shifted(&r);
         assert!((s.reading_shift_m - 0.05).abs() < 0.001);
         assert!(!s.vouches(PointM::new(0.2 + 0.94, 0.0)));
         assert!(s.vouches(PointM::new(0.2 + 0.85, 0.0)));
@@ -638,11 +648,36 @@ mod tests {
         for x in r.iter_mut() {
             x.pose.x_m -= 0.25;
         }
-        let s = Swept {
-            reading_shift_m: reading_shift_m(&r, Pose::new(0.0, 0.0, 0.0), 0.2),
-            ..thales(&r)
-        };
+        let s = thales_shifted(&r);
         assert!(!s.vouches(PointM::new(0.2 + 0.5, 0.0)));
+    }
+
+    #[test]
+    fn thales_a_wall_in_the_blind_disc_vouches_nothing_behind_it() {
+        // Silent all round: a thin wall 0.23 m ahead of the sonar (at 0.2, 0), inside its
+        // 0.26 m blind disc, reads as silence. Its two cells were marked from afar.
+        let r = sweep(|_| None);
+        let behind = PointM::new(1.2, 0.0);
+        assert!(
+            thales(&r).vouches(behind),
+            "nothing known in the blind disc"
+        );
+        let mut ahead = BlindCells::NONE;
+        ahead.push(8, -1);
+        ahead.push(8, 0);
+        assert!(!thales(&r).with_blind_cells(&ahead).vouches(behind));
+        // A cell behind the sonar's side: no wall through it and the point hides its
+        // nearest point there (the circle on the sonar and the point does not reach it).
+        let mut aside = BlindCells::NONE;
+        aside.push(1, 4);
+        assert!(thales(&r).with_blind_cells(&aside).vouches(behind));
+        // More cells than it holds: nothing is vouched for.
+        let mut full = BlindCells::NONE;
+        for i in 0..=MAX_BLIND_CELLS as i32 {
+            full.push(-100 - i, -100);
+        }
+        assert!(full.overflowed());
+        assert!(!thales(&r).with_blind_cells(&full).vouches(behind));
     }
 
     #[test]
@@ -687,34 +722,6 @@ mod tests {
     fn cos_(a: f32) -> f32 {
         crate::math::cos(a)
     }
-    #[test]
-    fn thales_a_wall_in_the_blind_disc_vouches_nothing_behind_it() {
-        // Silent all round: a thin wall 0.23 m ahead of the sonar (at 0.2, 0), inside its
-        // 0.26 m blind disc, reads as silence. Its two cells were marked from afar.
-        let r = sweep(|_| None);
-        let behind = PointM::new(1.2, 0.0);
-        assert!(
-            thales(&r).vouches(behind),
-            "nothing known in the blind disc"
-        );
-        let mut ahead = BlindCells::NONE;
-        ahead.push(8, -1);
-        ahead.push(8, 0);
-        assert!(!thales(&r).with_blind_cells(&ahead).vouches(behind));
-        // A cell behind the sonar's side: no wall through it and the point hides its
-        // nearest point there (the circle on the sonar and the point does not reach it).
-        let mut aside = BlindCells::NONE;
-        aside.push(1, 4);
-        assert!(thales(&r).with_blind_cells(&aside).vouches(behind));
-        // More cells than it holds: nothing is vouched for.
-        let mut full = BlindCells::NONE;
-        for i in 0..=MAX_BLIND_CELLS as i32 {
-            full.push(-100 - i, -100);
-        }
-        assert!(full.overflowed());
-        assert!(!thales(&r).with_blind_cells(&full).vouches(behind));
-    }
-
     fn sin_(a: f32) -> f32 {
         crate::math::sin(a)
     }
