@@ -425,6 +425,9 @@ fn run_on_this_thread(
             let m = runner.mission();
             eprintln!("{t_s:8.2} {:?} pose {:?}", outcome.events, m.pose_world());
             eprintln!("         prefix {:?}", m.prefix());
+            if let Some(target) = m.gap_visit_target() {
+                eprintln!("         gap visit {} to {target:?}", m.gap_visits());
+            }
         }
         if outcome.planned {
             let m = runner.mission();

@@ -19,6 +19,7 @@ use crate::trajectory::{FrameTransform, SupplyEvent};
 use super::evidence::EvidenceMap;
 
 use super::messages::push;
+use super::verdict::VisitedGaps;
 use super::{
     pilot, Mission, MissionConfig, MissionError, MissionEvent, MissionInput, MissionMode,
     MissionOutput, MissionPath, MissionPhase, MissionStats, MissionStatus, PilotCommand,
@@ -86,6 +87,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             next_plan_id: 1,
             visit: None,
             gap_visits: 0,
+            visited_gaps: VisitedGaps::new(),
         }
     };
 
@@ -172,6 +174,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.deferred_sweep_end = None;
         self.visit = None;
         self.gap_visits = 0;
+        self.visited_gaps.clear();
         self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
         if config.evidence_map {
             self.assume_body_disc_clear();

@@ -272,6 +272,8 @@ pub struct Mission<const W: usize, const E: usize = W> {
     visit: Option<verdict::GapVisit>,
     /// Evidence map: gap visits begun in this mission.
     gap_visits: u16,
+    /// Evidence map: the gaps visited so far, drawn into later proof plans (`verdict`).
+    visited_gaps: verdict::VisitedGaps,
 }
 mod blind;
 mod config;

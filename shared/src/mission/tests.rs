@@ -747,3 +747,64 @@ fn the_mcu_sized_mission_refuses_the_evidence_map_and_the_host_sized_one_keeps_i
     assert_eq!(host.evidence().get_xy(x, y), CellEvidence::Free);
     assert_eq!(host.evidence().counts().1 + host.evidence().counts().2, 0);
 }
+
+#[test]
+fn a_gap_visit_that_took_no_mark_back_closes_the_gap_for_the_next_proof_plan() {
+    use super::verdict::VisitedGap;
+    let c = MissionConfig {
+        evidence_map: true,
+        ..config(
+            PointM::new(4.0, 1.0),
+            PointM::new(4.0, 6.0),
+            MissionMode::Stop,
+        )
+    };
+    let mut m = Box::new(Mission400::new(c, geometry()).unwrap());
+    // A wall of tentative marks along y = 3 m across the whole map.
+    for x in 0..160 {
+        m.evidence.observe_arc_xy(x, 60);
+    }
+    let gap = PointM::new(4.0, 3.025);
+    let before = m.tentative_cells_within(gap, 1.0);
+    assert_eq!(before, 40, "cell centres 3.025 to 4.975 m on the wall");
+    let mut out = MissionOutput {
+        pilot_command: None,
+        sonar_request: None,
+        plan_request: None,
+        events: Vec::new(),
+        status: m.status,
+    };
+    let visited = |m: &Mission400| VisitedGap {
+        centre: gap,
+        reach_m: 1.0,
+        tentative_cells: m.tentative_cells_within(gap, 1.0),
+        closed: false,
+    };
+    // A visit that took some marks back leaves its gap open: only confirmed marks are drawn.
+    m.visited_gaps.push(visited(&m)).unwrap();
+    for x in 78..83 {
+        m.evidence.observe_vouched_xy(x, 60);
+    }
+    m.gap_visits = 1;
+    m.seek_proof(&mut out);
+    assert!(!m.visited_gaps[0].closed);
+    assert!(out.plan_request.is_some(), "the proof plan is asked");
+    let at = |m: &Mission400, x_m: f32| {
+        let (x, y) = m
+            .grid
+            .geometry()
+            .cell_xy_of(PointM::new(x_m, 3.025))
+            .unwrap();
+        m.grid.is_occupied_xy(x, y)
+    };
+    assert!(!at(&m, 3.5) && !at(&m, 1.0));
+    // A visit that took none back closes its gap: its marks within the reach are drawn into
+    // the proof plan's grid, the others are not.
+    m.pending_plan = None;
+    m.visited_gaps.clear();
+    m.visited_gaps.push(visited(&m)).unwrap();
+    m.seek_proof(&mut out);
+    assert!(m.visited_gaps[0].closed);
+    assert!(at(&m, 3.5) && at(&m, 4.9));
+    assert!(!at(&m, 1.0) && !at(&m, 7.0));
+}

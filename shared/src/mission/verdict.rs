@@ -46,6 +46,26 @@ use super::{Mission, MissionEvent, MissionOutput, MissionStatus, UnreachableReas
 /// Gap visits per mission before it gives up ([`UnreachableReason::GapsUnsettled`]).
 pub const MAX_GAP_VISITS: u16 = 10;
 
+/// A gap visited: its middle, how far around it its visit looked, and how many tentative
+/// marks lay there when the visit began. A visit that took none of them back closes the gap:
+/// its tentative marks within that reach are drawn into later proof plans, so that the next
+/// visit looks at another gap; one that took some back may be followed by another, nearer
+/// (the marks it took back free the way in).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct VisitedGap {
+    /// The middle of the blocked stretch, world metres.
+    pub centre: PointM,
+    /// How far around the middle the visit's marks are counted (and drawn in), metres.
+    pub reach_m: f32,
+    /// Tentative marks within the reach when the visit began.
+    pub tentative_cells: u32,
+    /// The visit took none of them back.
+    pub closed: bool,
+}
+
+/// The gaps visited in a mission, at most one per visit.
+pub(super) type VisitedGaps = heapless::Vec<VisitedGap, { MAX_GAP_VISITS as usize }>;
+
 /// A visit under way: where the robot goes to sweep again.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct GapVisit {
@@ -75,24 +95,31 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.config.evidence_map && self.evidence.has_occupied_plane() && !self.known_a_priori
     }
 
-    /// Redraw the grid from the evidence map: every occupied mark, or the confirmed ones only,
-    /// grown by the planning radius.
+    /// Redraw the grid from the evidence map: every occupied mark, or the confirmed ones only
+    /// (and the tentative ones around the gaps already visited), grown by the planning radius.
     pub(super) fn redraw_grid(&mut self, confirmed_only: bool) {
         let g = *self.grid.geometry();
         let e = self.expansion_cells;
         self.grid.clear();
         for y in 0..g.height() as i32 {
             for x in 0..g.width() as i32 {
+                let c = PointM::new(
+                    (x as f32 + 0.5) * g.resolution_m(),
+                    (y as f32 + 0.5) * g.resolution_m(),
+                );
                 let marked = match self.evidence.get_xy(x, y) {
                     CellEvidence::Confirmed => true,
-                    CellEvidence::Tentative => !confirmed_only,
+                    CellEvidence::Tentative => {
+                        !confirmed_only
+                            || self.visited_gaps.iter().any(|v| {
+                                v.closed
+                                    && hypot(c.x_m - v.centre.x_m, c.y_m - v.centre.y_m)
+                                        <= v.reach_m
+                            })
+                    }
                     CellEvidence::Unknown | CellEvidence::Free => false,
                 };
                 if marked {
-                    let c = PointM::new(
-                        (x as f32 + 0.5) * g.resolution_m(),
-                        (y as f32 + 0.5) * g.resolution_m(),
-                    );
                     mark_point_m(&mut self.grid, c, e);
                 }
             }
@@ -108,8 +135,35 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             return;
         }
         self.visit = None;
+        if let Some(last) = self.visited_gaps.last().copied() {
+            let now = self.tentative_cells_within(last.centre, last.reach_m);
+            if let Some(v) = self.visited_gaps.last_mut() {
+                v.closed |= now >= last.tentative_cells;
+            }
+        }
         self.redraw_grid(true);
         self.ask_plan(true, out);
+    }
+
+    /// Tentative marks whose cell centre lies within `reach_m` of `centre`.
+    pub(super) fn tentative_cells_within(&self, centre: PointM, reach_m: f32) -> u32 {
+        let g = *self.grid.geometry();
+        let res_m = g.resolution_m();
+        let cells = (reach_m.max(0.0) / res_m) as i32 + 1;
+        let cx = (centre.x_m / res_m) as i32;
+        let cy = (centre.y_m / res_m) as i32;
+        let mut n = 0;
+        for y in (cy - cells).max(0)..=(cy + cells).min(g.height() as i32 - 1) {
+            for x in (cx - cells).max(0)..=(cx + cells).min(g.width() as i32 - 1) {
+                let c = PointM::new((x as f32 + 0.5) * res_m, (y as f32 + 0.5) * res_m);
+                if self.evidence.get_xy(x, y) == CellEvidence::Tentative
+                    && hypot(c.x_m - centre.x_m, c.y_m - centre.y_m) <= reach_m
+                {
+                    n += 1;
+                }
+            }
+        }
+        n
     }
 
     /// The proof plan is back: `found` is whether the confirmed marks leave a way (its path
@@ -118,7 +172,12 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     pub(super) fn on_proof(&mut self, found: bool, out: &mut MissionOutput) {
         self.redraw_grid(false);
         if !found {
-            self.stats.unreachable_reason = Some(UnreachableReason::ConfirmedCut);
+            // With visited gaps drawn in, the cut may run through tentative marks: no proof.
+            self.stats.unreachable_reason = Some(if !self.visited_gaps.iter().any(|v| v.closed) {
+                UnreachableReason::ConfirmedCut
+            } else {
+                UnreachableReason::GapsUnsettled
+            });
             self.finish(MissionStatus::Unreachable, out);
             return;
         }
@@ -147,6 +206,14 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             self.position_world()
         });
         self.visit = Some(GapVisit { target });
+        // Full only past MAX_GAP_VISITS visits, which end the mission first.
+        let tentative_cells = self.tentative_cells_within(gap, stand_off_m);
+        let _ = self.visited_gaps.push(VisitedGap {
+            centre: gap,
+            reach_m: stand_off_m,
+            tentative_cells,
+            closed: false,
+        });
         if self.at_visit_target() {
             self.end_visit(out);
             return;
