@@ -425,6 +425,15 @@ fn run_on_this_thread(
             let m = runner.mission();
             eprintln!("{t_s:8.2} {:?} pose {:?}", outcome.events, m.pose_world());
             eprintln!("         prefix {:?}", m.prefix());
+            if let Ok(probe) = std::env::var("TWIL_PROBE") {
+                let v: Vec<f32> = probe.split(',').filter_map(|t| t.parse().ok()).collect();
+                if v.len() == 2 {
+                    eprintln!(
+                        "         PROBE {:?}",
+                        m.evidence().get(twil_core::geom::PointM::new(v[0], v[1]))
+                    );
+                }
+            }
             if let Some(target) = m.gap_visit_target() {
                 eprintln!("         gap visit {} to {target:?}", m.gap_visits());
             }

@@ -225,6 +225,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         };
         let blind = BlindZone {
             grid: &self.grid,
+            marks: self.config.evidence_map.then_some(&self.evidence),
             seen: self.evidence.free_plane(),
             pose,
             sonar_offset_m: self.config.robot.sonar_offset_m,
