@@ -33,7 +33,8 @@
 //! confirmed the ghosts across it); planning the next gap with *every* visited gap's marks
 //! drawn in reached 19 goals of 40 against 22 for looking at the first gap again (rule 4
 //! draws in only the gaps whose visit took nothing back); standing at the nearest free point
-//! before the gap collided in 5 of 576 generated missions (`docs/mapping.md`).
+//! before the gap collided in 5 of 576 generated missions, 1 after the blind-disc fix
+//! (`docs/mapping.md`).
 //!
 //! Cost: a redraw is one pass over the map plus a `(2e + 1)²` square per occupied cell (e:
 //! the expansion in cells); the gap search walks the path's cells once. Host only today (the
