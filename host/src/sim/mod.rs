@@ -433,6 +433,9 @@ fn run_on_this_thread(
                         m.evidence().get(twil_core::geom::PointM::new(v[0], v[1]))
                     );
                 }
+                if std::env::var_os("TWIL_PROBE_READINGS").is_some() {
+                    eprintln!("         READINGS {:?}", m.readings());
+                }
             }
             if let Some(target) = m.gap_visit_target() {
                 eprintln!("         gap visit {} to {target:?}", m.gap_visits());

@@ -253,6 +253,11 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         &self.prefix
     }
 
+    /// The readings of the sweep under way or, between sweeps, of the last one (for logs).
+    pub fn readings(&self) -> &[crate::sonar::Reading] {
+        self.readings.as_slice()
+    }
+
     /// Hits of the latest completed sweep, world metres.
     pub fn last_hits(&self) -> &[PointM] {
         &self.hits

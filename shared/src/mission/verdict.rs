@@ -13,10 +13,13 @@
 //!    constant depth from two sweeps (`evidence_marking`), [`UnreachableReason::ConfirmedCut`].
 //! 2. **The gap.** A path there crosses cells that only tentative marks block: its first such
 //!    stretch is the gap they close. The robot plans (on the full map, every body rule in
-//!    force) to a stand-off point in front of it, on the line through it along the path, at
-//!    the distance where a beam of the sonar's half-angle β is as wide as the narrowest gap the
-//!    robot can use (`w = 2·radius + 2 cells`): `d = w / (2·tan β)`, within the sonar's
-//!    reach; there it takes a full standing sweep. A reading whose beam fits through the gap
+//!    force) to a stand-off point in front of it, on the line through it along the path: the
+//!    nearest free point (the planning radius's margin over the body kept clear around it, for
+//!    the pilot's tracking), from a little past the sonar's minimum range out to the distance
+//!    where a beam of half-angle β is as wide as the narrowest gap the robot can use
+//!    (`w = 2·radius + 2 cells`): `d = w / (2·tan β)`, within the sonar's reach. Nearest,
+//!    because the beam's footprint in the opening narrows as the sonar nears it. There it
+//!    takes a full standing sweep. A reading whose beam fits through the gap
 //!    hears the room beyond, the jambs' run of constant depth puts its reflector on the jamb,
 //!    and the Thales rule (`swept`) vouches for the gap's cells, taking their tentative marks
 //!    back (active perception: Leonard & Durrant-Whyte's several viewpoints).
@@ -32,9 +35,9 @@
 //! not take them back) closed 1 to 3 reachable goals (a visit whose gap lay beside a doorway
 //! confirmed the ghosts across it); planning the next gap with *every* visited gap's marks
 //! drawn in reached 19 goals of 40 against 22 for looking at the first gap again (rule 4
-//! draws in only the gaps whose visit took nothing back); standing at the nearest free point
-//! before the gap collided in 5 of 576 generated missions, 1 after the blind-disc fix
-//! (`docs/mapping.md`).
+//! draws in only the gaps whose visit took nothing back). Standing at the nearest free point
+//! collided until the blind disc was known by marks, a wall's free end echoed in every
+//! simulated reading and the stand-off kept the tracking margin (`docs/mapping.md`).
 //!
 //! Cost: a redraw is one pass over the map plus a `(2e + 1)²` square per occupied cell (e:
 //! the expansion in cells); the gap search walks the path's cells once. Host only today (the
@@ -206,11 +209,17 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         } else {
             reach_m
         };
-        let stand_off_m = fits_m.clamp(robot.sonar_min_range_m + 2.0 * res_m, reach_m.max(res_m));
-        let target = stand_off_point(&self.grid, gap, dir, stand_off_m).unwrap_or_else(|| {
-            // No free point on the line: the last free path point before the gap.
-            self.position_world()
-        });
+        let near_m = robot.sonar_min_range_m + 2.0 * res_m;
+        let stand_off_m = fits_m.clamp(near_m, reach_m.max(near_m));
+        // The body stops up to the planning radius's margin over its own radius off the path
+        // (the pilot's tracking error): keep that margin clear around the stand-off point too.
+        let margin_cells =
+            ((robot.planning_radius_m - robot.physical_radius_m()).max(0.0) / res_m) as i32;
+        let target = stand_off_point(&self.grid, gap, dir, near_m, stand_off_m, margin_cells)
+            .unwrap_or_else(|| {
+                // No free point on the line: the last free path point before the gap.
+                self.position_world()
+            });
         self.visit = Some(GapVisit { target });
         // Full only past MAX_GAP_VISITS visits, which end the mission first.
         let tentative_cells = self.tentative_cells_within(gap, stand_off_m);
@@ -299,29 +308,35 @@ fn first_blocked_stretch<const W: usize>(
     ))
 }
 
-/// A free cell's centre on the line from `gap` back along `-dir`, `stand_off_m` away or,
-/// when that cell is occupied or off the map, the nearest free one short of it (in steps of a
-/// cell, never nearer than half the distance).
+/// The nearest free cell's centre on the line from `gap` back along `-dir`, at least `near_m`
+/// and at most `far_m` away (in steps of a cell), or `None` when every cell there is occupied
+/// or off the map. Nearest, because the nearer the sonar stands to a gap, the narrower its
+/// beam's footprint there: more readings pass through an opening and hear the room beyond.
 fn stand_off_point<const W: usize>(
     grid: &Grid<W>,
     gap: PointM,
     dir: PointM,
-    stand_off_m: f32,
+    near_m: f32,
+    far_m: f32,
+    margin_cells: i32,
 ) -> Option<PointM> {
     let g = grid.geometry();
     let res_m = g.resolution_m();
-    let mut d_m = stand_off_m;
-    while d_m >= 0.5 * stand_off_m {
+    let mut d_m = near_m;
+    while d_m <= far_m {
         let p = PointM::new(gap.x_m - d_m * dir.x_m, gap.y_m - d_m * dir.y_m);
         if let Some((x, y)) = g.cell_xy_on_map(p) {
-            if !grid.is_occupied_xy(x, y) {
+            let clear = (-margin_cells..=margin_cells).all(|dy| {
+                (-margin_cells..=margin_cells).all(|dx| !grid.is_occupied_xy(x + dx, y + dy))
+            });
+            if clear {
                 return Some(PointM::new(
                     (x as f32 + 0.5) * res_m,
                     (y as f32 + 0.5) * res_m,
                 ));
             }
         }
-        d_m -= res_m;
+        d_m += res_m;
     }
     None
 }
@@ -355,9 +370,11 @@ mod tests {
             "{gap:?}"
         );
         assert!((dir.y_m - 1.0).abs() < 1.0e-3, "{dir:?}");
-        let s = stand_off_point(&g, gap, dir, 1.5).expect("free");
+        // The nearest free point on the line through the gap: 0.3 m before it, past the marks
+        // (rows 48..52).
+        let s = stand_off_point(&g, gap, dir, 0.3, 1.5, 0).expect("free");
         assert!(
-            (s.y_m - 1.025).abs() < 0.03 && (s.x_m - 2.525).abs() < 0.03,
+            (s.y_m - 2.225).abs() < 0.03 && (s.x_m - 2.525).abs() < 0.03,
             "{s:?}"
         );
         // A clear path has no gap.
@@ -366,21 +383,45 @@ mod tests {
     }
 
     #[test]
-    fn a_stand_off_point_inside_marks_moves_nearer_or_is_refused() {
+    fn a_stand_off_point_inside_marks_moves_farther_or_is_refused() {
         let mut g = wall_with_marks_across_a_doorway();
-        // Marks over the stand-off point 1.5 m before the gap: a nearer free cell is taken.
-        for y in 18..24 {
+        // Marks from the wall's down to 1.0 m before the gap: the first free cell beyond.
+        for y in 30..48 {
             g.set_xy(50, y, true);
         }
-        let s = stand_off_point(&g, PointM::new(2.525, 2.525), PointM::new(0.0, 1.0), 1.5)
-            .expect("a nearer free cell");
-        assert!(s.y_m > 1.19 && s.y_m < 1.8, "{s:?}");
-        // Everything marked: none.
+        let s = stand_off_point(
+            &g,
+            PointM::new(2.525, 2.525),
+            PointM::new(0.0, 1.0),
+            0.3,
+            1.5,
+            0,
+        )
+        .expect("a farther free cell");
+        assert!((s.y_m - 1.475).abs() < 0.03, "{s:?}");
+        // With a margin of two cells kept clear around it, two cells farther.
+        let s = stand_off_point(
+            &g,
+            PointM::new(2.525, 2.525),
+            PointM::new(0.0, 1.0),
+            0.3,
+            1.5,
+            2,
+        )
+        .expect("a farther free cell");
+        assert!((s.y_m - 1.375).abs() < 0.03, "{s:?}");
+        // Everything marked up to the far limit: none.
         for y in 0..48 {
             g.set_xy(50, y, true);
         }
-        assert!(
-            stand_off_point(&g, PointM::new(2.525, 2.525), PointM::new(0.0, 1.0), 1.5).is_none()
-        );
+        assert!(stand_off_point(
+            &g,
+            PointM::new(2.525, 2.525),
+            PointM::new(0.0, 1.0),
+            0.3,
+            1.5,
+            0
+        )
+        .is_none());
     }
 }

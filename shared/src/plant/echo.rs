@@ -140,7 +140,11 @@ impl Beam {
                     if abs(wrap_angle_rad(atan2(vy, vx) - axis)) > half {
                         continue;
                     }
-                    keep(echo_along(
+                    // The vertex itself echoes unless something nearer is met on the way. A
+                    // ray aimed at a wall's free end, seen nearly along the wall, may pass it
+                    // by a rounding error and glance off the wall's line beyond (a jamb
+                    // vanished from some readings of a sweep and not others).
+                    let hit = nearest_hit(
                         obstacles,
                         origin,
                         vx / dist,
@@ -148,7 +152,11 @@ impl Beam {
                         max_range_m,
                         cos_limit,
                         corner_m,
-                    ));
+                    );
+                    keep(match hit {
+                        Some((t, echoes)) if t < dist - corner_m => echoes.then_some(t),
+                        _ => Some(dist),
+                    });
                 }
             }
         }
@@ -184,6 +192,23 @@ fn echo_along<const V: usize, const P: usize>(
     cos_limit: f32,
     corner_m: f32,
 ) -> Option<f32> {
+    match nearest_hit(obstacles, origin, dx, dy, max_range_m, cos_limit, corner_m) {
+        Some((t, true)) => Some(t),
+        _ => None,
+    }
+}
+
+/// The first edge one ray (unit direction `(dx, dy)`) meets within `max_range_m`: its range
+/// and whether it echoes (as [`echo_along`]).
+fn nearest_hit<const V: usize, const P: usize>(
+    obstacles: &PolygonSet<V, P>,
+    origin: PointM,
+    dx: f32,
+    dy: f32,
+    max_range_m: f32,
+    cos_limit: f32,
+    corner_m: f32,
+) -> Option<(f32, bool)> {
     // Nearest hit and whether it echoes; an echoing edge wins a tie (two edges meeting at a
     // vertex are hit at the same range).
     let mut nearest: Option<(f32, bool)> = None;
@@ -215,10 +240,7 @@ fn echo_along<const V: usize, const P: usize>(
             };
         }
     }
-    match nearest {
-        Some((t, true)) => Some(t),
-        _ => None,
-    }
+    nearest
 }
 
 #[cfg(test)]
@@ -238,6 +260,27 @@ mod tests {
     }
 
     const ORIGIN: PointM = PointM::new(0.0, 0.0);
+
+    #[test]
+    fn a_walls_free_end_seen_nearly_along_the_wall_echoes_in_every_reading() {
+        // A jamb of `twil sonar-grid` world 1: the wall's line passes 0.01 m from the sonar,
+        // 0.52 m from the end. Before, the ray aimed at the end passed it by rounding for
+        // some sonar positions a few micrometres apart, and the cone's rays glanced off.
+        let wall = segment((11.871, 5.944), (3.754, 7.702));
+        let b = beam(25.0, 25.0);
+        let mut missed = 0;
+        for i in 0..200 {
+            let jitter_m = i as f32 * 1.0e-6;
+            let origin = PointM::new(3.2437 + jitter_m, 7.8105 - jitter_m);
+            let axis = (7.702f32 - origin.y_m).atan2(3.754 - origin.x_m);
+            let expected = (3.754f32 - origin.x_m).hypot(7.702 - origin.y_m);
+            match b.first_echo_m(&wall, origin, axis, 6.0) {
+                Some(d) if (d - expected).abs() < 0.01 => {}
+                _ => missed += 1,
+            }
+        }
+        assert_eq!(missed, 0);
+    }
 
     #[test]
     fn a_wall_face_on_echoes_at_its_perpendicular_distance() {
