@@ -389,39 +389,19 @@ mod tests {
         for y in 30..48 {
             g.set_xy(50, y, true);
         }
-        let s = stand_off_point(
-            &g,
-            PointM::new(2.525, 2.525),
-            PointM::new(0.0, 1.0),
-            0.3,
-            1.5,
-            0,
-        )
-        .expect("a farther free cell");
+        let up = PointM::new(0.0, 1.0);
+        let at = |g: &G, margin_cells| {
+            stand_off_point(g, PointM::new(2.525, 2.525), up, 0.3, 1.5, margin_cells)
+        };
+        let s = at(&g, 0).expect("a farther free cell");
         assert!((s.y_m - 1.475).abs() < 0.03, "{s:?}");
         // With a margin of two cells kept clear around it, two cells farther.
-        let s = stand_off_point(
-            &g,
-            PointM::new(2.525, 2.525),
-            PointM::new(0.0, 1.0),
-            0.3,
-            1.5,
-            2,
-        )
-        .expect("a farther free cell");
+        let s = at(&g, 2).expect("a farther free cell");
         assert!((s.y_m - 1.375).abs() < 0.03, "{s:?}");
         // Everything marked up to the far limit: none.
         for y in 0..48 {
             g.set_xy(50, y, true);
         }
-        assert!(stand_off_point(
-            &g,
-            PointM::new(2.525, 2.525),
-            PointM::new(0.0, 1.0),
-            0.3,
-            1.5,
-            0
-        )
-        .is_none());
+        assert!(at(&g, 0).is_none());
     }
 }
