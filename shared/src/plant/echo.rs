@@ -113,7 +113,7 @@ impl Beam {
                 half * (2.0 * i as f32 / (rays - 1) as f32 - 1.0)
             };
             let angle = axis + offset;
-            keep(echo_along(
+            let hit = nearest_hit(
                 obstacles,
                 origin,
                 cos(angle),
@@ -121,7 +121,9 @@ impl Beam {
                 max_range_m,
                 cos_limit,
                 corner_m,
-            ));
+            );
+            // The first edge met echoes, or the ray returns nothing (it glanced off).
+            keep(hit.and_then(|(t, echoes)| echoes.then_some(t)));
         }
         if half > 0.0 {
             // One ray at each vertex inside the cone and the range: corners echo even when
@@ -180,26 +182,9 @@ fn cone_rays(half_rad: f32) -> usize {
     (2 * per_side + 1).min(MAX_BEAM_RAYS)
 }
 
-/// The echo of one ray (unit direction `(dx, dy)`): the first edge hit within `max_range_m`,
-/// if it sends the sound back (incidence cosine at least `cos_limit`, or the hit within
-/// `corner_m` of one of the edge's ends).
-fn echo_along<const V: usize, const P: usize>(
-    obstacles: &PolygonSet<V, P>,
-    origin: PointM,
-    dx: f32,
-    dy: f32,
-    max_range_m: f32,
-    cos_limit: f32,
-    corner_m: f32,
-) -> Option<f32> {
-    match nearest_hit(obstacles, origin, dx, dy, max_range_m, cos_limit, corner_m) {
-        Some((t, true)) => Some(t),
-        _ => None,
-    }
-}
-
 /// The first edge one ray (unit direction `(dx, dy)`) meets within `max_range_m`: its range
-/// and whether it echoes (as [`echo_along`]).
+/// and whether it sends the sound back (incidence cosine at least `cos_limit`, or the hit
+/// within `corner_m` of one of the edge's ends).
 fn nearest_hit<const V: usize, const P: usize>(
     obstacles: &PolygonSet<V, P>,
     origin: PointM,
