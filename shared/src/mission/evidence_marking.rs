@@ -229,7 +229,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     /// evidence map (its rule is not in use).
     ///
     /// Only marks: unknown cells there are left to the blind-zone rule (`blind`), which ends
-    /// a prefix only where the disc is known (free, vouched for, or on the grown map). Asking
+    /// a prefix only where the disc is known (free, vouched for, or marked). Asking
     /// for every cell of the disc to be free on the evidence map (unknown ones blocking too,
     /// and the blind-zone rule reading the map cell by cell) also took the beam collisions of
     /// `twil sonar-grid --worlds 8 --evidence-map` to 0, but reached 163 goals there instead
@@ -337,7 +337,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
 }
 
 /// Centre of the cell at signed indices (on the map or not), metres.
-fn centre(g: &crate::grid::GridGeometry, x: i32, y: i32) -> PointM {
+pub(super) fn centre(g: &crate::grid::GridGeometry, x: i32, y: i32) -> PointM {
     PointM::new(
         (x as f32 + 0.5) * g.resolution_m(),
         (y as f32 + 0.5) * g.resolution_m(),

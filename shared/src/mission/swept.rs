@@ -320,7 +320,8 @@ impl Swept<'_> {
             return false;
         }
         let slack = atan2(x, sqrt(1.0 - x * x)); // asin(shift / min range)
-                                                 // The cone a foot may hide in, less the slack: what the window may be read with.
+
+        // The cone a foot may hide in, less the slack: what the window may be read with.
         let beam_rad = self.thales_beam_rad - slack;
         let c = (self.min_range_m / d_m).clamp(0.0, 1.0);
         let window = atan2(sqrt(1.0 - c * c), c); // acos(min range / d)

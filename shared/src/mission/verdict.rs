@@ -49,6 +49,7 @@ use crate::math::{cos, hypot, sin};
 use crate::raster::{mark_point_m, BresenhamLine};
 
 use super::evidence::CellEvidence;
+use super::evidence_marking::centre as cell_centre;
 use super::messages::push;
 use super::{Mission, MissionEvent, MissionOutput, MissionStatus, UnreachableReason};
 
@@ -112,10 +113,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.grid.clear();
         for y in 0..g.height() as i32 {
             for x in 0..g.width() as i32 {
-                let c = PointM::new(
-                    (x as f32 + 0.5) * g.resolution_m(),
-                    (y as f32 + 0.5) * g.resolution_m(),
-                );
+                let c = cell_centre(&g, x, y);
                 let marked = match self.evidence.get_xy(x, y) {
                     CellEvidence::Confirmed => true,
                     CellEvidence::Tentative => {
@@ -164,7 +162,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         let mut n = 0;
         for y in (cy - cells).max(0)..=(cy + cells).min(g.height() as i32 - 1) {
             for x in (cx - cells).max(0)..=(cx + cells).min(g.width() as i32 - 1) {
-                let c = PointM::new((x as f32 + 0.5) * res_m, (y as f32 + 0.5) * res_m);
+                let c = cell_centre(&g, x, y);
                 if self.evidence.get_xy(x, y) == CellEvidence::Tentative
                     && hypot(c.x_m - centre.x_m, c.y_m - centre.y_m) <= reach_m
                 {
@@ -182,10 +180,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.redraw_grid(false);
         if !found {
             // With visited gaps drawn in, the cut may run through tentative marks: no proof.
-            self.stats.unreachable_reason = Some(if !self.visited_gaps.iter().any(|v| v.closed) {
-                UnreachableReason::ConfirmedCut
-            } else {
+            self.stats.unreachable_reason = Some(if self.visited_gaps.iter().any(|v| v.closed) {
                 UnreachableReason::GapsUnsettled
+            } else {
+                UnreachableReason::ConfirmedCut
             });
             self.finish(MissionStatus::Unreachable, out);
             return;
@@ -221,8 +219,8 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 self.position_world()
             });
         self.visit = Some(GapVisit { target });
-        // Full only past MAX_GAP_VISITS visits, which end the mission first.
         let tentative_cells = self.tentative_cells_within(gap, stand_off_m);
+        // Full only past MAX_GAP_VISITS visits, which end the mission first.
         let _ = self.visited_gaps.push(VisitedGap {
             centre: gap,
             reach_m: stand_off_m,
@@ -292,9 +290,7 @@ fn first_blocked_stretch<const W: usize>(
     }
     let (f, l) = (first?, last?);
     let res_m = g.resolution_m();
-    let centre =
-        |(x, y): (i32, i32)| PointM::new((x as f32 + 0.5) * res_m, (y as f32 + 0.5) * res_m);
-    let (p, q) = (centre(f), centre(l));
+    let (p, q) = (cell_centre(g, f.0, f.1), cell_centre(g, l.0, l.1));
     let len_m = hypot(q.x_m - p.x_m, q.y_m - p.y_m);
     let dir = if len_m > 0.5 * res_m {
         PointM::new((q.x_m - p.x_m) / len_m, (q.y_m - p.y_m) / len_m)
@@ -330,10 +326,7 @@ fn stand_off_point<const W: usize>(
                 (-margin_cells..=margin_cells).all(|dx| !grid.is_occupied_xy(x + dx, y + dy))
             });
             if clear {
-                return Some(PointM::new(
-                    (x as f32 + 0.5) * res_m,
-                    (y as f32 + 0.5) * res_m,
-                ));
+                return Some(cell_centre(g, x, y));
             }
         }
         d_m += res_m;
