@@ -437,6 +437,41 @@ fn run_on_this_thread(
                     eprintln!("         READINGS {:?}", m.readings());
                 }
             }
+            if let Ok(probe) = std::env::var("TWIL_PROBE_BOX") {
+                let v: Vec<f32> = probe.split(',').filter_map(|t| t.parse().ok()).collect();
+                if v.len() == 4
+                    && outcome
+                        .events
+                        .iter()
+                        .any(|e| matches!(e, MissionEvent::SweepDone { .. }))
+                {
+                    let mut marked = Vec::new();
+                    let mut y = v[1];
+                    while y <= v[3] {
+                        let mut x = v[0];
+                        while x <= v[2] {
+                            let e = m.evidence().get(twil_core::geom::PointM::new(x, y));
+                            if matches!(
+                                e,
+                                twil_core::mission::CellEvidence::Tentative
+                                    | twil_core::mission::CellEvidence::Confirmed
+                            ) {
+                                marked.push(format!(
+                                    "({x:.2},{y:.2}){}",
+                                    if matches!(e, twil_core::mission::CellEvidence::Confirmed) {
+                                        "C"
+                                    } else {
+                                        "t"
+                                    }
+                                ));
+                            }
+                            x += 0.05;
+                        }
+                        y += 0.05;
+                    }
+                    eprintln!("         BOX {}", marked.join(" "));
+                }
+            }
             if let Some(target) = m.gap_visit_target() {
                 eprintln!("         gap visit {} to {target:?}", m.gap_visits());
             }

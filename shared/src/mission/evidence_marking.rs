@@ -31,11 +31,12 @@ use heapless::Vec;
 
 use crate::control::Pose;
 use crate::geom::PointM;
-use crate::math::{abs, cos, hypot, sin};
+use crate::math::{abs, cos, hypot, sin, wrap_angle_rad};
 use crate::raster::mark_point_m;
 use crate::sonar::hit_to_world;
 
 use super::evidence::{CellEvidence, Change};
+use super::reflector::{reflector_bearings, RunEnd, RunSide};
 use super::swept::{reading_shift_m, BlindCells, Swept};
 use super::Mission;
 
@@ -125,6 +126,11 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         let tolerance_m = robot.rcd_depth_tolerance_m.max(0.5 * g.resolution_m());
         let readings = self.readings.as_slice();
         let beam_rad = robot.sonar_beam_half_angle_deg.max(0.0) * (core::f32::consts::PI / 180.0);
+        let sweep_step_rad = match readings {
+            [a, b, ..] => abs(b.neck_angle_rad - a.neck_angle_rad),
+            _ => 0.0,
+        };
+        let bridges_one_silence = beam_rad > 0.0 && 2.0 * sweep_step_rad <= 2.0 * beam_rad;
         let mut start = 0;
         while start < readings.len() {
             let Some(first_m) = readings[start].range_m else {
@@ -132,8 +138,21 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 continue;
             };
             let (mut end, mut sum_m, mut previous_m) = (start, first_m, first_m);
-            let (mut least_m, mut most_m) = (first_m, first_m);
-            while let Some(next_m) = readings.get(end + 1).and_then(|r| r.range_m) {
+            let (mut least_m, mut most_m, mut echoes) = (first_m, first_m, 1u16);
+            loop {
+                let (next_m, skipped) = match readings.get(end + 1).map(|r| r.range_m) {
+                    Some(Some(m)) => (m, 0),
+                    // One missed echo inside a run: a reflector within β of the readings on
+                    // both sides of it is within β of it too (the beam is wider than a step),
+                    // so its silence was the ranger's fault, not the reflector leaving.
+                    Some(None) if bridges_one_silence => {
+                        match readings.get(end + 2).and_then(|r| r.range_m) {
+                            Some(m) => (m, 1),
+                            None => break,
+                        }
+                    }
+                    _ => break,
+                };
                 if abs(next_m - previous_m) > tolerance_m {
                     break;
                 }
@@ -141,37 +160,61 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 previous_m = next_m;
                 least_m = least_m.min(next_m);
                 most_m = most_m.max(next_m);
-                end += 1;
+                echoes += 1;
+                end += 1 + skipped;
             }
-            let count = (end - start + 1) as f32;
+            let count = f32::from(echoes);
             let (a, b) = (&readings[start], &readings[end]);
             let middle = &readings[(start + end) / 2];
-            let angle_rad = 0.5 * (a.neck_angle_rad + b.neck_angle_rad);
             // A region of constant depth: as wide as the beam's half-angle at least (a plane's,
             // a corner's or an edge's spans about twice that) and level within a cell. Shorter
             // or sloping runs are the arcs of a wall met obliquely: their reflector is somewhere
             // on the arc, not on the axis, so they mark but never confirm.
             let constant_depth = abs(b.neck_angle_rad - a.neck_angle_rad) + 1.0e-4 >= beam_rad
                 && most_m - least_m <= g.resolution_m();
-            let p = hit_to_world(middle.pose, robot.sonar_offset_m, angle_rad, sum_m / count);
+            // Bearings in the middle reading's frame: a reading's bearing is its neck angle
+            // plus how far the body had turned from the middle one's heading.
+            let bearing = |i: usize| {
+                let r = &readings[i];
+                r.neck_angle_rad + wrap_angle_rad(r.pose.heading_rad - middle.pose.heading_rad)
+            };
+            let neighbour = |i: Option<usize>| i.and_then(|i| readings.get(i)).map(|r| r.range_m);
+            let first = RunEnd {
+                bearing_rad: bearing(start),
+                side: RunSide::of_neighbour(neighbour(start.checked_sub(1)), first_m),
+            };
+            let last = RunEnd {
+                bearing_rad: bearing(end),
+                side: RunSide::of_neighbour(neighbour(Some(end + 1)), previous_m),
+            };
+            let step_rad = match (start.checked_sub(1), readings.get(start + 1)) {
+                (_, Some(_)) => bearing(start + 1) - bearing(start),
+                (Some(before), None) => bearing(start) - bearing(before),
+                (None, None) => 0.0,
+            };
+            let depth_m = sum_m / count;
             start = end + 1;
-            if !p.is_finite() {
-                continue;
-            }
-            // One sweep is one viewpoint: its reflectors move a cell once (neighbouring short
-            // runs along an oblique wall, 1.8° apart, fall in one cell at short range, and
-            // used to confirm their own ghost in free space in front of a doorway).
-            let cell = g.cell_xy_on_map(p);
-            let seen_this_sweep = self.hits.iter().any(|q| g.cell_xy_on_map(*q) == cell);
-            if let (Some((x, y)), false) = (cell, seen_this_sweep) {
-                if constant_depth {
-                    self.evidence.observe_occupied_xy(x, y);
-                } else {
-                    self.evidence.observe_arc_xy(x, y);
+            for bearing_rad in reflector_bearings(first, last, step_rad, beam_rad) {
+                let p = hit_to_world(middle.pose, robot.sonar_offset_m, bearing_rad, depth_m);
+                if !p.is_finite() {
+                    continue;
                 }
+                // One sweep is one viewpoint: its reflectors move a cell once (neighbouring
+                // short runs along an oblique wall, 1.8° apart, fall in one cell at short
+                // range, and used to confirm their own ghost in free space in front of a
+                // doorway).
+                let cell = g.cell_xy_on_map(p);
+                let seen_this_sweep = self.hits.iter().any(|q| g.cell_xy_on_map(*q) == cell);
+                if let (Some((x, y)), false) = (cell, seen_this_sweep) {
+                    if constant_depth {
+                        self.evidence.observe_occupied_xy(x, y);
+                    } else {
+                        self.evidence.observe_arc_xy(x, y);
+                    }
+                }
+                mark_point_m(&mut self.grid, p, e);
+                let _ = self.hits.push(p);
             }
-            mark_point_m(&mut self.grid, p, e);
-            let _ = self.hits.push(p);
         }
         self.stats.hits += self.hits.len() as u32;
         self.hits.len() as u16

@@ -287,6 +287,7 @@ mod messages;
 mod pilot;
 mod planning;
 mod prefix;
+mod reflector;
 mod settle;
 mod stats;
 mod sweep;
