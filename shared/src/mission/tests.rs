@@ -749,7 +749,7 @@ fn the_mcu_sized_mission_refuses_the_evidence_map_and_the_host_sized_one_keeps_i
 }
 
 #[test]
-fn a_gap_visit_that_took_no_mark_back_closes_the_gap_for_the_next_proof_plan() {
+fn a_gap_visit_that_took_no_mark_back_closes_the_gap_until_no_other_gap_is_left() {
     use super::verdict::VisitedGap;
     let c = MissionConfig {
         evidence_map: true,
@@ -807,4 +807,21 @@ fn a_gap_visit_that_took_no_mark_back_closes_the_gap_for_the_next_proof_plan() {
     assert!(m.visited_gaps[0].closed);
     assert!(at(&m, 3.5) && at(&m, 4.9));
     assert!(!at(&m, 1.0) && !at(&m, 7.0));
+    // No way with the closed gap drawn in: not a verdict, the gap opens again and the proof
+    // is planned once more on the confirmed marks alone.
+    m.pending_plan = None;
+    out.plan_request = None;
+    m.on_proof(false, &mut out);
+    assert!(!m.visited_gaps[0].closed);
+    assert!(out.plan_request.is_some(), "the proof plan is asked again");
+    assert!(!at(&m, 3.5) && !at(&m, 4.9));
+    assert_eq!(m.status, MissionStatus::Running);
+    // No way on the confirmed marks alone, no gap closed: that is the proof.
+    m.pending_plan = None;
+    m.on_proof(false, &mut out);
+    assert_eq!(m.status, MissionStatus::Unreachable);
+    assert_eq!(
+        m.stats.unreachable_reason,
+        Some(UnreachableReason::ConfirmedCut)
+    );
 }

@@ -27,8 +27,12 @@
 //!    [`UnreachableReason::GapsUnsettled`] (`gave_up` on the host), which is not a proof.
 //! 4. **A visit that took nothing back closes its gap** (`VisitedGap`): later proof plans
 //!    draw its tentative marks in, so the next visit looks elsewhere rather than sweeping
-//!    again from where the robot stands; with a closed gap drawn in, no path is
-//!    `GapsUnsettled`, not a proof.
+//!    again from where the robot stands. Closing only orders the visits: when no way is
+//!    left with the closed gaps drawn in, they open again and the proof is planned once
+//!    more on the confirmed marks alone (its answer is then a proof or a gap). Before,
+//!    that case ended `GapsUnsettled` after as few as two visits (`twil sonar-grid --worlds 8
+//!    --evidence-map`: reopening reached 4 more goals and proved the first walled-in goal
+//!    unreachable, with 0 false `unreachable`).
 //!
 //! Tried and taken out, measured on `twil sonar-grid --quick --evidence-map`: confirming
 //! what a visit's full sweep left of the marks closing its gap (a second viewpoint that did
@@ -177,14 +181,20 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     /// is [`Mission::path`]). Restores the full grid, then ends the mission with the proof or
     /// sets off to the gap.
     pub(super) fn on_proof(&mut self, found: bool, out: &mut MissionOutput) {
+        if !found && self.visited_gaps.iter().any(|v| v.closed) {
+            // The closed gaps only order the visits (others first): with every other gap
+            // tried, open them again and plan the proof once more. Its answer then is a proof
+            // or a gap to visit; the visits stay bounded by MAX_GAP_VISITS.
+            for v in self.visited_gaps.iter_mut() {
+                v.closed = false;
+            }
+            self.redraw_grid(true);
+            self.ask_plan(true, out);
+            return;
+        }
         self.redraw_grid(false);
         if !found {
-            // With visited gaps drawn in, the cut may run through tentative marks: no proof.
-            self.stats.unreachable_reason = Some(if self.visited_gaps.iter().any(|v| v.closed) {
-                UnreachableReason::GapsUnsettled
-            } else {
-                UnreachableReason::ConfirmedCut
-            });
+            self.stats.unreachable_reason = Some(UnreachableReason::ConfirmedCut);
             self.finish(MissionStatus::Unreachable, out);
             return;
         }
