@@ -16,9 +16,15 @@
 //! - **Only a region of constant depth confirms**: a run at least the beam's half-angle wide
 //!   and level within a cell. A shorter or sloping run (an oblique wall's arc) marks its
 //!   reflector tentative and never confirms it: its echo came from somewhere on the arc.
-//! - **A run of constant depth** (Leonard & Durrant-Whyte 1991) has one reflector: the point at
-//!   the run's middle bearing and mean depth (for a plane, the foot of the perpendicular; for a
-//!   corner, the corner), not the whole arc: a doorway's jambs are not painted across it.
+//! - **A run of constant depth** (Leonard & Durrant-Whyte 1991) has its reflectors at its
+//!   mean depth, not the whole arc: one at the middle bearing of a run 2β wide (for a plane
+//!   the foot of the perpendicular, for a corner the corner), β inside an end whose neighbour
+//!   heard farther or nothing (the reflector left the cone there), two for a run wider than
+//!   2β (a doorway's jambs seen from its axis, not a mark in the doorway): `reflector`.
+//! - **Faults** (beam sensors, `sonar_beam`): a reflector is heard by about 2m + 1 readings
+//!   (m the steps in β), so one missed echo inside a run, or one echo nearer than the two
+//!   agreeing readings around it, is the ranger's fault and the run goes on across it; one
+//!   echo between two silences marks nothing.
 //! - **Suspects**: after a full standing sweep, unknown cells that no reading vouched for in a
 //!   ring just outside the planning radius are tentative occupied, so the planner does not
 //!   route the body through silent space beside it.
@@ -130,7 +136,18 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             [a, b, ..] => abs(b.neck_angle_rad - a.neck_angle_rad),
             _ => 0.0,
         };
-        let bridges_one_silence = beam_rad > 0.0 && 2.0 * sweep_step_rad <= 2.0 * beam_rad;
+        // The cone the readings were heard through: the beam's, or none for a ray sensor
+        // (`sonar_beam` false), whose echo lies on its axis.
+        let cone_rad = if robot.sonar_beam { beam_rad } else { 0.0 };
+        let bridges_one_reading = cone_rad > 0.0 && sweep_step_rad <= cone_rad;
+        // A point reflector is heard by every reading within β of it, about 2m + 1 of them
+        // (m the steps in β); the vouching rule (`swept`) outvotes fewer. Unless the sonar
+        // moved during the sweep far enough that the readings which missed a reflector had it
+        // in their blind disc or out of range.
+        let sweep_shift_m = match readings.first() {
+            Some(r) => reading_shift_m(readings, r.pose, robot.sonar_offset_m),
+            None => 0.0,
+        };
         let mut start = 0;
         while start < readings.len() {
             let Some(first_m) = readings[start].range_m else {
@@ -140,17 +157,32 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             let (mut end, mut sum_m, mut previous_m) = (start, first_m, first_m);
             let (mut least_m, mut most_m, mut echoes) = (first_m, first_m, 1u16);
             loop {
+                let after_next_m = readings.get(end + 2).and_then(|r| r.range_m);
+                let agrees = |m: Option<f32>| m.is_some_and(|m| abs(m - previous_m) <= tolerance_m);
                 let (next_m, skipped) = match readings.get(end + 1).map(|r| r.range_m) {
-                    Some(Some(m)) => (m, 0),
-                    // One missed echo inside a run: a reflector within β of the readings on
-                    // both sides of it is within β of it too (the beam is wider than a step),
-                    // so its silence was the ranger's fault, not the reflector leaving.
-                    Some(None) if bridges_one_silence => {
-                        match readings.get(end + 2).and_then(|r| r.range_m) {
+                    // One short echo inside a run: the reflector the readings on both sides
+                    // heard was in its cone too, so it heard something nearer that no
+                    // neighbour heard, which no reflector in the beam does (it would be in
+                    // about 2m + 1 cones): a spurious echo (crosstalk, multipath). Skipped,
+                    // and not marked.
+                    Some(Some(m))
+                        if bridges_one_reading
+                            && m < previous_m - tolerance_m
+                            && agrees(after_next_m) =>
+                    {
+                        match after_next_m {
                             Some(m) => (m, 1),
                             None => break,
                         }
                     }
+                    Some(Some(m)) => (m, 0),
+                    // One missed echo inside a run: a reflector within β of the readings on
+                    // both sides of it is within β of it too (the beam is wider than a step),
+                    // so its silence was the ranger's fault, not the reflector leaving.
+                    Some(None) if bridges_one_reading => match after_next_m {
+                        Some(m) => (m, 1),
+                        None => break,
+                    },
                     _ => break,
                 };
                 if abs(next_m - previous_m) > tolerance_m {
@@ -178,14 +210,27 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 let r = &readings[i];
                 r.neck_angle_rad + wrap_angle_rad(r.pose.heading_rad - middle.pose.heading_rad)
             };
-            let neighbour = |i: Option<usize>| i.and_then(|i| readings.get(i)).map(|r| r.range_m);
+            // What the reading just past an end heard, and how far its sonar stood from that
+            // end's (a moving sweep): a reflector at `end_m` may have come that much nearer or
+            // farther for it, into the blind disc or out of range, where silence says nothing.
+            let window = (robot.sonar_min_range_m, robot.sonar_range_m);
+            let neighbour = |i: Option<usize>, end: usize| {
+                i.and_then(|i| readings.get(i)).map(|r| {
+                    let (here, there) = (
+                        readings[end].pose.point_ahead(robot.sonar_offset_m),
+                        r.pose.point_ahead(robot.sonar_offset_m),
+                    );
+                    let moved_m = hypot(there.x_m - here.x_m, there.y_m - here.y_m);
+                    (r.range_m, moved_m, window)
+                })
+            };
             let first = RunEnd {
                 bearing_rad: bearing(start),
-                side: RunSide::of_neighbour(neighbour(start.checked_sub(1)), first_m),
+                side: RunSide::of_neighbour(neighbour(start.checked_sub(1), start), first_m),
             };
             let last = RunEnd {
                 bearing_rad: bearing(end),
-                side: RunSide::of_neighbour(neighbour(Some(end + 1)), previous_m),
+                side: RunSide::of_neighbour(neighbour(Some(end + 1), end), previous_m),
             };
             let step_rad = match (start.checked_sub(1), readings.get(start + 1)) {
                 (_, Some(_)) => bearing(start + 1) - bearing(start),
@@ -193,8 +238,24 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 (None, None) => 0.0,
             };
             let depth_m = sum_m / count;
+            let run_start = start;
             start = end + 1;
-            for bearing_rad in reflector_bearings(first, last, step_rad, beam_rad) {
+            // One echo between two silences, well inside the window: no reflector in the beam
+            // is heard by one reading alone (see above), so it is a spurious echo.
+            let silent = |i: Option<usize>| {
+                i.and_then(|i| readings.get(i))
+                    .is_some_and(|r| r.range_m.is_none())
+            };
+            if run_start == end
+                && bridges_one_reading
+                && silent(run_start.checked_sub(1))
+                && silent(Some(end + 1))
+                && depth_m - sweep_shift_m >= robot.sonar_min_range_m
+                && depth_m + sweep_shift_m <= robot.sonar_range_m
+            {
+                continue;
+            }
+            for bearing_rad in reflector_bearings(first, last, step_rad, cone_rad) {
                 let p = hit_to_world(middle.pose, robot.sonar_offset_m, bearing_rad, depth_m);
                 if !p.is_finite() {
                     continue;

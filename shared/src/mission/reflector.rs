@@ -38,14 +38,30 @@ pub(super) enum RunSide {
     Edge,
 }
 
+/// What the reading past one end of a run heard (`None`: no echo), how far its sonar stood
+/// from the end reading's, metres, and the ranger's window `(min, max)`, metres.
+pub(super) type Neighbour = (Option<f32>, f32, (f32, f32));
+
 impl RunSide {
-    /// The side a neighbour's range gives a run whose adjacent reading heard `end_m`.
-    pub(super) fn of_neighbour(neighbour_m: Option<Option<f32>>, end_m: f32) -> Self {
-        match neighbour_m {
+    /// The side a neighbour gives a run whose end reading heard `end_m` (`None`: the sweep
+    /// ends there). Its silence opens the side only when the run's reflector, `moved_m`
+    /// nearer or farther for it, still lay inside the window: otherwise the blind disc or
+    /// the range may have hidden it. A farther echo opens it only beyond that move too.
+    pub(super) fn of_neighbour(neighbour: Option<Neighbour>, end_m: f32) -> Self {
+        let Some((range_m, moved_m, (min_m, max_m))) = neighbour else {
+            return RunSide::Edge;
+        };
+        let moved_m = if moved_m.is_finite() {
+            moved_m.max(0.0)
+        } else {
+            f32::INFINITY
+        };
+        match range_m {
+            None if end_m - moved_m >= min_m && end_m + moved_m <= max_m => RunSide::Open,
             None => RunSide::Edge,
-            Some(None) => RunSide::Open,
-            Some(Some(m)) if m > end_m => RunSide::Open,
-            Some(Some(_)) => RunSide::Masked,
+            Some(m) if m > end_m + moved_m => RunSide::Open,
+            Some(m) if m > end_m => RunSide::Edge,
+            Some(_) => RunSide::Masked,
         }
     }
 }
@@ -300,9 +316,48 @@ mod tests {
 
     #[test]
     fn a_neighbour_farther_or_silent_opens_a_side_a_nearer_one_masks_it() {
+        let window = (0.26, 3.0);
         assert_eq!(RunSide::of_neighbour(None, 2.0), RunSide::Edge);
-        assert_eq!(RunSide::of_neighbour(Some(None), 2.0), RunSide::Open);
-        assert_eq!(RunSide::of_neighbour(Some(Some(2.5)), 2.0), RunSide::Open);
-        assert_eq!(RunSide::of_neighbour(Some(Some(1.5)), 2.0), RunSide::Masked);
+        assert_eq!(
+            RunSide::of_neighbour(Some((None, 0.0, window)), 2.0),
+            RunSide::Open
+        );
+        assert_eq!(
+            RunSide::of_neighbour(Some((Some(2.5), 0.0, window)), 2.0),
+            RunSide::Open
+        );
+        assert_eq!(
+            RunSide::of_neighbour(Some((Some(1.5), 0.0, window)), 2.0),
+            RunSide::Masked
+        );
+    }
+
+    #[test]
+    fn silence_where_the_moving_sonar_may_have_lost_the_reflector_says_nothing() {
+        // Heard at 0.28 m; the next reading's sonar had moved 0.03 m: the reflector may have
+        // been 0.25 m from it, inside the 0.26 m blind disc.
+        let window = (0.26, 3.0);
+        assert_eq!(
+            RunSide::of_neighbour(Some((None, 0.03, window)), 0.28),
+            RunSide::Edge
+        );
+        assert_eq!(
+            RunSide::of_neighbour(Some((None, 0.01, window)), 0.28),
+            RunSide::Open
+        );
+        // Near the far end of the window, likewise out of range.
+        assert_eq!(
+            RunSide::of_neighbour(Some((None, 0.03, window)), 2.98),
+            RunSide::Edge
+        );
+        // A farther echo within the move may be the same reflector.
+        assert_eq!(
+            RunSide::of_neighbour(Some((Some(2.02), 0.03, window)), 2.0),
+            RunSide::Edge
+        );
+        assert_eq!(
+            RunSide::of_neighbour(Some((Some(f32::NAN), f32::NAN, window)), 2.0),
+            RunSide::Masked
+        );
     }
 }

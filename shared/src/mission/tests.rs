@@ -825,3 +825,59 @@ fn a_gap_visit_that_took_no_mark_back_closes_the_gap_until_no_other_gap_is_left(
         Some(UnreachableReason::ConfirmedCut)
     );
 }
+
+#[test]
+fn a_reflectors_run_survives_a_missed_and_a_spurious_echo_and_a_lone_echo_marks_nothing() {
+    use crate::sonar::Reading;
+    let mut c = MissionConfig {
+        evidence_map: true,
+        ..config(
+            PointM::new(1.0, 4.0),
+            PointM::new(7.0, 4.0),
+            MissionMode::Stop,
+        )
+    };
+    c.robot.sonar_beam = true;
+    let mut m = Box::new(Mission400::new(c, geometry()).unwrap());
+    let pose = Pose {
+        x_m: 1.0,
+        y_m: 4.0,
+        heading_rad: 0.0,
+    };
+    let beam_deg = c.robot.sonar_beam_half_angle_deg;
+    m.readings.clear();
+    for i in 0..45 {
+        let bearing_deg = -39.6 + 1.8 * i as f32;
+        // A post straight ahead at 2 m is heard by every reading whose cone holds it; one of
+        // them misses it, one hears a spurious echo at 1 m; far off to the right one reading
+        // alone hears something at 1.2 m.
+        let range_m = match i {
+            18 => None,
+            24 => Some(1.0),
+            5 => Some(1.2),
+            _ if bearing_deg.abs() <= beam_deg => Some(2.0),
+            _ => None,
+        };
+        m.readings
+            .push(Reading {
+                neck_angle_rad: bearing_deg.to_radians(),
+                range_m,
+                pose,
+            })
+            .unwrap();
+    }
+    let marked = m.mark_reflectors();
+    let hits: std::vec::Vec<PointM> = m.hits.iter().copied().collect();
+    assert_eq!(marked, 1, "{hits:?}");
+    let expected_x_m = 1.0 + c.robot.sonar_offset_m + 2.0;
+    assert!(
+        (hits[0].x_m - expected_x_m).abs() < 0.03 && (hits[0].y_m - 4.0).abs() < 0.03,
+        "{hits:?}"
+    );
+    // Heard through a ray (`sonar_beam` false) the same readings are five reflectors: a
+    // ray's echo lies on its axis, and its missed echo is no fault to bridge.
+    c.robot.sonar_beam = false;
+    let mut ray = Box::new(Mission400::new(c, geometry()).unwrap());
+    ray.readings = m.readings.clone();
+    assert_eq!(ray.mark_reflectors(), 5);
+}
