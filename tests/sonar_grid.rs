@@ -75,6 +75,33 @@ fn the_quick_grid_keeps_the_ray_safe_and_failures_rerun() {
 }
 
 #[test]
+fn the_quick_grid_with_the_evidence_map_neither_collides_nor_calls_a_reachable_goal_unreachable() {
+    // Issue 23's rules on worlds the project does not ship (docs/mapping.md): the body never
+    // touches a wall and `unreachable` comes only with a proof, for the beams and the ray.
+    let out = common::twil()
+        .args([
+            "sonar-grid",
+            "--quick",
+            "--evidence-map",
+            "--json",
+            "--jobs",
+            "2",
+        ])
+        .output()
+        .unwrap();
+    let v = json_of(&out);
+    for row in ["ray", "beam"] {
+        let r = &v[row];
+        assert_eq!(r["collision"], 0, "{row}: {r}");
+        assert_eq!(r["false_unreachable"], 0, "{row}: {r}");
+    }
+    // Reached 23 of the 32 beam missions when this test was written (22 before the
+    // reflectors were placed from their runs' neighbours): a floor against going back.
+    let beam = &v["beam"];
+    assert!(beam["reached"].as_u64().unwrap() >= 22, "{beam}");
+}
+
+#[test]
 fn fault_options_out_of_bounds_are_refused_by_name() {
     let out = common::twil()
         .args(["sonar-grid", "--quick", "--sonar-dropout", "2"])
