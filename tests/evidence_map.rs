@@ -241,11 +241,12 @@ fn doorway() -> (String, String) {
 }
 
 #[test]
-fn a_doorway_the_map_cannot_settle_is_never_called_unreachable() {
+fn a_one_metre_doorway_is_passed_through() {
     // Main's evidence map ended every one of these `unreachable` ("no path on the map",
-    // tentative marks included). Now the verdict needs confirmed marks: the doorway is not
-    // found yet, so the mission gives up (or runs out of time) and says so, never touching a
-    // wall.
+    // tentative marks included); the verdicts turned that into giving up, and since the
+    // reflectors are placed from their runs' neighbours (a doorway's two jambs seen from its
+    // axis are two marks, not one in the doorway) the robot finds the doorway and passes it,
+    // never touching a wall.
     let (da, par) = doorway();
     for (limit, range) in [("15", "1.5"), ("30", "3"), ("70", "6")] {
         let r = simulate(
@@ -261,7 +262,7 @@ fn a_doorway_the_map_cannot_settle_is_never_called_unreachable() {
         );
         let o = outcome(&r);
         assert!(
-            matches!(o, Outcome::Reached | Outcome::GaveUp),
+            matches!(o, Outcome::Reached),
             "{limit}° {range} m: {o:?} ({:?})",
             r.stats.unreachable_reason
         );
@@ -270,13 +271,6 @@ fn a_doorway_the_map_cannot_settle_is_never_called_unreachable() {
             "{limit}° {range} m: clearance {}",
             r.min_clearance_m
         );
-        if r.status == SimStatus::Unreachable {
-            assert_eq!(
-                r.stats.unreachable_reason,
-                Some(UnreachableReason::GapsUnsettled),
-                "{limit}° {range} m"
-            );
-        }
     }
 }
 
