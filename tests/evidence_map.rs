@@ -425,3 +425,44 @@ fn stays_clear_with_the_10_degree_beam(da: &str, par: &str, range_m: &str, seed:
         r.min_clearance_m
     );
 }
+
+#[test]
+fn a_gap_visits_sweep_in_continuous_mode_stands_still() {
+    // A gap visit ends with a full standing sweep at its stand-off point. In continuous mode
+    // the visit used to end as soon as the robot came within the goal tolerance of that
+    // point, still moving: it rolled up to 0.2 m on while it "stood" and swept, and the
+    // sweep, its readings taken from poses that far apart, vouched for nothing.
+    let (da, par) = doorway();
+    let r = simulate(
+        &da,
+        &par,
+        &[
+            "--incidence-limit",
+            "30",
+            "--sonar-range",
+            "3",
+            "--mode",
+            "continuous",
+            "--evidence-map",
+        ],
+    );
+    let mut worst_m = 0.0f32;
+    let mut full_sweeps = 0;
+    let mut start: Option<twil_core::control::Pose> = None;
+    for row in &r.trajectory {
+        if row.phase == Some(twil_core::mission::MissionPhase::Sweep { full: true }) {
+            if start.is_none() {
+                full_sweeps += 1;
+            }
+            let s = *start.get_or_insert(row.pose);
+            worst_m = worst_m.max((row.pose.x_m - s.x_m).hypot(row.pose.y_m - s.y_m));
+        } else {
+            start = None;
+        }
+    }
+    assert!(full_sweeps > 3, "{full_sweeps} full sweeps");
+    assert!(
+        worst_m < 0.05,
+        "the robot moved {worst_m} m during a full standing sweep"
+    );
+}

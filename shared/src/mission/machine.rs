@@ -381,12 +381,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             self.finish(MissionStatus::Reached, out);
             return;
         }
-        if self.config.mode == MissionMode::Continuous
-            && matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle)
-            && self.at_visit_target()
-        {
-            self.end_visit(out);
-        }
+        // A gap visit is not ended on the way, even in continuous mode: its sweep must stand
+        // (the visit's stand-off point ends the path, and `on_settled` ends the visit there).
+        // Ended within the tolerance while still moving, the robot rolled 0.2 m on during its
+        // "standing" sweep, which then vouched for nothing.
         if self.stats.time_s >= self.config.time_limit_s {
             self.finish(MissionStatus::Timeout, out);
             return;
@@ -398,7 +396,8 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             match self.phase {
                 MissionPhase::Sweep { full } => self.start_sweep(full, false, out),
                 MissionPhase::Follow | MissionPhase::Settle
-                    if self.config.mode == MissionMode::Continuous =>
+                    if self.config.mode == MissionMode::Continuous
+                        && !self.settling_at_visit_target() =>
                 {
                     self.start_sweep(false, true, out)
                 }
@@ -419,6 +418,12 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         }
         // A sweep half done was taken from poses the robot has left: start it again.
         self.begin_standing_sweep(false, out);
+    }
+
+    /// Past the end of the path, at a gap visit's stand-off point: the robot waits to be
+    /// settled for the visit's standing sweep, with no moving pass or replan to restart it.
+    pub(super) fn settling_at_visit_target(&self) -> bool {
+        matches!(self.phase, MissionPhase::Settle) && self.at_visit_target()
     }
 
     fn at_goal(&self) -> bool {

@@ -219,7 +219,9 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.last_sweep_full = sweep.full;
         if sweep.moving {
             // Continuous: only replan if still following (a settle may have ended the pass).
-            if matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle) {
+            if matches!(self.phase, MissionPhase::Follow | MissionPhase::Settle)
+                && !self.settling_at_visit_target()
+            {
                 let blocked = self.remaining_path_blocked();
                 if blocked {
                     self.stats.blocked_replans += 1;
