@@ -439,37 +439,15 @@ fn run_on_this_thread(
             }
             if let Ok(probe) = std::env::var("TWIL_PROBE_BOX") {
                 let v: Vec<f32> = probe.split(',').filter_map(|t| t.parse().ok()).collect();
-                if v.len() == 4
-                    && outcome
-                        .events
-                        .iter()
-                        .any(|e| matches!(e, MissionEvent::SweepDone { .. }))
-                {
-                    let mut marked = Vec::new();
-                    let mut y = v[1];
-                    while y <= v[3] {
-                        let mut x = v[0];
-                        while x <= v[2] {
-                            let e = m.evidence().get(twil_core::geom::PointM::new(x, y));
-                            if matches!(
-                                e,
-                                twil_core::mission::CellEvidence::Tentative
-                                    | twil_core::mission::CellEvidence::Confirmed
-                            ) {
-                                marked.push(format!(
-                                    "({x:.2},{y:.2}){}",
-                                    if matches!(e, twil_core::mission::CellEvidence::Confirmed) {
-                                        "C"
-                                    } else {
-                                        "t"
-                                    }
-                                ));
-                            }
-                            x += 0.05;
-                        }
-                        y += 0.05;
-                    }
-                    eprintln!("         BOX {}", marked.join(" "));
+                let swept = outcome
+                    .events
+                    .iter()
+                    .any(|e| matches!(e, MissionEvent::SweepDone { .. }));
+                if let ([x0, y0, x1, y1], true) = (v.as_slice(), swept) {
+                    eprintln!(
+                        "         BOX {}",
+                        marked_cells(m.evidence(), (*x0, *y0), (*x1, *y1)).join(" ")
+                    );
                 }
             }
             if let Some(target) = m.gap_visit_target() {
@@ -625,4 +603,36 @@ pub fn known_map_plan_length_m(setup: &SimSetup) -> Option<f32> {
         )
         .ok()?;
     (report.status == twil_core::plan::PlanStatus::Found).then_some(report.length_m)
+}
+
+/// The cells of `evidence` whose centres lie in the box from `lo` to `hi` (metres) and that
+/// are marked occupied, as `(x, y)t` (tentative) or `(x, y)C` (confirmed) at their centres
+/// (`TWIL_PROBE_BOX`, a debugging aid).
+fn marked_cells<const W: usize, const E: usize>(
+    evidence: &twil_core::mission::EvidenceMap<W, E>,
+    lo: (f32, f32),
+    hi: (f32, f32),
+) -> Vec<String> {
+    use twil_core::mission::CellEvidence;
+    let g = *evidence.geometry();
+    let res_m = g.resolution_m();
+    // Cell indices from `from_m` to `to_m`, kept on the map: the box costs at most the map.
+    let cells = |from_m: f32, to_m: f32, count: u16| {
+        let last = count as i32 - 1;
+        let index = |m: f32| ((m / res_m).floor() as i32).clamp(0, last);
+        index(from_m)..=index(to_m)
+    };
+    let mut marked = Vec::new();
+    for y in cells(lo.1, hi.1, g.height()) {
+        for x in cells(lo.0, hi.0, g.width()) {
+            let tag = match evidence.get_xy(x, y) {
+                CellEvidence::Tentative => "t",
+                CellEvidence::Confirmed => "C",
+                CellEvidence::Unknown | CellEvidence::Free => continue,
+            };
+            let (cx, cy) = ((x as f32 + 0.5) * res_m, (y as f32 + 0.5) * res_m);
+            marked.push(format!("({cx:.3},{cy:.3}){tag}"));
+        }
+    }
+    marked
 }

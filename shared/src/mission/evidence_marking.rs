@@ -42,7 +42,7 @@ use crate::raster::mark_point_m;
 use crate::sonar::hit_to_world;
 
 use super::evidence::{CellEvidence, Change};
-use super::reflector::{reflector_bearings, RunEnd, RunSide};
+use super::reflector::{reflector_bearings, Neighbour, RunEnd, RunSide};
 use super::swept::{reading_shift_m, BlindCells, Swept};
 use super::Mission;
 
@@ -157,32 +157,28 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             let (mut end, mut sum_m, mut previous_m) = (start, first_m, first_m);
             let (mut least_m, mut most_m, mut echoes) = (first_m, first_m, 1u16);
             loop {
-                let after_next_m = readings.get(end + 2).and_then(|r| r.range_m);
-                let agrees = |m: Option<f32>| m.is_some_and(|m| abs(m - previous_m) <= tolerance_m);
-                let (next_m, skipped) = match readings.get(end + 1).map(|r| r.range_m) {
+                // The reading past the next one, when the run may go on across one reading.
+                let bridge_m = readings
+                    .get(end + 2)
+                    .and_then(|r| r.range_m)
+                    .filter(|_| bridges_one_reading);
+                let (next_m, skipped) = match (readings.get(end + 1).map(|r| r.range_m), bridge_m) {
                     // One short echo inside a run: the reflector the readings on both sides
                     // heard was in its cone too, so it heard something nearer that no
                     // neighbour heard, which no reflector in the beam does (it would be in
                     // about 2m + 1 cones): a spurious echo (crosstalk, multipath). Skipped,
                     // and not marked.
-                    Some(Some(m))
-                        if bridges_one_reading
-                            && m < previous_m - tolerance_m
-                            && agrees(after_next_m) =>
+                    (Some(Some(m)), Some(after_m))
+                        if m < previous_m - tolerance_m
+                            && abs(after_m - previous_m) <= tolerance_m =>
                     {
-                        match after_next_m {
-                            Some(m) => (m, 1),
-                            None => break,
-                        }
+                        (after_m, 1)
                     }
-                    Some(Some(m)) => (m, 0),
+                    (Some(Some(m)), _) => (m, 0),
                     // One missed echo inside a run: a reflector within β of the readings on
                     // both sides of it is within β of it too (the beam is wider than a step),
                     // so its silence was the ranger's fault, not the reflector leaving.
-                    Some(None) if bridges_one_reading => match after_next_m {
-                        Some(m) => (m, 1),
-                        None => break,
-                    },
+                    (Some(None), Some(after_m)) => (after_m, 1),
                     _ => break,
                 };
                 if abs(next_m - previous_m) > tolerance_m {
@@ -224,13 +220,17 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     (r.range_m, moved_m, window)
                 })
             };
+            let (before, after) = (
+                neighbour(start.checked_sub(1), start),
+                neighbour(Some(end + 1), end),
+            );
             let first = RunEnd {
                 bearing_rad: bearing(start),
-                side: RunSide::of_neighbour(neighbour(start.checked_sub(1), start), first_m),
+                side: RunSide::of_neighbour(before, first_m),
             };
             let last = RunEnd {
                 bearing_rad: bearing(end),
-                side: RunSide::of_neighbour(neighbour(Some(end + 1), end), previous_m),
+                side: RunSide::of_neighbour(after, previous_m),
             };
             let step_rad = match (start.checked_sub(1), readings.get(start + 1)) {
                 (_, Some(_)) => bearing(start + 1) - bearing(start),
@@ -242,14 +242,11 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             start = end + 1;
             // One echo between two silences, well inside the window: no reflector in the beam
             // is heard by one reading alone (see above), so it is a spurious echo.
-            let silent = |i: Option<usize>| {
-                i.and_then(|i| readings.get(i))
-                    .is_some_and(|r| r.range_m.is_none())
-            };
+            let silent = |n: Option<Neighbour>| n.is_some_and(|(range_m, ..)| range_m.is_none());
             if run_start == end
                 && bridges_one_reading
-                && silent(run_start.checked_sub(1))
-                && silent(Some(end + 1))
+                && silent(before)
+                && silent(after)
                 && depth_m - sweep_shift_m >= robot.sonar_min_range_m
                 && depth_m + sweep_shift_m <= robot.sonar_range_m
             {

@@ -23,6 +23,8 @@
 
 use heapless::Vec;
 
+use crate::math::ceil;
+
 /// Reflectors placed for one run at most; a run wider than `2β · (MAX − 1)` keeps its two end
 /// reflectors and spreads the rest evenly.
 pub(super) const MAX_REFLECTORS_PER_RUN: usize = 8;
@@ -139,7 +141,8 @@ pub(super) fn reflector_bearings(
     } else {
         // Several: one β inside each end, the rest at most 2β apart between them.
         let span_rad = (from_hi_rad - from_lo_rad).max(0.0);
-        let gaps = ceil_count(span_rad / (2.0 * beam_rad)).clamp(1, MAX_REFLECTORS_PER_RUN - 1);
+        let gaps =
+            (ceil(span_rad / (2.0 * beam_rad)) as usize).clamp(1, MAX_REFLECTORS_PER_RUN - 1);
         for k in 0..=gaps {
             let _ = out.push(from_lo_rad + span_rad * k as f32 / gaps as f32);
         }
@@ -148,19 +151,6 @@ pub(super) fn reflector_bearings(
         out.reverse();
     }
     out
-}
-
-/// `ceil` for a small non-negative ratio, as a count (no `std`).
-fn ceil_count(x: f32) -> usize {
-    if x.is_nan() || x <= 0.0 {
-        return 0;
-    }
-    let whole = x as usize;
-    if (whole as f32) < x {
-        whole + 1
-    } else {
-        whole
-    }
 }
 
 #[cfg(test)]
