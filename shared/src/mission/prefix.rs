@@ -129,6 +129,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             pose.heading_rad,
             band_rad,
         );
+        let mut ends_at_unknown = false;
         if self.last_sweep_full {
             // A full sweep saw all it could from here. What it could not see beside a known
             // obstacle (its end in the sonar's blind zone, or behind it) may reach further:
@@ -192,6 +193,11 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 // sweeping and the next pass replans.
                 self.truncate_prefix_m(unknown_at_m.unwrap_or(0.0));
                 self.stats.band_cuts += 1;
+                // With the evidence map a moving pass vouches for nothing, so the robot may
+                // well reach this end and sweep standing there: the unknown point the body
+                // would meet must not then lie in the sonar's blind disc, where no sweep from
+                // there can vouch for it (it became a suspect and closed the way).
+                ends_at_unknown = self.config.evidence_map;
             } else if path_outside_band || unknown_at_m.is_some() {
                 push(out, MissionEvent::FullSweepRequested);
                 self.begin_standing_sweep(true, out);
@@ -235,7 +241,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             swept: self.swept(pose, swept_half_band_rad, true),
         };
         // A moving pass's prefix is replaced by the next pass's long before its end.
-        let blind_cut = if moving {
+        let blind_cut = if moving && !ends_at_unknown {
             None
         } else {
             blind.keep_m(&self.prefix)
