@@ -18,7 +18,12 @@
 //!    the pilot's tracking), from a little past the sonar's minimum range out to the distance
 //!    where a beam of half-angle β is as wide as the narrowest gap the robot can use
 //!    (`w = 2·radius + 2 cells`): `d = w / (2·tan β)`, within the sonar's reach. Nearest,
-//!    because the beam's footprint in the opening narrows as the sonar nears it. There it
+//!    because the beam's footprint in the opening narrows as the sonar nears it. The line is
+//!    turned by up to 45° either way when the marks known now would hide the gap from a point
+//!    on it (`GapView`: a wall the robot would stand beside, met along its line towards the
+//!    gap, has its foot nearer than the Thales bound for the gap, so the sweep there could
+//!    vouch for nothing past the wall's end); only when every such point is hidden is the
+//!    nearest free point on the line taken as before. There it
 //!    takes a full standing sweep. A reading whose beam fits through the gap
 //!    hears the room beyond, the jambs' run of constant depth puts its reflector on the jamb,
 //!    and the Thales rule (`swept`) vouches for the gap's cells, taking their tentative marks
@@ -48,8 +53,8 @@
 //! MCU has no room for the occupied plane).
 
 use crate::geom::PointM;
-use crate::grid::Grid;
-use crate::math::{cos, hypot, sin};
+use crate::grid::{Grid, GridGeometry};
+use crate::math::{abs, atan2, cos, hypot, sin, wrap_angle_rad};
 use crate::raster::{mark_point_m, BresenhamLine};
 
 use super::evidence::CellEvidence;
@@ -201,7 +206,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.gap_visits += 1;
         let robot = self.config.robot;
         let res_m = self.grid.geometry().resolution_m();
-        let Some((gap, dir, _)) = first_blocked_stretch(&self.grid, &self.path) else {
+        let Some((gap, dir, stretch)) = first_blocked_stretch(&self.grid, &self.path) else {
             // The confirmed path is clear on the full map too (marks changed meanwhile):
             // sweep all round here and plan again.
             push(out, MissionEvent::FullSweepRequested);
@@ -223,11 +228,34 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         // (the pilot's tracking error): keep that margin clear around the stand-off point too.
         let margin_cells =
             ((robot.planning_radius_m - robot.physical_radius_m()).max(0.0) / res_m) as i32;
-        let target = stand_off_point(&self.grid, gap, dir, near_m, stand_off_m, margin_cells)
-            .unwrap_or_else(|| {
-                // No free point on the line: the last free path point before the gap.
-                self.position_world()
-            });
+        let g = *self.grid.geometry();
+        let own_reach_m = robot.planning_radius_m + res_m;
+        let (first, last) = (
+            cell_centre(&g, stretch[0].0, stretch[0].1),
+            cell_centre(&g, stretch[1].0, stretch[1].1),
+        );
+        let view = GapView {
+            gap,
+            beam_rad,
+            cell_m: res_m,
+            marked: &|x, y| {
+                let p = cell_centre(&g, x, y);
+                self.evidence.is_occupied_xy(x, y)
+                    && distance_to_segment_m(p, first, last) > own_reach_m
+            },
+        };
+        let target = stand_off_point_in_view(
+            &self.grid,
+            (gap, dir),
+            (near_m, stand_off_m),
+            margin_cells,
+            &view,
+        )
+        .or_else(|| stand_off_point(&self.grid, gap, dir, near_m, stand_off_m, margin_cells))
+        .unwrap_or_else(|| {
+            // No free point on the line: the last free path point before the gap.
+            self.position_world()
+        });
         self.visit = Some(GapVisit { target });
         let tentative_cells = self.tentative_cells_within(gap, stand_off_m);
         // Full only past MAX_GAP_VISITS visits, which end the mission first.
@@ -344,6 +372,105 @@ fn stand_off_point<const W: usize>(
     None
 }
 
+/// Directions tried for a stand-off point, radians off the line through the gap, in order.
+const VIEW_FAN_RAD: [f32; 7] = [0.0, 0.26, -0.26, 0.52, -0.52, 0.79, -0.79];
+
+/// What the marks known now say of a stand-off point: could a standing sweep from there vouch
+/// for the gap's middle, or would a known reflector contradict it?
+struct GapView<'a> {
+    /// The gap's middle, world metres.
+    gap: PointM,
+    /// The beam's half-angle, radians.
+    beam_rad: f32,
+    /// One cell, metres.
+    cell_m: f32,
+    /// Marked cells other than the gap's own (those a sweep is sent to take back).
+    marked: &'a dyn Fn(i32, i32) -> bool,
+}
+
+impl GapView<'_> {
+    /// `true` when no mark but the gap's own lies where it would contradict the Thales rule
+    /// (`swept`) for the gap's middle seen from `sonar`: within `d·cos(max(0, |Δφ| − β))` plus
+    /// a cell of it, `d` the distance to the gap and `Δφ` the mark's bearing off the gap's.
+    /// A wall the robot stands beside, met along its line towards the gap, is such a mark:
+    /// its foot, near the sonar, is nearer than the bound, so the sweep could vouch for
+    /// nothing past its end, and a visit made there settled nothing (world 5 of
+    /// `twil sonar-grid`, 10°/10° beam, 6 m, continuous).
+    ///
+    /// Cost: the square of side `2d` around the sonar, in cells.
+    fn clear_from(&self, g: &GridGeometry, sonar: PointM) -> bool {
+        let d_m = hypot(self.gap.x_m - sonar.x_m, self.gap.y_m - sonar.y_m);
+        let Some((sx, sy)) = g.cell_xy_of(sonar) else {
+            return false;
+        };
+        let gap_rad = atan2(self.gap.y_m - sonar.y_m, self.gap.x_m - sonar.x_m);
+        let h = (d_m / self.cell_m) as i32 + 1;
+        for y in (sy - h).max(0)..=(sy + h).min(g.height() as i32 - 1) {
+            for x in (sx - h).max(0)..=(sx + h).min(g.width() as i32 - 1) {
+                if !(self.marked)(x, y) {
+                    continue;
+                }
+                let p = cell_centre(g, x, y);
+                let r_m = hypot(p.x_m - sonar.x_m, p.y_m - sonar.y_m);
+                let off_rad = abs(wrap_angle_rad(
+                    atan2(p.y_m - sonar.y_m, p.x_m - sonar.x_m) - gap_rad,
+                ));
+                let bound_m = d_m * cos((off_rad - self.beam_rad).max(0.0)) + self.cell_m;
+                if off_rad <= core::f32::consts::FRAC_PI_2 + self.beam_rad && r_m <= bound_m {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+}
+
+/// The nearest free cell's centre in front of `gap` (back along `-dir`, turned by up to 45°,
+/// [`VIEW_FAN_RAD`]), `near_m` to `far_m` away in steps of a cell, from which the marks known
+/// now do not hide the gap ([`GapView`]), or `None`.
+fn stand_off_point_in_view<const W: usize>(
+    grid: &Grid<W>,
+    (gap, dir): (PointM, PointM),
+    (near_m, far_m): (f32, f32),
+    margin_cells: i32,
+    view: &GapView<'_>,
+) -> Option<PointM> {
+    let g = grid.geometry();
+    let res_m = g.resolution_m();
+    let mut d_m = near_m;
+    while d_m <= far_m {
+        for a in VIEW_FAN_RAD {
+            let (c, s) = (cos(a), sin(a));
+            let back = PointM::new(c * dir.x_m - s * dir.y_m, s * dir.x_m + c * dir.y_m);
+            let p = PointM::new(gap.x_m - d_m * back.x_m, gap.y_m - d_m * back.y_m);
+            let Some((x, y)) = g.cell_xy_on_map(p) else {
+                continue;
+            };
+            let clear = (-margin_cells..=margin_cells).all(|dy| {
+                (-margin_cells..=margin_cells).all(|dx| !grid.is_occupied_xy(x + dx, y + dy))
+            });
+            let centre = cell_centre(g, x, y);
+            if clear && view.clear_from(g, centre) {
+                return Some(centre);
+            }
+        }
+        d_m += res_m;
+    }
+    None
+}
+
+/// Distance from `p` to the segment `a`–`b`, metres.
+fn distance_to_segment_m(p: PointM, a: PointM, b: PointM) -> f32 {
+    let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((p.x_m - a.x_m) * dx + (p.y_m - a.y_m) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    hypot(p.x_m - (a.x_m + t * dx), p.y_m - (a.y_m + t * dy))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -406,5 +533,49 @@ mod tests {
             g.set_xy(50, y, true);
         }
         assert!(at(&g, 0).is_none());
+    }
+
+    #[test]
+    fn a_wall_met_along_its_line_hides_the_gap_and_the_stand_off_turns_away_from_it() {
+        // A wall along y = 2.2 m ending 0.2 m short of the gap at (2.5, 2.5); the way crosses
+        // the gap eastwards. The planning grid is empty (every point is free).
+        let mut walls = G::new_const(GridGeometry::new(100, 100, 0.05).unwrap()).unwrap();
+        for x in 0..=45 {
+            walls.set_xy(x, 44, true);
+        }
+        let free = G::new_const(GridGeometry::new(100, 100, 0.05).unwrap()).unwrap();
+        let g = *free.geometry();
+        let marked = |x: i32, y: i32| walls.is_occupied_xy(x, y);
+        let view = GapView {
+            gap: PointM::new(2.525, 2.525),
+            beam_rad: 15.0f32.to_radians(),
+            cell_m: 0.05,
+            marked: &marked,
+        };
+        // From 1 m straight back the sonar stands 0.3 m beside the wall: its foot, and the
+        // wall between the sonar and the gap, are nearer than the Thales bound.
+        assert!(!view.clear_from(&g, PointM::new(1.525, 2.525)));
+        // From the side away from the wall at 45°, nothing is.
+        assert!(view.clear_from(&g, PointM::new(1.825, 3.225)));
+        let east = PointM::new(1.0, 0.0);
+        let s = stand_off_point_in_view(&free, (view.gap, east), (1.0, 1.5), 0, &view)
+            .expect("a point in view");
+        assert!(s.y_m > 2.9, "{s:?}");
+        assert!(
+            (hypot(s.x_m - 2.525, s.y_m - 2.525) - 1.0).abs() < 0.05,
+            "{s:?}"
+        );
+        // Without the wall the nearest point straight back will do.
+        let nothing = |_: i32, _: i32| false;
+        let open = GapView {
+            marked: &nothing,
+            ..view
+        };
+        let s = stand_off_point_in_view(&free, (open.gap, east), (1.0, 1.5), 0, &open)
+            .expect("a point in view");
+        assert!(
+            (s.y_m - 2.525).abs() < 0.03 && (s.x_m - 1.525).abs() < 0.03,
+            "{s:?}"
+        );
     }
 }
