@@ -42,6 +42,7 @@ use crate::raster::mark_point_m;
 use crate::sonar::hit_to_world;
 
 use super::evidence::{CellEvidence, Change};
+use super::planes::{remember, PlaneSeen};
 use super::reflector::{reflector_bearings, Neighbour, RunEnd, RunSide};
 use super::swept::{reading_shift_m, BlindCells, Swept};
 use super::Mission;
@@ -238,6 +239,30 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 (None, None) => 0.0,
             };
             let depth_m = sum_m / count;
+            // A plane's foot: a region of constant depth that the reflector left at both
+            // ends, read standing. Confirmed when an earlier sweep heard the same plane from
+            // elsewhere (`planes`).
+            let plane = (constant_depth
+                && cone_rad > 0.0
+                && first.side == RunSide::Open
+                && last.side == RunSide::Open
+                && sweep_shift_m <= g.resolution_m())
+            .then(|| {
+                let mid_rad = 0.5 * (first.bearing_rad + last.bearing_rad);
+                PlaneSeen {
+                    foot: hit_to_world(middle.pose, robot.sonar_offset_m, mid_rad, depth_m),
+                    normal_rad: middle.pose.heading_rad + mid_rad,
+                    sonar: middle.pose.point_ahead(robot.sonar_offset_m),
+                }
+            });
+            let on_a_known_plane = plane.is_some_and(|p| {
+                self.planes
+                    .iter()
+                    .any(|q| q.agrees_with(&p, 2.0 * sweep_step_rad, g.resolution_m()))
+            });
+            if let Some(p) = plane {
+                remember(&mut self.planes, p);
+            }
             let run_start = start;
             start = end + 1;
             // One echo between two silences, well inside the window: no reflector in the beam
@@ -266,6 +291,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 if let (Some((x, y)), false) = (cell, seen_this_sweep) {
                     if constant_depth {
                         self.evidence.observe_occupied_xy(x, y);
+                        if on_a_known_plane && self.evidence.get_xy(x, y) == CellEvidence::Tentative
+                        {
+                            self.evidence.observe_occupied_xy(x, y);
+                        }
                     } else {
                         self.evidence.observe_arc_xy(x, y);
                     }

@@ -88,6 +88,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             visit: None,
             gap_visits: 0,
             visited_gaps: VisitedGaps::new(),
+            planes: heapless::Deque::new(),
         }
     };
 
@@ -175,6 +176,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.visit = None;
         self.gap_visits = 0;
         self.visited_gaps.clear();
+        self.planes.clear();
         self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
         if config.evidence_map {
             self.assume_body_disc_clear();

@@ -274,6 +274,8 @@ pub struct Mission<const W: usize, const E: usize = W> {
     gap_visits: u16,
     /// Evidence map: the gaps visited so far, drawn into later proof plans (`verdict`).
     visited_gaps: verdict::VisitedGaps,
+    /// Evidence map: planes heard by earlier standing sweeps (`planes`).
+    planes: planes::Planes,
 }
 mod blind;
 mod config;
@@ -285,6 +287,7 @@ mod local;
 mod machine;
 mod messages;
 mod pilot;
+mod planes;
 mod planning;
 mod prefix;
 mod reflector;

@@ -881,3 +881,53 @@ fn a_reflectors_run_survives_a_missed_and_a_spurious_echo_and_a_lone_echo_marks_
     ray.readings = m.readings.clone();
     assert_eq!(ray.mark_reflectors(), 5);
 }
+
+#[test]
+fn a_plane_heard_from_two_places_confirms_the_second_foot_a_parallel_one_does_not() {
+    use crate::sonar::Reading;
+    let mut c = MissionConfig {
+        evidence_map: true,
+        ..config(
+            PointM::new(1.0, 4.0),
+            PointM::new(7.0, 4.0),
+            MissionMode::Stop,
+        )
+    };
+    c.robot.sonar_beam = true;
+    let beam_deg = c.robot.sonar_beam_half_angle_deg;
+    let offset_m = c.robot.sonar_offset_m;
+    // A standing sweep from (1, y) facing east at a smooth wall `range_m` ahead: the readings
+    // whose cone holds the wall's normal hear its foot, the others nothing.
+    let sweep = |m: &mut Mission400, y_m: f32, range_m: f32| {
+        let pose = Pose {
+            x_m: 1.0,
+            y_m,
+            heading_rad: 0.0,
+        };
+        m.readings.clear();
+        for i in 0..45 {
+            let bearing_deg = -39.6 + 1.8 * i as f32;
+            m.readings
+                .push(Reading {
+                    neck_angle_rad: bearing_deg.to_radians(),
+                    range_m: (bearing_deg.abs() <= beam_deg).then_some(range_m),
+                    pose,
+                })
+                .unwrap();
+        }
+        m.mark_reflectors()
+    };
+    let foot = |y_m: f32, range_m: f32| PointM::new(1.0 + offset_m + range_m, y_m);
+    let mut m = Box::new(Mission400::new(c, geometry()).unwrap());
+    assert_eq!(sweep(&mut m, 3.0, 1.2), 1);
+    assert_eq!(m.evidence.get(foot(3.0, 1.2)), CellEvidence::Tentative);
+    // The same wall 1 m further along: the second look agrees with the first plane.
+    assert_eq!(sweep(&mut m, 4.0, 1.2), 1);
+    assert_eq!(m.evidence.get(foot(4.0, 1.2)), CellEvidence::Confirmed);
+    assert_eq!(m.evidence.get(foot(3.0, 1.2)), CellEvidence::Tentative);
+    // A wall 0.3 m nearer (within the 1.5 m range), parallel to the first: another plane, left tentative.
+    let mut m = Box::new(Mission400::new(c, geometry()).unwrap());
+    sweep(&mut m, 3.0, 1.2);
+    sweep(&mut m, 4.0, 0.9);
+    assert_eq!(m.evidence.get(foot(4.0, 0.9)), CellEvidence::Tentative);
+}
