@@ -12,7 +12,11 @@
 //! - **Silence** marks nothing: a smooth wall met at more than the incidence limit is silent
 //!   (Kuc & Siegel 1987), so silence is never proof that a cell is free for the body.
 //! - **One viewpoint, one step**: a sweep's reflectors move a cell at most once, so a mark is
-//!   confirmed only by two sweeps (two viewpoints).
+//!   confirmed only by two sweeps (two viewpoints): on one cell, or on one plane (`planes`:
+//!   a smooth wall's foot moves with the viewpoint).
+//! - **A sloping run's foot**: a wall heard at wide angles makes a long run whose range rises
+//!   on both sides of its nearest point; the readings within a cell of the least range, at
+//!   least β wide and inside the run, are its region of constant depth (standing sweeps).
 //! - **Only a region of constant depth confirms**: a run at least the beam's half-angle wide
 //!   and level within a cell. A shorter or sloping run (an oblique wall's arc) marks its
 //!   reflector tentative and never confirms it: its echo came from somewhere on the arc.
@@ -242,19 +246,38 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             // A plane's foot: a region of constant depth that the reflector left at both
             // ends, read standing. Confirmed when an earlier sweep heard the same plane from
             // elsewhere (`planes`).
-            let plane = (constant_depth
+            // A sloping run (a wall heard diffusely, its range growing on both sides of its
+            // nearest point) holds a region of constant depth too: the readings within a cell
+            // of its least range, when they are at least β wide and inside the run (the range
+            // rises on both sides). That is the wall's foot; the rest of the run is its arc.
+            let sloping_foot = if constant_depth
+                || cone_rad <= 0.0
+                || sweep_shift_m > g.resolution_m()
+            {
+                None
+            } else {
+                nearest_stretch(readings, (start, end), least_m, g.resolution_m())
+                    .filter(|&(a, b)| {
+                        a > start && b < end && abs(bearing(b) - bearing(a)) + 1.0e-4 >= beam_rad
+                    })
+                    .map(|(a, b)| (0.5 * (bearing(a) + bearing(b)), least_m))
+            };
+            let standing_plane = constant_depth
                 && cone_rad > 0.0
                 && first.side == RunSide::Open
-                && last.side == RunSide::Open
-                && sweep_shift_m <= g.resolution_m())
-            .then(|| {
-                let mid_rad = 0.5 * (first.bearing_rad + last.bearing_rad);
-                PlaneSeen {
-                    foot: hit_to_world(middle.pose, robot.sonar_offset_m, mid_rad, depth_m),
+                && last.side == RunSide::Open;
+            let plane_foot = if standing_plane {
+                Some((0.5 * (first.bearing_rad + last.bearing_rad), depth_m))
+            } else {
+                sloping_foot
+            };
+            let plane = plane_foot
+                .filter(|_| sweep_shift_m <= g.resolution_m())
+                .map(|(mid_rad, foot_m)| PlaneSeen {
+                    foot: hit_to_world(middle.pose, robot.sonar_offset_m, mid_rad, foot_m),
                     normal_rad: middle.pose.heading_rad + mid_rad,
                     sonar: middle.pose.point_ahead(robot.sonar_offset_m),
-                }
-            });
+                });
             let on_a_known_plane = plane.is_some_and(|p| {
                 self.planes
                     .iter()
@@ -301,6 +324,22 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 }
                 mark_point_m(&mut self.grid, p, e);
                 let _ = self.hits.push(p);
+            }
+            if let Some((mid_rad, foot_m)) = sloping_foot {
+                let p = hit_to_world(middle.pose, robot.sonar_offset_m, mid_rad, foot_m);
+                let cell = g.cell_xy_on_map(p).filter(|_| p.is_finite());
+                let seen_this_sweep = self.hits.iter().any(|q| g.cell_xy_on_map(*q) == cell);
+                if let Some((x, y)) = cell {
+                    // One sweep, one step (above), unless a second viewpoint agrees.
+                    if !seen_this_sweep {
+                        self.evidence.observe_occupied_xy(x, y);
+                    }
+                    if on_a_known_plane && self.evidence.get_xy(x, y) == CellEvidence::Tentative {
+                        self.evidence.observe_occupied_xy(x, y);
+                    }
+                    mark_point_m(&mut self.grid, p, e);
+                    let _ = self.hits.push(p);
+                }
             }
         }
         self.stats.hits += self.hits.len() as u32;
@@ -472,4 +511,25 @@ pub(super) fn centre(g: &crate::grid::GridGeometry, x: i32, y: i32) -> PointM {
         (x as f32 + 0.5) * g.resolution_m(),
         (y as f32 + 0.5) * g.resolution_m(),
     )
+}
+
+/// The readings of `run` (first and last index) within `cell_m` of `least_m`, the run's least
+/// range: the first and the last of them when no reading between them is farther (silences,
+/// bridged dropouts, pass), else `None`.
+fn nearest_stretch(
+    readings: &[crate::sonar::Reading],
+    (start, end): (usize, usize),
+    least_m: f32,
+    cell_m: f32,
+) -> Option<(usize, usize)> {
+    let near = |i: usize| {
+        readings
+            .get(i)
+            .and_then(|r| r.range_m)
+            .is_some_and(|m| m >= least_m - 1.0e-3 && m <= least_m + cell_m)
+    };
+    let a = (start..=end).find(|&i| near(i))?;
+    let b = (start..=end).rev().find(|&i| near(i))?;
+    let unbroken = (a..=b).all(|i| near(i) || readings.get(i).is_some_and(|r| r.range_m.is_none()));
+    unbroken.then_some((a, b))
 }

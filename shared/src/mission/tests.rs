@@ -931,3 +931,47 @@ fn a_plane_heard_from_two_places_confirms_the_second_foot_a_parallel_one_does_no
     sweep(&mut m, 4.0, 0.9);
     assert_eq!(m.evidence.get(foot(4.0, 0.9)), CellEvidence::Tentative);
 }
+
+#[test]
+fn a_wall_heard_diffusely_has_its_foot_marked_and_confirmed_from_a_second_place() {
+    use crate::sonar::Reading;
+    let mut c = MissionConfig {
+        evidence_map: true,
+        ..config(
+            PointM::new(1.0, 4.0),
+            PointM::new(7.0, 4.0),
+            MissionMode::Stop,
+        )
+    };
+    c.robot.sonar_beam = true;
+    let beam_rad = c.robot.sonar_beam_half_angle_deg.to_radians();
+    let offset_m = c.robot.sonar_offset_m;
+    // A wall 1.2 m ahead that echoes at any angle: each reading hears the nearest point of
+    // the wall in its cone, at 1.2 m / cos(|bearing| − β) beyond the cone's reach of the foot.
+    let sweep = |m: &mut Mission400, y_m: f32| {
+        let pose = Pose {
+            x_m: 1.0,
+            y_m,
+            heading_rad: 0.0,
+        };
+        m.readings.clear();
+        for i in 0..45 {
+            let bearing_rad = (-39.6f32 + 1.8 * i as f32).to_radians();
+            let off_rad = (bearing_rad.abs() - beam_rad).max(0.0);
+            m.readings
+                .push(Reading {
+                    neck_angle_rad: bearing_rad,
+                    range_m: Some(1.2 / off_rad.cos()),
+                    pose,
+                })
+                .unwrap();
+        }
+        m.mark_reflectors();
+    };
+    let foot = |y_m: f32| PointM::new(1.0 + offset_m + 1.2, y_m);
+    let mut m = Box::new(Mission400::new(c, geometry()).unwrap());
+    sweep(&mut m, 3.0);
+    assert_eq!(m.evidence.get(foot(3.0)), CellEvidence::Tentative);
+    sweep(&mut m, 4.0);
+    assert_eq!(m.evidence.get(foot(4.0)), CellEvidence::Confirmed);
+}
