@@ -81,6 +81,18 @@ impl Pose {
     }
 }
 
+/// Distance from `p` to the segment `a`–`b`, metres.
+pub fn distance_to_segment_m(p: PointM, a: PointM, b: PointM) -> f32 {
+    let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((p.x_m - a.x_m) * dx + (p.y_m - a.y_m) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    crate::math::hypot(p.x_m - (a.x_m + t * dx), p.y_m - (a.y_m + t * dy))
+}
+
 /// Euclidean length of a polyline, metres (0 for fewer than two points): the one sum the
 /// trajectory, the mission's prefix and blind-zone checks and the host's classic methods share.
 pub fn polyline_length_m(points: &[PointM]) -> f32 {

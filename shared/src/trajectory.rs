@@ -705,14 +705,7 @@ mod tests {
         use proptest::prelude::*;
 
         fn seg_dist(p: PointM, a: PointM, b: PointM) -> f32 {
-            let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
-            let l2 = dx * dx + dy * dy;
-            let t = if l2 > 0.0 {
-                (((p.x_m - a.x_m) * dx + (p.y_m - a.y_m) * dy) / l2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            hypot(p.x_m - a.x_m - t * dx, p.y_m - a.y_m - t * dy)
+            crate::geom::distance_to_segment_m(p, a, b)
         }
 
         proptest! {

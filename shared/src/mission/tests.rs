@@ -826,9 +826,8 @@ fn a_gap_visit_that_took_no_mark_back_closes_the_gap_until_no_other_gap_is_left(
     );
 }
 
-#[test]
-fn a_reflectors_run_survives_a_missed_and_a_spurious_echo_and_a_lone_echo_marks_nothing() {
-    use crate::sonar::Reading;
+/// Stop mode with the evidence map and a beam sonar, from (1, 4) to (7, 4).
+fn beam_evidence_config() -> MissionConfig {
     let mut c = MissionConfig {
         evidence_map: true,
         ..config(
@@ -838,6 +837,13 @@ fn a_reflectors_run_survives_a_missed_and_a_spurious_echo_and_a_lone_echo_marks_
         )
     };
     c.robot.sonar_beam = true;
+    c
+}
+
+#[test]
+fn a_reflectors_run_survives_a_missed_and_a_spurious_echo_and_a_lone_echo_marks_nothing() {
+    use crate::sonar::Reading;
+    let mut c = beam_evidence_config();
     let mut m = Box::new(Mission400::new(c, geometry()).unwrap());
     let pose = Pose {
         x_m: 1.0,
@@ -882,41 +888,41 @@ fn a_reflectors_run_survives_a_missed_and_a_spurious_echo_and_a_lone_echo_marks_
     assert_eq!(ray.mark_reflectors(), 5);
 }
 
+/// A standing sweep of 45 readings (−39.6° to +39.6° in 1.8° steps) from (1, `y_m`) facing
+/// east, each reading's range from its bearing; returns the reflectors marked.
+fn sweep_east_from(m: &mut Mission400, y_m: f32, range_at: impl Fn(f32) -> Option<f32>) -> u16 {
+    let pose = Pose {
+        x_m: 1.0,
+        y_m,
+        heading_rad: 0.0,
+    };
+    m.readings.clear();
+    for i in 0..45 {
+        let bearing_rad = (-39.6f32 + 1.8 * i as f32).to_radians();
+        m.readings
+            .push(crate::sonar::Reading {
+                neck_angle_rad: bearing_rad,
+                range_m: range_at(bearing_rad),
+                pose,
+            })
+            .unwrap();
+    }
+    m.mark_reflectors()
+}
+
 #[test]
 fn a_plane_heard_from_two_places_confirms_the_second_foot_a_parallel_one_does_not() {
-    use crate::sonar::Reading;
-    let mut c = MissionConfig {
-        evidence_map: true,
-        ..config(
-            PointM::new(1.0, 4.0),
-            PointM::new(7.0, 4.0),
-            MissionMode::Stop,
-        )
-    };
-    c.robot.sonar_beam = true;
+    let c = beam_evidence_config();
     let beam_deg = c.robot.sonar_beam_half_angle_deg;
     let offset_m = c.robot.sonar_offset_m;
     // A standing sweep from (1, y) facing east at a smooth wall `range_m` ahead: the readings
     // whose cone holds the wall's normal hear its foot, the others nothing.
     let sweep = |m: &mut Mission400, y_m: f32, range_m: f32| {
-        let pose = Pose {
-            x_m: 1.0,
-            y_m,
-            heading_rad: 0.0,
-        };
-        m.readings.clear();
-        for i in 0..45 {
-            let bearing_deg = -39.6 + 1.8 * i as f32;
-            m.readings
-                .push(Reading {
-                    neck_angle_rad: bearing_deg.to_radians(),
-                    range_m: (bearing_deg.abs() <= beam_deg).then_some(range_m),
-                    pose,
-                })
-                .unwrap();
-        }
-        m.mark_reflectors()
+        sweep_east_from(m, y_m, |bearing_rad| {
+            (bearing_rad.to_degrees().abs() <= beam_deg + 1.0e-3).then_some(range_m)
+        })
     };
+
     let foot = |y_m: f32, range_m: f32| PointM::new(1.0 + offset_m + range_m, y_m);
     let mut m = Box::new(Mission400::new(c, geometry()).unwrap());
     assert_eq!(sweep(&mut m, 3.0, 1.2), 1);
@@ -934,40 +940,17 @@ fn a_plane_heard_from_two_places_confirms_the_second_foot_a_parallel_one_does_no
 
 #[test]
 fn a_wall_heard_diffusely_has_its_foot_marked_and_confirmed_from_a_second_place() {
-    use crate::sonar::Reading;
-    let mut c = MissionConfig {
-        evidence_map: true,
-        ..config(
-            PointM::new(1.0, 4.0),
-            PointM::new(7.0, 4.0),
-            MissionMode::Stop,
-        )
-    };
-    c.robot.sonar_beam = true;
+    let c = beam_evidence_config();
     let beam_rad = c.robot.sonar_beam_half_angle_deg.to_radians();
     let offset_m = c.robot.sonar_offset_m;
     // A wall 1.2 m ahead that echoes at any angle: each reading hears the nearest point of
     // the wall in its cone, at 1.2 m / cos(|bearing| − β) beyond the cone's reach of the foot.
     let sweep = |m: &mut Mission400, y_m: f32| {
-        let pose = Pose {
-            x_m: 1.0,
-            y_m,
-            heading_rad: 0.0,
-        };
-        m.readings.clear();
-        for i in 0..45 {
-            let bearing_rad = (-39.6f32 + 1.8 * i as f32).to_radians();
-            let off_rad = (bearing_rad.abs() - beam_rad).max(0.0);
-            m.readings
-                .push(Reading {
-                    neck_angle_rad: bearing_rad,
-                    range_m: Some(1.2 / off_rad.cos()),
-                    pose,
-                })
-                .unwrap();
-        }
-        m.mark_reflectors();
+        sweep_east_from(m, y_m, |bearing_rad| {
+            Some(1.2 / (bearing_rad.abs() - beam_rad).max(0.0).cos())
+        })
     };
+
     let foot = |y_m: f32| PointM::new(1.0 + offset_m + 1.2, y_m);
     let mut m = Box::new(Mission400::new(c, geometry()).unwrap());
     sweep(&mut m, 3.0);

@@ -52,7 +52,7 @@
 //! the expansion in cells); the gap search walks the path's cells once. Host only today (the
 //! MCU has no room for the occupied plane).
 
-use crate::geom::PointM;
+use crate::geom::{distance_to_segment_m, PointM};
 use crate::grid::{Grid, GridGeometry};
 use crate::math::{abs, atan2, cos, hypot, sin, wrap_angle_rad};
 use crate::raster::{mark_point_m, BresenhamLine};
@@ -457,18 +457,6 @@ fn stand_off_point_in_view<const W: usize>(
         d_m += res_m;
     }
     None
-}
-
-/// Distance from `p` to the segment `a`–`b`, metres.
-fn distance_to_segment_m(p: PointM, a: PointM, b: PointM) -> f32 {
-    let (dx, dy) = (b.x_m - a.x_m, b.y_m - a.y_m);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 {
-        (((p.x_m - a.x_m) * dx + (p.y_m - a.y_m) * dy) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    hypot(p.x_m - (a.x_m + t * dx), p.y_m - (a.y_m + t * dy))
 }
 
 #[cfg(test)]
