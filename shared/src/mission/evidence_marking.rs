@@ -45,7 +45,7 @@ use crate::math::{abs, cos, hypot, sin, wrap_angle_rad};
 use crate::raster::mark_point_m;
 use crate::sonar::hit_to_world;
 
-use super::evidence::{CellEvidence, Change};
+use super::evidence::{CellEvidence, Change, EvidenceMap};
 use super::planes::{remember, PlaneSeen};
 use super::reflector::{reflector_bearings, Neighbour, RunEnd, RunSide};
 use super::swept::{reading_shift_m, BlindCells, Swept};
@@ -96,6 +96,12 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 }
             }
         }
+    }
+
+    /// Has a reflector of this sweep already fallen on `cell`?
+    fn seen_this_sweep(&self, cell: Option<(i32, i32)>) -> bool {
+        let g = self.grid.geometry();
+        self.hits.iter().any(|q| g.cell_xy_on_map(*q) == cell)
     }
 
     /// Redraw the grid around the cells whose tentative marks were taken back (unless marks
@@ -153,6 +159,9 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             Some(r) => reading_shift_m(readings, r.pose, robot.sonar_offset_m),
             None => 0.0,
         };
+        // Planes and sloping runs' feet are read only through a beam, from a sweep read standing
+        // (within a cell of one place).
+        let read_standing = cone_rad > 0.0 && sweep_shift_m <= g.resolution_m();
         let mut start = 0;
         while start < readings.len() {
             let Some(first_m) = readings[start].range_m else {
@@ -243,17 +252,11 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 (None, None) => 0.0,
             };
             let depth_m = sum_m / count;
-            // A plane's foot: a region of constant depth that the reflector left at both
-            // ends, read standing. Confirmed when an earlier sweep heard the same plane from
-            // elsewhere (`planes`).
             // A sloping run (a wall heard diffusely, its range growing on both sides of its
             // nearest point) holds a region of constant depth too: the readings within a cell
             // of its least range, when they are at least β wide and inside the run (the range
             // rises on both sides). That is the wall's foot; the rest of the run is its arc.
-            let sloping_foot = if constant_depth
-                || cone_rad <= 0.0
-                || sweep_shift_m > g.resolution_m()
-            {
+            let sloping_foot = if constant_depth || !read_standing {
                 None
             } else {
                 nearest_stretch(readings, (start, end), least_m, g.resolution_m())
@@ -262,17 +265,17 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     })
                     .map(|(a, b)| (0.5 * (bearing(a) + bearing(b)), least_m))
             };
-            let standing_plane = constant_depth
-                && cone_rad > 0.0
-                && first.side == RunSide::Open
-                && last.side == RunSide::Open;
-            let plane_foot = if standing_plane {
-                Some((0.5 * (first.bearing_rad + last.bearing_rad), depth_m))
-            } else {
-                sloping_foot
-            };
+            // A plane's foot: a region of constant depth that the reflector left at both
+            // ends, or a sloping run's, read standing. Confirmed when an earlier sweep heard
+            // the same plane from elsewhere (`planes`).
+            let plane_foot =
+                if constant_depth && first.side == RunSide::Open && last.side == RunSide::Open {
+                    Some((0.5 * (first.bearing_rad + last.bearing_rad), depth_m))
+                } else {
+                    sloping_foot
+                };
             let plane = plane_foot
-                .filter(|_| sweep_shift_m <= g.resolution_m())
+                .filter(|_| read_standing)
                 .map(|(mid_rad, foot_m)| PlaneSeen {
                     foot: hit_to_world(middle.pose, robot.sonar_offset_m, mid_rad, foot_m),
                     normal_rad: middle.pose.heading_rad + mid_rad,
@@ -310,17 +313,14 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 // range, and used to confirm their own ghost in free space in front of a
                 // doorway).
                 let cell = g.cell_xy_on_map(p);
-                let seen_this_sweep = self.hits.iter().any(|q| g.cell_xy_on_map(*q) == cell);
-                if let (Some((x, y)), false) = (cell, seen_this_sweep) {
-                    if constant_depth {
-                        self.evidence.observe_occupied_xy(x, y);
-                        if on_a_known_plane && self.evidence.get_xy(x, y) == CellEvidence::Tentative
-                        {
-                            self.evidence.observe_occupied_xy(x, y);
-                        }
-                    } else {
-                        self.evidence.observe_arc_xy(x, y);
-                    }
+                if let (Some(xy), false) = (cell, self.seen_this_sweep(cell)) {
+                    observe_reflector(
+                        &mut self.evidence,
+                        xy,
+                        true,
+                        constant_depth,
+                        on_a_known_plane,
+                    );
                 }
                 mark_point_m(&mut self.grid, p, e);
                 let _ = self.hits.push(p);
@@ -328,15 +328,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             if let Some((mid_rad, foot_m)) = sloping_foot {
                 let p = hit_to_world(middle.pose, robot.sonar_offset_m, mid_rad, foot_m);
                 let cell = g.cell_xy_on_map(p).filter(|_| p.is_finite());
-                let seen_this_sweep = self.hits.iter().any(|q| g.cell_xy_on_map(*q) == cell);
-                if let Some((x, y)) = cell {
+                if let Some(xy) = cell {
                     // One sweep, one step (above), unless a second viewpoint agrees.
-                    if !seen_this_sweep {
-                        self.evidence.observe_occupied_xy(x, y);
-                    }
-                    if on_a_known_plane && self.evidence.get_xy(x, y) == CellEvidence::Tentative {
-                        self.evidence.observe_occupied_xy(x, y);
-                    }
+                    let first_look = !self.seen_this_sweep(cell);
+                    observe_reflector(&mut self.evidence, xy, first_look, true, on_a_known_plane);
                     mark_point_m(&mut self.grid, p, e);
                     let _ = self.hits.push(p);
                 }
@@ -511,6 +506,28 @@ pub(super) fn centre(g: &crate::grid::GridGeometry, x: i32, y: i32) -> PointM {
         (x as f32 + 0.5) * g.resolution_m(),
         (y as f32 + 0.5) * g.resolution_m(),
     )
+}
+
+/// A reflector's evidence on its cell: on the sweep's first look at the cell one step
+/// (occupied for a region of constant depth, an arc's mark otherwise), and a second step for a
+/// region of constant depth on a plane that another viewpoint heard (`planes`).
+fn observe_reflector<const W: usize, const E: usize>(
+    evidence: &mut EvidenceMap<W, E>,
+    (x, y): (i32, i32),
+    first_look: bool,
+    constant_depth: bool,
+    on_a_known_plane: bool,
+) {
+    if first_look {
+        if constant_depth {
+            evidence.observe_occupied_xy(x, y);
+        } else {
+            evidence.observe_arc_xy(x, y);
+        }
+    }
+    if constant_depth && on_a_known_plane && evidence.get_xy(x, y) == CellEvidence::Tentative {
+        evidence.observe_occupied_xy(x, y);
+    }
 }
 
 /// The readings of `run` (first and last index) within `cell_m` of `least_m`, the run's least

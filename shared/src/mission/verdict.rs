@@ -244,18 +244,14 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     && distance_to_segment_m(p, first, last) > own_reach_m
             },
         };
-        let target = stand_off_point_in_view(
-            &self.grid,
-            (gap, dir),
-            (near_m, stand_off_m),
-            margin_cells,
-            &view,
-        )
-        .or_else(|| stand_off_point(&self.grid, gap, dir, near_m, stand_off_m, margin_cells))
-        .unwrap_or_else(|| {
-            // No free point on the line: the last free path point before the gap.
-            self.position_world()
-        });
+        let line = (gap, dir);
+        let reach = (near_m, stand_off_m);
+        let target = stand_off_point(&self.grid, line, reach, margin_cells, Some(&view))
+            .or_else(|| stand_off_point(&self.grid, line, reach, margin_cells, None))
+            .unwrap_or_else(|| {
+                // No free point on the line: the last free path point before the gap.
+                self.position_world()
+            });
         self.visit = Some(GapVisit { target });
         let tentative_cells = self.tentative_cells_within(gap, stand_off_m);
         // Full only past MAX_GAP_VISITS visits, which end the mission first.
@@ -342,36 +338,6 @@ fn first_blocked_stretch<const W: usize>(
     ))
 }
 
-/// The nearest free cell's centre on the line from `gap` back along `-dir`, at least `near_m`
-/// and at most `far_m` away (in steps of a cell), or `None` when every cell there is occupied
-/// or off the map. Nearest, because the nearer the sonar stands to a gap, the narrower its
-/// beam's footprint there: more readings pass through an opening and hear the room beyond.
-fn stand_off_point<const W: usize>(
-    grid: &Grid<W>,
-    gap: PointM,
-    dir: PointM,
-    near_m: f32,
-    far_m: f32,
-    margin_cells: i32,
-) -> Option<PointM> {
-    let g = grid.geometry();
-    let res_m = g.resolution_m();
-    let mut d_m = near_m;
-    while d_m <= far_m {
-        let p = PointM::new(gap.x_m - d_m * dir.x_m, gap.y_m - d_m * dir.y_m);
-        if let Some((x, y)) = g.cell_xy_on_map(p) {
-            let clear = (-margin_cells..=margin_cells).all(|dy| {
-                (-margin_cells..=margin_cells).all(|dx| !grid.is_occupied_xy(x + dx, y + dy))
-            });
-            if clear {
-                return Some(cell_centre(g, x, y));
-            }
-        }
-        d_m += res_m;
-    }
-    None
-}
-
 /// Directions tried for a stand-off point, radians off the line through the gap, in order.
 const VIEW_FAN_RAD: [f32; 7] = [0.0, 0.26, -0.26, 0.52, -0.52, 0.79, -0.79];
 
@@ -425,21 +391,29 @@ impl GapView<'_> {
     }
 }
 
-/// The nearest free cell's centre in front of `gap` (back along `-dir`, turned by up to 45°,
-/// [`VIEW_FAN_RAD`]), `near_m` to `far_m` away in steps of a cell, from which the marks known
-/// now do not hide the gap ([`GapView`]), or `None`.
-fn stand_off_point_in_view<const W: usize>(
+/// The nearest free cell's centre in front of `gap`, back along `-dir`, at least `near_m` and
+/// at most `far_m` away (in steps of a cell), with `margin_cells` around it free too, or
+/// `None`. Nearest, because the nearer the sonar stands to a gap, the narrower its beam's
+/// footprint there: more readings pass through an opening and hear the room beyond. With a
+/// `view`, the line is turned by up to 45° ([`VIEW_FAN_RAD`]) and a point counts only when
+/// the marks known now do not hide the gap from it ([`GapView`]); without, only the line.
+fn stand_off_point<const W: usize>(
     grid: &Grid<W>,
     (gap, dir): (PointM, PointM),
     (near_m, far_m): (f32, f32),
     margin_cells: i32,
-    view: &GapView<'_>,
+    view: Option<&GapView<'_>>,
 ) -> Option<PointM> {
     let g = grid.geometry();
     let res_m = g.resolution_m();
+    let fan_rad: &[f32] = if view.is_some() {
+        &VIEW_FAN_RAD
+    } else {
+        &[0.0]
+    };
     let mut d_m = near_m;
     while d_m <= far_m {
-        for a in VIEW_FAN_RAD {
+        for &a in fan_rad {
             let (c, s) = (cos(a), sin(a));
             let back = PointM::new(c * dir.x_m - s * dir.y_m, s * dir.x_m + c * dir.y_m);
             let p = PointM::new(gap.x_m - d_m * back.x_m, gap.y_m - d_m * back.y_m);
@@ -450,7 +424,7 @@ fn stand_off_point_in_view<const W: usize>(
                 (-margin_cells..=margin_cells).all(|dx| !grid.is_occupied_xy(x + dx, y + dy))
             });
             let centre = cell_centre(g, x, y);
-            if clear && view.clear_from(g, centre) {
+            if clear && view.is_none_or(|v| v.clear_from(g, centre)) {
                 return Some(centre);
             }
         }
@@ -490,7 +464,7 @@ mod tests {
         assert!((dir.y_m - 1.0).abs() < 1.0e-3, "{dir:?}");
         // The nearest free point on the line through the gap: 0.3 m before it, past the marks
         // (rows 48..52).
-        let s = stand_off_point(&g, gap, dir, 0.3, 1.5, 0).expect("free");
+        let s = stand_off_point(&g, (gap, dir), (0.3, 1.5), 0, None).expect("free");
         assert!(
             (s.y_m - 2.225).abs() < 0.03 && (s.x_m - 2.525).abs() < 0.03,
             "{s:?}"
@@ -509,7 +483,13 @@ mod tests {
         }
         let up = PointM::new(0.0, 1.0);
         let at = |g: &G, margin_cells| {
-            stand_off_point(g, PointM::new(2.525, 2.525), up, 0.3, 1.5, margin_cells)
+            stand_off_point(
+                g,
+                (PointM::new(2.525, 2.525), up),
+                (0.3, 1.5),
+                margin_cells,
+                None,
+            )
         };
         let s = at(&g, 0).expect("a farther free cell");
         assert!((s.y_m - 1.475).abs() < 0.03, "{s:?}");
@@ -546,7 +526,7 @@ mod tests {
         // From the side away from the wall at 45°, nothing is.
         assert!(view.clear_from(&g, PointM::new(1.825, 3.225)));
         let east = PointM::new(1.0, 0.0);
-        let s = stand_off_point_in_view(&free, (view.gap, east), (1.0, 1.5), 0, &view)
+        let s = stand_off_point(&free, (view.gap, east), (1.0, 1.5), 0, Some(&view))
             .expect("a point in view");
         assert!(s.y_m > 2.9, "{s:?}");
         assert!(
@@ -559,7 +539,7 @@ mod tests {
             marked: &nothing,
             ..view
         };
-        let s = stand_off_point_in_view(&free, (open.gap, east), (1.0, 1.5), 0, &open)
+        let s = stand_off_point(&free, (open.gap, east), (1.0, 1.5), 0, Some(&open))
             .expect("a point in view");
         assert!(
             (s.y_m - 2.525).abs() < 0.03 && (s.x_m - 1.525).abs() < 0.03,
