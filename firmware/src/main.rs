@@ -69,7 +69,7 @@ mod board;
 mod body;
 mod params;
 
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use twil_core::failsafe::{ResetCause, WatchdogDecision, WatchdogGate};
 use twil_core::link::{Build, PROTOCOL_VERSION};
@@ -170,6 +170,9 @@ fn instructions() -> u64 {
 
 /// Bytes dropped on the way in (a queue full, or a line error: overrun, framing, noise).
 static RX_DROPPED: AtomicU32 = AtomicU32::new(0);
+/// QEMU only: `usart1` stopped reading (receive interrupt off) because its queue was full;
+/// `link_rx` pends it again once it has taken bytes out. See `usart1`.
+static RX_PAUSED: AtomicBool = AtomicBool::new(false);
 /// Frames not sent because the transmit queue could not take the whole frame (the mission
 /// task checks for room first, so this stays 0 unless that rule is broken).
 static TX_DROPPED_FRAMES: AtomicU32 = AtomicU32::new(0);
@@ -272,7 +275,7 @@ mod app {
 
     /// The vector `link_rx` is bound to: CAN1's first receive FIFO, whose peripheral is never
     /// clocked, so only `rtic::pend` (from `usart1`) raises it.
-    const LINK_RX_VECTOR: Interrupt = Interrupt::CAN1_RX0;
+    pub const LINK_RX_VECTOR: Interrupt = Interrupt::CAN1_RX0;
 
     /// What the control task and the mission task tell each other besides the pilot's
     /// reports (a channel) and the stop's timing (`StopTiming`).
@@ -583,16 +586,53 @@ mod app {
     /// the next). TXE raises this interrupt only while bytes wait (`listen` / `unlisten`);
     /// `mission` pends it after queueing a frame. QEMU 7.2's USART raises no TXE interrupt
     /// and takes every byte at once, so there the pended run sends the whole queue.
-    #[task(binds = USART1, priority = 5, local = [rx, tx, irq_producer, tx_consumer, usart_wake])]
+    #[task(binds = USART1, priority = 5, local = [rx, tx, irq_producer, tx_consumer, usart_wake, held: heapless::Vec<u8, 2> = heapless::Vec::new()])]
     fn usart1(cx: usart1::Context) {
         let before = instructions();
         let mut received = false;
-        loop {
+        // QEMU hands over the next byte as soon as the data register is read, not one per
+        // 87 µs, so a burst sent while `link_rx` and `mission` are busy would overflow the
+        // queues that a baud rate keeps from filling on the board. Under QEMU a byte that
+        // does not fit is held here and the receive interrupt turned off: QEMU delivers no
+        // further byte while one waits in the data register, the host's socket buffers the
+        // rest, and `link_rx` pends this interrupt once it has taken bytes out, which queues
+        // the held bytes and turns reception back on. (QEMU 7.2 lowers the interrupt line
+        // only when the data register is read, never when the interrupt is turned off, so no
+        // byte that raised it may be left there: that would raise this interrupt for ever.)
+        // The board keeps reading, and counts what it drops.
+        let pause_when_full = cfg!(feature = "qemu");
+        let mut paused = RX_PAUSED.load(Ordering::Relaxed);
+        let held = cx.local.held;
+        let producer = cx.local.irq_producer;
+        if paused && producer.capacity() - producer.len() >= held.len() {
+            for &byte in held.iter() {
+                // Room was checked: the enqueue cannot fail.
+                let _ = producer.enqueue(byte);
+            }
+            received |= !held.is_empty();
+            held.clear();
+            paused = false;
+            RX_PAUSED.store(false, Ordering::Relaxed);
+            cx.local.rx.listen();
+        }
+        while !paused {
             match cx.local.rx.read() {
                 Ok(byte) => {
                     received = true;
-                    if cx.local.irq_producer.enqueue(byte).is_err() {
-                        RX_DROPPED.fetch_add(1, Ordering::Relaxed);
+                    if let Err(byte) = producer.enqueue(byte) {
+                        if pause_when_full {
+                            cx.local.rx.unlisten();
+                            let _ = held.push(byte);
+                            // A byte that came in between the read and turning the interrupt
+                            // off raised the line; reading it lowers the line (QEMU 7.2).
+                            if let Ok(late) = cx.local.rx.read() {
+                                let _ = held.push(late);
+                            }
+                            paused = true;
+                            RX_PAUSED.store(true, Ordering::Relaxed);
+                        } else {
+                            RX_DROPPED.fetch_add(1, Ordering::Relaxed);
+                        }
                     }
                 }
                 Err(nb::Error::WouldBlock) => break,
@@ -640,7 +680,20 @@ mod app {
         // The mission task is woken by a frame's end, or by a chunk's worth of bytes without
         // one (`mission_task.rs`), not by every byte.
         let mut wake = false;
-        while let Some(byte) = cx.local.irq_consumer.dequeue() {
+        // Under QEMU bytes wait here while the mission's queue is full (see `usart1`); the
+        // mission task pends this task when it has taken some. The board moves them on, and
+        // counts the ones the full queue drops, but looks at them all for a stop.
+        let hold_when_full = cfg!(feature = "qemu");
+        let mut moved = false;
+        loop {
+            if hold_when_full && !cx.local.producer.ready() {
+                wake = true;
+                break;
+            }
+            let Some(byte) = cx.local.irq_consumer.dequeue() else {
+                break;
+            };
+            moved = true;
             if cx.local.producer.enqueue(byte).is_err() {
                 RX_DROPPED.fetch_add(1, Ordering::Relaxed);
             }
@@ -658,6 +711,9 @@ mod app {
         }
         if wake {
             cx.local.link_wake.write(());
+        }
+        if moved && RX_PAUSED.load(Ordering::Relaxed) {
+            rtic::pend(Interrupt::USART1);
         }
         note_worst(
             &WORST_DECODE_INSTRUCTIONS,
