@@ -926,3 +926,50 @@ fn twil_mission_on_qemu_keeps_the_link_alive_with_its_heartbeat() {
     let v: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON line");
     assert_eq!(v["status"], "reached", "{v}");
 }
+
+#[test]
+fn the_evidence_map_runs_on_the_device_as_in_the_simulator_within_a_watchdog_turn() {
+    // `SetMission` field 20 on the firmware, with the beam (3 m, the default 15° cone and
+    // 70° incidence limit): the same mission as `twil simulate --evidence-map`, at
+    // `-icount shift=3`. The longest turn of the mission task (a standing sweep's vouching, the
+    // heaviest work the map adds) must stay inside the watchdog gate's 1 s: 125 M
+    // instructions at 8 ns each.
+    let run = |command: &str, extra: &[&str]| -> serde_json::Value {
+        let out = common::twil()
+            .arg(command)
+            .arg("--real")
+            .arg(common::world("pillars.da"))
+            .arg("--params")
+            .arg(common::world("pillars.par"))
+            .args(["--planner", "astar", "--mode", "stop", "--sonar-range", "3"])
+            .args(["--sonar", "beam", "--evidence-map", "--json"])
+            .args(extra)
+            .output()
+            .expect("run twil");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        serde_json::from_str(stdout.trim()).unwrap_or_else(|e| {
+            panic!(
+                "{command}: {e}: {stdout}{}",
+                String::from_utf8_lossy(&out.stderr)
+            )
+        })
+    };
+    let device = run("mission", &["--remote", "qemu"]);
+    let sim = run("simulate", &[]);
+    eprintln!("device {device}\nsimulator {sim}");
+    assert_eq!(device["status"], "reached", "{device}");
+    assert_eq!(sim["status"], "reached", "{sim}");
+    assert_eq!(device["controller_overruns"], 0, "{device}");
+    let number = |v: &serde_json::Value, key: &str| v[key].as_f64().unwrap();
+    let (stops, sim_stops) = (number(&device, "stops"), number(&sim, "stops"));
+    assert!(
+        (stops - sim_stops).abs() <= 0.25 * sim_stops + 2.5,
+        "{device} vs {sim}"
+    );
+    let (d, sim_d) = (number(&device, "distance_m"), number(&sim, "distance_m"));
+    assert!((d - sim_d).abs() <= 0.10 * sim_d, "{device} vs {sim}");
+    let turn = device["mcu"]["max_turn_instructions"].as_u64().unwrap();
+    assert!(turn > 0 && turn <= 125_000_000, "{device}");
+    let plan = device["mcu"]["max_plan_instructions"].as_u64().unwrap();
+    assert!(plan <= 5_000_000, "{device}");
+}

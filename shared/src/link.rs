@@ -91,10 +91,9 @@ pub mod mcu {
     pub type McuDevice = super::Device<GRID_WORDS>;
     /// The firmware's device: the planning service and the mission requests.
     pub type McuRobotDevice = super::RobotDevice<GRID_WORDS>;
-    /// The firmware's mission (its map is the device's map). One word for the evidence map's
-    /// occupied plane: the CCM has no room for a second 11 250 B plane (see `docs/mapping.md`),
-    /// so the MCU refuses [`MissionConfig::evidence_map`](crate::mission::MissionConfig).
-    pub type McuMission = crate::mission::Mission<GRID_WORDS, 1>;
+    /// The firmware's mission (its map is the device's map), with the evidence map's two
+    /// planes (`docs/mapping.md`; the memory it took is in `docs/firmware.md`).
+    pub type McuMission = crate::mission::Mission<GRID_WORDS>;
 }
 pub use handler::{Device, Handler};
 pub use message::*;

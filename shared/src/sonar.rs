@@ -379,20 +379,35 @@ pub fn filter_constant_depth(
     hits: &mut HitBuffer,
 ) -> usize {
     hits.clear();
+    // Capacities are equal: a sweep cannot give more hits than readings.
+    for_each_constant_depth_hit(sweep, params, |hit| {
+        let _ = hits.push(hit);
+    })
+}
+
+/// [`filter_constant_depth`] without a buffer: hands each surviving hit to `emit`, in the
+/// sweep's order, and returns the number of trusted regions (with the filter off, of hits).
+/// The mission marks hits as they come, so it keeps no [`HitBuffer`] (4 KB of the MCU's CCM).
+pub fn for_each_constant_depth_hit(
+    sweep: &SweepBuffer,
+    params: &RcdParams,
+    mut emit: impl FnMut(Hit),
+) -> usize {
     let readings = sweep.as_slice();
     let valid = |r: &Reading| r.range_m.filter(|d| d.is_finite() && *d >= 0.0);
     if params.min_pairs == 0 {
+        let mut count = 0;
         for r in readings {
             if let Some(d) = valid(r) {
-                // Capacities are equal: cannot overflow.
-                let _ = hits.push(Hit {
+                emit(Hit {
                     neck_angle_rad: r.neck_angle_rad,
                     range_m: d,
                     pose: r.pose,
                 });
+                count += 1;
             }
         }
-        return hits.len();
+        return count;
     }
     // Depths are compared as seen from where a region's first reading was taken: a sweep taken
     // while moving towards a wall at 0.3 m/s would otherwise see its depth fall by more than
@@ -457,7 +472,7 @@ pub fn filter_constant_depth(
             regions += 1;
             let mean = sum_m / (pairs + 1) as f32;
             for r in readings.iter().take(end + 1).skip(start) {
-                let _ = hits.push(Hit {
+                emit(Hit {
                     neck_angle_rad: r.neck_angle_rad,
                     range_m: mean - shift(r, from),
                     pose: r.pose,

@@ -238,6 +238,7 @@ mod seeds {
                 reference_feed_forward: false,
                 turn_in_place: false,
                 sweep_layout: twil_core::sonar::SweepLayout::Seed,
+                evidence_map: true,
             }),
             Request::WorldChunk {
                 first_vertex: 0,
@@ -315,6 +316,7 @@ mod seeds {
             stats: MissionStats::default(),
             max_control_instructions: 12_000,
             max_plan_instructions: 3_000_000,
+            max_turn_instructions: 60_000_000,
             stack_high_water_bytes: 9_000,
             stop_ticks: 1,
             stop_latency_us: 48_000,

@@ -24,8 +24,9 @@ use crate::plan::{PlanStatus, PlannerKind};
 /// 5: `StopCause::SensorFault` (the board's body: homing, sonar, battery, motors, e-stop input).
 /// 6: the device's parameters (requests `ParamList`, `ParamGet`, `ParamSet`; replies `Param`,
 /// `ParamRefused`; error codes `UnknownParam`, `StoreFailed`) and the bring-up self-test
-/// (`Request::SelfTest`, `Request::SelfTestReport`, `Reply::SelfTest`).
-pub const PROTOCOL_VERSION: u16 = 6;
+/// (`Request::SelfTest`, `Request::SelfTestReport`, `Reply::SelfTest`). 7: the evidence map
+/// (`MissionSetup::evidence_map`, field 20) and `MissionReport::max_turn_instructions`.
+pub const PROTOCOL_VERSION: u16 = 7;
 
 /// Points carried by one telemetry chunk of hits, prefix or path.
 pub const TELEMETRY_CHUNK_POINTS: usize = 32;
@@ -311,6 +312,8 @@ pub struct MissionSetup {
     pub turn_in_place: bool,
     /// Which neck positions a sweep reads (`--sweep-readings`).
     pub sweep_layout: crate::sonar::SweepLayout,
+    /// Map with the evidence map (`--evidence-map`, [`crate::mission::MissionConfig::evidence_map`]).
+    pub evidence_map: bool,
 }
 
 impl MissionSetup {
@@ -340,6 +343,7 @@ impl MissionSetup {
             reference_feed_forward: true,
             turn_in_place: true,
             sweep_layout: crate::sonar::SweepLayout::Symmetric,
+            evidence_map: false,
         }
     }
 }
@@ -359,6 +363,9 @@ pub struct MissionReport {
     pub max_control_instructions: u64,
     /// Most instructions one plan took (firmware: measured; 0 elsewhere).
     pub max_plan_instructions: u64,
+    /// Most instructions one turn of the mission task took, preemptions included (the
+    /// watchdog gate's limit is per turn; firmware: measured; 0 elsewhere).
+    pub max_turn_instructions: u64,
     /// Deepest stack use seen (painted stack), bytes (firmware; 0 elsewhere).
     pub stack_high_water_bytes: u32,
     /// Control periods from the last `AbortMission` / `EmergencyStop` frame's arrival to the

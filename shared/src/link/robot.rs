@@ -37,7 +37,7 @@
 use heapless::Vec;
 
 use super::frame::{FrameDecoder, FrameFault};
-use super::handler::{upload_chunk, Handler, MAX_PENDING_VERTICES};
+use super::handler::{upload_chunk, Handler};
 use super::message::*;
 use super::params::{DeviceParams, ParamSave};
 use super::replay::ReplayCache;
@@ -51,24 +51,36 @@ use crate::mission::{
 use crate::plan::{PlanStatus, Planner};
 
 use crate::robot::RobotConfig;
-use crate::world::{Obstacles, Params};
+use crate::world::{Params, PolygonSet};
 
 /// The pose is reported every this many control periods (5 Hz at 50 ms).
 pub const POSE_EVERY_TICKS: u32 = 4;
 
-/// The real world of a simulated build, uploaded with [`Request::WorldChunk`].
+/// Vertices the real world of a simulated build holds ([`WorldUpload`]). The host's own
+/// simulator holds [`crate::world::MAX_VERTICES`]; a simulated device gives its RAM to the
+/// mission's evidence map instead (the bundled worlds have at most 64 vertices in 16 polygons;
+/// `docs/firmware.md`).
+pub const WORLD_VERTICES: usize = 192;
+/// Polygons the real world of a simulated build holds.
+pub const WORLD_POLYGONS: usize = 64;
+/// Vertices of the one polygon being uploaded to the real world.
+pub const WORLD_PENDING_VERTICES: usize = 64;
+
+/// The real world of a simulated build, uploaded with [`Request::WorldChunk`]: at most
+/// [`WORLD_VERTICES`] vertices in [`WORLD_POLYGONS`] polygons; a chunk beyond them is refused
+/// with `TooManyVertices` / `TooManyPolygons` and changes nothing.
 pub struct WorldUpload {
     /// The closed polygons.
-    pub obstacles: Obstacles,
+    pub obstacles: PolygonSet<WORLD_VERTICES, WORLD_POLYGONS>,
     /// The polygon being uploaded.
-    pub pending: Vec<PointM, MAX_PENDING_VERTICES>,
+    pub pending: Vec<PointM, WORLD_PENDING_VERTICES>,
 }
 
 impl WorldUpload {
     /// No polygon.
     pub const fn new() -> Self {
         Self {
-            obstacles: Obstacles::new(),
+            obstacles: PolygonSet::new(),
             pending: Vec::new(),
         }
     }
@@ -190,6 +202,7 @@ pub struct RobotDevice<const W: usize> {
     plans: u32,
     last_plan_instructions: u64,
     max_plan_instructions: u64,
+    max_turn_instructions: u64,
     max_control_instructions: u64,
     stack_high_water_bytes: u32,
     stop_ticks: u32,
@@ -224,6 +237,7 @@ impl<const W: usize> RobotDevice<W> {
             plans: 0,
             last_plan_instructions: 0,
             max_plan_instructions: 0,
+            max_turn_instructions: 0,
             max_control_instructions: 0,
             stack_high_water_bytes: 0,
             stop_ticks: 0,
@@ -331,6 +345,12 @@ impl<const W: usize> RobotDevice<W> {
         self.max_control_instructions = max_control_instructions;
         self.stack_high_water_bytes = stack_high_water_bytes;
         self.stop_ticks = stop_ticks;
+    }
+
+    /// The firmware's measurement of one turn of its mission task, instructions: the report
+    /// keeps the most since the mission started.
+    pub fn note_turn_instructions(&mut self, instructions: u64) {
+        self.max_turn_instructions = self.max_turn_instructions.max(instructions);
     }
 
     /// The firmware's measured stop latency (receive interrupt to motors off), microseconds.
@@ -637,6 +657,7 @@ impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
         config.trust_seen_space = setup.trust_seen_space;
         config.settle = setup.settle;
         config.reference_feed_forward = setup.reference_feed_forward;
+        config.evidence_map = setup.evidence_map;
         if !setup.turn_in_place {
             // Direction changes are wrapped to ±π: none is larger.
             config.turn_in_place_above_rad = core::f32::consts::PI;
@@ -737,6 +758,7 @@ impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
         self.d.sweeps = 0;
         self.d.plans = 0;
         self.d.max_plan_instructions = 0;
+        self.d.max_turn_instructions = 0;
         self.d.plan_request = None;
         self.d.sonar_request = None;
         self.d.pilot_command = Some(PilotCommand::Hold);
@@ -923,6 +945,7 @@ impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
             stats: self.mission.stats(),
             max_control_instructions: self.d.max_control_instructions,
             max_plan_instructions: self.d.max_plan_instructions,
+            max_turn_instructions: self.d.max_turn_instructions,
             stack_high_water_bytes: self.d.stack_high_water_bytes,
             stop_ticks: self.d.stop_ticks,
             emergency_stop: self.d.emergency_stop,

@@ -209,6 +209,7 @@ mod tests {
                 heard_beam_rad: -1.0,
                 reading_shift_m: 0.0,
                 blind_cells: &crate::mission::swept::BlindCells::NONE,
+                steps: None,
             },
         }
     }

@@ -346,9 +346,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     /// tentative one becomes free evidence, so the next stop need not read it again, a
     /// confirmed one tentative (a reflector placed off its wall, e.g. on the axis of a reading
     /// whose cone met the wall obliquely, confirmed by a second such reading, is not kept for
-    /// ever: it cut a doorway off in `evidence_map::doorway`). Cost:
-    /// the cells of the square around the range times the sweep's readings (40 000 × 105 at
-    /// 3 m), host only (the MCU has no room for the evidence map).
+    /// ever: it cut a doorway off in `evidence_map::doorway`). Cost: the cells of the disc
+    /// of the range, each asking [`Swept::vouches`]; behind a wall one cone answers, in the
+    /// open one pass over the readings without trigonometry (measured on the MCU under QEMU:
+    /// `docs/firmware.md`).
     pub(super) fn mark_vouched_free(&mut self, full: bool) {
         let g = *self.grid.geometry();
         let pose = self.pose_world();
@@ -372,6 +373,8 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             (pose, band_rad, true),
         )
         .with_blind_cells(&self.blind_cells);
+        self.step_table.build(&swept);
+        let swept = swept.with_steps(&self.step_table);
         for y in (sy - h).max(0)..=(sy + h).min(g.height() as i32 - 1) {
             for x in (sx - h).max(0)..=(sx + h).min(g.width() as i32 - 1) {
                 if self.evidence.get_xy(x, y) == CellEvidence::Free {

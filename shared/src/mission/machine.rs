@@ -13,7 +13,7 @@ use crate::geom::PointM;
 use crate::grid::{Grid, GridError, GridGeometry};
 use crate::math::hypot;
 use crate::raster::mark_polygon;
-use crate::sonar::{HitBuffer, SweepBuffer};
+use crate::sonar::SweepBuffer;
 use crate::trajectory::{FrameTransform, SupplyEvent};
 
 use super::evidence::EvidenceMap;
@@ -61,8 +61,8 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             expansion_cells: 0,
             readings: SweepBuffer::new(),
             blind_cells: super::swept::BlindCells::NONE,
-            filtered: HitBuffer::new(),
             hits: Vec::new(),
+            step_table: super::swept::StepTable::new(),
             sweep: None,
             next_sweep_reversed: false,
             last_sweep_full: false,
@@ -154,7 +154,6 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.prefix.clear();
         self.readings.clear();
         self.blind_cells = super::swept::BlindCells::NONE;
-        self.filtered.clear();
         self.hits.clear();
         self.sweep = None;
         self.next_sweep_reversed = false;

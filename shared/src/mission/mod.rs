@@ -133,7 +133,7 @@ use crate::control::Pose;
 use crate::geom::PointM;
 use crate::grid::{words_for_cells, Grid};
 use crate::plan::{Planner, SCRATCH_WORDS_300, SCRATCH_WORDS_400};
-use crate::sonar::{HitBuffer, SweepBuffer, SWEEP_CAPACITY};
+use crate::sonar::{SweepBuffer, SWEEP_CAPACITY};
 use crate::trajectory::FrameTransform;
 
 /// Most readings one sweep can hold: a full ±180° sweep at 1.8° per step (200 steps + 1).
@@ -166,11 +166,9 @@ pub const MISSION_PATH_POINTS: usize = crate::trajectory::MAX_TRAJECTORY_POINTS;
 /// A plan or a prefix of the mission, world metres.
 pub type MissionPath = Vec<PointM, MISSION_PATH_POINTS>;
 
-/// A mission on a grid of at most 300 × 300 cells (15 m × 15 m at 0.05 m): the MCU size.
-///
-/// Its evidence map has no occupied plane (one word: the CCM has no room for a second
-/// 11 250 B plane, see `docs/mapping.md`), so it refuses [`MissionConfig::evidence_map`].
-pub type Mission300 = Mission<{ words_for_cells(300 * 300) }, 1>;
+/// A mission on a grid of at most 300 × 300 cells (15 m × 15 m at 0.05 m): the MCU size,
+/// with both planes of the evidence map (11 250 B each).
+pub type Mission300 = Mission<{ words_for_cells(300 * 300) }>;
 
 /// A mission on a grid of at most 400 × 400 cells (20 m × 20 m at 0.05 m): the host size.
 ///
@@ -185,8 +183,12 @@ pub type HostMissionPlanner = Planner<SCRATCH_WORDS_400, HOST_MISSION_QUEUE>;
 
 /// The [`DeviceShell`] of a [`Mission300`] and its [`MissionPlanner300`]: the in-process
 /// device's (`twil mission --remote sim`) and the link tests'.
-pub type DeviceShell300 =
-    DeviceShell<{ words_for_cells(300 * 300) }, 1, SCRATCH_WORDS_300, MISSION_QUEUE>;
+pub type DeviceShell300 = DeviceShell<
+    { words_for_cells(300 * 300) },
+    { words_for_cells(300 * 300) },
+    SCRATCH_WORDS_300,
+    MISSION_QUEUE,
+>;
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct SweepState {
     full: bool,
@@ -240,8 +242,10 @@ pub struct Mission<const W: usize, const E: usize = W> {
     /// Evidence map: the marked cells of the blind disc where the last standing sweep was
     /// read (`swept::BlindCells`).
     blind_cells: swept::BlindCells,
-    filtered: HitBuffer,
     hits: Vec<PointM, MAX_SWEEP_READINGS>,
+    /// The majority rule's steps of the last standing sweep (`swept::StepTable`), built
+    /// once for the cells it vouches for.
+    step_table: swept::StepTable,
     sweep: Option<SweepState>,
     next_sweep_reversed: bool,
     last_sweep_full: bool,

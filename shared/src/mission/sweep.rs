@@ -12,7 +12,7 @@ use crate::geom::PointM;
 use crate::math::{cos, hypot, sin};
 use crate::raster::{mark_point_m, BresenhamLine};
 use crate::robot::RobotConfig;
-use crate::sonar::{filter_constant_depth, RcdParams, Reading, SweepKind, SweepPlan};
+use crate::sonar::{for_each_constant_depth_hit, RcdParams, Reading, SweepKind, SweepPlan};
 
 use super::messages::push;
 use super::{
@@ -241,16 +241,16 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         if !self.config.constant_depth_filter {
             params.min_pairs = 0;
         }
-        filter_constant_depth(&self.readings, &params, &mut self.filtered);
         let offset_m = self.config.robot.sonar_offset_m;
-        for hit in self.filtered.iter() {
+        let (grid, hits, e) = (&mut self.grid, &mut self.hits, self.expansion_cells);
+        for_each_constant_depth_hit(&self.readings, &params, |hit| {
             let p = hit.world_point(offset_m);
-            if !p.is_finite() {
-                continue;
+            if p.is_finite() {
+                mark_point_m(grid, p, e);
+                // As many hits as readings: cannot overflow.
+                let _ = hits.push(p);
             }
-            mark_point_m(&mut self.grid, p, self.expansion_cells);
-            let _ = self.hits.push(p);
-        }
+        });
         self.stats.hits += self.hits.len() as u32;
         self.hits.len() as u16
     }

@@ -18,7 +18,7 @@
 use crate::control::Pose;
 use crate::geom::PointM;
 use crate::math::{abs, atan2, cos, hypot, sin, sqrt, wrap_angle_rad};
-use crate::sonar::Reading;
+use crate::sonar::{Reading, SWEEP_CAPACITY};
 
 use super::MissionConfig;
 
@@ -55,6 +55,9 @@ pub(super) struct Swept<'a> {
     pub reading_shift_m: f32,
     /// Marked cells of the sonar's blind disc (see [`BlindCells`]).
     pub blind_cells: &'a BlindCells,
+    /// The majority rule's steps, read once for the sweep (see [`StepTable`]); `None`: counted
+    /// point by point.
+    pub steps: Option<&'a StepTable>,
 }
 
 /// Most marked cells of the blind disc a sweep may hold; with more, the evidence map's rule
@@ -188,6 +191,17 @@ impl<'a> Swept<'a> {
                 0.0
             },
             blind_cells: &BlindCells::NONE,
+            steps: None,
+        }
+    }
+
+    /// The same sweep, reading the majority rule from `steps` (built for it with
+    /// [`StepTable::build`]; a table built for another sweep is not used).
+    pub fn with_steps(self, steps: &'a StepTable) -> Self {
+        let built_for_it = steps.frame.is_some() && steps.frame == self.frame(self.heard_rad());
+        Swept {
+            steps: built_for_it.then_some(steps),
+            ..self
         }
     }
 
@@ -217,6 +231,7 @@ impl<'a> Swept<'a> {
         heard_beam_rad: -1.0,
         reading_shift_m: 0.0,
         blind_cells: &BlindCells::NONE,
+        steps: None,
     };
 
     /// Does the sweep prove `q` free (see the module docs)?
@@ -225,7 +240,20 @@ impl<'a> Swept<'a> {
         if n < 2 || self.half_band_rad.is_nan() || self.half_band_rad <= 0.0 {
             return false;
         }
-        let sonar = self.pose.point_ahead(self.sonar_offset_m);
+        // The same for every point: from the table when the sweep has one (a sine and a
+        // cosine less per point).
+        let sonar = match self.steps.and_then(|t| t.basis) {
+            Some(basis) => basis.sonar,
+            None => self.pose.point_ahead(self.sonar_offset_m),
+        };
+        let thales = self.echo_limited && self.thales_beam_rad >= 0.0;
+        if thales {
+            // Out of range vouches nothing (`vouches_thales`): known before the bearing.
+            let d_m = hypot(q.x_m - sonar.x_m, q.y_m - sonar.y_m);
+            if !(d_m >= self.min_range_m && d_m <= self.range_m - self.cell_m) {
+                return false;
+            }
+        }
         let rel =
             wrap_angle_rad(atan2(q.y_m - sonar.y_m, q.x_m - sonar.x_m) - self.pose.heading_rad);
         if abs(rel) > self.half_band_rad {
@@ -288,7 +316,7 @@ impl Swept<'_> {
     /// - no echo contradicts it: no reading `i` heard something at `d·cos(max(0, |φᵢ − rel| −
     ///   beam)) + one cell` or nearer (the foot could be anywhere in its cone); or, with a beam
     ///   sonar, every candidate is ruled out by most of the readings whose cones hold it
-    ///   ([`Swept::every_candidate_ruled_out`]);
+    ///   ([`Swept::candidates`]);
     /// - no marked cell of the blind disc ([`BlindCells`]) lies inside the circle on the sonar
     ///   and the point: a wall from there to the point has its nearest point where the sonar
     ///   is deaf.
@@ -308,46 +336,44 @@ impl Swept<'_> {
     /// Cost: one pass over the readings (at most 201); with a beam, when an echo contradicts,
     /// one more per bearing step of the window, each over one cone of readings.
     pub fn vouches_thales(&self, rel: f32, d_m: f32) -> bool {
+        let Some((slack, window)) = self.thales_window(rel, d_m) else {
+            return false;
+        };
+        self.thales_decision(rel, d_m, slack, window)
+    }
+
+    /// The conditions of [`Swept::vouches_thales`] that need no echo: in range, the window read,
+    /// no mark of the blind disc in the way. Returns the slack and the window's half-angle.
+    fn thales_window(&self, rel: f32, d_m: f32) -> Option<(f32, f32)> {
         let n = self.readings.len();
         if n < 2 || !(d_m >= self.min_range_m && d_m <= self.range_m - self.cell_m) {
-            return false;
+            return None;
         }
-        // Readings from elsewhere: each is read at its own heading (exact), and the sonar's
-        // shift from `pose` widens every bound (below).
         let shift_m = self.reading_shift_m;
-        let x = shift_m / self.min_range_m;
-        if x.is_nan() || x >= 1.0 {
-            return false;
-        }
-        let slack = atan2(x, sqrt(1.0 - x * x)); // asin(shift / min range)
-
+        // The same for every point of the sweep: from its table when it has one.
+        let Basis {
+            slack,
+            first,
+            last,
+            step,
+            sonar,
+        } = self.steps.and_then(|t| t.basis).or_else(|| self.basis())?;
         // The cone a foot may hide in, less the slack: what the window may be read with.
         let beam_rad = self.thales_beam_rad - slack;
         let c = (self.min_range_m / d_m).clamp(0.0, 1.0);
         let window = atan2(sqrt(1.0 - c * c), c); // acos(min range / d)
-                                                  // Either direction: only the ends matter (every reading is looked at below).
-        let (a, b) = (
-            self.bearing_rad(&self.readings[0]),
-            self.bearing_rad(&self.readings[n - 1]),
-        );
-        let (first, last) = (a.min(b), a.max(b));
-        let step = (last - first) / (n - 1) as f32;
-        if !(step.is_finite() && step > 0.0) {
-            return false;
-        }
-        // A sweep all round (its two ends a step apart or overlapping) reads every bearing.
+                                                  // A sweep all round (its two ends a step apart or overlapping) reads every bearing.
         let all_round = last - first + 1.01 * step >= 2.0 * core::f32::consts::PI;
         let read = all_round
             || (rel - window >= first - beam_rad - 1.0e-4
                 && rel + window <= last + beam_rad + 1.0e-4);
         if !read {
-            return false;
+            return None;
         }
         // A wall whose nearest point lies in the blind disc is silent: none may pass through
         // a marked cell there inside the circle on the sonar and the point
         // (widened by half a cell for the point's cell and by the shift).
         if self.blind_cells.overflowed() || !self.blind_cells.cells().is_empty() {
-            let sonar = self.pose.point_ahead(self.sonar_offset_m);
             let heading = self.pose.heading_rad + rel;
             let centre = PointM::new(
                 sonar.x_m + 0.5 * d_m * cos(heading),
@@ -355,14 +381,46 @@ impl Swept<'_> {
             );
             let radius_m = 0.5 * d_m + 0.5 * self.cell_m + shift_m;
             if self.blind_cells.reach_disc(centre, radius_m, self.cell_m) {
-                return false;
+                return None;
             }
         }
-        let Some(worst) = self.most_contradicting(rel, d_m, slack) else {
-            return true;
+        Some((slack, window))
+    }
+
+    /// What the echoes say of a point that passed [`Swept::thales_window`]: the first rule
+    /// (no reading contradicts) or, with a beam, the majority rule (every candidate ruled
+    /// out), read in the cheapest order that gives the same answer.
+    fn thales_decision(&self, rel: f32, d_m: f32, slack: f32, window: f32) -> bool {
+        let candidates = self.candidates(rel, d_m, window, self.heard_beam_rad - slack);
+        // Behind a wall the cone on the point's own bearing heard the wall: not vouched for,
+        // known from one cone instead of every reading (most points of a 6 m sweep's square
+        // lie behind some wall; `mark_vouched_free` asks for each).
+        if candidates
+            .as_ref()
+            .is_some_and(|c| c.heard_near(c.own_step()))
+        {
+            return false;
+        }
+        let Some(candidates) = candidates else {
+            return !self.any_contradicting(rel, d_m, slack);
         };
-        let heard_rad = self.heard_beam_rad - slack;
-        self.every_candidate_ruled_out(rel, d_m, window, first, step, all_round, worst, heard_rad)
+        // Nearer than every candidate any step's majority could hear, and the whole window
+        // covered: every candidate is ruled out, without looking at one.
+        if candidates
+            .table
+            .is_some_and(|t| d_m < t.clear_within_m(&candidates))
+        {
+            return true;
+        }
+        // Candidate by candidate first (with the table, a comparison each): a step some
+        // covering reading heard too near also contradicts the first rule, so the answer is
+        // no; every step ruled out is yes whatever the first rule says. Only a step no cone
+        // covers (past the ends of a sweep that is not all round) leaves it to the first rule.
+        match candidates.window_verdict() {
+            WindowVerdict::RuledOut => true,
+            WindowVerdict::HeardNear => false,
+            WindowVerdict::Undecided => !self.any_contradicting(rel, d_m, slack),
+        }
     }
 
     /// A reading's bearing off `pose`'s heading: its neck angle, turned by how far the robot's
@@ -371,27 +429,67 @@ impl Swept<'_> {
         r.neck_angle_rad + wrap_angle_rad(r.pose.heading_rad - self.pose.heading_rad)
     }
 
-    /// The first rule, a fast sufficient test: the reading that heard something nearest
-    /// inside the farthest candidate reflector its cone could hold (its index), or `None`
-    /// when no reading did.
+    /// How far inside the farthest candidate reflector its cone could hold reading `r`
+    /// heard something (the first rule: it contradicts the point at `0` or more); `None` when
+    /// its cone cannot hold one.
+    fn contradiction_m(&self, r: &Reading, rel: f32, d_m: f32, beam_rad: f32) -> Option<f32> {
+        // No reading can contradict from beyond the point (the cosine is at most 1): skipped
+        // before any trigonometry, which is most of them for a point in the open.
+        let range_m = r
+            .range_m
+            .filter(|&range_m| range_m <= d_m + self.cell_m + self.reading_shift_m)?;
+        let off = abs(wrap_angle_rad(self.bearing_rad(r) - rel));
+        let nearest = (off - beam_rad).max(0.0);
+        if nearest.is_nan() || nearest >= core::f32::consts::FRAC_PI_2 {
+            return None;
+        }
+        Some(d_m * cos(nearest) + self.cell_m + self.reading_shift_m - range_m)
+    }
+
+    /// The first rule by its definition: the reading that heard something nearest inside the
+    /// farthest candidate reflector its cone could hold (its index), or `None` when no reading
+    /// did.
+    #[cfg(test)]
     fn most_contradicting(&self, rel: f32, d_m: f32, slack_rad: f32) -> Option<usize> {
         let beam = self.thales_beam_rad + slack_rad;
         let mut worst: Option<(usize, f32)> = None;
         for (i, r) in self.readings.iter().enumerate() {
-            let Some(range_m) = r.range_m else {
+            let Some(inside_m) = self.contradiction_m(r, rel, d_m, beam) else {
                 continue;
             };
-            let off = abs(wrap_angle_rad(self.bearing_rad(r) - rel));
-            let nearest = (off - beam).max(0.0);
-            if nearest.is_nan() || nearest >= core::f32::consts::FRAC_PI_2 {
-                continue;
-            }
-            let inside_m = d_m * cos(nearest) + self.cell_m + self.reading_shift_m - range_m;
             if inside_m >= 0.0 && worst.is_none_or(|(_, w)| inside_m > w) {
                 worst = Some((i, inside_m));
             }
         }
         worst.map(|(i, _)| i)
+    }
+
+    /// Does some reading contradict the point by the first rule? The readings around the
+    /// point's own bearing first: behind a wall they heard it, and the answer comes from a
+    /// few instead of the whole sweep.
+    fn any_contradicting(&self, rel: f32, d_m: f32, slack_rad: f32) -> bool {
+        let beam = self.thales_beam_rad + slack_rad;
+        let contradicts = |r: &Reading| {
+            self.contradiction_m(r, rel, d_m, beam)
+                .is_some_and(|inside_m| inside_m >= 0.0)
+        };
+        let n = self.readings.len();
+        let (Some(a), Some(b)) = (self.readings.first(), self.readings.last()) else {
+            return false;
+        };
+        let (a, b) = (self.bearing_rad(a), self.bearing_rad(b));
+        let at = (rel - a) / (b - a) * n.saturating_sub(1) as f32;
+        if at.is_finite() && at >= 0.0 && at < n as f32 {
+            let i = at as usize;
+            let near = self
+                .readings
+                .get(i.saturating_sub(4)..(i + 5).min(n))
+                .unwrap_or(&[]);
+            if near.iter().any(contradicts) {
+                return true;
+            }
+        }
+        self.readings.iter().any(contradicts)
     }
 
     /// The rule read candidate by candidate: every bearing `ψ` of the window is a candidate
@@ -400,79 +498,513 @@ impl Swept<'_> {
     /// `2m + 1` a whole cone spans) heard nothing that near: such a reflector would have
     /// echoed in every one of them. Bearings are taken a step wide, each with its farthest
     /// candidate and only the readings whose cones hold the whole step (conservative).
+    /// `None` when no reading's cone holds a step (a ray: nothing is ruled out this way).
     ///
     /// Why a majority and not every reading: a spurious short echo (crosstalk) or a jamb's
     /// edge in one side of the cone contradicted the whole window before, and one such echo in
     /// a sweep (1 % of readings) took the vouching of everything behind it; a dropped echo on
-    /// a real wall leaves the wall's other readings, and half a cone of them dropping is what
-    /// it would take to rule the wall out.
-    #[allow(clippy::too_many_arguments)]
-    fn every_candidate_ruled_out(
+    /// a real wall leaves the wall's other readings, and half a cone of them would have to
+    /// drop to rule the wall out.
+    fn candidates(
         &self,
         rel: f32,
         d_m: f32,
         window: f32,
-        first: f32,
-        step: f32,
-        all_round: bool,
-        worst: usize,
         heard_rad: f32,
-    ) -> bool {
-        let n = self.readings.len() as i32;
+    ) -> Option<Candidates<'_>> {
+        // A table is attached only to the sweep it was built for (`with_steps`), whose
+        // frame it holds: not recomputed for every point.
+        let (frame, table) = match self.steps.and_then(|t| Some((t.frame?, t))) {
+            Some((frame, t)) if frame.heard_rad == heard_rad => (frame, Some(t)),
+            _ => (self.frame(heard_rad)?, None),
+        };
+        Some(Candidates {
+            swept: self,
+            rel,
+            d_m,
+            window,
+            table,
+            frame,
+        })
+    }
+
+    /// The bearing steps of the majority rule for cones of `heard_rad`; `None` when no cone
+    /// holds a whole step.
+    fn frame(&self, heard_rad: f32) -> Option<Frame> {
+        let (a, b) = (
+            self.bearing_rad(self.readings.first()?),
+            self.bearing_rad(self.readings.last()?),
+        );
+        let (first, last, step) = self.bearing_span()?;
         let m = floor_i32((heard_rad - 0.5 * step) / step);
         if m < 0 {
-            return false;
+            return None;
         }
-        let ascending =
-            self.bearing_rad(&self.readings[0]) <= self.bearing_rad(&self.readings[n as usize - 1]);
-        // Bearing steps, counted from `first` in the readings' ascending order.
-        let index = |i: usize| {
-            if ascending {
-                i as i32
-            } else {
-                n - 1 - i as i32
-            }
-        };
-        let ruled_out = |k: i32| -> bool {
-            let centre = first + k as f32 * step;
-            let off = abs(wrap_angle_rad(centre - rel));
-            if off - 0.5 * step > window {
-                return true;
-            }
-            let farthest_m =
-                d_m * cos((off - 0.5 * step).max(0.0)) + self.cell_m + self.reading_shift_m;
-            let (mut covering, mut clear) = (0, 0);
-            for j in k - m..=k + m {
-                let j = if all_round { j.rem_euclid(n) } else { j };
-                if !(0..n).contains(&j) {
-                    continue;
-                }
-                let at = if ascending { j } else { n - 1 - j } as usize;
-                let Some(r) = self.readings.get(at) else {
-                    continue;
-                };
-                // Its cone must hold the whole step (an uneven sweep counts for less).
-                let r_off = abs(wrap_angle_rad(self.bearing_rad(r) - centre));
-                if r_off.is_nan() || r_off + 0.5 * step > heard_rad + 1.0e-4 {
-                    continue;
-                }
-                covering += 1;
-                if r.range_m.is_none_or(|range_m| range_m > farthest_m) {
-                    clear += 1;
-                }
-            }
-            covering > 0 && clear >= (m + 1).min(covering)
-        };
-        // The most contradicting reading's cone first: behind a wall, that is where a
-        // candidate stands, and the answer comes after a few steps.
-        let w = index(worst);
-        if !(w - m..=w + m).all(ruled_out) {
-            return false;
-        }
-        let k_lo = floor_i32((rel - window - first) / step - 0.5);
-        let k_hi = floor_i32((rel + window - first) / step + 0.5) + 1;
-        (k_lo..=k_hi).all(ruled_out)
+        Some(Frame {
+            first,
+            step,
+            all_round: last - first + 1.01 * step >= 2.0 * core::f32::consts::PI,
+            period: periodic(
+                last - first + 1.01 * step >= 2.0 * core::f32::consts::PI,
+                step,
+            ),
+            ascending: a <= b,
+            m,
+            heard_rad,
+        })
     }
+
+    /// What [`Swept::thales_window`] reads the same for every point: `None` when the sweep
+    /// vouches for nothing (read from nowhere in particular, or bearings out of order).
+    fn basis(&self) -> Option<Basis> {
+        // Readings from elsewhere: each is read at its own heading (exact), and the sonar's
+        // shift from `pose` widens every bound.
+        let x = self.reading_shift_m / self.min_range_m;
+        if x.is_nan() || x >= 1.0 {
+            return None;
+        }
+        let slack = atan2(x, sqrt(1.0 - x * x)); // asin(shift / min range)
+        let (first, last, step) = self.bearing_span()?;
+        Some(Basis {
+            slack,
+            first,
+            last,
+            step,
+            sonar: self.pose.point_ahead(self.sonar_offset_m),
+        })
+    }
+
+    /// The least and the greatest bearing of the sweep and the step between its readings
+    /// (either direction: only the ends matter); `None` for fewer than two readings or
+    /// bearings out of order.
+    fn bearing_span(&self) -> Option<(f32, f32, f32)> {
+        let n = self.readings.len();
+        let (a, b) = (
+            self.bearing_rad(self.readings.first()?),
+            self.bearing_rad(self.readings.last()?),
+        );
+        let (first, last) = (a.min(b), a.max(b));
+        let step = (last - first) / n.saturating_sub(1).max(1) as f32;
+        (n >= 2 && step.is_finite() && step > 0.0).then_some((first, last, step))
+    }
+
+    /// The cone the majority rule reads with: the heard beam less the shift's slack.
+    fn heard_rad(&self) -> f32 {
+        let x = self.reading_shift_m / self.min_range_m;
+        self.heard_beam_rad - atan2(x, sqrt(1.0 - x * x))
+    }
+}
+
+/// The slack (`asin(shift / min range)`) and the bearings of a sweep, the same for each of its
+/// points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Basis {
+    slack: f32,
+    first: f32,
+    last: f32,
+    step: f32,
+    /// Where the sonar stood.
+    sonar: PointM,
+}
+
+/// How the majority rule steps through a sweep's bearings: steps counted from `first` in the
+/// readings' ascending order, `m` readings on each side of a step's centre.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Frame {
+    first: f32,
+    step: f32,
+    all_round: bool,
+    /// Steps in a whole turn, for a sweep all round whose step divides it (to a thousandth
+    /// of a step): step `k` and step `k + period` are one bearing, read by the same readings.
+    period: Option<i32>,
+    ascending: bool,
+    m: i32,
+    heard_rad: f32,
+}
+
+impl Frame {
+    /// The number of step `k` within a turn, for a periodic sweep (the table holds each
+    /// bearing once); `k` otherwise.
+    fn reduce(&self, k: i32) -> i32 {
+        match self.period {
+            Some(p) => k.rem_euclid(p),
+            None => k,
+        }
+    }
+}
+
+/// What the majority rule reads from each step of one sweep, computed once instead of per
+/// point: a standing sweep vouches cell by cell over the disc of its range (tens of thousands
+/// of cells at 6 m), each reading up to a hundred steps of a whole cone, and on the MCU that
+/// took 0.2 to 1.5 s a sweep (QEMU, `docs/firmware.md`). Whether most covering readings heard
+/// nothing as near as a candidate at `f` is whether the `min(m + 1, covering)`-th farthest of
+/// their ranges lies beyond `f`: one comparison. Exact: the same answer as counting.
+#[derive(Clone, Debug)]
+pub struct StepTable {
+    frame: Option<Frame>,
+    /// Steps tabled: 0 to `len − 1`.
+    len: usize,
+    /// Readings whose cones hold step `k` whole.
+    covering: [u8; SWEEP_CAPACITY],
+    /// The range the majority must all lie beyond (silence: infinity; no reading or a NaN
+    /// among the majority: minus infinity).
+    majority_m: [f32; SWEEP_CAPACITY],
+    /// The steps from the first to the last covered one, when every step between is covered
+    /// and tabled (see [`StepTable::build_clear_within`]).
+    covered: Option<(usize, usize)>,
+    /// Per bin of steps, see [`StepTable::build_clear_within`].
+    clear_within: [f32; CLEAR_BINS],
+    /// The sweep's [`Basis`].
+    basis: Option<Basis>,
+    /// Per bin, the step that set its clear distance: the first a point beyond it is likely
+    /// heard too near in (read first by [`Candidates::window_verdict`]).
+    limiting_step: [u8; CLEAR_BINS],
+}
+
+/// Steps per bin of [`StepTable::clear_within_m`].
+const CLEAR_BIN_STEPS: usize = 2;
+/// Bins of [`StepTable::clear_within_m`].
+const CLEAR_BINS: usize = SWEEP_CAPACITY.div_ceil(CLEAR_BIN_STEPS);
+
+/// Readings of one cone a table step counts (a wider cone is read reading by reading).
+const MAX_CONE_READINGS: usize = 64;
+
+impl StepTable {
+    /// An empty table (used by no sweep).
+    pub const fn new() -> Self {
+        StepTable {
+            frame: None,
+            len: 0,
+            covering: [0; SWEEP_CAPACITY],
+            majority_m: [f32::NEG_INFINITY; SWEEP_CAPACITY],
+            covered: None,
+            clear_within: [f32::NEG_INFINITY; CLEAR_BINS],
+            basis: None,
+            limiting_step: [0; CLEAR_BINS],
+        }
+    }
+
+    /// A distance nearer than which every candidate of a point on the candidates' bearing is
+    /// ruled out, when its window lies within the steps the table covers; minus infinity
+    /// otherwise (see [`StepTable::build_clear_within`]).
+    fn clear_within_m(&self, c: &Candidates<'_>) -> f32 {
+        let Some((lo, hi)) = self.covered else {
+            return f32::NEG_INFINITY;
+        };
+        let (step, first) = (c.frame.step, c.frame.first);
+        let k_lo = floor_i32((c.rel - c.window - first) / step - 0.5);
+        let k_hi = floor_i32((c.rel + c.window - first) / step + 0.5) + 1;
+        // A periodic sweep's table holds every bearing once (its steps counted round).
+        let whole_turn = c
+            .frame
+            .period
+            .is_some_and(|p| lo == 0 && hi + 1 >= p as usize);
+        if !whole_turn && (k_lo < lo as i32 || k_hi > hi as i32) {
+            return f32::NEG_INFINITY;
+        }
+        usize::try_from(c.frame.reduce(c.own_step()))
+            .ok()
+            .and_then(|k| self.clear_within.get(k / CLEAR_BIN_STEPS))
+            .copied()
+            .unwrap_or(f32::NEG_INFINITY)
+    }
+
+    /// Per bin of steps, a distance nearer than which every step's majority rules its
+    /// candidate out for a point on a bearing of the bin: the least over the covered steps of
+    /// `(majority − cell − shift) / cos(θ)`, `θ` the step's least angle to the bin less half a
+    /// step (a candidate's angle), less 1 % and 1 cm for the approximate cosine. A point in a
+    /// window of covered steps nearer than it is vouched for whatever the first rule says.
+    fn build_clear_within(&mut self, frame: &Frame, swept: &Swept<'_>) {
+        self.covered = None;
+        let n = self.len;
+        let covered = |k: usize| self.covering[k] > 0 && self.covering[k] != u8::MAX;
+        let Some(lo) = (0..n).find(|&k| covered(k)) else {
+            return;
+        };
+        let hi = (0..n).rev().find(|&k| covered(k)).unwrap_or(lo);
+        if !(lo..=hi).all(covered) {
+            return;
+        }
+        let step = frame.step;
+        let bin_width = CLEAR_BIN_STEPS as f32 * step;
+        for b in 0..n.div_ceil(CLEAR_BIN_STEPS).min(CLEAR_BINS) {
+            // Bin b holds the bearings of steps CLEAR_BIN_STEPS·b .. +CLEAR_BIN_STEPS − 1.
+            let mid = frame.first + ((b * CLEAR_BIN_STEPS) as f32 - 0.5) * step + 0.5 * bin_width;
+            let mut clear_m = f32::INFINITY;
+            let mut limiting = lo;
+            for k in lo..=hi {
+                let centre = frame.first + k as f32 * step;
+                let off = abs(wrap_angle_rad(centre - mid));
+                let theta = ((off - 0.5 * bin_width).max(0.0) - 0.5 * step).max(0.0);
+                if theta >= core::f32::consts::FRAC_PI_2 {
+                    continue;
+                }
+                let reach_m =
+                    (self.majority_m[k] - swept.cell_m - swept.reading_shift_m) / cos(theta);
+                if reach_m < clear_m {
+                    (clear_m, limiting) = (reach_m, k);
+                }
+            }
+            self.limiting_step[b] = limiting.min(u8::MAX as usize) as u8;
+            self.clear_within[b] = if clear_m.is_nan() {
+                f32::NEG_INFINITY
+            } else {
+                0.99 * clear_m - 0.01
+            };
+        }
+        self.covered = Some((lo, hi));
+    }
+
+    /// The table of `swept`'s steps 0 to n − 1 (the window's steps past the sweep's ends are
+    /// counted point by point).
+    pub fn build(&mut self, swept: &Swept<'_>) {
+        self.frame = None;
+        self.len = 0;
+        self.covered = None;
+        self.basis = swept.basis();
+        let Some(frame) = swept.frame(swept.heard_rad()) else {
+            return;
+        };
+        let n = swept.readings.len().min(SWEEP_CAPACITY);
+        for k in 0..n {
+            let mut ranges: heapless::Vec<f32, MAX_CONE_READINGS> = heapless::Vec::new();
+            let mut fits = true;
+            let covering = for_each_covering(swept, &frame, k as i32, |r| {
+                // Silence is beyond every candidate, a NaN before every one (never clear).
+                let v = match r.range_m {
+                    None => f32::INFINITY,
+                    Some(x) if x.is_nan() => f32::NEG_INFINITY,
+                    Some(x) => x,
+                };
+                fits &= ranges.push(v).is_ok();
+            });
+            let need = (frame.m + 1).min(covering) as usize;
+            let (cov, majority) = if !fits || covering > u8::MAX as i32 {
+                // Not tabled: a point reads this step reading by reading.
+                (u8::MAX, f32::NAN)
+            } else if need == 0 {
+                (0, f32::NEG_INFINITY)
+            } else {
+                (covering as u8, nth_farthest(&mut ranges, need - 1))
+            };
+            self.covering[k] = cov;
+            self.majority_m[k] = majority;
+        }
+        self.len = n;
+        self.build_clear_within(&frame, swept);
+        self.frame = Some(frame);
+    }
+}
+
+impl Default for StepTable {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The `i`-th largest of `values` (0: the largest), sorting them in place (an insertion
+/// sort: a cone holds a few dozen readings, and core's sort would add kilobytes of flash);
+/// minus infinity past the end.
+fn nth_farthest(values: &mut [f32], i: usize) -> f32 {
+    for j in 1..values.len() {
+        let mut k = j;
+        while k > 0 && values[k - 1] < values[k] {
+            values.swap(k - 1, k);
+            k -= 1;
+        }
+    }
+    values.get(i).copied().unwrap_or(f32::NEG_INFINITY)
+}
+
+/// The steps in a whole turn when a sweep all round has a step that divides it (a full sweep
+/// of 201 readings from −180° to 180° has 200: its two ends are one bearing). Counting its
+/// steps modulo that, every bearing has one number and one set of readings; modulo the
+/// number of readings, a window across the ends read its readings one off.
+fn periodic(all_round: bool, step: f32) -> Option<i32> {
+    let turns = 2.0 * core::f32::consts::PI / step;
+    let p = floor_i32(turns + 0.5);
+    (all_round && p > 0 && abs(turns - p as f32) < 1.0e-3).then_some(p)
+}
+
+/// Call `f` with each reading whose cone holds step `k` whole; returns how many.
+fn for_each_covering(swept: &Swept<'_>, frame: &Frame, k: i32, mut f: impl FnMut(&Reading)) -> i32 {
+    let n = swept.readings.len() as i32;
+    let centre = frame.first + k as f32 * frame.step;
+    let mut covering = 0;
+    for j in k - frame.m..=k + frame.m {
+        let j = if frame.all_round {
+            j.rem_euclid(frame.period.unwrap_or(n))
+        } else {
+            j
+        };
+        if !(0..n).contains(&j) {
+            continue;
+        }
+        let at = if frame.ascending { j } else { n - 1 - j } as usize;
+        let Some(r) = swept.readings.get(at) else {
+            continue;
+        };
+        // Its cone must hold the whole step (an uneven sweep counts for less).
+        let r_off = abs(wrap_angle_rad(swept.bearing_rad(r) - centre));
+        if r_off.is_nan() || r_off + 0.5 * frame.step > frame.heard_rad + 1.0e-4 {
+            continue;
+        }
+        covering += 1;
+        f(r);
+    }
+    covering
+}
+
+/// The candidates of one point for [`Swept::candidates`].
+struct Candidates<'a> {
+    swept: &'a Swept<'a>,
+    rel: f32,
+    d_m: f32,
+    window: f32,
+    frame: Frame,
+    table: Option<&'a StepTable>,
+}
+
+/// One step's candidate as the covering readings judge it.
+enum StepVerdict {
+    /// The step lies outside the window: no candidate there.
+    Outside,
+    /// Read by the readings whose cones hold it.
+    Read {
+        /// Most of them heard nothing as near as the candidate: it is ruled out.
+        majority_clear: bool,
+        /// Not ruled out even a margin nearer ([`HEARD_NEAR_MARGIN`]): some reading heard
+        /// something that near, and then it also contradicts the point by the first rule,
+        /// whatever the approximate cosines round to.
+        heard_near: bool,
+    },
+}
+
+/// How much nearer than a candidate a step must be heard for [`StepVerdict::Read::heard_near`]:
+/// a fraction of the point's distance and a millimetre, above what the approximate cosines of
+/// two nearby angles can differ by.
+const HEARD_NEAR_MARGIN: (f32, f32) = (0.01, 0.001);
+
+impl Candidates<'_> {
+    /// The step that holds the point's own bearing.
+    fn own_step(&self) -> i32 {
+        floor_i32((self.rel - self.frame.first) / self.frame.step + 0.5)
+    }
+
+    /// Step `k`'s candidate, judged by the readings whose cones hold the whole step.
+    fn verdict(&self, k: i32) -> StepVerdict {
+        let k = self.frame.reduce(k);
+        let step = self.frame.step;
+        let centre = self.frame.first + k as f32 * step;
+        let off = abs(wrap_angle_rad(centre - self.rel));
+        if off - 0.5 * step > self.window {
+            return StepVerdict::Outside;
+        }
+        let tabled = self.table.and_then(|t| {
+            let i = usize::try_from(k).ok().filter(|&i| i < t.len)?;
+            let covering = *t.covering.get(i)?;
+            (covering != u8::MAX).then(|| (covering, t.majority_m[i]))
+        });
+        let base_m = self.swept.cell_m + self.swept.reading_shift_m;
+        // The majority heard farther than any candidate can be (the cosine, approximate, is
+        // below 1.002): ruled out without the cosine, as most steps in the open are.
+        if tabled.is_some_and(|(covering, majority_m)| {
+            covering > 0 && majority_m > 1.01 * self.d_m + base_m
+        }) {
+            return StepVerdict::Read {
+                majority_clear: true,
+                heard_near: false,
+            };
+        }
+        let farthest_m = self.d_m * cos((off - 0.5 * step).max(0.0)) + base_m;
+        let near_m = farthest_m - (HEARD_NEAR_MARGIN.0 * self.d_m + HEARD_NEAR_MARGIN.1);
+        if let Some((covering, majority_m)) = tabled {
+            return StepVerdict::Read {
+                majority_clear: covering > 0 && majority_m > farthest_m,
+                heard_near: covering > 0 && majority_m <= near_m,
+            };
+        }
+        let (mut clear, mut clear_of_near) = (0, 0);
+        let covering = for_each_covering(self.swept, &self.frame, k, |r| {
+            clear += r.range_m.is_none_or(|range_m| range_m > farthest_m) as i32;
+            clear_of_near += r.range_m.is_none_or(|range_m| range_m > near_m) as i32;
+        });
+        let need = (self.frame.m + 1).min(covering);
+        StepVerdict::Read {
+            majority_clear: covering > 0 && clear >= need,
+            heard_near: covering > 0 && clear_of_near < need,
+        }
+    }
+
+    /// Some reading whose cone holds step `k` heard something as near as its candidate, and
+    /// too many did for the candidate to be ruled out. Such a reading also contradicts the
+    /// point in [`Swept::any_contradicting`] (its cone holds the point's bearing to within
+    /// the candidate's offset, so its test distance is at least the candidate's), so the point
+    /// is not vouched for: the exact answer, without the pass over every reading.
+    fn heard_near(&self, k: i32) -> bool {
+        matches!(
+            self.verdict(k),
+            StepVerdict::Read {
+                heard_near: true,
+                ..
+            }
+        )
+    }
+
+    /// Every step of the window, the point's own first (behind a wall, the answer comes at
+    /// once): the first heard too near decides.
+    fn window_verdict(&self) -> WindowVerdict {
+        let (step, first) = (self.frame.step, self.frame.first);
+        let own = self.own_step();
+        let k_lo = floor_i32((self.rel - self.window - first) / step - 0.5);
+        let k_hi = floor_i32((self.rel + self.window - first) / step + 0.5) + 1;
+        // The step that limits the own bin's clear distance next (`StepTable`): past that
+        // distance, the one most likely heard too near.
+        let limiting = self
+            .table
+            .filter(|t| t.covered.is_some())
+            .and_then(|t| {
+                let b = usize::try_from(own).ok()? / CLEAR_BIN_STEPS;
+                t.limiting_step.get(b).map(|&k| k as i32)
+            })
+            // Steps are counted on from `first`: without a period one bearing all round may
+            // have two numbers, with different readings, and only the window's own counts.
+            .filter(|k| self.frame.period.is_some() || (k_lo..=k_hi).contains(k))
+            .unwrap_or(own);
+        let mut undecided = false;
+        let first_two = [own, limiting];
+        let rest = (k_lo..=k_hi).filter(|k| !first_two.contains(k));
+        for k in first_two.into_iter().chain(rest) {
+            match self.verdict(k) {
+                StepVerdict::Outside
+                | StepVerdict::Read {
+                    majority_clear: true,
+                    ..
+                } => {}
+                StepVerdict::Read {
+                    heard_near: true, ..
+                } => return WindowVerdict::HeardNear,
+                // Not ruled out, but only just (or by no cone): the first rule decides.
+                StepVerdict::Read { .. } => undecided = true,
+            }
+        }
+        if undecided {
+            WindowVerdict::Undecided
+        } else {
+            WindowVerdict::RuledOut
+        }
+    }
+}
+
+/// What the candidates of a point's window say.
+enum WindowVerdict {
+    /// Every candidate is ruled out: vouched for.
+    RuledOut,
+    /// Some candidate's covering readings heard something too near: not vouched for.
+    HeardNear,
+    /// No candidate was heard clearly too near, but some is not ruled out (no reading's cone
+    /// covers its step, or it was heard within the margin): the first rule decides.
+    Undecided,
 }
 
 /// `⌊x⌋` as an `i32` (saturating; NaN gives 0).
@@ -518,6 +1050,7 @@ mod tests {
             heard_beam_rad: -1.0,
             reading_shift_m: 0.0,
             blind_cells: &BlindCells::NONE,
+            steps: None,
         }
     }
 
@@ -534,6 +1067,89 @@ mod tests {
             thales_beam_rad: 15.0f32.to_radians(),
             heard_beam_rad: 15.0f32.to_radians(),
             ..swept(readings)
+        }
+    }
+
+    /// The rule as written in [`Swept::vouches_thales`]'s documentation, read the slow way:
+    /// no reading contradicts, or every candidate of the window is ruled out, each step's
+    /// readings counted one by one (no table, no shortcut).
+    fn vouches_by_definition(s: &Swept<'_>, q: PointM) -> bool {
+        let sonar = s.pose.point_ahead(s.sonar_offset_m);
+        let rel = wrap_angle_rad(atan2(q.y_m - sonar.y_m, q.x_m - sonar.x_m) - s.pose.heading_rad);
+        if s.readings.len() < 2 || abs(rel) > s.half_band_rad {
+            return false;
+        }
+        let d_m = hypot(q.x_m - sonar.x_m, q.y_m - sonar.y_m);
+        let Some((slack, window)) = s.thales_window(rel, d_m) else {
+            return false;
+        };
+        let untabled = Swept { steps: None, ..*s };
+        let no_contradiction = untabled.most_contradicting(rel, d_m, slack).is_none();
+        let every_candidate_ruled_out = untabled
+            .candidates(rel, d_m, window, s.heard_beam_rad - slack)
+            .is_some_and(|c| {
+                let (step, first) = (c.frame.step, c.frame.first);
+                let k_lo = floor_i32((rel - window - first) / step - 0.5);
+                let k_hi = floor_i32((rel + window - first) / step + 0.5) + 1;
+                (k_lo..=k_hi).all(|k| {
+                    matches!(
+                        c.verdict(k),
+                        StepVerdict::Outside
+                            | StepVerdict::Read {
+                                majority_clear: true,
+                                ..
+                            }
+                    )
+                })
+            });
+        no_contradiction || every_candidate_ruled_out
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+        /// The shortcuts (the own step first, the table's clear distances and majorities, the
+        /// window before the first rule) answer every point as the rule's definition does, for
+        /// a normal sweep and one all round, whatever the readings heard.
+        #[test]
+        fn the_shortcuts_vouch_exactly_what_the_rule_does(
+            ranges in proptest::collection::vec(
+                proptest::option::of(0.1f32..1.6), 201),
+            all_round in proptest::bool::ANY,
+            heard_deg in 4.0f32..25.0,
+            shift_m in proptest::prop_oneof![proptest::strategy::Just(0.0f32), 0.0f32..0.1],
+        ) {
+            let (lo, hi, band) = if all_round {
+                (-100, 100, core::f32::consts::PI)
+            } else {
+                (-52, 52, 52.0 * STEP)
+            };
+            let mut r: Vec<Reading, 201> = Vec::new();
+            for (k, i) in (lo..=hi).enumerate() {
+                let _ = r.push(Reading {
+                    neck_angle_rad: i as f32 * STEP,
+                    range_m: ranges[k],
+                    pose: Pose::new(0.0, 0.0, 0.0),
+                });
+            }
+            let counted = Swept {
+                half_band_rad: band,
+                thales_beam_rad: heard_deg.to_radians(),
+                heard_beam_rad: heard_deg.to_radians(),
+                reading_shift_m: shift_m,
+                ..swept(&r)
+            };
+            let mut table = StepTable::new();
+            table.build(&counted);
+            proptest::prop_assert!(shift_m > 0.0 || table.frame.is_some());
+            let tabled = counted.with_steps(&table);
+            for y in -30..=30 {
+                for x in -30..=30 {
+                    let q = PointM::new(x as f32 * 0.05 + 0.025, y as f32 * 0.05 + 0.025);
+                    let expected = vouches_by_definition(&counted, q);
+                    proptest::prop_assert_eq!(counted.vouches(q), expected, "{:?}", q);
+                    proptest::prop_assert_eq!(tabled.vouches(q), expected, "{:?}", q);
+                }
+            }
         }
     }
 

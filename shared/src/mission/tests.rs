@@ -718,7 +718,7 @@ fn the_band_check_trusts_only_the_bearings_the_sweep_read() {
 }
 
 #[test]
-fn the_mcu_sized_mission_refuses_the_evidence_map_and_the_host_sized_one_keeps_it() {
+fn a_mission_without_its_occupied_plane_refuses_the_evidence_map_and_the_mcu_sized_one_keeps_it() {
     let c = MissionConfig {
         evidence_map: true,
         ..config(
@@ -727,8 +727,9 @@ fn the_mcu_sized_mission_refuses_the_evidence_map_and_the_host_sized_one_keeps_i
             MissionMode::Stop,
         )
     };
-    // No room for the occupied plane: the option is refused, naming the capacity.
-    match Mission300::new(c, geometry()) {
+    // No room for the occupied plane (one word): the option is refused, naming the capacity.
+    type NoPlane = Mission<{ crate::grid::words_for_cells(300 * 300) }, 1>;
+    match NoPlane::new(c, geometry()) {
         Err(MissionError::Grid(crate::grid::GridError::CapacityExceeded { cells, capacity })) => {
             assert_eq!((cells, capacity), (160 * 160, 32));
         }
@@ -738,7 +739,10 @@ fn the_mcu_sized_mission_refuses_the_evidence_map_and_the_host_sized_one_keeps_i
         evidence_map: false,
         ..c
     };
-    assert!(Mission300::new(plain, geometry()).is_ok());
+    assert!(NoPlane::new(plain, geometry()).is_ok());
+    // The MCU's mission (300 × 300) has both planes, like the host's.
+    let mcu = Box::new(Mission300::new(c, geometry()).unwrap());
+    assert!(mcu.evidence().has_occupied_plane());
     let host = Box::new(Mission400::new(c, geometry()).unwrap());
     assert!(host.evidence().has_occupied_plane());
     // At the start the body's disc is free evidence, nothing is occupied.

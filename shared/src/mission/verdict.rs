@@ -49,8 +49,7 @@
 //! simulated reading and the stand-off kept the tracking margin (`docs/mapping.md`).
 //!
 //! Cost: a redraw is one pass over the map plus a `(2e + 1)²` square per occupied cell (e:
-//! the expansion in cells); the gap search walks the path's cells once. Host only today (the
-//! MCU has no room for the occupied plane).
+//! the expansion in cells); the gap search walks the path's cells once.
 
 use crate::geom::{distance_to_segment_m, PointM};
 use crate::grid::{Grid, GridGeometry};

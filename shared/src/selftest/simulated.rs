@@ -10,23 +10,24 @@
 use super::{Answer, CheckBody, Echo, Probe};
 use crate::drivers::neck_stepper::NeckGeometry;
 use crate::plant::Plant;
-use crate::world::Obstacles;
+use crate::world::{PolygonSet, MAX_POLYGONS, MAX_VERTICES};
 
-/// The simulated robot for [`super::run`].
-pub struct SimulatedCheck<'a> {
+/// The simulated robot for [`super::run`], in a world of at most `V` vertices and `P` polygons
+/// (a simulated device's world is smaller than the host's, `crate::link::WORLD_VERTICES`).
+pub struct SimulatedCheck<'a, const V: usize = MAX_VERTICES, const P: usize = MAX_POLYGONS> {
     /// The robot as it stands (not moved by a pulse).
     pub plant: &'a Plant,
     /// The real world the sonar sees.
-    pub world: &'a Obstacles,
+    pub world: &'a PolygonSet<V, P>,
     /// The sonar's range, metres.
     pub sonar_range_m: f32,
     /// Where the ideal neck points, steps from ahead; `None` until homed.
     pub neck_steps: Option<i32>,
 }
 
-impl<'a> SimulatedCheck<'a> {
+impl<'a, const V: usize, const P: usize> SimulatedCheck<'a, V, P> {
     /// The robot `plant` in `world`, its sonar reaching `sonar_range_m`, the neck not homed.
-    pub fn new(plant: &'a Plant, world: &'a Obstacles, sonar_range_m: f32) -> Self {
+    pub fn new(plant: &'a Plant, world: &'a PolygonSet<V, P>, sonar_range_m: f32) -> Self {
         Self {
             plant,
             world,
@@ -40,7 +41,7 @@ impl<'a> SimulatedCheck<'a> {
     }
 }
 
-impl CheckBody for SimulatedCheck<'_> {
+impl<const V: usize, const P: usize> CheckBody for SimulatedCheck<'_, V, P> {
     fn probe(&mut self, probe: Probe) -> Answer {
         let geometry = self.geometry();
         match probe {

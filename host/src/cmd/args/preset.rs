@@ -108,8 +108,8 @@ pub struct LoopArgs {
     pub seed_prune: Option<bool>,
     /// Map with the evidence map (docs/mapping.md): one reflector per run of constant depth,
     /// silence marks nothing, the body only enters space a standing sweep vouches for by the
-    /// Thales rule. Off by default, in both presets; `twil simulate` only (the link's
-    /// `SetMission` does not carry it: the MCU has no room for its second bit plane).
+    /// Thales rule. Off by default, in both presets; `twil mission` sends it in `SetMission`
+    /// (the firmware runs it too).
     #[arg(long)]
     pub evidence_map: bool,
 }

@@ -22,13 +22,6 @@ pub struct Inputs {
 /// Read and check the files and numbers of `args` (errors name the file and line, or the
 /// option).
 pub fn read_inputs(args: &Args) -> Result<Inputs> {
-    if args.mission.loop_args.evidence_map {
-        bail!(
-            "--evidence-map: twil mission cannot carry it (SetMission has no field for it, and \
-             the MCU has no room for the map's second bit plane: see docs/mapping.md); use twil \
-             simulate --evidence-map"
-        );
-    }
     let (mut params, known) = args.world.read()?;
     let real = args.real.as_deref().map(read_da).transpose()?;
     let geometry = args.world.geometry(DEFAULT_RESOLUTION_M)?;
@@ -124,6 +117,7 @@ pub fn mission_setup(args: &Args, inputs: &Inputs) -> MissionSetup {
         reference_feed_forward: args.choices().reference_feed_forward,
         turn_in_place: args.choices().turn_in_place,
         sweep_layout: robot.sweep_layout,
+        evidence_map: args.choices().evidence_map,
     }
 }
 

@@ -338,9 +338,10 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         // The in-process device (`--remote sim`) measures nothing: no line of zeros.
         if report::measured(&outcome) {
             println!(
-                "mcu: {} instructions per control step at most, {} per plan, {} B static RAM, {} B stack",
+                "mcu: {} instructions per control step at most, {} per plan, {} per mission turn, {} B static RAM, {} B stack",
                 report.max_control_instructions,
                 report.max_plan_instructions,
+                report.max_turn_instructions,
                 info.static_ram_bytes,
                 report.stack_high_water_bytes
             );
@@ -514,6 +515,7 @@ mod tests {
                         stats: Default::default(),
                         max_control_instructions: 0,
                         max_plan_instructions: 0,
+                        max_turn_instructions: 0,
                         stack_high_water_bytes: 0,
                         stop_ticks: 0,
                         stop_latency_us: 0,

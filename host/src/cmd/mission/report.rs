@@ -125,6 +125,7 @@ fn mcu_json(outcome: &Outcome) -> serde_json::Value {
     json!({
         "max_control_instructions": outcome.report.max_control_instructions,
         "max_plan_instructions": outcome.report.max_plan_instructions,
+        "max_turn_instructions": outcome.report.max_turn_instructions,
         "static_ram_bytes": outcome.info.static_ram_bytes,
         "stack_high_water_bytes": outcome.report.stack_high_water_bytes,
     })
@@ -209,7 +210,7 @@ pub(super) fn write_outputs(
         time_limit_s: args.mission.time_limit_s(),
         constant_depth_filter: args.choices().rcd,
         trust_seen_space: !args.choices().seed_prune,
-        evidence_map: false,
+        evidence_map: args.choices().evidence_map,
         moving_half_sweep_deg: 95.0,
         snapshot_period_s: FRAME_PERIOD_S,
         plan_latency_s: 0.0,
@@ -258,6 +259,7 @@ mod tests {
                 stats: Default::default(),
                 max_control_instructions: 0,
                 max_plan_instructions: 0,
+                max_turn_instructions: 0,
                 stack_high_water_bytes: 0,
                 stop_ticks: 0,
                 stop_latency_us: 0,

@@ -13,9 +13,9 @@ use crate::geom::PointM;
 use crate::grid::{words_for_cells, Grid, GridError, GridGeometry};
 use crate::link::message::{ErrorCode, ErrorReply, MapParams, Reply, MAP_CHUNK_WORDS};
 use crate::raster::{mark_polygon, Work};
-use crate::world::{Obstacles, PolygonSetError, MAX_POLYGONS, MAX_VERTICES};
+use crate::world::{PolygonSet, PolygonSetError, MAX_VERTICES};
 
-use super::{MAX_PENDING_VERTICES, MAX_ROBOT_RADIUS_M};
+use super::MAX_ROBOT_RADIUS_M;
 
 /// Most map rows one request may have the marker visit: stored obstacle vertices × map height
 /// (each edge visits at most every row of the map, see [`crate::raster::edge_work_bound`]).
@@ -213,9 +213,9 @@ impl<const GRID_WORDS: usize> Handler<GRID_WORDS> {
 
 /// Add one chunk of a polygon being uploaded to `pending`; the `last` chunk stores the polygon
 /// in `obstacles` and returns `true`. Checks everything first: on error nothing changes.
-pub(crate) fn upload_chunk(
-    obstacles: &mut Obstacles,
-    pending: &mut Vec<PointM, MAX_PENDING_VERTICES>,
+pub(crate) fn upload_chunk<const V: usize, const P: usize, const N: usize>(
+    obstacles: &mut PolygonSet<V, P>,
+    pending: &mut Vec<PointM, N>,
     first_vertex: u16,
     vertices: &[PointM],
     last: bool,
@@ -236,7 +236,7 @@ pub(crate) fn upload_chunk(
         ));
     }
     let needed = already + vertices.len();
-    let left = (MAX_VERTICES - obstacles.vertex_count()).min(MAX_PENDING_VERTICES);
+    let left = V.saturating_sub(obstacles.vertex_count()).min(N);
     if needed > left {
         return Err(ErrorReply::new(
             ErrorCode::TooManyVertices,
@@ -244,11 +244,11 @@ pub(crate) fn upload_chunk(
             left as u32,
         ));
     }
-    if obstacles.len() >= MAX_POLYGONS {
+    if obstacles.len() >= P {
         return Err(ErrorReply::new(
             ErrorCode::TooManyPolygons,
             obstacles.len() as u32 + 1,
-            MAX_POLYGONS as u32,
+            P as u32,
         ));
     }
     if last && needed == 0 {

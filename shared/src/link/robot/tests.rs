@@ -13,6 +13,7 @@ use crate::mission::{
 };
 use crate::plan::PlannerKind;
 use crate::raster::mark_point_m;
+use crate::world::Obstacles;
 
 type TestDevice = RobotDevice<{ words_for_cells(300 * 300) }>;
 
@@ -451,6 +452,7 @@ fn the_largest_mission_messages_fit_a_frame() {
         },
         max_control_instructions: u64::MAX,
         max_plan_instructions: u64::MAX,
+        max_turn_instructions: u64::MAX,
         stack_high_water_bytes: u32::MAX,
         stop_ticks: u32::MAX,
         emergency_stop: true,
@@ -504,6 +506,7 @@ fn the_largest_mission_messages_fit_a_frame() {
         reference_feed_forward: true,
         turn_in_place: true,
         sweep_layout: crate::sonar::SweepLayout::Seed,
+        evidence_map: true,
     };
     let mut out = [0u8; MAX_FRAME_BYTES];
     assert!(encode(
