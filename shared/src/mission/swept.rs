@@ -198,7 +198,10 @@ impl<'a> Swept<'a> {
     /// The same sweep, reading the majority rule from `steps` (built for it with
     /// [`StepTable::build`]; a table built for another sweep is not used).
     pub fn with_steps(self, steps: &'a StepTable) -> Self {
-        let built_for_it = steps.frame.is_some() && steps.frame == self.frame(self.heard_rad());
+        // Its basis (where the sonar stood, the bearings, the slack) and its frame.
+        let built_for_it = steps.basis.is_some()
+            && steps.basis == self.basis()
+            && steps.frame == self.frame(self.heard_rad());
         Swept {
             steps: built_for_it.then_some(steps),
             ..self
@@ -402,6 +405,11 @@ impl Swept<'_> {
             return false;
         }
         let Some(candidates) = candidates else {
+            // No majority cone (a ray, or a sweep read while the robot still moved): the
+            // first rule alone, nearer than the table's clear distance without a reading.
+            if self.steps.is_some_and(|t| d_m < t.first_rule_clear_m(rel)) {
+                return true;
+            }
             return !self.any_contradicting(rel, d_m, slack);
         };
         // Nearer than every candidate any step's majority could hear, and the whole window
@@ -684,6 +692,59 @@ impl StepTable {
         }
     }
 
+    /// For a sweep without a majority cone: a distance nearer than which no reading
+    /// contradicts a point on bearing `rel` (the first rule); minus infinity off the table.
+    fn first_rule_clear_m(&self, rel: f32) -> f32 {
+        let (Some(basis), None, Some((_, bins))) = (self.basis, self.frame, self.covered) else {
+            return f32::NEG_INFINITY;
+        };
+        let k = floor_i32((rel - basis.first) / basis.step + 0.5);
+        usize::try_from(k)
+            .ok()
+            .map(|k| k / CLEAR_BIN_STEPS)
+            .filter(|&b| b < bins)
+            .map_or(f32::NEG_INFINITY, |b| self.clear_within[b])
+    }
+
+    /// The first rule's clear distances of a sweep without a majority cone, per pair of
+    /// steps: the least over the readings of `(range − cell − shift) / cos(nearest)`,
+    /// `nearest` the reading's cone's least angle to the pair, less 1 % and 1 cm for the
+    /// approximate cosine. `covered` then holds `(0, bins)`.
+    fn build_first_rule_clear(&mut self, swept: &Swept<'_>) {
+        let Some(basis) = self.basis else {
+            return;
+        };
+        let beam = swept.thales_beam_rad + basis.slack;
+        let bins = swept
+            .readings
+            .len()
+            .div_ceil(CLEAR_BIN_STEPS)
+            .min(CLEAR_BINS);
+        let half_width = 0.5 * CLEAR_BIN_STEPS as f32 * basis.step;
+        for (b, slot) in self.clear_within.iter_mut().enumerate().take(bins) {
+            let mid = basis.first + ((b * CLEAR_BIN_STEPS) as f32 - 0.5) * basis.step + half_width;
+            let mut clear_m = f32::INFINITY;
+            for r in swept.readings {
+                let Some(range_m) = r.range_m.filter(|x| !x.is_nan()) else {
+                    continue;
+                };
+                let off = abs(wrap_angle_rad(swept.bearing_rad(r) - mid));
+                let nearest = ((off - half_width).max(0.0) - beam).max(0.0);
+                if nearest >= core::f32::consts::FRAC_PI_2 {
+                    continue;
+                }
+                let reach_m = (range_m - swept.cell_m - swept.reading_shift_m) / cos(nearest);
+                clear_m = clear_m.min(reach_m);
+            }
+            *slot = if clear_m.is_nan() {
+                f32::NEG_INFINITY
+            } else {
+                0.99 * clear_m - 0.01
+            };
+        }
+        self.covered = Some((0, bins));
+    }
+
     /// A distance nearer than which every candidate of a point on the candidates' bearing is
     /// ruled out, when its window lies within the steps the table covers; minus infinity
     /// otherwise (see [`StepTable::build_clear_within`]).
@@ -763,6 +824,7 @@ impl StepTable {
         self.covered = None;
         self.basis = swept.basis();
         let Some(frame) = swept.frame(swept.heard_rad()) else {
+            self.build_first_rule_clear(swept);
             return;
         };
         let n = swept.readings.len().min(SWEEP_CAPACITY);
@@ -1106,14 +1168,17 @@ mod tests {
     }
 
     proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
         /// The shortcuts (the own step first, the table's clear distances and majorities, the
         /// window before the first rule) answer every point as the rule's definition does, for
         /// a normal sweep and one all round, whatever the readings heard.
         #[test]
         fn the_shortcuts_vouch_exactly_what_the_rule_does(
             ranges in proptest::collection::vec(
-                proptest::option::of(0.1f32..1.6), 201),
+                proptest::option::of(0.0f32..1.0), 201),
+            // The nearest echo: from cluttered (every distance) to open (all far), so that
+            // the shortcuts' clear distances reach into the points tested.
+            nearest_m in proptest::prop_oneof![proptest::strategy::Just(0.1f32), 0.1f32..1.4],
             all_round in proptest::bool::ANY,
             heard_deg in 4.0f32..25.0,
             shift_m in proptest::prop_oneof![proptest::strategy::Just(0.0f32), 0.0f32..0.1],
@@ -1127,7 +1192,7 @@ mod tests {
             for (k, i) in (lo..=hi).enumerate() {
                 let _ = r.push(Reading {
                     neck_angle_rad: i as f32 * STEP,
-                    range_m: ranges[k],
+                    range_m: ranges[k].map(|u| nearest_m + u * (1.6 - nearest_m)),
                     pose: Pose::new(0.0, 0.0, 0.0),
                 });
             }
