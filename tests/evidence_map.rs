@@ -298,8 +298,9 @@ fn a_walled_in_goal_is_not_reached_and_a_proof_names_confirmed_marks() {
     }
 }
 
-/// `command` (`mission` or `simulate`) with `--evidence-map --json` on a bundled world.
-fn evidence_run(command: &str, world: &str, extra: &[&str]) -> serde_json::Value {
+/// `command` (`mission` or `simulate`) with `--evidence-map --json` on a bundled world, its
+/// one JSON line (the QEMU test of the firmware's evidence map uses it too).
+pub(crate) fn evidence_run(command: &str, world: &str, extra: &[&str]) -> serde_json::Value {
     let o = common::twil()
         .arg(command)
         .arg("--params")

@@ -934,25 +934,19 @@ fn the_evidence_map_runs_on_the_device_as_in_the_simulator_within_a_watchdog_tur
     // `-icount shift=3`. The longest turn of the mission task (a standing sweep's vouching, the
     // heaviest work the map adds) must stay inside the watchdog gate's 1 s: 125 M
     // instructions at 8 ns each.
-    let run = |command: &str, extra: &[&str]| -> serde_json::Value {
-        let out = common::twil()
-            .arg(command)
-            .arg("--real")
-            .arg(common::world("pillars.da"))
-            .arg("--params")
-            .arg(common::world("pillars.par"))
-            .args(["--planner", "astar", "--mode", "stop", "--sonar-range", "3"])
-            .args(["--sonar", "beam", "--evidence-map", "--json"])
-            .args(extra)
-            .output()
-            .expect("run twil");
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        serde_json::from_str(stdout.trim()).unwrap_or_else(|e| {
-            panic!(
-                "{command}: {e}: {stdout}{}",
-                String::from_utf8_lossy(&out.stderr)
-            )
-        })
+    let options = [
+        "--planner",
+        "astar",
+        "--mode",
+        "stop",
+        "--sonar-range",
+        "3",
+        "--sonar",
+        "beam",
+    ];
+    let run = |command: &str, extra: &[&str]| {
+        let args: Vec<&str> = options.iter().chain(extra).copied().collect();
+        crate::evidence_map::evidence_run(command, "pillars", &args)
     };
     let device = run("mission", &["--remote", "qemu"]);
     let sim = run("simulate", &[]);

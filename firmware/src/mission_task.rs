@@ -100,9 +100,6 @@ pub async fn run(
     let tx = &mut *local.tx_producer;
     let mut chunk = [0u8; CHUNK_BYTES];
     let mut reported_end = false;
-    // The longest turn since the last mission ended (the watchdog gate's 1 s is per turn):
-    // instructions (QEMU) or cycles (board), the preemptions by the other tasks included.
-    let mut worst_turn_instructions: u64 = 0;
     loop {
         let turn_start = instructions();
         let mut busy = false;
@@ -258,14 +255,13 @@ pub async fn run(
             busy = true;
         }
         let ended = device.state() == twil_core::link::RunState::Ended;
-        let just_ended = ended && !reported_end;
         if ended && !reported_end {
             let r = device.link(mission).report();
             log!(
                 "mission done: worst instructions: control step {}, plan {}, mission turn {}, sonar reading {}, usart1 interrupt {}, link_rx {}, body step {}; frames not sent {}; stack {} bytes; stop cause {}, stop latency {} us",
                 r.max_control_instructions as u32,
                 r.max_plan_instructions as u32,
-                worst_turn_instructions.min(u32::MAX as u64) as u32,
+                r.max_turn_instructions.min(u32::MAX as u64) as u32,
                 WORST_SONAR_INSTRUCTIONS.load(Ordering::Relaxed),
                 WORST_USART_INSTRUCTIONS.load(Ordering::Relaxed),
                 WORST_DECODE_INSTRUCTIONS.load(Ordering::Relaxed),
@@ -298,13 +294,9 @@ pub async fn run(
             busy = true;
             TwilDevice::send_telemetry(&t, &mut |bytes: &[u8]| queue_frame(tx, bytes));
         }
-        if just_ended {
-            worst_turn_instructions = 0;
-        } else {
-            let spent = instructions().saturating_sub(turn_start);
-            worst_turn_instructions = worst_turn_instructions.max(spent);
-            device.note_turn_instructions(spent);
-        }
+        // The turn's length for the report (the watchdog gate's 1 s is per turn): instructions
+        // (QEMU) or cycles (board), the preemptions by the other tasks included.
+        device.note_turn_instructions(instructions().saturating_sub(turn_start));
         let now = memory::stack_high_water_bytes();
         if now > high_water {
             high_water = now;

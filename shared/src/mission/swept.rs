@@ -249,13 +249,11 @@ impl<'a> Swept<'a> {
             Some(basis) => basis.sonar,
             None => self.pose.point_ahead(self.sonar_offset_m),
         };
+        let d_m = hypot(q.x_m - sonar.x_m, q.y_m - sonar.y_m);
         let thales = self.echo_limited && self.thales_beam_rad >= 0.0;
-        if thales {
-            // Out of range vouches nothing (`vouches_thales`): known before the bearing.
-            let d_m = hypot(q.x_m - sonar.x_m, q.y_m - sonar.y_m);
-            if !(d_m >= self.min_range_m && d_m <= self.range_m - self.cell_m) {
-                return false;
-            }
+        // Out of range vouches nothing (`vouches_thales`): known before the bearing.
+        if thales && !(d_m >= self.min_range_m && d_m <= self.range_m - self.cell_m) {
+            return false;
         }
         let rel =
             wrap_angle_rad(atan2(q.y_m - sonar.y_m, q.x_m - sonar.x_m) - self.pose.heading_rad);
@@ -265,8 +263,7 @@ impl<'a> Swept<'a> {
         if !self.echo_limited {
             return true;
         }
-        let d_m = hypot(q.x_m - sonar.x_m, q.y_m - sonar.y_m);
-        if self.thales_beam_rad >= 0.0 {
+        if thales {
             return self.vouches_thales(rel, d_m);
         }
         if d_m.is_nan() || d_m < self.min_range_m {
@@ -364,10 +361,9 @@ impl Swept<'_> {
         // The cone a foot may hide in, less the slack: what the window may be read with.
         let beam_rad = self.thales_beam_rad - slack;
         let c = (self.min_range_m / d_m).clamp(0.0, 1.0);
-        let window = atan2(sqrt(1.0 - c * c), c); // acos(min range / d)
-                                                  // A sweep all round (its two ends a step apart or overlapping) reads every bearing.
-        let all_round = last - first + 1.01 * step >= 2.0 * core::f32::consts::PI;
-        let read = all_round
+        // acos(min range / d)
+        let window = atan2(sqrt(1.0 - c * c), c);
+        let read = reads_all_round(first, last, step)
             || (rel - window >= first - beam_rad - 1.0e-4
                 && rel + window <= last + beam_rad + 1.0e-4);
         if !read {
@@ -548,14 +544,12 @@ impl Swept<'_> {
         if m < 0 {
             return None;
         }
+        let all_round = reads_all_round(first, last, step);
         Some(Frame {
             first,
             step,
-            all_round: last - first + 1.01 * step >= 2.0 * core::f32::consts::PI,
-            period: periodic(
-                last - first + 1.01 * step >= 2.0 * core::f32::consts::PI,
-                step,
-            ),
+            all_round,
+            period: periodic(all_round, step),
             ascending: a <= b,
             m,
             heard_rad,
@@ -650,7 +644,8 @@ impl Frame {
 #[derive(Clone, Debug)]
 pub struct StepTable {
     frame: Option<Frame>,
-    /// Steps tabled: 0 to `len − 1`.
+    /// Steps tabled, 0 to `len − 1`: their majorities, or without a frame the first rule's
+    /// clear distances.
     len: usize,
     /// Readings whose cones hold step `k` whole.
     covering: [u8; SWEEP_CAPACITY],
@@ -667,6 +662,22 @@ pub struct StepTable {
     /// Per bin, the step that set its clear distance: the first a point beyond it is likely
     /// heard too near in (read first by [`Candidates::window_verdict`]).
     limiting_step: [u8; CLEAR_BINS],
+}
+
+/// The middle bearing of bin `b` of a sweep's steps from `first`, `step` apart: bin `b` holds
+/// the bearings of steps `CLEAR_BIN_STEPS·b` to `CLEAR_BIN_STEPS·b + CLEAR_BIN_STEPS − 1`.
+fn bin_middle(first: f32, step: f32, b: usize) -> f32 {
+    first + ((b * CLEAR_BIN_STEPS) as f32 - 0.5) * step + 0.5 * CLEAR_BIN_STEPS as f32 * step
+}
+
+/// A clear distance less 1 % and 1 cm: what the approximate cosine (off by up to 0.002) can
+/// move it by; minus infinity for a NaN.
+fn with_cosine_margin(clear_m: f32) -> f32 {
+    if clear_m.is_nan() {
+        f32::NEG_INFINITY
+    } else {
+        0.99 * clear_m - 0.01
+    }
 }
 
 /// Steps per bin of [`StepTable::clear_within_m`].
@@ -695,34 +706,42 @@ impl StepTable {
     /// For a sweep without a majority cone: a distance nearer than which no reading
     /// contradicts a point on bearing `rel` (the first rule); minus infinity off the table.
     fn first_rule_clear_m(&self, rel: f32) -> f32 {
-        let (Some(basis), None, Some((_, bins))) = (self.basis, self.frame, self.covered) else {
-            return f32::NEG_INFINITY;
-        };
-        let k = floor_i32((rel - basis.first) / basis.step + 0.5);
+        match (self.basis, self.frame) {
+            (Some(basis), None) => {
+                self.clear_within_step(floor_i32((rel - basis.first) / basis.step + 0.5))
+            }
+            _ => f32::NEG_INFINITY,
+        }
+    }
+
+    /// The clear distance of the bin of step `k`; minus infinity off the table.
+    fn clear_within_step(&self, k: i32) -> f32 {
         usize::try_from(k)
             .ok()
-            .map(|k| k / CLEAR_BIN_STEPS)
-            .filter(|&b| b < bins)
-            .map_or(f32::NEG_INFINITY, |b| self.clear_within[b])
+            .filter(|&k| k < self.len)
+            .and_then(|k| self.clear_within.get(k / CLEAR_BIN_STEPS))
+            .copied()
+            .unwrap_or(f32::NEG_INFINITY)
     }
 
     /// The first rule's clear distances of a sweep without a majority cone, per pair of
     /// steps: the least over the readings of `(range − cell − shift) / cos(nearest)`,
-    /// `nearest` the reading's cone's least angle to the pair, less 1 % and 1 cm for the
-    /// approximate cosine. `covered` then holds `(0, bins)`.
+    /// `nearest` the reading's cone's least angle to the pair, less the cosine's margin
+    /// ([`with_cosine_margin`]).
     fn build_first_rule_clear(&mut self, swept: &Swept<'_>) {
         let Some(basis) = self.basis else {
             return;
         };
         let beam = swept.thales_beam_rad + basis.slack;
-        let bins = swept
-            .readings
-            .len()
-            .div_ceil(CLEAR_BIN_STEPS)
-            .min(CLEAR_BINS);
+        let n = swept.readings.len().min(SWEEP_CAPACITY);
         let half_width = 0.5 * CLEAR_BIN_STEPS as f32 * basis.step;
-        for (b, slot) in self.clear_within.iter_mut().enumerate().take(bins) {
-            let mid = basis.first + ((b * CLEAR_BIN_STEPS) as f32 - 0.5) * basis.step + half_width;
+        for (b, slot) in self
+            .clear_within
+            .iter_mut()
+            .enumerate()
+            .take(n.div_ceil(CLEAR_BIN_STEPS))
+        {
+            let mid = bin_middle(basis.first, basis.step, b);
             let mut clear_m = f32::INFINITY;
             for r in swept.readings {
                 let Some(range_m) = r.range_m.filter(|x| !x.is_nan()) else {
@@ -736,13 +755,9 @@ impl StepTable {
                 let reach_m = (range_m - swept.cell_m - swept.reading_shift_m) / cos(nearest);
                 clear_m = clear_m.min(reach_m);
             }
-            *slot = if clear_m.is_nan() {
-                f32::NEG_INFINITY
-            } else {
-                0.99 * clear_m - 0.01
-            };
+            *slot = with_cosine_margin(clear_m);
         }
-        self.covered = Some((0, bins));
+        self.len = n;
     }
 
     /// A distance nearer than which every candidate of a point on the candidates' bearing is
@@ -763,11 +778,7 @@ impl StepTable {
         if !whole_turn && (k_lo < lo as i32 || k_hi > hi as i32) {
             return f32::NEG_INFINITY;
         }
-        usize::try_from(c.frame.reduce(c.own_step()))
-            .ok()
-            .and_then(|k| self.clear_within.get(k / CLEAR_BIN_STEPS))
-            .copied()
-            .unwrap_or(f32::NEG_INFINITY)
+        self.clear_within_step(c.frame.reduce(c.own_step()))
     }
 
     /// Per bin of steps, a distance nearer than which every step's majority rules its
@@ -789,8 +800,7 @@ impl StepTable {
         let step = frame.step;
         let bin_width = CLEAR_BIN_STEPS as f32 * step;
         for b in 0..n.div_ceil(CLEAR_BIN_STEPS).min(CLEAR_BINS) {
-            // Bin b holds the bearings of steps CLEAR_BIN_STEPS·b .. +CLEAR_BIN_STEPS − 1.
-            let mid = frame.first + ((b * CLEAR_BIN_STEPS) as f32 - 0.5) * step + 0.5 * bin_width;
+            let mid = bin_middle(frame.first, step, b);
             let mut clear_m = f32::INFINITY;
             let mut limiting = lo;
             for k in lo..=hi {
@@ -807,11 +817,7 @@ impl StepTable {
                 }
             }
             self.limiting_step[b] = limiting.min(u8::MAX as usize) as u8;
-            self.clear_within[b] = if clear_m.is_nan() {
-                f32::NEG_INFINITY
-            } else {
-                0.99 * clear_m - 0.01
-            };
+            self.clear_within[b] = with_cosine_margin(clear_m);
         }
         self.covered = Some((lo, hi));
     }
@@ -876,6 +882,11 @@ fn nth_farthest(values: &mut [f32], i: usize) -> f32 {
         }
     }
     values.get(i).copied().unwrap_or(f32::NEG_INFINITY)
+}
+
+/// A sweep all round (its two ends a step apart or overlapping) reads every bearing.
+fn reads_all_round(first: f32, last: f32, step: f32) -> bool {
+    last - first + 1.01 * step >= 2.0 * core::f32::consts::PI
 }
 
 /// The steps in a whole turn when a sweep all round has a step that divides it (a full sweep
