@@ -284,7 +284,8 @@ fn accepted(p: &Param) -> String {
     }
 }
 
-/// The text of `twil robot init`: every constant at its default, with comments.
+/// The text of `twil robot init`: every constant at the host tools' default
+/// ([`RobotConfig::SIMULATED`]: the core's, with the simulated ranger), with comments.
 pub fn init_text() -> String {
     let mut s = String::from(
         "# Twil robot file: every constant of the robot model, at its default (`twil robot init`).\n\
@@ -305,7 +306,7 @@ pub fn init_text() -> String {
             accepted(p),
             p.source,
             p.name,
-            toml_text(p, p.default_value())
+            toml_text(p, p.get(&RobotConfig::SIMULATED))
         ));
     }
     s
@@ -328,7 +329,7 @@ pub fn docs_table() -> String {
         s.push_str(&format!(
             "| `{}` | {} | {} | {} | {} | {} |\n",
             p.name,
-            toml_text(p, p.default_value()).replace('"', "`"),
+            toml_text(p, p.get(&RobotConfig::SIMULATED)).replace('"', "`"),
             p.unit,
             accepted(p).replace('|', "\\|"),
             p.doc,
@@ -350,8 +351,8 @@ mod tests {
     fn the_generated_file_reads_back_as_the_defaults() {
         let file = parsed(&init_text()).unwrap();
         assert_eq!(file.entries.len(), PARAMS.len());
-        let robot = resolve(RobotConfig::DEFAULT, Some(&file), &[]).unwrap();
-        assert_eq!(robot, RobotConfig::DEFAULT);
+        let robot = resolve(RobotConfig::SIMULATED, Some(&file), &[]).unwrap();
+        assert_eq!(robot, RobotConfig::SIMULATED);
     }
 
     #[test]

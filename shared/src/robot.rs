@@ -128,11 +128,12 @@ pub struct RobotConfig {
     /// [`sonar_cone_deg`](Self::sonar_cone_deg)), `true` the ultrasonic beam of
     /// [`crate::plant::echo`] (cone, first echo, incidence limit, corners).
     pub sonar_beam: bool,
-    /// Beam model: half-angle of the cone, degrees (half of Moravec & Elfes' 30° sonar cone; no
-    /// data-sheet value was found: see `docs/robot-model.md`).
+    /// Beam model: half-angle of the cone, degrees (the HC-SR04 data sheet's 15°, half of
+    /// Moravec & Elfes' 30° sonar cone: see `docs/robot-model.md`).
     pub sonar_beam_half_angle_deg: f32,
     /// Beam model: a wall echoes only when the angle between the ray and the wall's normal is
-    /// below this, degrees (specular reflection; 70 by default, why in `docs/robot-model.md`).
+    /// below this, degrees (specular reflection; 70 in [`Self::DEFAULT`], the beam's half-angle
+    /// in [`Self::SIMULATED`], why in `docs/robot-model.md`).
     pub sonar_incidence_limit_deg: f32,
     /// Beam model: a ray hitting within this distance of a polygon vertex echoes at any angle
     /// (corner reflector, edge diffraction), metres.
@@ -206,6 +207,29 @@ impl RobotConfig {
         rcd_min_pairs: 4,
         rcd_min_arc_m: 0.126,
         plant_substep_s: 0.001,
+    };
+
+    /// Half-angle of the beam, degrees, at which a smooth wall stops echoing in the simulated
+    /// ranger the host tools default to: the beam's own half-angle. A mirror-smooth wall sends
+    /// the sound back to the transducer only while its normal lies within the beam (Kuc &
+    /// Siegel 1987; Leonard & Durrant-Whyte 1992), and the beam model's rays, each tested
+    /// against this limit, then hear the wall over twice the beam's width of neck angles:
+    /// the specular end of issue 23's range, why in `docs/robot-model.md`.
+    pub const SPECULAR_INCIDENCE_LIMIT_DEG: f32 = Self::DEFAULT.sonar_beam_half_angle_deg;
+
+    /// The robot the host tools simulate unless told otherwise (`twil simulate`, `twil
+    /// mission`, `twil sonar-grid`'s passed options, `twil robot init`): [`Self::DEFAULT`] with a
+    /// sensor-faithful ranger: the ultrasonic beam, smooth walls echoing only near face-on
+    /// ([`Self::SPECULAR_INCIDENCE_LIMIT_DEG`]), a measured HC-SR04's range noise and the
+    /// judged missed and spurious echoes of [`crate::plant::faults`]. [`Self::DEFAULT`] keeps
+    /// the exact single ray the unit tests drive.
+    pub const SIMULATED: Self = Self {
+        sonar_beam: true,
+        sonar_incidence_limit_deg: Self::SPECULAR_INCIDENCE_LIMIT_DEG,
+        sonar_noise_std_m: crate::plant::faults::MEASURED_NOISE_STD_M,
+        sonar_dropout_probability: crate::plant::faults::JUDGED.dropout_probability,
+        sonar_spurious_probability: crate::plant::faults::JUDGED.spurious_probability,
+        ..Self::DEFAULT
     };
 }
 

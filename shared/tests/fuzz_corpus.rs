@@ -239,6 +239,8 @@ mod seeds {
                 turn_in_place: false,
                 sweep_layout: twil_core::sonar::SweepLayout::Seed,
                 evidence_map: true,
+                sonar_dropout_probability: 0.02,
+                sonar_spurious_probability: 0.01,
             }),
             Request::WorldChunk {
                 first_vertex: 0,

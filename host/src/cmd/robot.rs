@@ -67,7 +67,7 @@ pub fn run(args: Args) -> Result<crate::exit::Ending> {
         }
         Action::Show { robot, json } => {
             let file = robot.as_deref().map(robot_file::read).transpose()?;
-            let config = robot_file::resolve(RobotConfig::DEFAULT, file.as_ref(), &[])?;
+            let config = robot_file::resolve(RobotConfig::SIMULATED, file.as_ref(), &[])?;
             if json {
                 let v = serde_json::json!({ "robot": robot_file::robot_json(&config) });
                 println!("{}", serde_json::to_string(&v)?);

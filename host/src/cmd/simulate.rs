@@ -24,7 +24,7 @@ use crate::record::sim::{Pace, SimRecorder};
 use crate::record::topics::StatusMessage;
 use crate::record::Recorder;
 
-use super::args::{read_da, Faults, LoopChoices, MissionArgs, OutputArgs, RobotArgs, WorldArgs};
+use super::args::{read_da, LoopChoices, MissionArgs, OutputArgs, RobotArgs, WorldArgs};
 
 use crate::sim::{self, SimResult, SimSetup};
 
@@ -46,14 +46,6 @@ pub struct Args {
     /// `--robot`, `--seed`, `--sonar-range`, `--sonar-noise`, `--sonar`, ….
     #[command(flatten)]
     pub robot: RobotArgs,
-    /// Probability that a reading which would echo returns no echo (missed echo), 0 to 1
-    /// [default: 0, or the --robot file's `sonar_dropout_probability`].
-    #[arg(long, value_name = "P")]
-    pub sonar_dropout: Option<f32>,
-    /// Probability of a spurious echo nearer than the true one (crosstalk, multipath), 0 to 1
-    /// [default: 0, or the --robot file's `sonar_spurious_probability`].
-    #[arg(long, value_name = "P")]
-    pub sonar_spurious: Option<f32>,
     /// Continuous mode: half-width of the sweeps taken while moving, degrees (narrower sweeps
     /// come round more often but see less to the sides; experimental).
     #[arg(long, default_value_t = 95.0)]
@@ -81,10 +73,6 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
     let robot = args.robot.resolve(
         &choices,
         args.mission.follow.sweep_readings.is_some(),
-        Faults {
-            dropout_probability: args.sonar_dropout,
-            spurious_probability: args.sonar_spurious,
-        },
         &args.world.params,
         &mut params,
     )?;

@@ -59,6 +59,9 @@ pub struct Args {
     /// The faulty cells' probability of a spurious short echo.
     #[arg(long, default_value_t = faults::JUDGED.spurious_probability, value_name = "P")]
     pub sonar_spurious: f32,
+    /// Mission time limit of every mission, simulated seconds [default: the preset's].
+    #[arg(long, value_name = "S")]
+    pub time_limit: Option<f32>,
     /// Missions run at once [default: the machine's cores].
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -236,15 +239,22 @@ fn mission_words(args: &Args, job: &Job, da: &Path, par: &Path, passed: &[String
             l.to_string(),
         ]),
     }
-    if job.sonar.faults {
-        w.extend([
-            "--sonar-noise".into(),
-            args.sonar_noise.to_string(),
-            "--sonar-dropout".into(),
-            args.sonar_dropout.to_string(),
-            "--sonar-spurious".into(),
-            args.sonar_spurious.to_string(),
-        ]);
+    // Every cell names its faults, on or off: `twil simulate`'s default ranger has them.
+    let (noise, dropout, spurious) = if job.sonar.faults {
+        (args.sonar_noise, args.sonar_dropout, args.sonar_spurious)
+    } else {
+        (0.0, 0.0, 0.0)
+    };
+    w.extend([
+        "--sonar-noise".into(),
+        noise.to_string(),
+        "--sonar-dropout".into(),
+        dropout.to_string(),
+        "--sonar-spurious".into(),
+        spurious.to_string(),
+    ]);
+    if let Some(s) = args.time_limit {
+        w.extend(["--time-limit".into(), s.to_string()]);
     }
     w.extend(passed.iter().cloned());
     w

@@ -25,8 +25,9 @@ use crate::plan::{PlanStatus, PlannerKind};
 /// 6: the device's parameters (requests `ParamList`, `ParamGet`, `ParamSet`; replies `Param`,
 /// `ParamRefused`; error codes `UnknownParam`, `StoreFailed`) and the bring-up self-test
 /// (`Request::SelfTest`, `Request::SelfTestReport`, `Reply::SelfTest`). 7: the evidence map
-/// (`MissionSetup::evidence_map`, field 20) and `MissionReport::max_turn_instructions`.
-pub const PROTOCOL_VERSION: u16 = 7;
+/// (`MissionSetup::evidence_map`, field 20) and `MissionReport::max_turn_instructions`. 8: the
+/// simulated ranger's missed and spurious echoes (`MissionSetup` fields 21, 22).
+pub const PROTOCOL_VERSION: u16 = 8;
 
 /// Points carried by one telemetry chunk of hits, prefix or path.
 pub const TELEMETRY_CHUNK_POINTS: usize = 32;
@@ -314,11 +315,16 @@ pub struct MissionSetup {
     pub sweep_layout: crate::sonar::SweepLayout,
     /// Map with the evidence map (`--evidence-map`, [`crate::mission::MissionConfig::evidence_map`]).
     pub evidence_map: bool,
+    /// Probability of a missed echo per reading (`--sonar-dropout`, [`crate::plant::faults`];
+    /// simulated builds).
+    pub sonar_dropout_probability: f32,
+    /// Probability of a spurious short echo per reading (`--sonar-spurious`; simulated builds).
+    pub sonar_spurious_probability: f32,
 }
 
 impl MissionSetup {
     /// The mission of a `.par` (start, heading, goal, speed) in `mode` with the test benches'
-    /// choices: A*, a 1.5 m noiseless single-ray sonar (seed 1), 900 s, no filter, trusted seen
+    /// choices: A*, a 1.5 m noiseless, faultless single-ray sonar (seed 1), 900 s, no filter, trusted seen
     /// space, no link-loss reaction, the reference-model settle, feed-forward, turns in place,
     /// the symmetric sweep. Change a field with struct-update syntax.
     pub fn from_params(params: &crate::world::Params, mode: MissionMode) -> Self {
@@ -344,6 +350,8 @@ impl MissionSetup {
             turn_in_place: true,
             sweep_layout: crate::sonar::SweepLayout::Symmetric,
             evidence_map: false,
+            sonar_dropout_probability: 0.0,
+            sonar_spurious_probability: 0.0,
         }
     }
 }

@@ -637,6 +637,8 @@ impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
             sonar_beam: setup.sonar_beam,
             sonar_beam_half_angle_deg: setup.beam_half_angle_deg,
             sonar_incidence_limit_deg: setup.incidence_limit_deg,
+            sonar_dropout_probability: setup.sonar_dropout_probability,
+            sonar_spurious_probability: setup.sonar_spurious_probability,
             sweep_layout: setup.sweep_layout,
             // The device's parameters (the stored values, `ParamSet`) for the rest.
             ..self.d.params.robot
@@ -663,7 +665,8 @@ impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
             config.turn_in_place_above_rad = core::f32::consts::PI;
         }
         // Field indices of MissionSetup: 2 start, 3 heading, 4 goal, 5 speed, 6 sonar range,
-        // 7 time limit, 11 noise, 12 link-loss policy, 14 beam half-angle, 15 incidence limit.
+        // 7 time limit, 11 noise, 12 link-loss policy, 14 beam half-angle, 15 incidence limit,
+        // 21 dropout, 22 spurious echoes.
         if !setup.link_loss.is_valid() {
             return Err(bad(12));
         }
@@ -695,6 +698,8 @@ impl<const W: usize, const E: usize> RobotLink<'_, W, E> {
                     "sonar_noise_std_m" => bad(11),
                     "sonar_beam_half_angle_deg" => bad(14),
                     "sonar_incidence_limit_deg" => bad(15),
+                    "sonar_dropout_probability" => bad(21),
+                    "sonar_spurious_probability" => bad(22),
                     _ => bad(100),
                 },
                 _ => bad(100),

@@ -28,7 +28,7 @@
 //! - **Faults** (beam sensors, `sonar_beam`): a reflector is heard by about 2m + 1 readings
 //!   (m the steps in β), so one missed echo inside a run, or one echo nearer than the two
 //!   agreeing readings around it, is the ranger's fault and the run goes on across it; one
-//!   echo between two silences marks nothing.
+//!   echo whose neighbours both heard farther or nothing marks nothing.
 //! - **Suspects**: after a full standing sweep, unknown cells that no reading vouched for in a
 //!   ring just outside the planning radius are tentative occupied, so the planner does not
 //!   route the body through silent space beside it.
@@ -47,7 +47,7 @@ use crate::sonar::hit_to_world;
 
 use super::evidence::{CellEvidence, Change, EvidenceMap};
 use super::planes::{remember, PlaneSeen};
-use super::reflector::{reflector_bearings, Neighbour, RunEnd, RunSide};
+use super::reflector::{reflector_bearings, RunEnd, RunSide};
 use super::swept::{reading_shift_m, BlindCells, Swept};
 use super::Mission;
 
@@ -291,15 +291,14 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             }
             let run_start = start;
             start = end + 1;
-            // One echo between two silences, well inside the window: no reflector in the beam
-            // is heard by one reading alone (see above), so it is a spurious echo.
-            let silent = |n: Option<Neighbour>| n.is_some_and(|(range_m, ..)| range_m.is_none());
+            // One echo whose neighbours on both sides heard farther, or nothing well inside the
+            // window (both sides open): no reflector in the beam is heard by one reading alone
+            // (see above), so it is a spurious echo, and marks nothing. The vouching outvotes
+            // it too (`swept`).
             if run_start == end
                 && bridges_one_reading
-                && silent(before)
-                && silent(after)
-                && depth_m - sweep_shift_m >= robot.sonar_min_range_m
-                && depth_m + sweep_shift_m <= robot.sonar_range_m
+                && first.side == RunSide::Open
+                && last.side == RunSide::Open
             {
                 continue;
             }

@@ -21,7 +21,7 @@ pub struct MissionArgs {
     #[command(flatten)]
     pub follow: FollowArgs,
     /// Mission time limit, seconds of mission time (simulated time in `twil simulate`)
-    /// [default: the preset's: 900; seed: 1800, its 18.85 s settles].
+    /// [default: 1800, both presets].
     #[arg(long)]
     pub time_limit: Option<f32>,
 }

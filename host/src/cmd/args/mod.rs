@@ -28,7 +28,7 @@ mod world;
 pub use mission::MissionArgs;
 pub use output::OutputArgs;
 pub use preset::{FollowArgs, LoopArgs, LoopChoices, Preset};
-pub use robot::{resolve, Faults, RobotArgs, RobotOptions, SonarArg, SonarArgs};
+pub use robot::{resolve, RobotArgs, RobotOptions, SonarArg, SonarArgs};
 pub use world::{parse_size, PlanningArgs, SizeM, WorldArgs};
 
 /// Sonar use.

@@ -42,8 +42,8 @@ pub struct SonarArgs {
     #[arg(long, value_name = "DEG")]
     pub beam_half_angle: Option<f32>,
     /// Beam: a smooth wall echoes only when the ray is within this angle of
-    /// its normal, degrees (0 to 90) [default: 70, or the --robot file's
-    /// `sonar_incidence_limit_deg`].
+    /// its normal, degrees (0 to 90) [default: 15, the beam's half-angle (specular walls), or
+    /// the --robot file's `sonar_incidence_limit_deg`].
     #[arg(long, value_name = "DEG")]
     pub incidence_limit: Option<f32>,
 }
@@ -55,10 +55,10 @@ impl SonarArgs {
             sonar_beam: self.sonar.unwrap_or(SonarArg::Beam) == SonarArg::Beam,
             sonar_beam_half_angle_deg: self
                 .beam_half_angle
-                .unwrap_or(RobotConfig::DEFAULT.sonar_beam_half_angle_deg),
+                .unwrap_or(RobotConfig::SIMULATED.sonar_beam_half_angle_deg),
             sonar_incidence_limit_deg: self
                 .incidence_limit
-                .unwrap_or(RobotConfig::DEFAULT.sonar_incidence_limit_deg),
+                .unwrap_or(RobotConfig::SIMULATED.sonar_incidence_limit_deg),
             ..robot
         }
     }
@@ -83,33 +83,31 @@ pub struct RobotArgs {
     #[arg(long)]
     pub sonar_range: Option<f32>,
     /// Standard deviation of the simulated sonar noise, metres (simulated devices) [default:
-    /// 0, or the --robot file's `sonar_noise_std_m`].
+    /// 0.005, a measured HC-SR04's, or the --robot file's `sonar_noise_std_m`].
     #[arg(long)]
     pub sonar_noise: Option<f32>,
+    /// Probability that a reading which would echo returns no echo (missed echo), 0 to 1
+    /// (simulated devices) [default: 0.02, or the --robot file's `sonar_dropout_probability`].
+    #[arg(long, value_name = "P")]
+    pub sonar_dropout: Option<f32>,
+    /// Probability of a spurious echo nearer than the true one (crosstalk, multipath), 0 to 1
+    /// (simulated devices) [default: 0.01, or the --robot file's
+    /// `sonar_spurious_probability`].
+    #[arg(long, value_name = "P")]
+    pub sonar_spurious: Option<f32>,
     /// The simulated sonar (simulated devices).
     #[command(flatten)]
     pub sonar_model: SonarArgs,
 }
 
-/// The simulated ranger's faults, options of `twil simulate` only (`twil mission` leaves them
-/// to the robot file).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Faults {
-    /// `--sonar-dropout`, if given.
-    pub dropout_probability: Option<f32>,
-    /// `--sonar-spurious`, if given.
-    pub spurious_probability: Option<f32>,
-}
-
 impl RobotArgs {
-    /// The robot of a run ([`resolve`]) with these options, the loop's `choices` (the sweep
-    /// layout, unless `sweep_layout_explicit` it is the preset's) and the ranger's `faults`;
-    /// `params` (read from `params_path`) takes the robot's planning radius.
+    /// The robot of a run ([`resolve`]) with these options and the loop's `choices` (the sweep
+    /// layout, unless `sweep_layout_explicit` it is the preset's); `params` (read from
+    /// `params_path`) takes the robot's planning radius.
     pub fn resolve(
         &self,
         choices: &LoopChoices,
         sweep_layout_explicit: bool,
-        faults: Faults,
         params_path: &Path,
         params: &mut Params,
     ) -> Result<RobotConfig> {
@@ -118,8 +116,8 @@ impl RobotArgs {
                 file: self.robot_file.as_deref(),
                 sonar_range_m: self.sonar_range,
                 sonar_noise_std_m: self.sonar_noise,
-                sonar_dropout_probability: faults.dropout_probability,
-                sonar_spurious_probability: faults.spurious_probability,
+                sonar_dropout_probability: self.sonar_dropout,
+                sonar_spurious_probability: self.sonar_spurious,
                 sonar: &self.sonar_model,
                 noise_seed: self.seed,
                 sweep_layout: choices.sweep_layout,
@@ -164,13 +162,19 @@ pub fn resolve(options: &RobotOptions, params: &mut Params) -> Result<RobotConfi
     let base = options
         .sonar
         .apply(RobotConfig {
-            sonar_range_m: options.sonar_range_m.unwrap_or(DEFAULT_SONAR_RANGE_M),
-            sonar_noise_std_m: options.sonar_noise_std_m.unwrap_or(0.0),
-            sonar_dropout_probability: options.sonar_dropout_probability.unwrap_or(0.0),
-            sonar_spurious_probability: options.sonar_spurious_probability.unwrap_or(0.0),
+            sonar_range_m: options.sonar_range_m.unwrap_or(DEFAULT.sonar_range_m),
+            sonar_noise_std_m: options
+                .sonar_noise_std_m
+                .unwrap_or(DEFAULT.sonar_noise_std_m),
+            sonar_dropout_probability: options
+                .sonar_dropout_probability
+                .unwrap_or(DEFAULT.sonar_dropout_probability),
+            sonar_spurious_probability: options
+                .sonar_spurious_probability
+                .unwrap_or(DEFAULT.sonar_spurious_probability),
             noise_seed: options.noise_seed,
             sweep_layout: options.sweep_layout,
-            ..RobotConfig::default()
+            ..DEFAULT
         })
         .with_planning_radius_m(params.robot_radius_m);
     let mut explicit = Vec::new();
@@ -228,8 +232,10 @@ pub fn resolve(options: &RobotOptions, params: &mut Params) -> Result<RobotConfi
     Ok(robot)
 }
 
-/// `--sonar-range` left out and no robot file: the seed's `ALCANCE_SONAR`.
-const DEFAULT_SONAR_RANGE_M: f32 = RobotConfig::DEFAULT.sonar_range_m;
+/// The robot of an option left out and a key the robot file leaves out: the core's, with the
+/// sensor-faithful simulated ranger ([`RobotConfig::SIMULATED`]; the range is the seed's
+/// `ALCANCE_SONAR`).
+const DEFAULT: RobotConfig = RobotConfig::SIMULATED;
 
 #[cfg(test)]
 mod tests {

@@ -28,9 +28,6 @@ pub fn read_inputs(args: &Args) -> Result<Inputs> {
     let robot = args.robot.resolve(
         &args.choices(),
         args.mission.follow.sweep_readings.is_some(),
-        // The simulated ranger's faults are `twil simulate`'s options (the robot file can
-        // still set them for `--remote sim`).
-        Faults::default(),
         &args.world.params,
         &mut params,
     )?;
@@ -118,6 +115,8 @@ pub fn mission_setup(args: &Args, inputs: &Inputs) -> MissionSetup {
         turn_in_place: args.choices().turn_in_place,
         sweep_layout: robot.sweep_layout,
         evidence_map: args.choices().evidence_map,
+        sonar_dropout_probability: robot.sonar_dropout_probability,
+        sonar_spurious_probability: robot.sonar_spurious_probability,
     }
 }
 
@@ -160,6 +159,14 @@ pub(super) fn explain_bad_mission(args: &Args, robot: &RobotConfig, error: &Erro
         15 => format!(
             "incidence limit (--incidence-limit {})",
             robot.sonar_incidence_limit_deg
+        ),
+        21 => format!(
+            "missed-echo probability (--sonar-dropout {})",
+            robot.sonar_dropout_probability
+        ),
+        22 => format!(
+            "spurious-echo probability (--sonar-spurious {})",
+            robot.sonar_spurious_probability
         ),
         12 => format!("link timeout (--link-timeout-ms {})", args.link_timeout_ms),
         100 => format!(

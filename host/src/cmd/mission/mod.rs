@@ -41,7 +41,7 @@ use twil_core::plant::Plant;
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
-use super::args::{read_da, Faults, MissionArgs, OutputArgs, RobotArgs, WorldArgs};
+use super::args::{read_da, MissionArgs, OutputArgs, RobotArgs, WorldArgs};
 use crate::record::telemetry::TelemetryRecorder;
 use crate::record::Recorder;
 use crate::remote::{Remote, RemoteSpec};

@@ -507,6 +507,8 @@ fn the_largest_mission_messages_fit_a_frame() {
         turn_in_place: true,
         sweep_layout: crate::sonar::SweepLayout::Seed,
         evidence_map: true,
+        sonar_dropout_probability: f32::MAX,
+        sonar_spurious_probability: f32::MAX,
     };
     let mut out = [0u8; MAX_FRAME_BYTES];
     assert!(encode(
