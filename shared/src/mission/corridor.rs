@@ -14,6 +14,7 @@
 //! within reach is already grown into it). The prefix is good up to where the body, a disc of the
 //! planning radius, would first reach an unknown point.
 
+use super::evidence::EvidenceMap;
 use super::swept::Swept;
 use crate::control::Pose;
 use crate::geom::PointM;
@@ -24,7 +25,7 @@ use crate::math::{hypot, sqrt};
 const MAX_SAMPLES: u32 = 512;
 
 /// The map, the seen grid and the last sweep, read together.
-pub(super) struct Corridor<'a, const W: usize> {
+pub(super) struct Corridor<'a, const W: usize, const E: usize> {
     /// The robot's map (obstacles grown by the planning radius).
     pub grid: &'a Grid<W>,
     /// Cells some ray crossed before its echo.
@@ -46,9 +47,15 @@ pub(super) struct Corridor<'a, const W: usize> {
     /// occupied on the map". The centre line is checked from the path itself, and the stop is
     /// the least over the samples.
     pub evidence: bool,
+    /// The evidence map's marks, when it has them: a marked cell is known (an obstacle heard
+    /// there) beyond the body's reach of the path, and never within it, whatever else says so
+    /// (a confirmed mark carries the free bit too, and a sweep's vouching only steps a mark
+    /// down). Without this a path planned out of a start inside the grown marks (a 0.70 m
+    /// slot) took the body onto a wall heard at its foot.
+    pub marks: Option<&'a EvidenceMap<W, E>>,
 }
 
-impl<const W: usize> Corridor<'_, W> {
+impl<const W: usize, const E: usize> Corridor<'_, W, E> {
     /// Length along `prefix` the centre may go before the body reaches an unknown point, or
     /// `None` when everything beside the prefix within `range_m` of the robot is known.
     pub fn first_unknown_m(&self, prefix: &[PointM], range_m: f32) -> Option<f32> {
@@ -146,7 +153,10 @@ impl<const W: usize> Corridor<'_, W> {
                 // already grown into it). Nearer the path it is not: an occupied cell there
                 // may be the unseen end of a wall whose seen part grew it (a 0.15 m wall's
                 // end met this way put the body 0.30 m from it: a collision at 0.36 m/s).
-                let known = if self.occupied_only {
+                let known = if self.marked(q) {
+                    // The body reaches a mark half a cell past its radius (the cell's extent).
+                    d > self.body_radius_m + 0.5 * step_m
+                } else if self.occupied_only {
                     self.free_or_seen(q)
                 } else if full && d >= r {
                     self.known(q)
@@ -179,6 +189,17 @@ impl<const W: usize> Corridor<'_, W> {
             || self.seen.is_occupied_xy(x, y)
             || self.in_band(q)
             || self.under_body(q)
+    }
+
+    /// Is `q`'s cell marked on the evidence map (never without its marks, nor off the map)?
+    fn marked(&self, q: PointM) -> bool {
+        let Some(marks) = self.marks else {
+            return false;
+        };
+        self.grid
+            .geometry()
+            .cell_xy_on_map(q)
+            .is_some_and(|(x, y)| marks.is_occupied_xy(x, y))
     }
 
     fn in_band(&self, q: PointM) -> bool {

@@ -143,6 +143,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 body_radius_m: self.config.robot.physical_radius_m(),
                 occupied_only: true,
                 evidence: self.config.evidence_map,
+                marks: self.config.evidence_map.then_some(&self.evidence),
             }
             .first_unknown(&self.prefix, range_m);
             match beside_known {
@@ -161,6 +162,12 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     self.stats.band_cuts += 1;
                     self.replan_round_suspect(out);
                     return false;
+                }
+                // Within two cells the body would reach a mark (a path out of a start inside
+                // the grown marks, heading at one): go no nearer.
+                Some((m, _)) if self.config.evidence_map => {
+                    self.truncate_prefix_m(m);
+                    self.stats.band_cuts += 1;
                 }
                 _ => {}
             }
@@ -270,6 +277,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             body_radius_m: self.config.robot.physical_radius_m(),
             occupied_only: false,
             evidence: self.config.evidence_map,
+            marks: self.config.evidence_map.then_some(&self.evidence),
         }
         .first_unknown_m(&self.prefix, self.config.robot.sonar_range_m)
     }

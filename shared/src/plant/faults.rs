@@ -20,20 +20,23 @@
 //! deviations of the probability set, and a spurious echo is always nearer than the true one.
 
 use super::SplitMix64;
+use crate::robot::RobotConfig;
 
 /// Range noise of a real HC-SR04, standard deviation in metres: repeated readings of fixed
 /// targets from 5 to 200 cm spread by about 1 to 5 mm (R. Gonzalez, "HC-SR04: tests on
 /// accuracy, precision and resolution of ultrasonic measurement", Arduino forum, 2014); we
-/// take the worse end. Not the default (0): `twil sonar-grid` uses it.
-pub const MEASURED_NOISE_STD_M: f32 = 0.005;
+/// take the worse end. The host tools' default ([`RobotConfig::SIMULATED`]); the core's tests
+/// read exact ranges.
+pub const MEASURED_NOISE_STD_M: f32 = RobotConfig::SIMULATED.sonar_noise_std_m;
 
-/// The faults `twil sonar-grid` gives a faithful ranger: 2 % missed echoes, 1 % spurious short
-/// echoes. Judgement, not measurement (no data sheet states rates): a 105-reading sweep then
-/// has about two missed and one spurious reading, enough to test a map that trusts one reading;
-/// see `docs/robot-model.md`.
+/// The faults of the host tools' faithful ranger ([`RobotConfig::SIMULATED`], `twil
+/// sonar-grid`'s faulty cells): 2 % missed echoes, 1 % spurious short echoes. Judgement, not
+/// measurement (no data sheet states rates): a 105-reading sweep then has about two missed and
+/// one spurious reading, enough to test a map that trusts one reading; see
+/// `docs/robot-model.md`.
 pub const JUDGED: RangerFaults = RangerFaults {
-    dropout_probability: 0.02,
-    spurious_probability: 0.01,
+    dropout_probability: RobotConfig::SIMULATED.sonar_dropout_probability,
+    spurious_probability: RobotConfig::SIMULATED.sonar_spurious_probability,
 };
 
 /// The fault rates of one simulated ranger, each a probability per reading in `[0, 1]`
