@@ -202,7 +202,9 @@ fn a_silent_wall_met_at_a_glancing_angle_is_hit_without_the_map_and_avoided_with
             "--mode",
             "stop",
         ];
-        let without = simulate(&da, &par, &base);
+        let mut without_map = base.to_vec();
+        without_map.push("--evidence-map=false");
+        let without = simulate(&da, &par, &without_map);
         assert_eq!(
             outcome(&without),
             Outcome::Collision,
@@ -340,9 +342,16 @@ fn twil_mission_carries_the_flag_and_the_device_maps_as_the_simulator_does() {
             (distance(&device) - distance(&sim)).abs() <= 0.10 * distance(&sim),
             "{world}: {device} vs {sim}"
         );
-        // Without the flag the same device maps as before: the flag is what changed it.
+        // With the flag off the same device maps as the seed: the flag is what changed it.
         let plain = common::twil()
-            .args(["mission", "--remote", "sim", "--json", "--params"])
+            .args([
+                "mission",
+                "--remote",
+                "sim",
+                "--evidence-map=false",
+                "--json",
+                "--params",
+            ])
             .arg(common::world(&format!("{world}.par")))
             .arg("--real")
             .arg(common::world(&format!("{world}.da")))

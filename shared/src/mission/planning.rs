@@ -120,9 +120,13 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             },
             None => origin,
         };
-        self.stats.plans += 1;
-        if self.stats.plans > 1 {
-            self.stats.replans += 1;
+        // A proof plan (on the confirmed marks alone, `verdict`) is no plan the robot follows:
+        // the counts, and the pictures drawn per plan, leave it out.
+        if !proof {
+            self.stats.plans += 1;
+            if self.stats.plans > 1 {
+                self.stats.replans += 1;
+            }
         }
         let id = self.next_plan_id;
         self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
@@ -191,7 +195,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             }
         } else if pending.proof {
             match result {
-                Ok(r) => self.on_proof(r.status == PlanStatus::Found, out),
+                Ok(r) => self.on_proof(r.status, out),
                 Err(e) => {
                     self.redraw_grid(false);
                     self.stats.plan_errors += 1;

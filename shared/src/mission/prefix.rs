@@ -130,6 +130,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             band_rad,
         );
         let mut ends_at_unknown = false;
+        // The point a cut after a full sweep stops the body short of (evidence map).
+        let mut cut_short_of = None;
+        // Two cells, and a rounding error more (a cut of 0.10000005 m is one of two cells).
+        let two_cells_m = 2.0 * res_m + 1.0e-4;
         if self.last_sweep_full {
             // A full sweep saw all it could from here. What it could not see beside a known
             // obstacle (its end in the sonar's blind zone, or behind it) may reach further:
@@ -147,9 +151,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             }
             .first_unknown(&self.prefix, range_m);
             match beside_known {
-                Some((m, _)) if m > 2.0 * g.resolution_m() => {
+                Some((m, unknown)) if m > two_cells_m => {
                     self.truncate_prefix_m(m);
                     self.stats.band_cuts += 1;
+                    cut_short_of = Some(unknown);
                 }
                 // The body would reach, within two cells, a point the full sweep could not
                 // vouch for: following the prefix would take it there (this let it drive into
@@ -162,12 +167,6 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     self.stats.band_cuts += 1;
                     self.replan_round_suspect(out);
                     return false;
-                }
-                // Within two cells the body would reach a mark (a path out of a start inside
-                // the grown marks, heading at one): go no nearer.
-                Some((m, _)) if self.config.evidence_map => {
-                    self.truncate_prefix_m(m);
-                    self.stats.band_cuts += 1;
                 }
                 _ => {}
             }
@@ -256,6 +255,16 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         if let Some(m) = blind_cut {
             self.truncate_prefix_m(m);
             self.stats.blind_cuts += 1;
+        }
+        // After a full sweep, the blind zone left no move of the cut short of an unknown
+        // point: the body could only stand and sweep again, which would vouch for nothing
+        // new (a stall 1.2 m from the pillars' goal). The point is a suspect, as when the
+        // cut itself was that short: mark it and plan round it.
+        if let Some(unknown) = cut_short_of.filter(|_| self.config.evidence_map) {
+            if polyline_length_m(&self.prefix) <= two_cells_m && self.mark_suspect_m(unknown) {
+                self.replan_round_suspect(out);
+                return false;
+            }
         }
         true
     }

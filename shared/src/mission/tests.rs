@@ -815,14 +815,14 @@ fn a_gap_visit_that_took_no_mark_back_closes_the_gap_until_no_other_gap_is_left(
     // is planned once more on the confirmed marks alone.
     m.pending_plan = None;
     out.plan_request = None;
-    m.on_proof(false, &mut out);
+    m.on_proof(PlanStatus::Unreachable, &mut out);
     assert!(!m.visited_gaps[0].closed);
     assert!(out.plan_request.is_some(), "the proof plan is asked again");
     assert!(!at(&m, 3.5) && !at(&m, 4.9));
     assert_eq!(m.status, MissionStatus::Running);
     // No way on the confirmed marks alone, no gap closed: that is the proof.
     m.pending_plan = None;
-    m.on_proof(false, &mut out);
+    m.on_proof(PlanStatus::Unreachable, &mut out);
     assert_eq!(m.status, MissionStatus::Unreachable);
     assert_eq!(
         m.stats.unreachable_reason,

@@ -54,6 +54,7 @@
 use crate::geom::{distance_to_segment_m, PointM};
 use crate::grid::{Grid, GridGeometry};
 use crate::math::{abs, atan2, cos, hypot, sin, wrap_angle_rad};
+use crate::plan::PlanStatus;
 use crate::raster::{mark_point_m, BresenhamLine};
 
 use super::evidence::CellEvidence;
@@ -181,10 +182,12 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         n
     }
 
-    /// The proof plan is back: `found` is whether the confirmed marks leave a way (its path
-    /// is [`Mission::path`]). Restores the full grid, then ends the mission with the proof or
-    /// sets off to the gap.
-    pub(super) fn on_proof(&mut self, found: bool, out: &mut MissionOutput) {
+    /// The proof plan is back: its `status` says whether the confirmed marks leave a way (its
+    /// path is [`Mission::path`]). Restores the full grid, then ends the mission with the
+    /// proof (the goal inside a confirmed mark's grown disc is `GoalBlocked`, as without the
+    /// evidence map) or sets off to the gap.
+    pub(super) fn on_proof(&mut self, status: PlanStatus, out: &mut MissionOutput) {
+        let found = status == PlanStatus::Found;
         if !found && self.visited_gaps.iter().any(|v| v.closed) {
             // The closed gaps only order the visits (others first): with every other gap
             // tried, open them again and plan the proof once more. Its answer then is a proof
@@ -198,7 +201,11 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         }
         self.redraw_grid(false);
         if !found {
-            self.stats.unreachable_reason = Some(UnreachableReason::ConfirmedCut);
+            self.stats.unreachable_reason = Some(if status == PlanStatus::GoalBlocked {
+                UnreachableReason::GoalBlocked
+            } else {
+                UnreachableReason::ConfirmedCut
+            });
             self.finish(MissionStatus::Unreachable, out);
             return;
         }

@@ -83,15 +83,16 @@ pub struct RobotArgs {
     #[arg(long)]
     pub sonar_range: Option<f32>,
     /// Standard deviation of the simulated sonar noise, metres (simulated devices) [default:
-    /// 0.005, a measured HC-SR04's, or the --robot file's `sonar_noise_std_m`].
+    /// 0.005, a measured HC-SR04's (the ray: 0), or the --robot file's `sonar_noise_std_m`].
     #[arg(long)]
     pub sonar_noise: Option<f32>,
     /// Probability that a reading which would echo returns no echo (missed echo), 0 to 1
-    /// (simulated devices) [default: 0.02, or the --robot file's `sonar_dropout_probability`].
+    /// (simulated devices) [default: 0.02 (the ray: 0), or the --robot file's
+    /// `sonar_dropout_probability`].
     #[arg(long, value_name = "P")]
     pub sonar_dropout: Option<f32>,
     /// Probability of a spurious echo nearer than the true one (crosstalk, multipath), 0 to 1
-    /// (simulated devices) [default: 0.01, or the --robot file's
+    /// (simulated devices) [default: 0.01 (the ray: 0), or the --robot file's
     /// `sonar_spurious_probability`].
     #[arg(long, value_name = "P")]
     pub sonar_spurious: Option<f32>,
@@ -159,22 +160,41 @@ pub struct RobotOptions<'a> {
 /// (errors name the `.par` line, the option, or the robot file's line).
 pub fn resolve(options: &RobotOptions, params: &mut Params) -> Result<RobotConfig> {
     let file = options.file.map(robot_file::read).transpose()?;
+    // The single ray is the exact sensor (the ranger's noise and faults are the beam's): its
+    // defaults read exact ranges; the options and the robot file may still add them.
+    let ray = match options.sonar.sonar {
+        Some(s) => s == SonarArg::Ray,
+        None => file
+            .as_ref()
+            .and_then(|f| f.get("sonar_beam"))
+            .is_some_and(|e| e.value == 0.0),
+    };
+    let default = if ray {
+        RobotConfig {
+            sonar_noise_std_m: 0.0,
+            sonar_dropout_probability: 0.0,
+            sonar_spurious_probability: 0.0,
+            ..DEFAULT
+        }
+    } else {
+        DEFAULT
+    };
     let base = options
         .sonar
         .apply(RobotConfig {
-            sonar_range_m: options.sonar_range_m.unwrap_or(DEFAULT.sonar_range_m),
+            sonar_range_m: options.sonar_range_m.unwrap_or(default.sonar_range_m),
             sonar_noise_std_m: options
                 .sonar_noise_std_m
-                .unwrap_or(DEFAULT.sonar_noise_std_m),
+                .unwrap_or(default.sonar_noise_std_m),
             sonar_dropout_probability: options
                 .sonar_dropout_probability
-                .unwrap_or(DEFAULT.sonar_dropout_probability),
+                .unwrap_or(default.sonar_dropout_probability),
             sonar_spurious_probability: options
                 .sonar_spurious_probability
-                .unwrap_or(DEFAULT.sonar_spurious_probability),
+                .unwrap_or(default.sonar_spurious_probability),
             noise_seed: options.noise_seed,
             sweep_layout: options.sweep_layout,
-            ..DEFAULT
+            ..default
         })
         .with_planning_radius_m(params.robot_radius_m);
     let mut explicit = Vec::new();

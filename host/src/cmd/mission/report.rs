@@ -241,8 +241,11 @@ pub(super) fn write_outputs(
         frames: follower.frames,
         known_map_plan_length_m: None,
     };
-    args.output
-        .write(&setup, &result, &summary_json(args, inputs, outcome))
+    let mut summary = summary_json(args, inputs, outcome);
+    // The plans the device reported (telemetry `Planned`), one picture each: a plan replaced
+    // on the device before its report went out has none (`plans` counts it).
+    summary["plans_reported"] = json!(result.plans.len());
+    args.output.write(&setup, &result, &summary)
 }
 
 #[cfg(test)]
