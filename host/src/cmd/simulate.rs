@@ -97,7 +97,7 @@ pub fn setup_from_args(args: &Args) -> Result<SimSetup> {
         snapshot_period_s: if args.output.out.is_some() { 0.5 } else { 0.0 },
         constant_depth_filter: choices.rcd,
         trust_seen_space: !choices.seed_prune,
-        evidence_map: choices.evidence_map,
+        evidence_map: args.mission.loop_args.evidence_map_for(robot.sonar_beam),
         moving_half_sweep_deg: args.moving_sweep,
         plan_latency_s: args.plan_latency_ms / 1000.0,
         settle: choices.settle,

@@ -114,7 +114,7 @@ pub fn mission_setup(args: &Args, inputs: &Inputs) -> MissionSetup {
         reference_feed_forward: args.choices().reference_feed_forward,
         turn_in_place: args.choices().turn_in_place,
         sweep_layout: robot.sweep_layout,
-        evidence_map: args.choices().evidence_map,
+        evidence_map: args.mission.loop_args.evidence_map_for(robot.sonar_beam),
         sonar_dropout_probability: robot.sonar_dropout_probability,
         sonar_spurious_probability: robot.sonar_spurious_probability,
     }

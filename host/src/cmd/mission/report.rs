@@ -210,7 +210,10 @@ pub(super) fn write_outputs(
         time_limit_s: args.mission.time_limit_s(),
         constant_depth_filter: args.choices().rcd,
         trust_seen_space: !args.choices().seed_prune,
-        evidence_map: args.choices().evidence_map,
+        evidence_map: args
+            .mission
+            .loop_args
+            .evidence_map_for(inputs.robot.sonar_beam),
         moving_half_sweep_deg: 95.0,
         snapshot_period_s: FRAME_PERIOD_S,
         plan_latency_s: 0.0,
