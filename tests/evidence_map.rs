@@ -194,6 +194,7 @@ fn glancing_wall() -> (String, String) {
 fn a_silent_wall_met_at_a_glancing_angle_is_hit_without_the_map_and_avoided_with_it() {
     let (da, par) = glancing_wall();
     for range in ["1.5", "3"] {
+        // The geometry alone: no noise, no missed or spurious echoes.
         let base = [
             "--incidence-limit",
             "15",
@@ -201,6 +202,12 @@ fn a_silent_wall_met_at_a_glancing_angle_is_hit_without_the_map_and_avoided_with
             range,
             "--mode",
             "stop",
+            "--sonar-noise",
+            "0",
+            "--sonar-dropout",
+            "0",
+            "--sonar-spurious",
+            "0",
         ];
         let mut without_map = base.to_vec();
         without_map.push("--evidence-map=false");

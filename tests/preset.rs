@@ -128,6 +128,12 @@ fn explicit_options_override_the_preset() {
             "--rcd=false",
             "--incidence-limit",
             "70",
+            "--sonar-noise",
+            "0",
+            "--sonar-dropout",
+            "0",
+            "--sonar-spurious",
+            "0",
         ],
     );
     assert_eq!(s["preset"], "seed", "{s}");
@@ -152,8 +158,8 @@ fn explicit_options_override_the_preset() {
         "--evidence-map",
     ]);
     assert_eq!(all_ours, office_json(&[]));
-    // And the old flags still mean what they meant (at the 70° incidence limit of their
-    // day: under the specular default the seed's marking ends this mission `unreachable`).
+    // And the old flags still mean what they meant (with the ranger of their day, the 70°
+    // limit and no faults: under today's the seed's marking ends this mission `unreachable`).
     let old = office_json(&[
         "--planner",
         "bfs",
@@ -162,6 +168,12 @@ fn explicit_options_override_the_preset() {
         "--evidence-map=false",
         "--incidence-limit",
         "70",
+        "--sonar-noise",
+        "0",
+        "--sonar-dropout",
+        "0",
+        "--sonar-spurious",
+        "0",
     ]);
     let new = office_json(&[
         "--preset",
@@ -174,6 +186,12 @@ fn explicit_options_override_the_preset() {
         "symmetric",
         "--incidence-limit",
         "70",
+        "--sonar-noise",
+        "0",
+        "--sonar-dropout",
+        "0",
+        "--sonar-spurious",
+        "0",
     ]);
     assert_eq!(old, new);
 }

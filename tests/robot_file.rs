@@ -309,7 +309,7 @@ fn mission_sends_the_files_values_and_says_why_it_ended() {
     let out = run(&a.iter().map(String::as_str).collect::<Vec<_>>());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        stderr.contains("2 of 39 values set on the device"),
+        stderr.contains("7 of 39 values set on the device"),
         "{stderr}"
     );
     assert!(stdout_json(&out)["status"].is_string(), "{out:?}");

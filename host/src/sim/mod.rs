@@ -44,7 +44,7 @@ use twil_core::mission::{
     HostMissionPlanner, LocalRunner, Mission400, MissionConfig, MissionEvent, MissionMode,
     MissionPhase, MissionStats, MissionStatus, Pilot, SimBody,
 };
-use twil_core::plan::PlannerKind;
+use twil_core::plan::{PlanStatus, PlannerKind};
 use twil_core::robot::RobotConfig;
 use twil_core::world::{Obstacles, Params};
 
@@ -272,10 +272,12 @@ fn snapshot(
     pose: Pose,
     trail_len: usize,
     plan_number: u32,
+    found: bool,
 ) -> Snapshot {
-    // A mission that ended unreachable has no plan: the mission still holds the previous
-    // plan's path and prefix, which a picture must not show as if they were followed.
-    let has_plan = mission.status() != MissionStatus::Unreachable;
+    // A mission that ended unreachable, or a plan that found no path (the evidence map then
+    // seeks its proof), has no plan: the mission still holds the previous plan's path and
+    // prefix, which a picture must not show as if they were followed.
+    let has_plan = found && mission.status() != MissionStatus::Unreachable;
     let plan_points = |points: &[PointM]| {
         if has_plan {
             points.to_vec()
@@ -463,6 +465,10 @@ fn run_on_this_thread(
                 body.plant().pose(),
                 trajectory.len(),
                 m.stats().plans,
+                // The plan's own status: a plan that found no path draws none.
+                !outcome.events.iter().any(|e| {
+                    matches!(e, MissionEvent::Planned { status, .. } if *status != PlanStatus::Found)
+                }),
             ));
         }
         sweeps += outcome
@@ -521,6 +527,7 @@ fn run_on_this_thread(
                 after,
                 trajectory.len(),
                 0,
+                true,
             ));
         }
         if t_s >= next_progress_s {
@@ -535,6 +542,7 @@ fn run_on_this_thread(
         body.plant().pose(),
         trajectory.len(),
         0,
+        true,
     ));
     let mission = runner.mission();
     let status = if collision {
