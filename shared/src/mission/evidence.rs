@@ -232,6 +232,22 @@ impl<const W: usize, const E: usize> EvidenceMap<W, E> {
         self.observe_free_xy(x, y)
     }
 
+    /// A cell of an obstacle known a priori (`Mission::add_known_polygon`): confirmed, as if
+    /// heard from two places, so that a proof or a take-back, which redraw the grid from the
+    /// marks, keep it. Off the map, or without the occupied plane, nothing changes.
+    pub fn known_xy(&mut self, x: i32, y: i32) -> Change {
+        if !self.geometry().contains_xy(x, y) || !self.has_occupied_plane() {
+            return Change::None;
+        }
+        let before = self.get_xy(x, y);
+        self.set(x, y, CellEvidence::Confirmed);
+        match before {
+            CellEvidence::Confirmed => Change::None,
+            CellEvidence::Tentative => Change::Evidence,
+            _ => Change::NowOccupied,
+        }
+    }
+
     /// A cell nobody vouched for beside the robot: unknown → tentative; anything else stays.
     pub fn suspect_xy(&mut self, x: i32, y: i32) -> Change {
         if self.get_xy(x, y) != CellEvidence::Unknown

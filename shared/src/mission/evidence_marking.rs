@@ -42,7 +42,7 @@ use heapless::Vec;
 use crate::control::Pose;
 use crate::geom::PointM;
 use crate::math::{abs, cos, hypot, sin, wrap_angle_rad};
-use crate::raster::mark_point_m;
+use crate::raster::{mark_point_m, BresenhamLine};
 use crate::sonar::hit_to_world;
 
 use super::evidence::{CellEvidence, Change, EvidenceMap};
@@ -95,6 +95,27 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     self.evidence.observe_free_xy(x, y);
                 }
             }
+        }
+    }
+
+    /// The cells of a known obstacle's outline (the vertices' cells joined in order and back
+    /// to the first, as [`crate::raster::mark_polygon`] draws it, not grown) become confirmed
+    /// marks. Bounded by the outline's length in cells.
+    pub(super) fn mark_known_outline(&mut self, vertices: &[PointM]) {
+        let g = *self.grid.geometry();
+        let mut cells = vertices.iter().filter_map(|v| g.cell_xy_of(*v));
+        let Some(first) = cells.next() else {
+            return;
+        };
+        let mut previous = first;
+        for cell in cells.chain(core::iter::once(first)) {
+            for (x, y) in BresenhamLine::new(previous, cell) {
+                self.evidence.known_xy(x, y);
+            }
+            previous = cell;
+        }
+        if previous == first {
+            self.evidence.known_xy(first.0, first.1);
         }
     }
 

@@ -211,10 +211,18 @@ impl<const W: usize, const E: usize> Mission<W, E> {
 
     /// Rasterize an obstacle known a priori (a closed outline, world metres), grown by the
     /// planning radius. Call before the first step; later calls are allowed (the map only
-    /// gains obstacles).
+    /// gains obstacles). With the evidence map (and its occupied plane) the outline's cells
+    /// are confirmed marks too, so its proofs and take-backs, which redraw the grid from the
+    /// marks, keep the obstacle; otherwise a redraw would lose it, and the mission neither
+    /// proves nor takes back (before: with `--known` the evidence map's `unreachable` came
+    /// from tentative marks, a false one on the office with its walls known).
     pub fn add_known_polygon(&mut self, vertices: &[PointM]) {
-        self.known_a_priori = true;
         mark_polygon(&mut self.grid, vertices, self.expansion_cells);
+        if self.config.evidence_map && self.evidence.has_occupied_plane() {
+            self.mark_known_outline(vertices);
+        } else {
+            self.known_a_priori = true;
+        }
     }
 
     /// The configuration.
