@@ -137,9 +137,11 @@ fn grid() {
                             "--incidence-limit",
                             limit,
                         ];
-                        if evidence {
-                            extra.push("--evidence-map");
-                        }
+                        extra.push(if evidence {
+                            "--evidence-map"
+                        } else {
+                            "--evidence-map=false"
+                        });
                         let r = bundled(name, &extra);
                         let o = outcome(&r);
                         if o != Outcome::Reached {
@@ -195,20 +197,9 @@ fn a_silent_wall_met_at_a_glancing_angle_is_hit_without_the_map_and_avoided_with
     let (da, par) = glancing_wall();
     for range in ["1.5", "3"] {
         // The geometry alone: no noise, no missed or spurious echoes.
-        let base = [
-            "--incidence-limit",
-            "15",
-            "--sonar-range",
-            range,
-            "--mode",
-            "stop",
-            "--sonar-noise",
-            "0",
-            "--sonar-dropout",
-            "0",
-            "--sonar-spurious",
-            "0",
-        ];
+        let mut base = common::EARLIER_RANGER.to_vec();
+        base[1] = "15";
+        base.extend(["--sonar-range", range, "--mode", "stop"]);
         let mut without_map = base.to_vec();
         without_map.push("--evidence-map=false");
         let without = simulate(&da, &par, &without_map);

@@ -120,21 +120,10 @@ fn explicit_options_override_the_preset() {
     // `unreachable`, which is not this test's business).
     let s = office_summary(
         "override",
-        &[
-            "--preset",
-            "seed",
-            "--planner",
-            "astar",
-            "--rcd=false",
-            "--incidence-limit",
-            "70",
-            "--sonar-noise",
-            "0",
-            "--sonar-dropout",
-            "0",
-            "--sonar-spurious",
-            "0",
-        ],
+        &common::with(
+            &["--preset", "seed", "--planner", "astar", "--rcd=false"],
+            &common::EARLIER_RANGER,
+        ),
     );
     assert_eq!(s["preset"], "seed", "{s}");
     assert_eq!(s["planner"], "astar", "{s}");
@@ -160,39 +149,29 @@ fn explicit_options_override_the_preset() {
     assert_eq!(all_ours, office_json(&[]));
     // And the old flags still mean what they meant (with the ranger of their day, the 70°
     // limit and no faults: under today's the seed's marking ends this mission `unreachable`).
-    let old = office_json(&[
-        "--planner",
-        "bfs",
-        "--seed-prune",
-        "--rcd",
-        "--evidence-map=false",
-        "--incidence-limit",
-        "70",
-        "--sonar-noise",
-        "0",
-        "--sonar-dropout",
-        "0",
-        "--sonar-spurious",
-        "0",
-    ]);
-    let new = office_json(&[
-        "--preset",
-        "seed",
-        "--settle",
-        "model",
-        "--feed-forward=true",
-        "--turn-in-place=true",
-        "--sweep-readings",
-        "symmetric",
-        "--incidence-limit",
-        "70",
-        "--sonar-noise",
-        "0",
-        "--sonar-dropout",
-        "0",
-        "--sonar-spurious",
-        "0",
-    ]);
+    let old = office_json(&common::with(
+        &[
+            "--planner",
+            "bfs",
+            "--seed-prune",
+            "--rcd",
+            "--evidence-map=false",
+        ],
+        &common::EARLIER_RANGER,
+    ));
+    let new = office_json(&common::with(
+        &[
+            "--preset",
+            "seed",
+            "--settle",
+            "model",
+            "--feed-forward=true",
+            "--turn-in-place=true",
+            "--sweep-readings",
+            "symmetric",
+        ],
+        &common::EARLIER_RANGER,
+    ));
     assert_eq!(old, new);
 }
 

@@ -273,7 +273,7 @@ impl MissionEnd<'_> {
                 format!(
                     "gave up at {here} after {} plans: the gaps that tentative marks close were \
                      visited and swept without settling whether the way is open \
-                     (--evidence-map; docs/mapping.md)",
+                     (the evidence map: docs/mapping.md)",
                     self.plans_here
                 )
             }

@@ -132,8 +132,15 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         let mut ends_at_unknown = false;
         // The point a cut after a full sweep stops the body short of (evidence map).
         let mut cut_short_of = None;
-        // Two cells, and a rounding error more (a cut of 0.10000005 m is one of two cells).
-        let two_cells_m = 2.0 * res_m + 1.0e-4;
+        // Two cells, and with the evidence map a rounding error more (a cut of 0.10000005 m is
+        // one of two cells: it stalled 1.2 m from the pillars' goal); the seed's marking keeps
+        // its comparison.
+        let two_cells_m = 2.0 * res_m
+            + if self.config.evidence_map {
+                1.0e-4
+            } else {
+                0.0
+            };
         if self.last_sweep_full {
             // A full sweep saw all it could from here. What it could not see beside a known
             // obstacle (its end in the sonar's blind zone, or behind it) may reach further:

@@ -37,8 +37,8 @@ impl Preset {
     /// judge. The seed's 18.85 s settle after each of its 20-odd stops needs 1800 s (office,
     /// 1.5 m, stop mode: 900 s ran out at 31 stops); ours, with the evidence map's shorter
     /// steps under a specular sonar, too (900 s ran out on the office and the corridor at
-    /// 1.5 m while still on their way, and on 41 of the 576 missions of `twil sonar-grid
-    /// --worlds 8`; 1800 s on none of those and 3 of these: docs/simulate.md).
+    /// 1.5 m while still on their way, and on 38 of the 576 missions of `twil sonar-grid
+    /// --worlds 8`; 1800 s on none of those and 2 of these: docs/simulate.md).
     pub fn time_limit_s(self) -> f32 {
         match self {
             Self::Seed | Self::Ours => 1800.0,
