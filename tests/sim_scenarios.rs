@@ -457,3 +457,22 @@ fn a_start_over_an_obstacle_gets_one_answer_from_plan_simulate_and_mission() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_closed_stdout_ends_the_run_quietly_without_a_panic() {
+    // `twil simulate … | head -0`: the reader is gone before the first line is written.
+    // `println!` then panicked ("failed printing to stdout: Broken pipe", exit 101); now the
+    // run ends as a Unix tool killed by SIGPIPE does, 141, with nothing on stderr.
+    let (da, par) = (world("pillars.da"), world("pillars.par"));
+    let mut child = common::twil()
+        .args(["simulate", "--real", &da, "--params", &par])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run twil");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("twil ends");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(141), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -23,6 +23,7 @@ pub const HELP: &str = "Exit status:
   5    timeout: the mission's time limit ran out
   6    aborted: the device or another host stopped the mission
   130  interrupted (Ctrl-C)
+  141  standard output closed by its reader (`twil … | head`)
 
 Environment:
   TWIL_QEMU_ELF     the firmware ELF that --remote qemu runs (default: the one cargo xtask firmware built)

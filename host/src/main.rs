@@ -44,7 +44,32 @@ enum Command {
     Check(cmd::check::Args),
 }
 
+/// Exit status of a run whose reader closed its standard output (`twil … | head`): 128 + 13,
+/// what a Unix tool killed by SIGPIPE reports.
+const CLOSED_STDOUT_EXIT: i32 = 141;
+
+/// `twil simulate … | head -1` closes the pipe after a line: the rest of the output has no
+/// reader, and `println!` panics on the write ("failed printing to stdout: Broken pipe").
+/// End quietly instead, as `head`'s other writers do; every other panic keeps the default
+/// report.
+fn quiet_when_stdout_is_closed() {
+    let report = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let message = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if message.starts_with("failed printing to stdout") && message.contains("Broken pipe") {
+            std::process::exit(CLOSED_STDOUT_EXIT);
+        }
+        report(info);
+    }));
+}
+
 fn main() {
+    quiet_when_stdout_is_closed();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Plan(args) => cmd::plan::run(args),
