@@ -197,8 +197,7 @@ fn a_silent_wall_met_at_a_glancing_angle_is_hit_without_the_map_and_avoided_with
     let (da, par) = glancing_wall();
     for range in ["1.5", "3"] {
         // The geometry alone: no noise, no missed or spurious echoes.
-        let mut base = common::EARLIER_RANGER.to_vec();
-        base[1] = "15";
+        let mut base = common::earlier_ranger("15");
         base.extend(["--sonar-range", range, "--mode", "stop"]);
         let mut without_map = base.to_vec();
         without_map.push("--evidence-map=false");

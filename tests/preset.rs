@@ -122,7 +122,7 @@ fn explicit_options_override_the_preset() {
         "override",
         &common::with(
             &["--preset", "seed", "--planner", "astar", "--rcd=false"],
-            &common::EARLIER_RANGER,
+            &common::earlier_ranger("70"),
         ),
     );
     assert_eq!(s["preset"], "seed", "{s}");
@@ -157,7 +157,7 @@ fn explicit_options_override_the_preset() {
             "--rcd",
             "--evidence-map=false",
         ],
-        &common::EARLIER_RANGER,
+        &common::earlier_ranger("70"),
     ));
     let new = office_json(&common::with(
         &[
@@ -170,7 +170,7 @@ fn explicit_options_override_the_preset() {
             "--sweep-readings",
             "symmetric",
         ],
-        &common::EARLIER_RANGER,
+        &common::earlier_ranger("70"),
     ));
     assert_eq!(old, new);
 }

@@ -29,9 +29,13 @@ fn simulate(name: &str, extra: &[&str]) -> SimResult {
 }
 
 /// The options of the defaults before issue 23 (docs/simulate.md, "The earlier defaults"),
-/// but the time limit (the seed's preset keeps its 1800 s).
-fn earlier() -> Vec<&'static str> {
-    common::with(&["--evidence-map=false"], &common::EARLIER_RANGER)
+/// at `incidence_limit_deg` (theirs was 70°), but the time limit (the seed's preset keeps its
+/// 1800 s).
+fn earlier(incidence_limit_deg: &'static str) -> Vec<&'static str> {
+    common::with(
+        &["--evidence-map=false"],
+        &common::earlier_ranger(incidence_limit_deg),
+    )
 }
 
 #[test]
@@ -73,7 +77,7 @@ fn beam_missions_on_the_bundled_worlds_do_not_collide_with_or_without_the_filter
             for name in ["office", "corridor", "pillars", "enclosed", "lab"] {
                 for mode in ["stop", "continuous"] {
                     let mut extra = options.to_vec();
-                    extra.extend(earlier());
+                    extra.extend(earlier("70"));
                     extra.extend(["--mode", mode, "--sonar-range", range]);
                     if name == "lab" {
                         extra.extend(["--size", "18x10"]);
@@ -103,7 +107,7 @@ fn the_single_ray_stays_available_and_keeps_farther_from_walls_with_the_beam() {
     // The ray with the filter drops oblique walls (their depth changes faster than 1 cm per
     // step); the mission's rules keep it off them all the same, closer than with the beam.
     let ray = simulate("office", &["--sonar", "ray"]);
-    let beam = simulate("office", &earlier());
+    let beam = simulate("office", &earlier("70"));
     assert_eq!(ray.status, SimStatus::Reached, "{:?}", ray.stats);
     assert_eq!(beam.status, SimStatus::Reached, "{:?}", beam.stats);
     assert!(ray.min_clearance_m > 0.0, "{}", ray.min_clearance_m);
@@ -121,10 +125,7 @@ fn a_specular_only_beam_makes_silence_look_free() {
     // With the incidence limit at the beam's half-angle (a perfectly smooth wall), walls seen
     // obliquely never echo and the seed's marking, which takes silence for free space, runs
     // into one (the evidence map, today's default, is made for this: the test above).
-    let mut options = earlier();
-    // The earlier defaults but the limit: 15° for 70°.
-    let limit = options.iter().position(|o| *o == "70").expect("the limit");
-    options[limit] = "15";
+    let mut options = earlier("15");
     options.extend(["--sonar", "beam"]);
     let r = simulate("office", &options);
     assert_eq!(r.status, SimStatus::Collision, "{:?}", r.stats);

@@ -71,6 +71,13 @@ pub fn wrap_angle_rad(angle_rad: f32) -> f32 {
     if angle_rad <= -PI && angle_rad > -2.0 * PI {
         return angle_rad + 2.0 * PI;
     }
+    wrap_by_remainder(angle_rad)
+}
+
+/// [`wrap_angle_rad`] by the remainder alone (its definition; the shortcuts above must give
+/// the same bits: `tests::wrapping_gives_the_remainders_bits`). Non-finite angles give 0.
+fn wrap_by_remainder(angle_rad: f32) -> f32 {
+    use core::f32::consts::PI;
     if !angle_rad.is_finite() {
         return 0.0;
     }
@@ -174,28 +181,13 @@ pub fn sqrt(x: f32) -> f32 {
 mod tests {
     extern crate std;
 
-    /// The remainder formula alone, as `wrap_angle_rad` was before its shortcuts.
-    fn wrap_by_remainder(angle_rad: f32) -> f32 {
-        use core::f32::consts::PI;
-        if !angle_rad.is_finite() {
-            return 0.0;
-        }
-        let mut a = angle_rad % (2.0 * PI);
-        if a > PI {
-            a -= 2.0 * PI;
-        } else if a <= -PI {
-            a += 2.0 * PI;
-        }
-        a
-    }
-
     proptest::proptest! {
         /// The shortcuts for angles within a turn of the range give the remainder's bits.
         #[test]
         fn wrapping_gives_the_remainders_bits(a in proptest::prop_oneof![
             -7.0f32..7.0, proptest::num::f32::ANY,
         ]) {
-            let (got, want) = (super::wrap_angle_rad(a), wrap_by_remainder(a));
+            let (got, want) = (super::wrap_angle_rad(a), super::wrap_by_remainder(a));
             proptest::prop_assert_eq!(got.to_bits(), want.to_bits(), "{}", a);
         }
     }
@@ -204,7 +196,7 @@ mod tests {
     fn wrapping_keeps_the_range_ends_and_non_numbers_apart() {
         use core::f32::consts::PI;
         assert_eq!(super::wrap_angle_rad(PI), PI);
-        assert_eq!(super::wrap_angle_rad(-PI), wrap_by_remainder(-PI));
+        assert_eq!(super::wrap_angle_rad(-PI), super::wrap_by_remainder(-PI));
         assert_eq!(super::wrap_angle_rad(f32::NAN), 0.0);
         assert_eq!(super::wrap_angle_rad(f32::INFINITY), 0.0);
     }

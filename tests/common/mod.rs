@@ -4,25 +4,27 @@
 
 use std::path::PathBuf;
 
-/// The repository's root folder.
-/// The ranger of before issue 23's defaults: the 70° incidence limit and no noise, missed
-/// or spurious echoes (docs/simulate.md, "The earlier defaults").
-pub const EARLIER_RANGER: [&str; 8] = [
-    "--incidence-limit",
-    "70",
-    "--sonar-noise",
-    "0",
-    "--sonar-dropout",
-    "0",
-    "--sonar-spurious",
-    "0",
-];
+/// The ranger of before issue 23's defaults at `incidence_limit_deg` (theirs was 70°): no
+/// noise, missed or spurious echoes (docs/simulate.md, "The earlier defaults").
+pub fn earlier_ranger(incidence_limit_deg: &str) -> Vec<&str> {
+    vec![
+        "--incidence-limit",
+        incidence_limit_deg,
+        "--sonar-noise",
+        "0",
+        "--sonar-dropout",
+        "0",
+        "--sonar-spurious",
+        "0",
+    ]
+}
 
 /// `argv` followed by `extra`, as one list of words.
 pub fn with<'a>(argv: &[&'a str], extra: &[&'a str]) -> Vec<&'a str> {
     argv.iter().chain(extra).copied().collect()
 }
 
+/// The repository's root folder.
 pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
 }

@@ -107,15 +107,13 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         let Some(first) = cells.next() else {
             return;
         };
+        // Closed back to the first cell; a single vertex is the line from its cell to itself.
         let mut previous = first;
         for cell in cells.chain(core::iter::once(first)) {
             for (x, y) in BresenhamLine::new(previous, cell) {
                 self.evidence.known_xy(x, y);
             }
             previous = cell;
-        }
-        if previous == first {
-            self.evidence.known_xy(first.0, first.1);
         }
     }
 
