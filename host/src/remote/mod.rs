@@ -130,6 +130,8 @@ pub struct Remote {
     pub unmatched_errors: Vec<Reply>,
     retries: u32,
     damaged_frames: u32,
+    /// When the last frame from the device, whole or damaged, arrived.
+    last_frame_at: Option<Instant>,
     /// Kept last so that the socket closes before QEMU is killed.
     qemu: Option<Qemu>,
 }
@@ -228,6 +230,7 @@ impl Remote {
             unmatched_errors: Vec::new(),
             retries: 0,
             damaged_frames: 0,
+            last_frame_at: None,
             qemu,
         }
     }
@@ -371,6 +374,12 @@ impl Remote {
         self.retries
     }
 
+    /// When the last frame from the device arrived, whole or damaged (a damaged one still
+    /// says the device is talking), by any call: [`Remote::request`] reads telemetry too.
+    pub fn last_frame_at(&self) -> Option<Instant> {
+        self.last_frame_at
+    }
+
     /// Damaged frames from the device seen so far (dropped).
     pub fn damaged_frames(&self) -> u32 {
         self.damaged_frames
@@ -393,6 +402,7 @@ impl Remote {
                 let (got, rest) = self.decoder.feed::<DeviceFrame>(&backlog);
                 self.backlog = rest.to_vec();
                 if let Some(got) = got {
+                    self.last_frame_at = Some(Instant::now());
                     if got.is_err() {
                         self.damaged_frames = self.damaged_frames.saturating_add(1);
                     }

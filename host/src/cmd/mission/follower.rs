@@ -461,17 +461,26 @@ pub(super) fn follow(
         if beat_due || quiet {
             last_beat = Instant::now();
             last_beat_mission_ms = mission_ms;
-            match recover_final_report(remote, follower) {
+            let poll = recover_final_report(remote, follower);
+            // Frames read while waiting for the reply count: the device is talking, only
+            // not answering yet (a reply lost on a bad line is sent again).
+            if let Some(at) = remote.last_frame_at() {
+                last_heard = last_heard.max(at);
+            }
+            match poll {
                 Poll::Finished => continue,
                 Poll::Alive => {
                     last_heard = Instant::now();
                     continue;
                 }
-                Poll::NoReply if last_heard.elapsed() < silence => {
+                Poll::NoReply(_) if last_heard.elapsed() < silence => {
                     note(bar, "twil: MissionStatus unanswered, still listening");
                     continue;
                 }
-                Poll::NoReply => bail!(went_silent(args, follower)),
+                Poll::NoReply(why) => bail!(
+                    "{}; the last poll: MissionStatus: {why}",
+                    went_silent(args, follower)
+                ),
             }
         }
         let mut deadline = (last_heard + silence).min(last_beat.max(last_heard) + POLL_AFTER);
@@ -511,14 +520,14 @@ pub(super) fn follow(
 }
 
 /// What [`recover_final_report`] learnt.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 enum Poll {
     /// The mission has ended: the follower has its final report.
     Finished,
     /// The device answered: the mission goes on (the link is alive, only quiet).
     Alive,
     /// No reply within the timeout: the caller's silence limit decides.
-    NoReply,
+    NoReply(String),
 }
 
 /// Ask `MissionStatus`; if the mission has ended, hand its report to `follower` as the final
@@ -538,6 +547,6 @@ fn recover_final_report(remote: &mut Remote, follower: &mut Follower) -> Poll {
             Poll::Finished
         }
         Ok(_) => Poll::Alive,
-        Err(_) => Poll::NoReply,
+        Err(e) => Poll::NoReply(format!("{e:#}")),
     }
 }

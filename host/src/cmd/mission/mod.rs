@@ -497,6 +497,86 @@ mod tests {
         );
     }
 
+    /// The final report of a mission that reached its goal.
+    fn reached_report() -> MissionReport {
+        MissionReport {
+            state: twil_core::link::RunState::Ended,
+            status: MissionStatus::Reached,
+            phase: MissionPhase::Done,
+            stats: Default::default(),
+            max_control_instructions: 0,
+            max_plan_instructions: 0,
+            max_turn_instructions: 0,
+            stack_high_water_bytes: 0,
+            stop_ticks: 0,
+            stop_latency_us: 0,
+            stop_cause: twil_core::failsafe::StopCause::None,
+            emergency_stop: false,
+        }
+    }
+
+    /// A device on a line that loses everything the host sends: it never answers, but its
+    /// telemetry (a phase every 50 ms) arrives, and after `until` the final report.
+    struct Deaf {
+        started: Instant,
+        until: Duration,
+        sent_final: bool,
+    }
+    impl std::io::Read for Deaf {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            if self.sent_final {
+                std::thread::sleep(Duration::from_millis(20));
+                return Err(std::io::ErrorKind::TimedOut.into());
+            }
+            std::thread::sleep(Duration::from_millis(50));
+            let t_ms = self.started.elapsed().as_millis() as u32;
+            let telemetry = if self.started.elapsed() >= self.until {
+                self.sent_final = true;
+                Telemetry::Finished(reached_report())
+            } else {
+                Telemetry::Phase {
+                    t_ms,
+                    phase: MissionPhase::Follow,
+                    status: MissionStatus::Running,
+                }
+            };
+            let mut out = [0u8; twil_core::link::MAX_FRAME_BYTES];
+            let frame = DeviceFrame::Telemetry(telemetry);
+            let bytes = twil_core::link::frame::encode(&frame, &mut out).unwrap();
+            let n = bytes.len().min(buf.len());
+            buf[..n].copy_from_slice(&bytes[..n]);
+            Ok(n)
+        }
+    }
+    impl std::io::Write for Deaf {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn telemetry_heard_while_a_poll_goes_unanswered_is_not_silence() {
+        // Seen in CI through a bad line: each heartbeat's `MissionStatus` went unanswered for
+        // the whole silence time while telemetry flowed, and the mission ended "went silent".
+        let args = args(&["--silence", "0.5"]);
+        let inputs = read_inputs(&args).unwrap();
+        let mut follower = Follower::new(&inputs, false).unwrap();
+        let until = Duration::from_millis(2500);
+        let mut remote = Remote::over(Deaf {
+            started: Instant::now(),
+            until,
+            sent_final: false,
+        });
+        follow(&args, &mut remote, &mut follower, &ProgressBar::hidden()).unwrap();
+        assert_eq!(
+            follower.finished.map(|r| r.status),
+            Some(MissionStatus::Reached)
+        );
+    }
+
     /// A device whose mission has ended and whose `Finished` telemetry was lost: it answers
     /// every request with its report.
     struct Ended(Vec<u8>);
@@ -508,20 +588,7 @@ mod tests {
                 let (got, r) = decoder.feed::<twil_core::link::RequestFrame>(rest);
                 rest = r;
                 if let Some(Ok(frame)) = got {
-                    let report = MissionReport {
-                        state: twil_core::link::RunState::Ended,
-                        status: MissionStatus::Reached,
-                        phase: MissionPhase::Done,
-                        stats: Default::default(),
-                        max_control_instructions: 0,
-                        max_plan_instructions: 0,
-                        max_turn_instructions: 0,
-                        stack_high_water_bytes: 0,
-                        stop_ticks: 0,
-                        stop_latency_us: 0,
-                        stop_cause: twil_core::failsafe::StopCause::None,
-                        emergency_stop: false,
-                    };
+                    let report = reached_report();
                     let mut out = [0u8; twil_core::link::MAX_FRAME_BYTES];
                     let reply = DeviceFrame::Reply {
                         seq: Some(frame.seq),
