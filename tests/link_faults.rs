@@ -155,11 +155,13 @@ fn nine_of_ten_plans_and_a_mission_complete_through_a_bad_line_to_the_firmware()
         .arg(common::world("corridor.par"))
         .args(["--planner", "astar", "--json", "--remote"])
         .arg(format!("tcp:{}", proxy.addr))
-        // QEMU (`sleep=off`) skips the idle time, so the device's clock runs several times
-        // faster than the host's: one resend after 500 ms of host time can be seconds of
-        // mission time, and the default 2 s link timeout would stop the mission ("link lost",
-        // seen in CI). On a board both clocks agree.
-        .args(["--link-timeout-ms", "10000"])
+        // QEMU (`sleep=off`) skips the idle time, so the device's clock runs faster than the
+        // host's, about 30 times here (this mission: some 1100 s of mission time in 38 s):
+        // one resend after 500 ms of host time can be seconds of mission time. 10 s of
+        // mission time was a third of a second of host time, and a loaded CI machine held the
+        // host up that long: "link lost" at mission time 1067 s (and the 2 s default before
+        // that). 60 s is some 2 s of host time. On a board both clocks agree.
+        .args(["--link-timeout-ms", "60000"])
         .arg("--out")
         .arg(dir.path())
         .output()
