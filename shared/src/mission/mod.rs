@@ -285,7 +285,6 @@ mod blind;
 mod config;
 mod corridor;
 mod device_shell;
-mod edge_chains;
 mod evidence;
 mod evidence_marking;
 mod local;
