@@ -205,5 +205,9 @@ fn ping_check_and_a_short_mission_over_a_pseudo_terminal() {
     let v: serde_json::Value = serde_json::from_str(mission.trim()).expect("one JSON line");
     assert_eq!(v["status"], "reached", "{v}");
     assert_eq!(v["stop_cause"], "reached", "{v}");
-    assert_eq!(v["controller_overruns"], 0, "{v}");
+    // No assertion on `controller_overruns` here: at `sleep=on` idle time passes as the host's
+    // wall time, so a host that holds QEMU up (the suite beside it on a 2-core CI machine:
+    // 1 overrun once, 2026-12-07) makes virtual time jump past a control period. The deadline
+    // is asserted where it is measured, at `sleep=off` (tests/firmware_qemu.rs).
+    assert!(v["controller_overruns"].is_u64(), "{v}");
 }
