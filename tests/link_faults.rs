@@ -162,17 +162,10 @@ fn nine_of_ten_plans_and_a_mission_complete_through_a_bad_line_to_the_firmware()
         // fresh-clone CI runs (and ended `link_lost` at 1 067 s in a third, before the longer
         // link timeout below); the cause is not found yet (see the closing notes). The test
         // is about the link: it keeps the shorter mission.
-        .args(["--evidence-map=false", "--incidence-limit", "70"])
-        .args([
-            "--sonar-noise",
-            "0",
-            "--sonar-dropout",
-            "0",
-            "--sonar-spurious",
-            "0",
-        ])
+        .arg("--evidence-map=false")
+        .args(common::earlier_ranger("70"))
         // QEMU (`sleep=off`) skips the idle time, so the device's clock runs faster than the
-        // host's, about 30 times here (this mission: some 1100 s of mission time in 38 s):
+        // host's, about 30 times under today's defaults (some 1100 s of mission time in 38 s):
         // one resend after 500 ms of host time can be seconds of mission time. 10 s of
         // mission time was a third of a second of host time, and a loaded CI machine held the
         // host up that long: "link lost" at mission time 1067 s (and the 2 s default before

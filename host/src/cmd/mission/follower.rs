@@ -425,7 +425,10 @@ pub(super) fn follow(
     // ahead of the host's: a heartbeat is also due when the mission time of its telemetry
     // has advanced by a period.
     let mut last_beat_mission_ms = 0u32;
-    let mut last_heard = Instant::now();
+    // The device was last heard when the link last read a frame from it, whole or damaged,
+    // whoever read it (telemetry read while a poll waits for its reply counts).
+    let started = Instant::now();
+    let heard = |remote: &Remote| remote.last_frame_at().map_or(started, |at| at.max(started));
     let mut fault_notes = super::link::FaultNotes::from_env();
     loop {
         for t in std::mem::take(&mut remote.telemetry) {
@@ -457,23 +460,13 @@ pub(super) fn follow(
             last_beat.elapsed() >= period
                 || u128::from(mission_ms.saturating_sub(last_beat_mission_ms)) >= period.as_millis()
         });
-        let quiet = last_heard.elapsed() >= POLL_AFTER && last_beat.elapsed() >= POLL_AFTER;
+        let quiet = heard(remote).elapsed() >= POLL_AFTER && last_beat.elapsed() >= POLL_AFTER;
         if beat_due || quiet {
             last_beat = Instant::now();
             last_beat_mission_ms = mission_ms;
-            let poll = recover_final_report(remote, follower);
-            // Frames read while waiting for the reply count: the device is talking, only
-            // not answering yet (a reply lost on a bad line is sent again).
-            if let Some(at) = remote.last_frame_at() {
-                last_heard = last_heard.max(at);
-            }
-            match poll {
-                Poll::Finished => continue,
-                Poll::Alive => {
-                    last_heard = Instant::now();
-                    continue;
-                }
-                Poll::NoReply(_) if last_heard.elapsed() < silence => {
+            match recover_final_report(remote, follower) {
+                Poll::Finished | Poll::Alive => continue,
+                Poll::NoReply(_) if heard(remote).elapsed() < silence => {
                     note(bar, "twil: MissionStatus unanswered, still listening");
                     continue;
                 }
@@ -483,17 +476,15 @@ pub(super) fn follow(
                 ),
             }
         }
+        let last_heard = heard(remote);
         let mut deadline = (last_heard + silence).min(last_beat.max(last_heard) + POLL_AFTER);
         if let Some(period) = heartbeat {
             deadline = deadline.min(last_beat + period);
         }
         let frame = match remote.next_frame(deadline) {
-            Ok(frame) => {
-                last_heard = Instant::now();
-                frame
-            }
+            Ok(frame) => frame,
             // The wait ended for a heartbeat or a poll, not for the silence: go round.
-            Err(_) if Instant::now() >= deadline && last_heard.elapsed() < silence => continue,
+            Err(_) if Instant::now() >= deadline && heard(remote).elapsed() < silence => continue,
             Err(e) if Instant::now() >= deadline => {
                 return Err(e).with_context(|| went_silent(args, follower));
             }

@@ -497,11 +497,12 @@ mod tests {
         );
     }
 
-    /// The final report of a mission that reached its goal.
-    fn reached_report() -> MissionReport {
+    /// The final report of a mission that ended with `status` and `cause` (every count zero);
+    /// `report`'s tests build their outcomes on it too.
+    pub(super) fn ended_report(status: MissionStatus, cause: StopCause) -> MissionReport {
         MissionReport {
             state: twil_core::link::RunState::Ended,
-            status: MissionStatus::Reached,
+            status,
             phase: MissionPhase::Done,
             stats: Default::default(),
             max_control_instructions: 0,
@@ -510,9 +511,14 @@ mod tests {
             stack_high_water_bytes: 0,
             stop_ticks: 0,
             stop_latency_us: 0,
-            stop_cause: twil_core::failsafe::StopCause::None,
+            stop_cause: cause,
             emergency_stop: false,
         }
+    }
+
+    /// The final report of a mission that reached its goal.
+    fn reached_report() -> MissionReport {
+        ended_report(MissionStatus::Reached, StopCause::None)
     }
 
     /// A device on a line that loses everything the host sends: it never answers, but its

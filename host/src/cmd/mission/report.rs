@@ -254,24 +254,10 @@ pub(super) fn write_outputs(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use twil_core::link::RunState;
 
     fn outcome(status: MissionStatus, cause: StopCause, min_clearance_m: Option<f32>) -> Outcome {
         Outcome {
-            report: MissionReport {
-                state: RunState::Ended,
-                status,
-                phase: MissionPhase::Done,
-                stats: Default::default(),
-                max_control_instructions: 0,
-                max_plan_instructions: 0,
-                max_turn_instructions: 0,
-                stack_high_water_bytes: 0,
-                stop_ticks: 0,
-                stop_latency_us: 0,
-                stop_cause: cause,
-                emergency_stop: false,
-            },
+            report: super::super::tests::ended_report(status, cause),
             info: DeviceInfo::for_build(Build::Host),
             distance_m: 1.0,
             min_clearance_m,
