@@ -118,7 +118,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
     }
 
     /// Has a reflector of this sweep already fallen on `cell`?
-    fn seen_this_sweep(&self, cell: Option<(i32, i32)>) -> bool {
+    pub(super) fn seen_this_sweep(&self, cell: Option<(i32, i32)>) -> bool {
         let g = self.grid.geometry();
         self.hits.iter().any(|q| g.cell_xy_on_map(*q) == cell)
     }

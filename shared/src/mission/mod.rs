@@ -285,6 +285,7 @@ mod blind;
 mod config;
 mod corridor;
 mod device_shell;
+mod edge_chains;
 mod evidence;
 mod evidence_marking;
 mod local;

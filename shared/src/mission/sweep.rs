@@ -204,6 +204,9 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         let hits = if self.config.evidence_map {
             let hits = self.mark_reflectors();
             if !sweep.moving {
+                self.mark_edge_chains();
+            }
+            if !sweep.moving {
                 self.blind_cells = self.find_blind_cells(self.pose_world());
                 self.mark_vouched_free(sweep.full);
             }

@@ -88,7 +88,7 @@ fn step(mission: &mut Mission300, pilot: &mut Pilot, input: MissionInput) -> Mis
     out
 }
 
-fn geometry() -> GridGeometry {
+pub(super) fn geometry() -> GridGeometry {
     GridGeometry::from_size_m(8.0, 8.0, 0.05).unwrap()
 }
 
@@ -831,7 +831,7 @@ fn a_gap_visit_that_took_no_mark_back_closes_the_gap_until_no_other_gap_is_left(
 }
 
 /// Stop mode with the evidence map and a beam sonar, from (1, 4) to (7, 4).
-fn beam_evidence_config() -> MissionConfig {
+pub(super) fn beam_evidence_config() -> MissionConfig {
     let mut c = MissionConfig {
         evidence_map: true,
         ..config(
@@ -894,7 +894,11 @@ fn a_reflectors_run_survives_a_missed_and_a_spurious_echo_and_a_lone_echo_marks_
 
 /// A standing sweep of 45 readings (−39.6° to +39.6° in 1.8° steps) from (1, `y_m`) facing
 /// east, each reading's range from its bearing; returns the reflectors marked.
-fn sweep_east_from(m: &mut Mission400, y_m: f32, range_at: impl Fn(f32) -> Option<f32>) -> u16 {
+pub(super) fn sweep_east_from(
+    m: &mut Mission400,
+    y_m: f32,
+    range_at: impl Fn(f32) -> Option<f32>,
+) -> u16 {
     let pose = Pose {
         x_m: 1.0,
         y_m,
