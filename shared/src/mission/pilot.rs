@@ -27,7 +27,8 @@ pub enum PilotCommand {
     /// Follow [`super::Mission::prefix`] from the next tick on (the shell hands the points
     /// to [`Pilot::follow`]).
     Follow,
-    /// Stop supplying points: the controller holds the last reference.
+    /// Stop supplying points: the controller holds the control point's place on the path
+    /// (the last reference without its feed-forward lead).
     Hold,
     /// The mission ended: zero volts on both motors from now on.
     Stop,
@@ -68,6 +69,9 @@ pub struct Pilot {
     frame: FrameTransform,
     /// Controller reference (control point), odometry frame.
     reference: PointM,
+    /// The control point's place on the path at the last tick (the reference without the
+    /// feed-forward lead), odometry frame: where [`Pilot::hold`] stops it.
+    on_path: PointM,
     pose_odom: Pose,
     voltages_v: (f32, f32),
     /// The supplier is handing out points (following or settling).
@@ -95,6 +99,10 @@ impl Pilot {
             x_m: RobotConfig::DEFAULT.point_offset_m,
             y_m: 0.0,
         },
+        on_path: PointM {
+            x_m: RobotConfig::DEFAULT.point_offset_m,
+            y_m: 0.0,
+        },
         pose_odom: Pose {
             x_m: 0.0,
             y_m: 0.0,
@@ -115,6 +123,7 @@ impl Pilot {
             controller: Controller::new(&config.robot, Pose::default()),
             frame: FrameTransform::new(config.start, config.initial_heading_rad),
             reference: PointM::new(config.robot.point_offset_m, 0.0),
+            on_path: PointM::new(config.robot.point_offset_m, 0.0),
             pose_odom: Pose::default(),
             voltages_v: (0.0, 0.0),
             supplying: false,
@@ -132,6 +141,7 @@ impl Pilot {
         self.controller = Controller::new(&config.robot, Pose::default());
         self.frame = FrameTransform::new(config.start, config.initial_heading_rad);
         self.reference = PointM::new(config.robot.point_offset_m, 0.0);
+        self.on_path = self.reference;
         self.pose_odom = Pose::default();
         self.voltages_v = (0.0, 0.0);
         self.supplying = false;
@@ -166,9 +176,10 @@ impl Pilot {
             } else {
                 0.0
             };
+            self.on_path = PointM::new(supply.point.x_m + d * c, supply.point.y_m + d * s);
             self.reference = PointM::new(
-                supply.point.x_m + d * c + tau * vx,
-                supply.point.y_m + d * s + tau * vy,
+                self.on_path.x_m + tau * vx,
+                self.on_path.y_m + tau * vy,
             );
             event = supply.event;
         }
@@ -226,10 +237,16 @@ impl Pilot {
         }
     }
 
-    /// Stop supplying points; the controller holds the last reference.
+    /// Stop supplying points; the controller holds the control point's place on the path.
+    ///
+    /// Not the last reference itself: while moving it leads the path by the feed-forward
+    /// `τ·v` (0.36 m at 0.36 m/s), past the end of a prefix cut short (a standing sweep begun
+    /// mid-pass), into space no sweep vouched for. The robot then stopped up to that far
+    /// beyond where it was told to.
     pub fn hold(&mut self) {
         self.supplier.stop();
         self.supplying = false;
+        self.reference = self.on_path;
     }
 
     /// Zero volts on both motors, now and at every later tick.
@@ -303,5 +320,68 @@ pub(super) fn pose_to_world(frame: &FrameTransform, pose_odom: Pose) -> Pose {
         x_m: p.x_m,
         y_m: p.y_m,
         heading_rad: frame.heading_odom_to_world(pose_odom.heading_rad),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::Params;
+    use crate::plant::Plant;
+
+    /// Follow a straight 3 m prefix east at `speed_m_s`, hold after `hold_after_s`, and let
+    /// the robot come to rest: where the held path point was, and where the robot stopped
+    /// (world metres).
+    fn hold_mid_pass(speed_m_s: f32, hold_after_s: f32) -> (PointM, PointM) {
+        let params = Params {
+            robot_radius_m: 0.4,
+            speed_m_s,
+            initial_heading_deg: 0.0,
+            start: PointM::new(1.0, 1.0),
+            goal: PointM::new(4.0, 1.0),
+        };
+        let config = MissionConfig::from_params(&params, RobotConfig::default());
+        assert!(config.reference_feed_forward);
+        let mut pilot = Pilot::new(&config);
+        let mut plant = Plant::new(&config.robot, Pose::new(1.0, 1.0, 0.0));
+        pilot
+            .command(
+                PilotCommand::Follow,
+                &[PointM::new(1.0, 1.0), PointM::new(4.0, 1.0)],
+            )
+            .unwrap();
+        let period_s = config.robot.controller_period_s;
+        let mut previous = plant.encoder_counts();
+        let mut held_at = None;
+        for n in 0..((hold_after_s + 10.0) / period_s) as u32 {
+            if held_at.is_none() && n as f32 * period_s >= hold_after_s {
+                held_at = Some(pilot.frame.odom_to_world(pilot.supplier.current_point_odom()));
+                pilot.command(PilotCommand::Hold, &[]).unwrap();
+            }
+            let counts = plant.encoder_counts();
+            pilot.tick(counts.0 - previous.0, counts.1 - previous.1, period_s);
+            previous = counts;
+            let (left_v, right_v) = pilot.voltages_v();
+            plant.step(period_s, left_v, right_v);
+        }
+        let p = plant.pose();
+        (held_at.unwrap(), PointM::new(p.x_m, p.y_m))
+    }
+
+    #[test]
+    fn a_hold_mid_pass_stops_at_the_path_point_not_at_the_feed_forward_lead() {
+        // At the safe-speed bound of the default robot (0.3645 m/s) the feed-forward lead is
+        // τ·v = 0.36 m: holding the last reference itself stopped the robot that far past
+        // the held point (0.36 m on the enclosed world, into a wall no sweep had vouched for).
+        for speed_m_s in [0.2, 0.3645] {
+            let (held, stopped) = hold_mid_pass(speed_m_s, 4.0);
+            let past_m = stopped.x_m - held.x_m;
+            assert!(
+                past_m < 0.05,
+                "{speed_m_s} m/s: stopped {past_m:.3} m past the held point {held:?}"
+            );
+            assert!(past_m > -0.2, "{speed_m_s} m/s: stopped short by {past_m:.3} m");
+            assert!((stopped.y_m - 1.0).abs() < 0.02, "{stopped:?}");
+        }
     }
 }
