@@ -161,7 +161,7 @@ fn wall_part(chain: &[EdgePoint], toward: Toward, min_sin_incidence: f32) -> Opt
 }
 
 /// The cells this sweep's chains have stepped.
-type ChainCells = Vec<(i32, i32), MAX_CHAIN_CELLS_PER_SWEEP>;
+type ChainCells = Vec<(u16, u16), MAX_CHAIN_CELLS_PER_SWEEP>;
 
 impl<const W: usize, const E: usize> Mission<W, E> {
     /// Mark the walls heard at their cone edges in this standing sweep (see the module docs);
@@ -323,9 +323,14 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 }
                 // One viewpoint, one step: not where a reflector or another chain of this
                 // sweep stepped already.
-                if !stepped.contains(&(x, y))
+                // Cells off the map (negative) take no evidence.
+                let (Ok(kx), Ok(ky)) = (u16::try_from(x), u16::try_from(y)) else {
+                    continue;
+                };
+                let key = (kx, ky);
+                if !stepped.contains(&key)
                     && !self.seen_this_sweep(Some((x, y)))
-                    && stepped.push((x, y)).is_ok()
+                    && stepped.push(key).is_ok()
                 {
                     self.evidence.observe_occupied_xy(x, y);
                 }

@@ -20,6 +20,8 @@
 //! - **Only a region of constant depth confirms**: a run at least the beam's half-angle wide
 //!   and level within a cell. A shorter or sloping run (an oblique wall's arc) marks its
 //!   reflector tentative and never confirms it: its echo came from somewhere on the arc.
+//!   (A wall heard at its cone edges, `edge_chains`, says where on the arc: its cells are
+//!   stepped once per sweep and confirmed by a second one.)
 //! - **A run of constant depth** (Leonard & Durrant-Whyte 1991) has its reflectors at its
 //!   mean depth, not the whole arc: one at the middle bearing of a run 2β wide (for a plane
 //!   the foot of the perpendicular, for a corner the corner), β inside an end whose neighbour
