@@ -165,6 +165,57 @@ impl<T: Read> Read for FaultyIo<T> {
     }
 }
 
+/// What one forwarding thread of a [`FaultProxy`] is doing, and what it has moved: when a
+/// test through the proxy fails, [`FaultProxy::report`] tells a silent device from a stuck or
+/// ended thread.
+#[derive(Default, Debug)]
+pub struct Traffic {
+    /// Bytes read from the source.
+    bytes: AtomicU64,
+    /// Milliseconds from the proxy's start to the last read that brought bytes.
+    last_ms: AtomicU64,
+    /// One of [`Traffic::STATES`].
+    state: AtomicU64,
+}
+
+impl Traffic {
+    const STATES: [&'static str; 6] = [
+        "reading",
+        "stalling (a delay fault)",
+        "writing",
+        "ended: the source closed",
+        "ended: a read failed",
+        "ended: a write failed",
+    ];
+    const READING: u64 = 0;
+    const STALLING: u64 = 1;
+    const WRITING: u64 = 2;
+    const SOURCE_CLOSED: u64 = 3;
+    const READ_FAILED: u64 = 4;
+    const WRITE_FAILED: u64 = 5;
+
+    fn set(&self, state: u64) {
+        self.state.store(state, Ordering::Relaxed);
+    }
+
+    fn read(&self, n: usize, since: std::time::Instant) {
+        self.bytes.fetch_add(n as u64, Ordering::Relaxed);
+        self.last_ms
+            .store(since.elapsed().as_millis() as u64, Ordering::Relaxed);
+    }
+
+    fn describe(&self, since: std::time::Instant) -> String {
+        let state = self.state.load(Ordering::Relaxed) as usize;
+        let idle_ms = (since.elapsed().as_millis() as u64)
+            .saturating_sub(self.last_ms.load(Ordering::Relaxed));
+        format!(
+            "{} bytes, last read {idle_ms} ms ago, {}",
+            self.bytes.load(Ordering::Relaxed),
+            Self::STATES.get(state).unwrap_or(&"?")
+        )
+    }
+}
+
 /// A TCP proxy on 127.0.0.1 in front of `device`, damaging bytes both ways. Host connections
 /// are served one at a time, in turn; the device's stream stays open between them.
 pub struct FaultProxy {
@@ -172,6 +223,9 @@ pub struct FaultProxy {
     pub addr: String,
     pub counts: Arc<Counts>,
     stop: Arc<AtomicBool>,
+    started: std::time::Instant,
+    down: Arc<Traffic>,
+    up: Arc<Traffic>,
 }
 
 impl FaultProxy {
@@ -181,21 +235,28 @@ impl FaultProxy {
         let counts = Arc::new(Counts::default());
         let stop = Arc::new(AtomicBool::new(false));
         let host: Arc<Mutex<Option<TcpStream>>> = Arc::new(Mutex::new(None));
+        let started = std::time::Instant::now();
+        let (down, up) = (Arc::new(Traffic::default()), Arc::new(Traffic::default()));
         device.set_read_timeout(Some(Duration::from_millis(50)))?;
         // Device -> host.
         {
             let mut device = device.try_clone()?;
             let host = host.clone();
             let stop = stop.clone();
+            let traffic = down.clone();
             let mut line = Line::new(faults, 2, counts.clone());
             std::thread::spawn(move || {
                 let mut buf = [0u8; 256];
                 while !stop.load(Ordering::Relaxed) {
+                    traffic.set(Traffic::READING);
                     match device.read(&mut buf) {
-                        Ok(0) => return,
+                        Ok(0) => return traffic.set(Traffic::SOURCE_CLOSED),
                         Ok(n) => {
+                            traffic.read(n, started);
                             let (out, stall) = line.pass(&buf[..n]);
+                            traffic.set(Traffic::STALLING);
                             std::thread::sleep(stall);
+                            traffic.set(Traffic::WRITING);
                             if let Some(h) = host.lock().unwrap().as_mut() {
                                 let _ = h.write_all(&out);
                             }
@@ -205,7 +266,7 @@ impl FaultProxy {
                                 e.kind(),
                                 std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
                             ) => {}
-                        Err(_) => return,
+                        Err(_) => return traffic.set(Traffic::READ_FAILED),
                     }
                 }
             });
@@ -213,6 +274,7 @@ impl FaultProxy {
         // Host connections, in turn -> device.
         {
             let stop = stop.clone();
+            let traffic = up.clone();
             let mut line = Line::new(faults, 1, counts.clone());
             let mut device = device;
             std::thread::spawn(move || {
@@ -228,13 +290,17 @@ impl FaultProxy {
                     *host.lock().unwrap() = Some(writer);
                     let mut buf = [0u8; 256];
                     loop {
+                        traffic.set(Traffic::READING);
                         match conn.read(&mut buf) {
                             Ok(0) | Err(_) => break,
                             Ok(n) => {
+                                traffic.read(n, started);
                                 let (out, stall) = line.pass(&buf[..n]);
+                                traffic.set(Traffic::STALLING);
                                 std::thread::sleep(stall);
+                                traffic.set(Traffic::WRITING);
                                 if device.write_all(&out).is_err() {
-                                    return;
+                                    return traffic.set(Traffic::WRITE_FAILED);
                                 }
                             }
                         }
@@ -243,7 +309,23 @@ impl FaultProxy {
                 }
             });
         }
-        Ok(Self { addr, counts, stop })
+        Ok(Self {
+            addr,
+            counts,
+            stop,
+            started,
+            down,
+            up,
+        })
+    }
+
+    /// Each direction's traffic and what its thread is doing now, for a failure's message.
+    pub fn report(&self) -> String {
+        format!(
+            "proxy: device -> host {}; host -> device {}",
+            self.down.describe(self.started),
+            self.up.describe(self.started)
+        )
     }
 
     /// Share of the bytes damaged so far.

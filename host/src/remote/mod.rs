@@ -615,17 +615,33 @@ impl Qemu {
         Self::start_paced(elf, 0)
     }
 
-    /// [`Qemu::start`] at `-icount shift=SHIFT` (one instruction per 2^SHIFT ns).
+    /// [`Qemu::start`] at `-icount shift=SHIFT` (one instruction per 2^SHIFT ns); the log is
+    /// kept in `$TWIL_QEMU_LOG` if set.
     pub fn start_paced(elf: &Path, shift: u8) -> Result<(Qemu, TcpStream)> {
+        let log = std::env::var_os("TWIL_QEMU_LOG").map(PathBuf::from);
+        Self::start_logged(elf, shift, log.as_deref())
+    }
+
+    /// [`Qemu::start_paced`] with the firmware's log (semihosting, defmt frames: `cargo xtask
+    /// defmt-log FILE`) kept in `log`, and QEMU's own messages in `log` + `.stderr` (a fatal
+    /// one, such as a core lockup, would otherwise be lost: nothing reads that pipe once QEMU
+    /// has connected).
+    pub fn start_logged(elf: &Path, shift: u8, log: Option<&Path>) -> Result<(Qemu, TcpStream)> {
         let listener =
             TcpListener::bind("127.0.0.1:0").context("cannot listen on a local TCP port")?;
         let port = listener.local_addr()?.port();
-        let log = match std::env::var_os("TWIL_QEMU_LOG") {
-            Some(path) => Stdio::from(
-                std::fs::File::create(&path)
-                    .with_context(|| format!("cannot create {}", Path::new(&path).display()))?,
-            ),
-            None => Stdio::null(),
+        let create = |path: &Path| {
+            std::fs::File::create(path)
+                .map(Stdio::from)
+                .with_context(|| format!("cannot create {}", path.display()))
+        };
+        let (stdout, stderr) = match log {
+            Some(path) => {
+                let mut errors = path.as_os_str().to_owned();
+                errors.push(".stderr");
+                (create(path)?, create(Path::new(&errors))?)
+            }
+            None => (Stdio::null(), Stdio::piped()),
         };
         let child = Command::new("qemu-system-arm")
             .args(crate::qemu_cmd::qemu_args_paced(
@@ -634,8 +650,8 @@ impl Qemu {
                 shift,
             ))
             .stdin(Stdio::null())
-            .stdout(log)
-            .stderr(Stdio::piped())
+            .stdout(stdout)
+            .stderr(stderr)
             .spawn()
             .map_err(|e| {
                 if e.kind() == std::io::ErrorKind::NotFound {
@@ -670,6 +686,13 @@ impl Qemu {
         };
         stream.set_nonblocking(false)?;
         Ok((qemu, stream))
+    }
+}
+
+impl Qemu {
+    /// QEMU's exit status if it has exited (`None`: still running).
+    pub fn exited(&mut self) -> Option<std::process::ExitStatus> {
+        self.child.try_wait().ok().flatten()
     }
 }
 
