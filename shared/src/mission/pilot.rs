@@ -177,10 +177,7 @@ impl Pilot {
                 0.0
             };
             self.on_path = PointM::new(supply.point.x_m + d * c, supply.point.y_m + d * s);
-            self.reference = PointM::new(
-                self.on_path.x_m + tau * vx,
-                self.on_path.y_m + tau * vy,
-            );
+            self.reference = PointM::new(self.on_path.x_m + tau * vx, self.on_path.y_m + tau * vy);
             event = supply.event;
         }
         let before = self.pose_odom;
@@ -326,8 +323,8 @@ pub(super) fn pose_to_world(frame: &FrameTransform, pose_odom: Pose) -> Pose {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::world::Params;
     use crate::plant::Plant;
+    use crate::world::Params;
 
     /// Follow a straight 3 m prefix east at `speed_m_s`, hold after `hold_after_s`, and let
     /// the robot come to rest: where the held path point was, and where the robot stopped
@@ -355,7 +352,11 @@ mod tests {
         let mut held_at = None;
         for n in 0..((hold_after_s + 10.0) / period_s) as u32 {
             if held_at.is_none() && n as f32 * period_s >= hold_after_s {
-                held_at = Some(pilot.frame.odom_to_world(pilot.supplier.current_point_odom()));
+                held_at = Some(
+                    pilot
+                        .frame
+                        .odom_to_world(pilot.supplier.current_point_odom()),
+                );
                 pilot.command(PilotCommand::Hold, &[]).unwrap();
             }
             let counts = plant.encoder_counts();
@@ -380,7 +381,10 @@ mod tests {
                 past_m < 0.05,
                 "{speed_m_s} m/s: stopped {past_m:.3} m past the held point {held:?}"
             );
-            assert!(past_m > -0.2, "{speed_m_s} m/s: stopped short by {past_m:.3} m");
+            assert!(
+                past_m > -0.2,
+                "{speed_m_s} m/s: stopped short by {past_m:.3} m"
+            );
             assert!((stopped.y_m - 1.0).abs() < 0.02, "{stopped:?}");
         }
     }
