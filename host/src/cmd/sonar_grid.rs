@@ -266,8 +266,11 @@ fn run_mission(words: &[String], reachable: bool) -> Result<Outcome> {
         .map_err(|e| anyhow::anyhow!("{}", e.to_string().trim()))?;
     let setup = simulate::setup_from_args(&cli.args)?;
     let result = sim::run(&setup, &mut NoProgress)?;
-    let status = result.status.name().to_string();
-    // `gave_up` is a stop cause (an `unreachable` without a proof), not a status.
+    // The word `twil simulate --json` prints (`gave_up` for an `unreachable` without a proof),
+    // so that a kept failure's status is what its command prints when run again.
+    let status = simulate::mission_end(&cli.args, &setup, &result)
+        .word()
+        .to_string();
     let cause = simulate::stop_cause(&result);
     let class = if result.min_clearance_m < 0.0 || status == "collision" {
         Class::Collision

@@ -228,7 +228,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         } else {
             reach_m
         };
-        let near_m = robot.sonar_min_range_m + 2.0 * res_m;
+        // Nearest stand-off: the sonar, ahead of the centre by its offset when it faces the gap,
+        // out of its blind zone from the gap (nearer, the visit's sweep cannot hear the marks
+        // it came to settle, and a visit from where the robot stands sweeps again what it swept).
+        let near_m = robot.sonar_min_range_m + robot.sonar_offset_m.max(0.0) + 2.0 * res_m;
         let stand_off_m = fits_m.clamp(near_m, reach_m.max(near_m));
         // The body stops up to the planning radius's margin over its own radius off the path
         // (the pilot's tracking error): keep that margin clear around the stand-off point too.
