@@ -228,10 +228,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         } else {
             reach_m
         };
-        // Nearest stand-off: the sonar, ahead of the centre by its offset when it faces the gap,
-        // out of its blind zone from the gap (nearer, the visit's sweep cannot hear the marks
-        // it came to settle, and a visit from where the robot stands sweeps again what it swept).
-        let near_m = robot.sonar_min_range_m + robot.sonar_offset_m.max(0.0) + 2.0 * res_m;
+        let near_m = nearest_stand_off_m(&robot, res_m);
         let stand_off_m = fits_m.clamp(near_m, reach_m.max(near_m));
         // The body stops up to the planning radius's margin over its own radius off the path
         // (the pilot's tracking error): keep that margin clear around the stand-off point too.
@@ -297,6 +294,14 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         push(out, MissionEvent::FullSweepRequested);
         self.begin_standing_sweep(true, out);
     }
+}
+
+/// The nearest a visit stands from its gap's middle, centre to middle, metres: the sonar,
+/// ahead of the centre by its offset when it faces the gap, out of its blind zone from the
+/// gap by two cells. Nearer, the visit's sweep cannot hear the marks it came to settle, and a
+/// visit from where the robot stands sweeps again what it swept.
+fn nearest_stand_off_m(robot: &crate::robot::RobotConfig, res_m: f32) -> f32 {
+    robot.sonar_min_range_m + robot.sonar_offset_m.max(0.0) + 2.0 * res_m
 }
 
 /// The first and the last blocked cell of a stretch of a path (`x`, `y`).
@@ -481,6 +486,27 @@ mod tests {
         // A clear path has no gap.
         let clear = [PointM::new(0.5, 0.5), PointM::new(4.5, 0.5)];
         assert!(first_blocked_stretch(&g, &clear).is_none());
+    }
+
+    #[test]
+    fn the_nearest_stand_off_keeps_the_sonar_out_of_its_blind_zone_from_the_gap() {
+        // The office mission that gave up 0.5 m from its goal: a lone mark beside the goal, the
+        // robot already standing at the nearest clear point of the line through it. The
+        // visit's point must put the sonar, facing the gap, beyond its minimum range.
+        let robot = crate::robot::RobotConfig::DEFAULT;
+        let g = wall_with_marks_across_a_doorway();
+        let (gap, dir) = (PointM::new(2.525, 2.525), PointM::new(0.0, 1.0));
+        let near_m = nearest_stand_off_m(&robot, 0.05);
+        let s = stand_off_point(&g, (gap, dir), (near_m, 1.7), 0, None).expect("free");
+        let sonar_y_m = s.y_m + robot.sonar_offset_m;
+        assert!(
+            gap.y_m - sonar_y_m >= robot.sonar_min_range_m + 0.05,
+            "sonar {sonar_y_m:.3} m, gap {:.3} m",
+            gap.y_m
+        );
+        // The sonar's minimum range alone (the rule before) left it 0.16 m from the gap.
+        let old = stand_off_point(&g, (gap, dir), (0.36, 1.7), 0, None).expect("free");
+        assert!(gap.y_m - (old.y_m + robot.sonar_offset_m) < robot.sonar_min_range_m);
     }
 
     #[test]
