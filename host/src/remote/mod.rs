@@ -687,9 +687,7 @@ impl Qemu {
         stream.set_nonblocking(false)?;
         Ok((qemu, stream))
     }
-}
 
-impl Qemu {
     /// QEMU's exit status if it has exited (`None`: still running).
     pub fn exited(&mut self) -> Option<std::process::ExitStatus> {
         self.child.try_wait().ok().flatten()
