@@ -332,7 +332,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     && !self.seen_this_sweep(Some((x, y)))
                     && stepped.push(key).is_ok()
                 {
-                    self.evidence.observe_occupied_xy(x, y);
+                    self.step_occupied(x, y);
                 }
             }
             if !self.seen_this_sweep(Some(cell)) {
@@ -402,11 +402,17 @@ mod tests {
                 assert_ne!(m.evidence.get(at), CellEvidence::Free, "{at:?}");
             }
         }
-        let point = PointM::new(wall_m, 3.3);
+        let point = PointM::new(wall_m, 3.45);
         assert_eq!(m.evidence.get(point), CellEvidence::Tentative);
-        // From 0.2 m further along, a second viewpoint hears the same stretch: confirmed.
-        sweep_east_from(&mut m, 3.1, |b| {
-            heard_m(sonar(3.1), wall_m, beam_rad, (0.0, 0.0), b)
+        // The same sweep again from the same place is no second viewpoint: nothing confirmed.
+        sweep_east_from(&mut m, 3.0, |b| {
+            heard_m(sonar(3.0), wall_m, beam_rad, (0.0, 0.0), b)
+        });
+        m.mark_edge_chains();
+        assert_eq!(m.evidence.get(point), CellEvidence::Tentative);
+        // From 0.25 m further along, a second viewpoint hears the same stretch: confirmed.
+        sweep_east_from(&mut m, 3.25, |b| {
+            heard_m(sonar(3.25), wall_m, beam_rad, (0.0, 0.0), b)
         });
         m.mark_edge_chains();
         assert_eq!(m.evidence.get(point), CellEvidence::Confirmed);

@@ -51,6 +51,12 @@ use super::evidence::{CellEvidence, Change, EvidenceMap};
 use super::planes::{remember, PlaneSeen};
 use super::reflector::{reflector_bearings, RunEnd, RunSide};
 use super::swept::{reading_shift_m, BlindCells, Swept};
+
+/// Sweeps whose sonar positions are remembered for [`Mission::note_viewpoint`] (64 B).
+pub const VIEWPOINT_MEMORY: usize = 8;
+
+/// The sonar positions of the last [`VIEWPOINT_MEMORY`] sweeps that marked, oldest first.
+pub(super) type Viewpoints = heapless::Deque<PointM, VIEWPOINT_MEMORY>;
 use super::Mission;
 
 /// Take-backs redrawn in the grid per sweep; more are kept marked in the grid (the safe side)
@@ -119,6 +125,44 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         }
     }
 
+    /// Note where this sweep's sonar stood (its first reading's pose) and whether an earlier
+    /// sweep of the last [`VIEWPOINT_MEMORY`] stood within
+    /// [`MIN_VIEWPOINT_APART_M`](super::planes::MIN_VIEWPOINT_APART_M) of it: then its
+    /// reflectors step no tentative mark up to confirmed. Two sweeps from one place hear the
+    /// same ghost in the same cell (the beam's geometry is deterministic), so they are one
+    /// viewpoint, not two: a moving sweep ending where the full standing sweep then stood
+    /// confirmed a ghost in the middle of a 1.5 m doorway, and the goal beyond it was
+    /// reported `unreachable` (`twil sonar-grid --worlds 8 --world-seed 4`, world 4, 25°/25°,
+    /// 3 m, continuous, with 30 gap visits).
+    fn note_viewpoint(&mut self) {
+        let offset_m = self.config.robot.sonar_offset_m;
+        let Some(sonar) = self
+            .readings
+            .as_slice()
+            .first()
+            .map(|r| r.pose.point_ahead(offset_m))
+        else {
+            self.repeated_viewpoint = false;
+            return;
+        };
+        self.repeated_viewpoint = self.viewpoints.iter().any(|p| {
+            hypot(p.x_m - sonar.x_m, p.y_m - sonar.y_m) < super::planes::MIN_VIEWPOINT_APART_M
+        });
+        if self.viewpoints.is_full() {
+            let _ = self.viewpoints.pop_front();
+        }
+        // Room was made just above.
+        let _ = self.viewpoints.push_back(sonar);
+    }
+
+    /// One evidence step of a reflector on (`x`, `y`): a mark from a viewpoint met before
+    /// (`note_viewpoint`) is made but never confirmed.
+    pub(super) fn step_occupied(&mut self, x: i32, y: i32) {
+        if !(self.repeated_viewpoint && self.evidence.get_xy(x, y) == CellEvidence::Tentative) {
+            self.evidence.observe_occupied_xy(x, y);
+        }
+    }
+
     /// Has a reflector of this sweep already fallen on `cell`?
     pub(super) fn seen_this_sweep(&self, cell: Option<(i32, i32)>) -> bool {
         let g = self.grid.geometry();
@@ -159,6 +203,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         let g = *self.grid.geometry();
         let e = self.expansion_cells;
         let robot = self.config.robot;
+        self.note_viewpoint();
         // Neighbours of one run agree to half a cell (the seed's 1 cm is finer than a cell,
         // and noise splits runs that one reflector made).
         let tolerance_m = robot.rcd_depth_tolerance_m.max(0.5 * g.resolution_m());
@@ -337,7 +382,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     observe_reflector(
                         &mut self.evidence,
                         xy,
-                        true,
+                        (true, !self.repeated_viewpoint),
                         constant_depth,
                         on_a_known_plane,
                     );
@@ -351,7 +396,8 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 if let Some(xy) = cell {
                     // One sweep, one step (above), unless a second viewpoint agrees.
                     let first_look = !self.seen_this_sweep(cell);
-                    observe_reflector(&mut self.evidence, xy, first_look, true, on_a_known_plane);
+                    let look = (first_look, !self.repeated_viewpoint);
+                    observe_reflector(&mut self.evidence, xy, look, true, on_a_known_plane);
                     mark_point_m(&mut self.grid, p, e);
                     let _ = self.hits.push(p);
                 }
@@ -532,17 +578,18 @@ pub(super) fn centre(g: &crate::grid::GridGeometry, x: i32, y: i32) -> PointM {
 }
 
 /// A reflector's evidence on its cell: on the sweep's first look at the cell one step
-/// (occupied for a region of constant depth, an arc's mark otherwise), and a second step for a
-/// region of constant depth on a plane that another viewpoint heard (`planes`).
+/// (occupied for a region of constant depth, an arc's mark otherwise; up to confirmed only
+/// from a new viewpoint, `new_viewpoint`), and a second step for a region of constant depth
+/// on a plane that another viewpoint heard (`planes`).
 fn observe_reflector<const W: usize, const E: usize>(
     evidence: &mut EvidenceMap<W, E>,
     (x, y): (i32, i32),
-    first_look: bool,
+    (first_look, new_viewpoint): (bool, bool),
     constant_depth: bool,
     on_a_known_plane: bool,
 ) {
     if first_look {
-        if constant_depth {
+        if constant_depth && (new_viewpoint || evidence.get_xy(x, y) != CellEvidence::Tentative) {
             evidence.observe_occupied_xy(x, y);
         } else {
             evidence.observe_arc_xy(x, y);

@@ -62,6 +62,8 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             readings: SweepBuffer::new(),
             blind_cells: super::swept::BlindCells::NONE,
             hits: Vec::new(),
+            viewpoints: heapless::Deque::new(),
+            repeated_viewpoint: false,
             step_table: super::swept::StepTable::new(),
             sweep: None,
             next_sweep_reversed: false,
@@ -176,6 +178,8 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.gap_visits = 0;
         self.visited_gaps.clear();
         self.planes.clear();
+        self.viewpoints.clear();
+        self.repeated_viewpoint = false;
         self.next_plan_id = self.next_plan_id.wrapping_add(1).max(1);
         if config.evidence_map {
             self.assume_body_disc_clear();

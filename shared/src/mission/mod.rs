@@ -243,6 +243,12 @@ pub struct Mission<const W: usize, const E: usize = W> {
     /// read (`swept::BlindCells`).
     blind_cells: swept::BlindCells,
     hits: Vec<PointM, MAX_SWEEP_READINGS>,
+    /// Where the sonar stood for the last [`VIEWPOINT_MEMORY`] sweeps that marked
+    /// (`evidence_marking::Viewpoints`), and whether this sweep's stands near one of them.
+    viewpoints: evidence_marking::Viewpoints,
+    /// This sweep's sonar stands within [`planes::MIN_VIEWPOINT_APART_M`] of an earlier one:
+    /// its reflectors make marks but confirm none (one viewpoint, one step).
+    repeated_viewpoint: bool,
     /// The majority rule's steps of the last standing sweep (`swept::StepTable`), built
     /// once for the cells it vouches for.
     step_table: swept::StepTable,
@@ -308,6 +314,7 @@ mod verdict;
 pub use config::{MissionConfig, MissionError, MissionMode};
 pub use device_shell::{DeviceShell, SimBody};
 pub use evidence::{CellEvidence, Change, EvidenceMap};
+pub use evidence_marking::VIEWPOINT_MEMORY;
 pub use local::{LocalRunner, TickOutcome, MAX_EVENTS_PER_TICK, MAX_READINGS_PER_TICK};
 pub use messages::{
     MissionEvent, MissionInput, MissionOutput, MissionPhase, MissionStatus, PlanRequest,

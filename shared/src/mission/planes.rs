@@ -31,7 +31,7 @@ pub(super) struct PlaneSeen {
 
 /// How far two viewpoints, and two feet, must lie apart to count as two looks (metres), and
 /// how far a foot may lie off the other plane's line (one cell, passed in).
-const MIN_VIEWPOINT_APART_M: f32 = 0.2;
+pub(super) const MIN_VIEWPOINT_APART_M: f32 = 0.2;
 
 impl PlaneSeen {
     /// Distance of `p` from this plane's line, metres.

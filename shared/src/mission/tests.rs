@@ -781,8 +781,10 @@ fn a_gap_visit_that_took_no_mark_back_closes_the_gap_until_no_other_gap_is_left(
     let visited = |m: &Mission400| VisitedGap {
         centre: gap,
         reach_m: 1.0,
-        tentative_cells: m.tentative_cells_within(gap, 1.0),
+        tentative_cells: m.tentative_cells_within(gap, 1.0) as u16,
         closed: false,
+        stand_off: PointM::new(4.0, 2.0),
+        futile: false,
     };
     // A visit that took some marks back leaves its gap open: only confirmed marks are drawn.
     m.visited_gaps.push(visited(&m)).unwrap();
@@ -808,7 +810,7 @@ fn a_gap_visit_that_took_no_mark_back_closes_the_gap_until_no_other_gap_is_left(
     m.visited_gaps.clear();
     m.visited_gaps.push(visited(&m)).unwrap();
     m.seek_proof(&mut out);
-    assert!(m.visited_gaps[0].closed);
+    assert!(m.visited_gaps[0].closed && m.visited_gaps[0].futile);
     assert!(at(&m, 3.5) && at(&m, 4.9));
     assert!(!at(&m, 1.0) && !at(&m, 7.0));
     // No way with the closed gap drawn in: not a verdict, the gap opens again and the proof
@@ -817,6 +819,8 @@ fn a_gap_visit_that_took_no_mark_back_closes_the_gap_until_no_other_gap_is_left(
     out.plan_request = None;
     m.on_proof(PlanStatus::Unreachable, &mut out);
     assert!(!m.visited_gaps[0].closed);
+    // Reopened, but its viewpoint stays spent: a later visit of this gap stands elsewhere.
+    assert!(m.visited_gaps[0].futile);
     assert!(out.plan_request.is_some(), "the proof plan is asked again");
     assert!(!at(&m, 3.5) && !at(&m, 4.9));
     assert_eq!(m.status, MissionStatus::Running);
@@ -965,4 +969,34 @@ fn a_wall_heard_diffusely_has_its_foot_marked_and_confirmed_from_a_second_place(
     assert_eq!(m.evidence.get(foot(3.0)), CellEvidence::Tentative);
     sweep(&mut m, 4.0);
     assert_eq!(m.evidence.get(foot(4.0)), CellEvidence::Confirmed);
+}
+
+#[test]
+fn a_second_sweep_from_the_same_place_makes_no_confirmation_one_from_elsewhere_does() {
+    // A post 2 m ahead: a point reflector, a region of constant depth from any viewpoint.
+    let c = beam_evidence_config();
+    let beam_rad = c.robot.sonar_beam_half_angle_deg.to_radians();
+    let offset_m = c.robot.sonar_offset_m;
+    let post = PointM::new(1.0 + offset_m + 2.025, 4.025);
+    let heard_from = |y_m: f32| {
+        let (dx, dy) = (post.x_m - (1.0 + offset_m), post.y_m - y_m);
+        let (bearing_rad, range_m) = (dy.atan2(dx), dx.hypot(dy));
+        move |b: f32| ((b - bearing_rad).abs() <= beam_rad).then_some(range_m)
+    };
+    let mut m = Box::new(Mission400::new(c, geometry()).unwrap());
+    assert_eq!(sweep_east_from(&mut m, 4.0, heard_from(4.0)), 1);
+    assert_eq!(m.evidence.get(post), CellEvidence::Tentative);
+    // The same readings again from the same place (a moving sweep that ended where the
+    // standing sweep then stood): the same cell, and no second viewpoint.
+    assert_eq!(sweep_east_from(&mut m, 4.0, heard_from(4.0)), 1);
+    assert_eq!(m.evidence.get(post), CellEvidence::Tentative);
+    // From 0.3 m to the side: a second viewpoint agrees.
+    assert_eq!(sweep_east_from(&mut m, 4.3, heard_from(4.3)), 1);
+    assert_eq!(
+        m.evidence.get(post),
+        CellEvidence::Confirmed,
+        "{:?} {:?}",
+        m.hits,
+        post
+    );
 }

@@ -63,7 +63,7 @@ use super::messages::push;
 use super::{Mission, MissionEvent, MissionOutput, MissionStatus, UnreachableReason};
 
 /// Gap visits per mission before it gives up ([`UnreachableReason::GapsUnsettled`]).
-pub const MAX_GAP_VISITS: u16 = 10;
+pub const MAX_GAP_VISITS: u16 = 24;
 
 /// A gap visited: its middle, how far around it its visit looked, and how many tentative
 /// marks lay there when the visit began. A visit that took none of them back closes the gap:
@@ -76,10 +76,15 @@ pub(super) struct VisitedGap {
     pub centre: PointM,
     /// How far around the middle the visit's marks are counted (and drawn in), metres.
     pub reach_m: f32,
-    /// Tentative marks within the reach when the visit began.
-    pub tentative_cells: u32,
+    /// Tentative marks within the reach when the visit began (saturating).
+    pub tentative_cells: u16,
     /// The visit took none of them back.
     pub closed: bool,
+    /// Where the visit stood to sweep, world metres.
+    pub stand_off: PointM,
+    /// The visit took none of its marks back (kept when `closed` opens again): a later
+    /// visit of the same gap stands elsewhere, since this sweep would only be read again.
+    pub futile: bool,
 }
 
 /// The gaps visited in a mission, at most one per visit.
@@ -152,9 +157,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         }
         self.visit = None;
         if let Some(last) = self.visited_gaps.last().copied() {
-            let now = self.tentative_cells_within(last.centre, last.reach_m);
+            let now = saturate_u16(self.tentative_cells_within(last.centre, last.reach_m));
             if let Some(v) = self.visited_gaps.last_mut() {
                 v.closed |= now >= last.tentative_cells;
+                v.futile |= now >= last.tentative_cells;
             }
         }
         self.redraw_grid(true);
@@ -250,22 +256,33 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     && distance_to_segment_m(p, first, last) > own_reach_m
             },
         };
+        // The viewpoints already swept in vain for a gap here: a visit stands elsewhere.
+        let mut futile: heapless::Vec<PointM, { MAX_GAP_VISITS as usize }> = heapless::Vec::new();
+        for v in self.visited_gaps.iter().filter(|v| {
+            v.futile && hypot(v.centre.x_m - gap.x_m, v.centre.y_m - gap.y_m) <= stand_off_m
+        }) {
+            // At most one per visit: never full.
+            let _ = futile.push(v.stand_off);
+        }
         let line = (gap, dir);
         let reach = (near_m, stand_off_m);
-        let target = stand_off_point(&self.grid, line, reach, margin_cells, Some(&view))
-            .or_else(|| stand_off_point(&self.grid, line, reach, margin_cells, None))
+        let target = stand_off_point(&self.grid, line, reach, margin_cells, Some(&view), &futile)
+            .or_else(|| stand_off_point(&self.grid, line, reach, margin_cells, None, &futile))
+            .or_else(|| stand_off_point(&self.grid, line, reach, margin_cells, None, &[]))
             .unwrap_or_else(|| {
                 // No free point on the line: the last free path point before the gap.
                 self.position_world()
             });
         self.visit = Some(GapVisit { target });
-        let tentative_cells = self.tentative_cells_within(gap, stand_off_m);
+        let tentative_cells = saturate_u16(self.tentative_cells_within(gap, stand_off_m));
         // Full only past MAX_GAP_VISITS visits, which end the mission first.
         let _ = self.visited_gaps.push(VisitedGap {
             centre: gap,
             reach_m: stand_off_m,
             tentative_cells,
             closed: false,
+            stand_off: target,
+            futile: false,
         });
         if self.at_visit_target() {
             self.end_visit(out);
@@ -294,6 +311,12 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         push(out, MissionEvent::FullSweepRequested);
         self.begin_standing_sweep(true, out);
     }
+}
+
+/// `n` as a `u16`, at most `u16::MAX` (a visit's count of marks, kept small: the mission's
+/// visits live in the MCU's core-coupled memory).
+fn saturate_u16(n: u32) -> u16 {
+    u16::try_from(n).unwrap_or(u16::MAX)
 }
 
 /// The nearest a visit stands from its gap's middle, centre to middle, metres: the sonar,
@@ -417,6 +440,7 @@ fn stand_off_point<const W: usize>(
     (near_m, far_m): (f32, f32),
     margin_cells: i32,
     view: Option<&GapView<'_>>,
+    avoid: &[PointM],
 ) -> Option<PointM> {
     let g = grid.geometry();
     let res_m = g.resolution_m();
@@ -438,7 +462,10 @@ fn stand_off_point<const W: usize>(
                 (-margin_cells..=margin_cells).all(|dx| !grid.is_occupied_xy(x + dx, y + dy))
             });
             let centre = cell_centre(g, x, y);
-            if clear && view.is_none_or(|v| v.clear_from(g, centre)) {
+            let fresh = avoid
+                .iter()
+                .all(|a| hypot(a.x_m - centre.x_m, a.y_m - centre.y_m) > 2.0 * res_m);
+            if clear && fresh && view.is_none_or(|v| v.clear_from(g, centre)) {
                 return Some(centre);
             }
         }
@@ -478,7 +505,7 @@ mod tests {
         assert!((dir.y_m - 1.0).abs() < 1.0e-3, "{dir:?}");
         // The nearest free point on the line through the gap: 0.3 m before it, past the marks
         // (rows 48..52).
-        let s = stand_off_point(&g, (gap, dir), (0.3, 1.5), 0, None).expect("free");
+        let s = stand_off_point(&g, (gap, dir), (0.3, 1.5), 0, None, &[]).expect("free");
         assert!(
             (s.y_m - 2.225).abs() < 0.03 && (s.x_m - 2.525).abs() < 0.03,
             "{s:?}"
@@ -497,7 +524,7 @@ mod tests {
         let g = wall_with_marks_across_a_doorway();
         let (gap, dir) = (PointM::new(2.525, 2.525), PointM::new(0.0, 1.0));
         let near_m = nearest_stand_off_m(&robot, 0.05);
-        let s = stand_off_point(&g, (gap, dir), (near_m, 1.7), 0, None).expect("free");
+        let s = stand_off_point(&g, (gap, dir), (near_m, 1.7), 0, None, &[]).expect("free");
         let sonar_y_m = s.y_m + robot.sonar_offset_m;
         assert!(
             gap.y_m - sonar_y_m >= robot.sonar_min_range_m + 0.05,
@@ -505,8 +532,22 @@ mod tests {
             gap.y_m
         );
         // The sonar's minimum range alone (the rule before) left it 0.16 m from the gap.
-        let old = stand_off_point(&g, (gap, dir), (0.36, 1.7), 0, None).expect("free");
+        let old = stand_off_point(&g, (gap, dir), (0.36, 1.7), 0, None, &[]).expect("free");
         assert!(gap.y_m - (old.y_m + robot.sonar_offset_m) < robot.sonar_min_range_m);
+    }
+
+    #[test]
+    fn a_visit_does_not_stand_where_a_visit_of_its_gap_swept_in_vain() {
+        let g = wall_with_marks_across_a_doorway();
+        let (gap, up) = (PointM::new(2.525, 2.525), PointM::new(0.0, 1.0));
+        let first = stand_off_point(&g, (gap, up), (0.3, 1.5), 0, None, &[]).expect("free");
+        // That viewpoint swept and took nothing back: the next visit stands over two cells
+        // farther along the line.
+        let next = stand_off_point(&g, (gap, up), (0.3, 1.5), 0, None, &[first]).expect("free");
+        assert!(
+            first.y_m - next.y_m > 0.1 - 1.0e-4,
+            "{first:?} then {next:?}"
+        );
     }
 
     #[test]
@@ -524,6 +565,7 @@ mod tests {
                 (0.3, 1.5),
                 margin_cells,
                 None,
+                &[],
             )
         };
         let s = at(&g, 0).expect("a farther free cell");
@@ -561,7 +603,7 @@ mod tests {
         // From the side away from the wall at 45°, nothing is.
         assert!(view.clear_from(&g, PointM::new(1.825, 3.225)));
         let east = PointM::new(1.0, 0.0);
-        let s = stand_off_point(&free, (view.gap, east), (1.0, 1.5), 0, Some(&view))
+        let s = stand_off_point(&free, (view.gap, east), (1.0, 1.5), 0, Some(&view), &[])
             .expect("a point in view");
         assert!(s.y_m > 2.9, "{s:?}");
         assert!(
@@ -574,7 +616,7 @@ mod tests {
             marked: &nothing,
             ..view
         };
-        let s = stand_off_point(&free, (open.gap, east), (1.0, 1.5), 0, Some(&open))
+        let s = stand_off_point(&free, (open.gap, east), (1.0, 1.5), 0, Some(&open), &[])
             .expect("a point in view");
         assert!(
             (s.y_m - 2.525).abs() < 0.03 && (s.x_m - 1.525).abs() < 0.03,
