@@ -52,7 +52,7 @@ use super::planes::{remember, PlaneSeen};
 use super::reflector::{reflector_bearings, RunEnd, RunSide};
 use super::swept::{reading_shift_m, BlindCells, Swept};
 
-/// Sweeps whose sonar positions are remembered for [`Mission::note_viewpoint`] (64 B).
+/// Sweeps whose sonar positions a mission remembers (`Mission::note_viewpoint`), 64 B.
 pub const VIEWPOINT_MEMORY: usize = 8;
 
 /// The sonar positions of the last [`VIEWPOINT_MEMORY`] sweeps that marked, oldest first.
