@@ -228,6 +228,23 @@ pub struct FaultProxy {
     up: Arc<Traffic>,
 }
 
+/// One read's bytes through a direction of the proxy: counted, damaged and delayed by the
+/// line, then handed to `write` (each state shown in `traffic` for a failure's report).
+fn pass_on(
+    traffic: &Traffic,
+    line: &mut Line,
+    bytes: &[u8],
+    started: std::time::Instant,
+    write: impl FnOnce(&[u8]) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    traffic.read(bytes.len(), started);
+    let (out, stall) = line.pass(bytes);
+    traffic.set(Traffic::STALLING);
+    std::thread::sleep(stall);
+    traffic.set(Traffic::WRITING);
+    write(&out)
+}
+
 impl FaultProxy {
     pub fn start(device: TcpStream, faults: Faults) -> std::io::Result<Self> {
         let listener = TcpListener::bind("127.0.0.1:0")?;
@@ -252,14 +269,13 @@ impl FaultProxy {
                     match device.read(&mut buf) {
                         Ok(0) => return traffic.set(Traffic::SOURCE_CLOSED),
                         Ok(n) => {
-                            traffic.read(n, started);
-                            let (out, stall) = line.pass(&buf[..n]);
-                            traffic.set(Traffic::STALLING);
-                            std::thread::sleep(stall);
-                            traffic.set(Traffic::WRITING);
-                            if let Some(h) = host.lock().unwrap().as_mut() {
-                                let _ = h.write_all(&out);
-                            }
+                            // No host connected, or its write failed (it went): the device's
+                            // bytes are dropped, as a serial line drops them.
+                            let write = |out: &[u8]| match host.lock().unwrap().as_mut() {
+                                Some(h) => h.write_all(out),
+                                None => Ok(()),
+                            };
+                            let _ = pass_on(&traffic, &mut line, &buf[..n], started, write);
                         }
                         Err(e)
                             if matches!(
@@ -294,12 +310,9 @@ impl FaultProxy {
                         match conn.read(&mut buf) {
                             Ok(0) | Err(_) => break,
                             Ok(n) => {
-                                traffic.read(n, started);
-                                let (out, stall) = line.pass(&buf[..n]);
-                                traffic.set(Traffic::STALLING);
-                                std::thread::sleep(stall);
-                                traffic.set(Traffic::WRITING);
-                                if device.write_all(&out).is_err() {
+                                let write = |out: &[u8]| device.write_all(out);
+                                if pass_on(&traffic, &mut line, &buf[..n], started, write).is_err()
+                                {
                                     return traffic.set(Traffic::WRITE_FAILED);
                                 }
                             }
