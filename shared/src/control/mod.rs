@@ -297,7 +297,6 @@ pub struct Controller {
     config: RobotConfig,
     odometry: Odometry,
     model: PointM,
-    held: Option<PointM>,
     left_pid: WheelPid,
     right_pid: WheelPid,
     last: ControlOutput,
@@ -325,7 +324,6 @@ impl Controller {
                 half_axle_m: config.half_axle_m,
             },
             model: point,
-            held: None,
             left_pid: WheelPid::idle(config),
             right_pid: WheelPid::idle(config),
             last: ControlOutput {
@@ -354,7 +352,6 @@ impl Controller {
             config: *config,
             odometry,
             model: point,
-            held: None,
             left_pid: WheelPid::new(config),
             right_pid: WheelPid::new(config),
             last: ControlOutput {
@@ -391,35 +388,15 @@ impl Controller {
         self.last
     }
 
-    /// `true` while [`hold`](Self::hold) is in force.
-    pub fn is_holding(&self) -> bool {
-        self.held.is_some()
-    }
-
-    /// Stop smoothly where the reference model is now: from the next step on the input
-    /// reference is ignored and the control point converges to the held point (at the
-    /// tracking gain, no overshoot of the model). Returns the held point. Ended by
-    /// [`release`](Self::release) or [`reset_reference`](Self::reset_reference).
-    pub fn hold(&mut self) -> PointM {
-        self.held = Some(self.model);
-        self.model
-    }
-
-    /// Follow the input reference again after a [`hold`](Self::hold).
-    pub fn release(&mut self) {
-        self.held = None;
-    }
-
     /// Restart the reference model at `point` (typically the current control point before a
-    /// new path, so the model does not carry over a lag) and end any hold. A non-finite point
-    /// restarts it at the current control point.
+    /// new path, so the model does not carry over a lag). A non-finite point restarts it at
+    /// the current control point.
     pub fn reset_reference(&mut self, point: PointM) {
         self.model = if point.is_finite() {
             point
         } else {
             self.control_point()
         };
-        self.held = None;
     }
 
     /// Replace the odometry pose (an external fix); the PIDs keep their state.
@@ -432,10 +409,10 @@ impl Controller {
     pub fn step(&mut self, input: ControlInput) -> ControlOutput {
         let m = self.measure(&input);
         let c = &self.config;
-        let target = match self.held {
-            Some(h) => h,
-            None if input.reference.is_finite() => input.reference,
-            None => self.model,
+        let target = if input.reference.is_finite() {
+            input.reference
+        } else {
+            self.model
         };
         let tau = c.reference_time_constant_s;
         let k = c.tracking_gain_1_s;
@@ -465,7 +442,7 @@ impl Controller {
     /// (turn rate = [`RobotConfig::turn_gain_1_s`] × heading error, at most
     /// [`RobotConfig::max_turn_rate_rad_s`], forward speed 0). The reference model follows
     /// the control point as it swings round, so [`step`](Self::step) can take over without a
-    /// jump (any hold is released). Use it to face a new path before following it, so the
+    /// jump. Use it to face a new path before following it, so the
     /// sonar looks where the robot goes. A non-finite heading means "stop turning".
     ///
     /// ```
@@ -493,7 +470,6 @@ impl Controller {
         } else if turn_rad_s < -limit {
             turn_rad_s = -limit;
         }
-        self.held = None;
         self.model = m.point;
         self.drive(&m, 0.0, turn_rad_s, m.point)
     }

@@ -258,37 +258,6 @@ fn overrun_flag() {
 }
 
 #[test]
-fn hold_stops_at_the_model_point() {
-    let c = RobotConfig::default();
-    let start = Pose::new(0.0, 0.0, 0.0);
-    let mut plant = Plant::new(&c, start);
-    let mut ctl = Controller::new(&c, start);
-    let mut counts = (0, 0);
-    let mut held = None;
-    for n in 0..300 {
-        if n == 60 {
-            held = Some(ctl.hold());
-        }
-        let now = plant.encoder_counts();
-        let out = ctl.step(ControlInput {
-            reference: PointM::new(0.15 + 0.3 * n as f32 * 0.05, 0.0),
-            encoder_left_delta_counts: now.0.wrapping_sub(counts.0),
-            encoder_right_delta_counts: now.1.wrapping_sub(counts.1),
-            elapsed_since_last_step_s: 0.05,
-        });
-        counts = now;
-        plant.step(0.05, out.left_voltage_v, out.right_voltage_v);
-    }
-    let held = held.unwrap();
-    assert!(ctl.is_holding());
-    let cp = plant.pose().point_ahead(c.point_offset_m);
-    assert!(cp.distance_m(held) < 0.01, "{cp:?} vs {held:?}");
-    assert!(plant.speed_m_s().abs() < 0.01);
-    ctl.reset_reference(cp);
-    assert!(!ctl.is_holding());
-}
-
-#[test]
 fn turns_in_place_then_follows_without_a_jump() {
     let c = RobotConfig::default();
     let start = Pose::new(2.0, 2.0, 0.0);
