@@ -155,12 +155,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         let _ = self.viewpoints.push_back(sonar);
     }
 
-    /// One evidence step of a reflector on (`x`, `y`): a mark from a viewpoint met before
-    /// (`note_viewpoint`) is made but never confirmed.
+    /// One evidence step of a reflector on (`x`, `y`) from this sweep (the free function of the
+    /// same name: confirmed only from a new viewpoint).
     pub(super) fn step_occupied(&mut self, x: i32, y: i32) {
-        if !(self.repeated_viewpoint && self.evidence.get_xy(x, y) == CellEvidence::Tentative) {
-            self.evidence.observe_occupied_xy(x, y);
-        }
+        step_occupied(&mut self.evidence, (x, y), !self.repeated_viewpoint);
     }
 
     /// Has a reflector of this sweep already fallen on `cell`?
@@ -577,6 +575,19 @@ pub(super) fn centre(g: &crate::grid::GridGeometry, x: i32, y: i32) -> PointM {
     )
 }
 
+/// One evidence step of a reflector on its cell, unknown or free → tentative → confirmed; a
+/// tentative mark is confirmed only from a new viewpoint (`Mission::note_viewpoint`), so a
+/// mark from a viewpoint met before is made but never confirmed.
+fn step_occupied<const W: usize, const E: usize>(
+    evidence: &mut EvidenceMap<W, E>,
+    (x, y): (i32, i32),
+    new_viewpoint: bool,
+) {
+    if new_viewpoint || evidence.get_xy(x, y) != CellEvidence::Tentative {
+        evidence.observe_occupied_xy(x, y);
+    }
+}
+
 /// A reflector's evidence on its cell: on the sweep's first look at the cell one step
 /// (occupied for a region of constant depth, an arc's mark otherwise; up to confirmed only
 /// from a new viewpoint, `new_viewpoint`), and a second step for a region of constant depth
@@ -589,8 +600,8 @@ fn observe_reflector<const W: usize, const E: usize>(
     on_a_known_plane: bool,
 ) {
     if first_look {
-        if constant_depth && (new_viewpoint || evidence.get_xy(x, y) != CellEvidence::Tentative) {
-            evidence.observe_occupied_xy(x, y);
+        if constant_depth {
+            step_occupied(evidence, (x, y), new_viewpoint);
         } else {
             evidence.observe_arc_xy(x, y);
         }

@@ -158,9 +158,10 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         self.visit = None;
         if let Some(last) = self.visited_gaps.last().copied() {
             let now = saturate_u16(self.tentative_cells_within(last.centre, last.reach_m));
+            let took_none_back = now >= last.tentative_cells;
             if let Some(v) = self.visited_gaps.last_mut() {
-                v.closed |= now >= last.tentative_cells;
-                v.futile |= now >= last.tentative_cells;
+                v.closed |= took_none_back;
+                v.futile |= took_none_back;
             }
         }
         self.redraw_grid(true);
