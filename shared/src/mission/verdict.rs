@@ -48,14 +48,14 @@
 //! collided until the blind disc was known by marks, a wall's free end echoed in every
 //! simulated reading and the stand-off kept the tracking margin (`docs/mapping.md`).
 //!
-//! Cost: a redraw is one pass over the map plus a `(2e + 1)²` square per occupied cell (e:
+//! Cost: a redraw is one pass over the map plus a disc of radius `e` per occupied cell (e:
 //! the expansion in cells); the gap search walks the path's cells once.
 
 use crate::geom::{distance_to_segment_m, PointM};
 use crate::grid::{Grid, GridGeometry};
 use crate::math::{abs, atan2, cos, hypot, sin, wrap_angle_rad};
 use crate::plan::PlanStatus;
-use crate::raster::{mark_point_m, BresenhamLine};
+use crate::raster::{mark_disc_point_m, BresenhamLine};
 
 use super::evidence::CellEvidence;
 use super::evidence_marking::centre as cell_centre;
@@ -141,7 +141,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     CellEvidence::Unknown | CellEvidence::Free => false,
                 };
                 if marked {
-                    mark_point_m(&mut self.grid, c, e);
+                    mark_disc_point_m(&mut self.grid, c, e);
                 }
             }
         }
