@@ -1000,3 +1000,50 @@ fn a_second_sweep_from_the_same_place_makes_no_confirmation_one_from_elsewhere_d
         post
     );
 }
+
+#[test]
+fn a_beams_sweep_takes_a_mark_back_exact_rays_never_do() {
+    use crate::sonar::Reading;
+    // A tentative mark about 1 m ahead of the sonar, and full standing sweeps from the start.
+    let sweep = |c: MissionConfig, echo_beyond_centre_m: Option<f32>| {
+        let mut m = Box::new(Mission400::new(c, geometry()).unwrap());
+        let pose = m.pose_world();
+        let sonar = pose.point_ahead(c.robot.sonar_offset_m);
+        let (x, y) = m
+            .grid
+            .geometry()
+            .cell_xy_of(PointM::new(sonar.x_m + 1.0, sonar.y_m))
+            .unwrap();
+        m.evidence.observe_arc_xy(x, y);
+        assert_eq!(m.evidence.get_xy(x, y), CellEvidence::Tentative);
+        let centre = super::evidence_marking::centre(m.grid.geometry(), x, y);
+        let d_m = (centre.x_m - sonar.x_m).hypot(centre.y_m - sonar.y_m);
+        let beam_rad = c.robot.sonar_beam_half_angle_deg.to_radians();
+        m.readings.clear();
+        for i in 0..201 {
+            let bearing_rad = (-180.0f32 + 1.8 * i as f32).to_radians();
+            let range_m = echo_beyond_centre_m
+                .filter(|_| bearing_rad.abs() <= beam_rad)
+                .map(|e| d_m + e);
+            m.readings
+                .push(Reading {
+                    neck_angle_rad: bearing_rad,
+                    range_m,
+                    pose,
+                })
+                .unwrap();
+        }
+        m.mark_vouched_free(true);
+        m.evidence.get_xy(x, y)
+    };
+    let beam = beam_evidence_config();
+    // Silence all round (every bearing read): the cell is free, its mark goes.
+    assert_eq!(sweep(beam, None), CellEvidence::Free);
+    // An echo on the cell's bearing: vouched for when a cell short of it, not otherwise.
+    assert_eq!(sweep(beam, Some(0.30)), CellEvidence::Free);
+    assert_eq!(sweep(beam, Some(0.03)), CellEvidence::Tentative);
+    // Exact rays 1.8° apart can slip past a wall's end seen edge-on: they take no mark back.
+    let mut ray = beam;
+    ray.robot.sonar_beam = false;
+    assert_eq!(sweep(ray, None), CellEvidence::Tentative);
+}
