@@ -1047,3 +1047,67 @@ fn a_beams_sweep_takes_a_mark_back_exact_rays_never_do() {
     ray.robot.sonar_beam = false;
     assert_eq!(sweep(ray, None), CellEvidence::Tentative);
 }
+
+#[test]
+fn a_visit_with_no_way_to_its_stand_off_sweeps_where_the_robot_stands_once() {
+    use super::verdict::{GapVisit, VisitedGap};
+    let mut m = Box::new(Mission400::new(beam_evidence_config(), geometry()).unwrap());
+    let here = m.position_world();
+    let mut out = MissionOutput {
+        pilot_command: None,
+        sonar_request: None,
+        plan_request: None,
+        events: Vec::new(),
+        status: m.status,
+    };
+    let gap = PointM::new(4.0, 4.0);
+    m.visited_gaps
+        .push(VisitedGap {
+            centre: gap,
+            reach_m: 1.0,
+            tentative_cells: 3,
+            closed: false,
+            stand_off: PointM::new(3.0, 4.0),
+            futile: false,
+        })
+        .unwrap();
+    m.gap_visits = 1;
+    m.visit = Some(GapVisit {
+        target: PointM::new(3.0, 4.0),
+    });
+    // No way to (3, 4): the visit's sweep is made here, standing, and remembered as made here.
+    m.visit_from_here(&mut out);
+    assert!(out
+        .events
+        .iter()
+        .any(|e| matches!(e, MissionEvent::FullSweepRequested)));
+    assert_eq!(m.visit, None);
+    assert_eq!(m.visited_gaps[0].stand_off, here);
+    assert_eq!(m.status, MissionStatus::Running);
+    // That sweep took nothing back (futile); the next visit finds no way either: sweeping
+    // here again would settle nothing, so the visit is spent and the next gap is sought (a
+    // proof plan), not another sweep.
+    m.visited_gaps[0].futile = true;
+    m.visit = Some(GapVisit {
+        target: PointM::new(3.0, 5.0),
+    });
+    out.events.clear();
+    m.visit_from_here(&mut out);
+    assert!(!out
+        .events
+        .iter()
+        .any(|e| matches!(e, MissionEvent::FullSweepRequested)));
+    assert!(out.plan_request.is_some(), "the proof plan is asked");
+    // With every visit spent that ends the mission, saying why.
+    m.pending_plan = None;
+    m.gap_visits = MAX_GAP_VISITS;
+    m.visit = Some(GapVisit {
+        target: PointM::new(3.0, 5.0),
+    });
+    m.visit_from_here(&mut out);
+    assert_eq!(m.status, MissionStatus::Unreachable);
+    assert_eq!(
+        m.stats.unreachable_reason,
+        Some(UnreachableReason::GapsUnsettled)
+    );
+}
