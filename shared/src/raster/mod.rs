@@ -194,7 +194,7 @@ pub fn mark_disc<const W: usize>(grid: &mut Grid<W>, x: i32, y: i32, radius: u16
         y.saturating_sub(radius as i32).max(0)..=y.saturating_add(radius as i32).min(last_row)
     {
         let dy = row as i64 - y as i64;
-        let half = isqrt(r * r - dy * dy) as i32;
+        let half = isqrt_below(r * r - dy * dy, r + 1) as i32;
         work += 1 + grid.fill_row(row, x.saturating_sub(half), x.saturating_add(half)) as Work;
     }
     work
@@ -209,12 +209,13 @@ pub fn mark_disc_point_m<const W: usize>(grid: &mut Grid<W>, point: PointM, radi
     }
 }
 
-/// `floor(√n)` for `0 ≤ n < 2³²`, by bisection (at most 17 steps); negative `n` gives 0.
-fn isqrt(n: i64) -> i64 {
+/// `floor(√n)` for `0 ≤ n < hi²`, by bisection in `[0, hi)` (about log₂ hi steps: 4 for the
+/// seed's 8-cell radius, at most 17 for any `u16` radius); negative `n` gives 0.
+fn isqrt_below(n: i64, hi: i64) -> i64 {
     if n <= 0 {
         return 0;
     }
-    let (mut lo, mut hi) = (0i64, 65_536i64);
+    let (mut lo, mut hi) = (0i64, hi);
     while hi - lo > 1 {
         let mid = (lo + hi) / 2;
         if mid * mid <= n {
