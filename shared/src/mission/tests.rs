@@ -771,13 +771,7 @@ fn a_gap_visit_that_took_no_mark_back_closes_the_gap_until_no_other_gap_is_left(
     let gap = PointM::new(4.0, 3.025);
     let before = m.tentative_cells_within(gap, 1.0);
     assert_eq!(before, 40, "cell centres 3.025 to 4.975 m on the wall");
-    let mut out = MissionOutput {
-        pilot_command: None,
-        sonar_request: None,
-        plan_request: None,
-        events: Vec::new(),
-        status: m.status,
-    };
+    let mut out = no_output(&m);
     let visited = |m: &Mission400| VisitedGap {
         centre: gap,
         reach_m: 1.0,
@@ -832,6 +826,17 @@ fn a_gap_visit_that_took_no_mark_back_closes_the_gap_until_no_other_gap_is_left(
         m.stats.unreachable_reason,
         Some(UnreachableReason::ConfirmedCut)
     );
+}
+
+/// An output with nothing in it yet, for calling a mission's handlers directly.
+fn no_output(m: &Mission400) -> MissionOutput {
+    MissionOutput {
+        pilot_command: None,
+        sonar_request: None,
+        plan_request: None,
+        events: Vec::new(),
+        status: m.status,
+    }
 }
 
 /// Stop mode with the evidence map and a beam sonar, from (1, 4) to (7, 4).
@@ -1053,13 +1058,7 @@ fn a_visit_with_no_way_to_its_stand_off_sweeps_where_the_robot_stands_once() {
     use super::verdict::{GapVisit, VisitedGap};
     let mut m = Box::new(Mission400::new(beam_evidence_config(), geometry()).unwrap());
     let here = m.position_world();
-    let mut out = MissionOutput {
-        pilot_command: None,
-        sonar_request: None,
-        plan_request: None,
-        events: Vec::new(),
-        status: m.status,
-    };
+    let mut out = no_output(&m);
     let gap = PointM::new(4.0, 4.0);
     m.visited_gaps
         .push(VisitedGap {
