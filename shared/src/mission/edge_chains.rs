@@ -32,7 +32,7 @@ use heapless::Vec;
 
 use crate::geom::PointM;
 use crate::math::{abs, cos, hypot, sin, wrap_angle_rad};
-use crate::raster::{mark_disc_point_m, BresenhamLine};
+use crate::raster::{mark_point_m, BresenhamLine};
 use crate::sonar::{hit_to_world, Reading};
 
 use super::evidence_marking::centre;
@@ -336,7 +336,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                 }
             }
             if !self.seen_this_sweep(Some(cell)) {
-                mark_disc_point_m(&mut self.grid, centre(&g, cell.0, cell.1), e);
+                mark_point_m(&mut self.grid, centre(&g, cell.0, cell.1), e);
                 let _ = self.hits.push(p.at);
             }
             previous = Some(cell);

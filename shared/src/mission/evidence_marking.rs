@@ -35,11 +35,12 @@
 //!   ring just outside the planning radius are tentative occupied, so the planner does not
 //!   route the body through silent space beside it.
 //!
-//! - **Marks grow as discs** (`raster::mark_disc`), the body's own shape, not as the seed's
-//!   squares: a square narrows a way met at 45° by 0.33 m more than the body needs at 0.40 m,
-//!   and the ways to a box's hidden faces are often such diagonals (measured on `twil
-//!   sonar-grid`: 86 → 99 walled-in goals proved, 573 → 574 reached, 0 collisions before and
-//!   after). The seed's marking (`--evidence-map=false`) keeps its squares.
+//! - **Marks grow as the seed's squares**, not as discs (`raster::mark_disc`), though the body
+//!   is round: after a full sweep the body corridor (`corridor`) counts only occupied cells
+//!   of the grid as unknown, and a wall heard only at its feet is then covered between them by
+//!   the squares' corners alone. With discs a robot in a 0.70 m slot planned out through the
+//!   wall between two feet and grazed it (`tests/answers.rs`, the stall), though the discs
+//!   proved 99 walled-in goals of 192 on `twil sonar-grid` against 86 (`docs/mapping.md`).
 //!
 //! Bounded work: a sweep's reflectors at most its
 //! readings; a take-back redraws a `(4e + 1)²` window (e: the expansion in cells), at most
@@ -50,7 +51,7 @@ use heapless::Vec;
 use crate::control::Pose;
 use crate::geom::PointM;
 use crate::math::{abs, cos, hypot, sin, wrap_angle_rad};
-use crate::raster::{mark_disc_point_m, BresenhamLine};
+use crate::raster::{mark_point_m, BresenhamLine};
 use crate::sonar::hit_to_world;
 
 use super::evidence::{CellEvidence, Change, EvidenceMap};
@@ -192,7 +193,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             for y in ty - 2 * e..=ty + 2 * e {
                 for x in tx - 2 * e..=tx + 2 * e {
                     if self.evidence.is_occupied_xy(x, y) {
-                        mark_disc_point_m(&mut self.grid, centre(&g, x, y), e as u16);
+                        mark_point_m(&mut self.grid, centre(&g, x, y), e as u16);
                     }
                 }
             }
@@ -391,7 +392,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                         on_a_known_plane,
                     );
                 }
-                mark_disc_point_m(&mut self.grid, p, e);
+                mark_point_m(&mut self.grid, p, e);
                 let _ = self.hits.push(p);
             }
             if let Some((mid_rad, foot_m)) = sloping_foot {
@@ -402,7 +403,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     let first_look = !self.seen_this_sweep(cell);
                     let look = (first_look, !self.repeated_viewpoint);
                     observe_reflector(&mut self.evidence, xy, look, true, on_a_known_plane);
-                    mark_disc_point_m(&mut self.grid, p, e);
+                    mark_point_m(&mut self.grid, p, e);
                     let _ = self.hits.push(p);
                 }
             }
@@ -545,7 +546,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             return false;
         }
         let g = *self.grid.geometry();
-        mark_disc_point_m(&mut self.grid, centre(&g, x, y), self.expansion_cells);
+        mark_point_m(&mut self.grid, centre(&g, x, y), self.expansion_cells);
         true
     }
 

@@ -241,13 +241,8 @@ impl<const W: usize, const E: usize> Mission<W, E> {
             PlanStatus::Found => {}
             PlanStatus::Unreachable | PlanStatus::GoalBlocked if self.proves_verdicts() => {
                 // Tentative marks may be what blocks: prove it or visit the gap (`verdict`).
-                // No way to a visit's stand-off point: the visit sweeps from here instead.
                 push_planned(out, report.status, blocked, 0);
-                if self.visit.is_some() {
-                    self.visit_from_here(out);
-                } else {
-                    self.seek_proof(out);
-                }
+                self.seek_proof(out);
                 return;
             }
             PlanStatus::Unreachable => {

@@ -48,14 +48,14 @@
 //! collided until the blind disc was known by marks, a wall's free end echoed in every
 //! simulated reading and the stand-off kept the tracking margin (`docs/mapping.md`).
 //!
-//! Cost: a redraw is one pass over the map plus a disc of radius `e` per occupied cell (e:
+//! Cost: a redraw is one pass over the map plus a `(2e + 1)²` square per occupied cell (e:
 //! the expansion in cells); the gap search walks the path's cells once.
 
 use crate::geom::{distance_to_segment_m, PointM};
 use crate::grid::{Grid, GridGeometry};
 use crate::math::{abs, atan2, cos, hypot, sin, wrap_angle_rad};
 use crate::plan::PlanStatus;
-use crate::raster::{mark_disc_point_m, BresenhamLine};
+use crate::raster::{mark_point_m, BresenhamLine};
 
 use super::evidence::CellEvidence;
 use super::evidence_marking::centre as cell_centre;
@@ -141,7 +141,7 @@ impl<const W: usize, const E: usize> Mission<W, E> {
                     CellEvidence::Unknown | CellEvidence::Free => false,
                 };
                 if marked {
-                    mark_disc_point_m(&mut self.grid, c, e);
+                    mark_point_m(&mut self.grid, c, e);
                 }
             }
         }
@@ -292,33 +292,6 @@ impl<const W: usize, const E: usize> Mission<W, E> {
         // A new target: plans from here are not stalled ones.
         self.last_plan_origin = None;
         self.plan_and_go(false, out);
-    }
-
-    /// The full map has no way to the visit's stand-off point (the robot boxed in by marks
-    /// around it, which a sweep from elsewhere left): the visit sweeps from where the robot
-    /// stands, the one place it can sweep from. Unless a visit already swept here in vain:
-    /// then the visit counts as spent and the next gap is sought at once (its stand-off may
-    /// lie where the robot can go).
-    ///
-    /// Why: seeking the next gap at once, every time, spent all the visits in one control
-    /// step without the robot moving or sweeping, and a reachable goal ended `gave_up`
-    /// (bundled `pillars`, continuous, seed 3, with no planning latency: 24 visits at
-    /// 214.7 s). Giving up instead of seeking when the place was swept in vain already cost 3
-    /// proofs of 192 on `twil sonar-grid` (another gap's stand-off was reachable).
-    pub(super) fn visit_from_here(&mut self, out: &mut MissionOutput) {
-        let here = self.position_world();
-        let near_m = 2.0 * self.grid.geometry().resolution_m();
-        let swept_in_vain = self.visited_gaps.iter().any(|v| {
-            v.futile && hypot(v.stand_off.x_m - here.x_m, v.stand_off.y_m - here.y_m) <= near_m
-        });
-        if swept_in_vain {
-            self.seek_proof(out);
-            return;
-        }
-        if let Some(v) = self.visited_gaps.last_mut() {
-            v.stand_off = here;
-        }
-        self.end_visit(out);
     }
 
     /// At the stand-off point (or, standing, within the goal tolerance of it): the visit is
