@@ -35,7 +35,7 @@
 //!   ring just outside the planning radius are tentative occupied, so the planner does not
 //!   route the body through silent space beside it.
 //!
-//! - **Marks grow as the seed's squares**, not as discs (`raster::mark_disc`), though the body
+//! - **Marks grow as the seed's squares**, not as discs (tried in commit fb63004), though the body
 //!   is round: after a full sweep the body corridor (`corridor`) counts only occupied cells
 //!   of the grid as unknown, and a wall heard only at its feet is then covered between them by
 //!   the squares' corners alone. With discs a robot in a 0.70 m slot planned out through the
@@ -58,13 +58,13 @@ use super::evidence::{CellEvidence, Change, EvidenceMap};
 use super::planes::{remember, PlaneSeen};
 use super::reflector::{reflector_bearings, RunEnd, RunSide};
 use super::swept::{reading_shift_m, BlindCells, Swept};
+use super::Mission;
 
 /// Sweeps whose sonar positions a mission remembers (`Mission::note_viewpoint`), 64 B.
 pub const VIEWPOINT_MEMORY: usize = 8;
 
 /// The sonar positions of the last [`VIEWPOINT_MEMORY`] sweeps that marked, oldest first.
 pub(super) type Viewpoints = heapless::Deque<PointM, VIEWPOINT_MEMORY>;
-use super::Mission;
 
 /// Take-backs redrawn in the grid per sweep; more are kept marked in the grid (the safe side)
 /// though the evidence map has taken them back.

@@ -181,52 +181,6 @@ pub fn mark_square<const W: usize>(grid: &mut Grid<W>, x: i32, y: i32, half_side
     work
 }
 
-/// Mark the disc of radius `radius` cells centred on cell (`x`, `y`): the cells whose centres
-/// lie within `radius` cells of its centre, clipped to the grid. It is the Minkowski sum of the
-/// point with the robot's circular body; the seed's square ([`mark_square`]) covers the same
-/// disc and its corners too, which narrows a way met at 45° by `(√2 − 1)·2r` (0.33 m at the
-/// seed's 0.40 m). Its [`Work`] is at most `H·(W/32 + 3)`, like the square's.
-pub fn mark_disc<const W: usize>(grid: &mut Grid<W>, x: i32, y: i32, radius: u16) -> Work {
-    let r = radius as i64;
-    let last_row = grid.geometry().height() as i32 - 1;
-    let mut work = 0;
-    for row in
-        y.saturating_sub(radius as i32).max(0)..=y.saturating_add(radius as i32).min(last_row)
-    {
-        let dy = row as i64 - y as i64;
-        let half = isqrt_below(r * r - dy * dy, r + 1) as i32;
-        work += 1 + grid.fill_row(row, x.saturating_sub(half), x.saturating_add(half)) as Work;
-    }
-    work
-}
-
-/// Mark one obstacle point in world metres, grown to a disc of `radius` cells
-/// ([`mark_disc`]). Non-finite points are ignored.
-pub fn mark_disc_point_m<const W: usize>(grid: &mut Grid<W>, point: PointM, radius: u16) -> Work {
-    match grid.geometry().cell_xy_of(point) {
-        Some((x, y)) => mark_disc(grid, x, y, radius),
-        None => 0,
-    }
-}
-
-/// `floor(√n)` for `0 ≤ n < hi²`, by bisection in `[0, hi)` (about log₂ hi steps: 4 for the
-/// seed's 8-cell radius, at most 17 for any `u16` radius); negative `n` gives 0.
-fn isqrt_below(n: i64, hi: i64) -> i64 {
-    if n <= 0 {
-        return 0;
-    }
-    let (mut lo, mut hi) = (0i64, hi);
-    while hi - lo > 1 {
-        let mid = (lo + hi) / 2;
-        if mid * mid <= n {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    lo
-}
-
 /// Mark every cell of the Bresenham line between two cells, each grown to a square of half-side
 /// `half_side` (seed `marca_linha`), clipped to the grid. Its [`Work`] is at most
 /// [`edge_work_bound`], wherever the ends are.

@@ -14,21 +14,6 @@ pub(super) fn mark_square<const W: usize>(grid: &mut Grid<W>, x: i32, y: i32, ha
     }
 }
 
-/// The disc of radius `radius` around (`x`, `y`): every cell on the grid whose centre is
-/// within `radius` cells, tested one by one.
-pub(super) fn mark_disc<const W: usize>(grid: &mut Grid<W>, x: i32, y: i32, radius: u16) {
-    let g = *grid.geometry();
-    let r = radius as i64;
-    for cy in 0..g.height() as i32 {
-        for cx in 0..g.width() as i32 {
-            let (dx, dy) = (cx as i64 - x as i64, cy as i64 - y as i64);
-            if dx * dx + dy * dy <= r * r {
-                grid.set_xy(cx, cy, true);
-            }
-        }
-    }
-}
-
 /// Every cell of the walk from `from` to `to`, grown.
 pub(super) fn mark_line<const W: usize>(
     grid: &mut Grid<W>,

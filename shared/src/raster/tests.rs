@@ -47,29 +47,6 @@ fn square_is_clipped_at_the_border() {
 }
 
 #[test]
-fn disc_is_the_body_and_is_clipped_at_the_border() {
-    let mut grid = Grid300::new(GridGeometry::new(40, 40, 0.05).unwrap()).unwrap();
-    // Radius 8 (0.40 m at 5 cm): 197 cells, against the square's 17² = 289.
-    mark_disc(&mut grid, 20, 20, 8);
-    assert_eq!(grid.count_occupied(), 197);
-    assert!(grid.is_occupied_xy(28, 20) && grid.is_occupied_xy(20, 12));
-    // The square's corner (45°, 0.57 m away) stays free: the diagonal way it would shut.
-    assert!(!grid.is_occupied_xy(28, 28) && !grid.is_occupied_xy(26, 26));
-    assert!(grid.is_occupied_xy(25, 25)); // 0.35 m away
-    let mut grid = Grid300::new(GridGeometry::new(10, 10, 0.1).unwrap()).unwrap();
-    mark_disc(&mut grid, 0, 0, 2);
-    assert_eq!(grid.count_occupied(), 6); // the quarter disc: (0..=2, 0), (0..=1, 1), (0, 2)
-    mark_disc(&mut grid, -100, 5, 3);
-    mark_disc(&mut grid, i32::MAX, i32::MIN, u16::MAX);
-    assert_eq!(grid.count_occupied(), 6);
-    assert_eq!(
-        mark_disc_point_m(&mut grid, PointM::new(f32::NAN, 0.5), 3),
-        0,
-        "a non-finite point marks nothing"
-    );
-}
-
-#[test]
 fn polygon_outline_is_grown() {
     let mut grid = Grid300::new(GridGeometry::new(100, 100, 0.1).unwrap()).unwrap();
     let square = [
@@ -178,19 +155,6 @@ mod properties {
             mark_square(&mut fast, from.0, from.1, half);
             reference::mark_square(&mut slow, from.0, from.1, half);
             prop_assert!(fast == slow, "square at {:?}, half-side {}", from, half);
-        }
-
-        #[test]
-        fn disc_equals_the_reference(
-            size in (1u32..100, 1u32..100),
-            at in (-160i32..260, -160i32..260),
-            radius in half_side(),
-        ) {
-            let (mut fast, mut slow) = (grid(size.0, size.1), grid(size.0, size.1));
-            let work = mark_disc(&mut fast, at.0, at.1, radius);
-            reference::mark_disc(&mut slow, at.0, at.1, radius);
-            prop_assert!(fast == slow, "disc at {:?}, radius {}", at, radius);
-            prop_assert!(work <= edge_work_bound(fast.geometry()));
         }
 
         #[test]
